@@ -1,0 +1,1 @@
+"""Stage 3 of the pipeline: the controller (look-ahead, S-curve, real-time override) and the planners."""

@@ -1,0 +1,1 @@
+"""Stage 4 of the pipeline: the servo axes (reference → actual position) and contour error."""

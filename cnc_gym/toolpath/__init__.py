@@ -1,0 +1,12 @@
+"""Stage 2 of the pipeline: the canonical tool path and its geometry services."""
+
+from cnc_gym.toolpath.segments import (
+    PLANE_AXES,
+    Plane,
+    SegmentKind,
+    SegmentMode,
+    Toolpath,
+    ToolpathBuilder,
+)
+
+__all__ = ["PLANE_AXES", "Plane", "SegmentKind", "SegmentMode", "Toolpath", "ToolpathBuilder"]

@@ -1,0 +1,51 @@
+"""The tool path as plain records: the ``cnc-gym trace`` JSON Lines contract (see DESIGN.md)."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from cnc_gym.toolpath.segments import Plane, SegmentKind
+
+if TYPE_CHECKING:
+    from cnc_gym.toolpath.segments import Toolpath
+
+_KIND_NAMES = {k: k.name.lower() for k in SegmentKind}
+_PLANE_NAMES = {p: p.name for p in Plane}
+_DIGITS = 6  # 1 nm: far below any machine's resolution, keeps the output stable across platforms
+
+
+def _r(x: float) -> float:
+    y = round(float(x), _DIGITS)
+    return 0.0 if y == 0 else y  # no "-0.0" in the output
+
+
+def toolpath_records(tp: Toolpath) -> list[dict]:
+    records = []
+    for i in range(len(tp)):
+        kind = SegmentKind(int(tp.kind[i]))
+        rec: dict = {"kind": _KIND_NAMES[kind], "line": int(tp.line[i])}
+        if tp.file_index[i] != 0:
+            rec["file"] = tp.files[int(tp.file_index[i])]
+        if kind == SegmentKind.DWELL:
+            rec["seconds"] = _r(tp.dwell_s[i])
+        else:
+            rec["start"] = [_r(x) for x in tp.start[i]]
+            rec["end"] = [_r(x) for x in tp.end[i]]
+        if kind in (SegmentKind.LINE, SegmentKind.ARC, SegmentKind.NURBS):
+            rec["feed"] = _r(tp.feed[i])
+        if kind == SegmentKind.ARC:
+            rec["center"] = [_r(x) for x in tp.center[i]]
+            rec["plane"] = _PLANE_NAMES[Plane(int(tp.plane[i]))]
+            rec["sweep_deg"] = _r(math.degrees(tp.sweep[i]))
+            rec["radius"] = _r(tp.radius[i])
+        if tp.modes[i]:
+            rec["modes"] = [m.name.lower() for m in type_modes(int(tp.modes[i]))]
+        records.append(rec)
+    return records
+
+
+def type_modes(value: int):
+    from cnc_gym.toolpath.segments import SegmentMode
+
+    return [m for m in SegmentMode if m and value & m]

@@ -1,0 +1,361 @@
+"""The canonical tool path: what the interpreter emits and every later stage reads.
+
+A :class:`Toolpath` is immutable and array-backed: one row per segment, one numpy array per field, in
+machine coordinates (mm, s, mm/min). Building one goes through :class:`ToolpathBuilder`, which the
+interpreter appends to block by block; ``build()`` freezes the arrays.
+
+Arc convention (the same as the ``cnc-gym trace`` contract): a plane is named by its two in-plane axes
+``(u, v)`` and its normal ``w`` with ``u × v = w`` — XY (normal +Z), ZX (normal +Y), YZ (normal +X). The
+sweep is signed: positive is counter-clockwise seen from the + end of the normal (G03), negative is
+clockwise (G02). The centre's normal coordinate is the start's; a helix rises linearly in ``w``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum, IntFlag
+
+import numpy as np
+
+
+class SegmentKind(IntEnum):
+    RAPID = 0
+    LINE = 1
+    ARC = 2
+    DWELL = 3
+    NURBS = 4
+
+
+class Plane(IntEnum):
+    """Arc planes. The value indexes :data:`PLANE_AXES`."""
+
+    XY = 0
+    ZX = 1
+    YZ = 2
+
+
+#: (u, v, w) axis indices per plane, with u × v = w (w is the plane normal).
+PLANE_AXES: dict[Plane, tuple[int, int, int]] = {
+    Plane.XY: (0, 1, 2),
+    Plane.ZX: (2, 0, 1),
+    Plane.YZ: (1, 2, 0),
+}
+_PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
+
+
+class SegmentMode(IntFlag):
+    """Per-block modes the controller must honour."""
+
+    NONE = 0
+    EXACT_STOP = 1  # G09 one-shot or G61 modal: stop with in-position check at the block end
+    OVERRIDE_LOCKED = 2  # G63 tapping mode: override fixed at 100 %, no deceleration at block end
+    AUTO_CORNER = 4  # G62 automatic corner override
+    INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
+
+
+_FIELDS = (
+    "kind", "start", "end", "center", "plane", "radius", "start_angle", "sweep", "feed",
+    "dwell_s", "line", "file_index", "modes", "tool", "spindle_rpm",
+)  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class Toolpath:
+    """An immutable sequence of segments. Every array has one row per segment.
+
+    Fields (n = number of segments):
+
+    ==============  ===========  ====================================================================
+    kind            int8 (n)     :class:`SegmentKind`
+    start, end      float (n,3)  start and end point, machine coordinates, mm
+    center          float (n,3)  arc centre (NaN for non-arcs); normal coordinate = start's
+    plane           int8 (n)     :class:`Plane` of an arc (0 otherwise)
+    radius          float (n)    arc radius, mm (0 otherwise)
+    start_angle     float (n)    angle of ``start - center`` in the (u, v) plane, rad
+    sweep           float (n)    signed swept angle, rad (+ = CCW about the plane normal)
+    feed            float (n)    programmed feed, mm/min (NaN for rapids and dwells)
+    dwell_s         float (n)    dwell time, s (0 otherwise)
+    line            int32 (n)    1-based source line of the block that produced the segment
+    file_index      int16 (n)    index into ``files`` (subprograms live in other files)
+    modes           uint8 (n)    :class:`SegmentMode` flags
+    tool            int32 (n)    active tool number (T)
+    spindle_rpm     float (n)    commanded spindle speed (S), signed by direction (M03 +, M04 -, M05 0)
+    ==============  ===========  ====================================================================
+    """
+
+    kind: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    center: np.ndarray
+    plane: np.ndarray
+    radius: np.ndarray
+    start_angle: np.ndarray
+    sweep: np.ndarray
+    feed: np.ndarray
+    dwell_s: np.ndarray
+    line: np.ndarray
+    file_index: np.ndarray
+    modes: np.ndarray
+    tool: np.ndarray
+    spindle_rpm: np.ndarray
+    files: tuple[str, ...] = ("<program>",)
+    #: exact NURBS curves by segment index (kind == NURBS); room for the GSK G06.2 issue.
+    nurbs: dict[int, object] = field(default_factory=dict)
+    # Derived geometry, filled in __post_init__.
+    length: np.ndarray = field(init=False, repr=False)
+    planar_length: np.ndarray = field(init=False, repr=False)
+    s_start: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        n = len(self.kind)
+        for name in _FIELDS:
+            arr = getattr(self, name)
+            if len(arr) != n:
+                raise ValueError(f"toolpath field {name!r} has {len(arr)} rows, expected {n}")
+        delta = self.end - self.start
+        chord = np.linalg.norm(delta, axis=1)
+        is_arc = self.kind == SegmentKind.ARC
+        arc_planar = self.radius * np.abs(self.sweep)
+        rise = self._rise()
+        helix = np.hypot(arc_planar, rise)
+        length = np.where(is_arc, helix, np.where(self.kind == SegmentKind.DWELL, 0.0, chord))
+        planar = np.where(is_arc, arc_planar, length)
+        s_start = np.concatenate(([0.0], np.cumsum(length)))
+        object.__setattr__(self, "length", length)
+        object.__setattr__(self, "planar_length", planar)
+        object.__setattr__(self, "s_start", s_start)
+        for name in (*_FIELDS, "length", "planar_length", "s_start"):
+            getattr(self, name).flags.writeable = False
+
+    # ------------------------------------------------------------------ basics
+    def __len__(self) -> int:
+        return len(self.kind)
+
+    @property
+    def total_length(self) -> float:
+        """Path length of all motion segments (rapids included), mm."""
+        return float(self.s_start[-1])
+
+    @property
+    def path_feed(self) -> np.ndarray:
+        """Programmed feed along the 3-D path, mm/min.
+
+        GSK 25i (manual L1097): on a helix, F is the speed of the arc's projection on the plane, so the
+        speed along the helix is F · length / planar_length. Lines and flat arcs: F itself.
+        """
+        ratio = np.divide(self.length, self.planar_length, out=np.ones_like(self.length),
+                          where=self.planar_length > 0)  # fmt: skip
+        return self.feed * ratio
+
+    def _rise(self) -> np.ndarray:
+        """Helix rise along the plane normal (0 for flat arcs and non-arcs)."""
+        w = _PLANE_AXES_TABLE[self.plane.astype(np.int64), 2]
+        rows = np.arange(len(self.kind))
+        rise = self.end[rows, w] - self.start[rows, w]
+        return np.where(self.kind == SegmentKind.ARC, rise, 0.0)
+
+    def source(self, index: int) -> tuple[str, int]:
+        """(file, line) of segment ``index``."""
+        return self.files[int(self.file_index[index])], int(self.line[index])
+
+    # --------------------------------------------------------------- geometry
+    def segment_at(self, s: np.ndarray | float) -> np.ndarray:
+        """Index of the segment containing arc length ``s`` (zero-length segments are never returned)."""
+        s_arr = np.clip(np.asarray(s, dtype=float), 0.0, self.total_length)
+        idx = np.searchsorted(self.s_start, s_arr, side="right") - 1
+        idx = np.clip(idx, 0, max(len(self) - 1, 0))
+        # Skip backwards over zero-length segments (dwells) at the very end of the path.
+        if np.any(self.length[idx] == 0) and len(self):
+            nonzero = np.flatnonzero(self.length > 0)
+            if len(nonzero):
+                pos = np.searchsorted(nonzero, idx, side="right") - 1
+                idx = nonzero[np.clip(pos, 0, len(nonzero) - 1)]
+        return idx
+
+    def evaluate(self, s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Point, unit tangent and curvature (1/mm) at arc length(s) ``s``. Vectorised over ``s``.
+
+        Returns arrays of shape (m, 3), (m, 3), (m,) (m = number of query values).
+        """
+        s_arr = np.atleast_1d(np.asarray(s, dtype=float))
+        idx = self.segment_at(s_arr)
+        local = np.clip(s_arr - self.s_start[idx], 0.0, self.length[idx])
+        return self._evaluate_local(idx, local)
+
+    def _evaluate_local(self, idx: np.ndarray, local: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        m = len(idx)
+        point = np.empty((m, 3))
+        tangent = np.zeros((m, 3))
+        curvature = np.zeros(m)
+        kind = self.kind[idx]
+        length = self.length[idx]
+
+        straight = (kind == SegmentKind.LINE) | (kind == SegmentKind.RAPID) | (kind == SegmentKind.DWELL)
+        if np.any(straight):
+            i = idx[straight]
+            delta = self.end[i] - self.start[i]
+            ln = length[straight]
+            safe = np.where(ln > 0, ln, 1.0)
+            frac = np.where(ln > 0, local[straight] / safe, 0.0)
+            point[straight] = self.start[i] + delta * frac[:, None]
+            tangent[straight] = delta / safe[:, None]
+
+        arcs = kind == SegmentKind.ARC
+        if np.any(arcs):
+            i = idx[arcs]
+            frac = np.where(length[arcs] > 0, local[arcs] / np.where(length[arcs] > 0, length[arcs], 1), 0)
+            p, t, k = self._arc_geometry(i, frac)
+            point[arcs], tangent[arcs], curvature[arcs] = p, t, k
+
+        if np.any(kind == SegmentKind.NURBS):
+            raise NotImplementedError("NURBS segments are evaluated by the NURBS module (not yet built)")
+        return point, tangent, curvature
+
+    def _arc_geometry(self, i: np.ndarray, frac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Point, unit tangent and curvature on arcs ``i`` at fraction ``frac`` of their sweep."""
+        axes = _PLANE_AXES_TABLE[self.plane[i].astype(np.int64)]
+        u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
+        rows = np.arange(len(i))
+        radius = self.radius[i]
+        sweep = self.sweep[i]
+        rise = self.end[i, w] - self.start[i, w]
+        theta = self.start_angle[i] + sweep * frac
+        cos_t, sin_t = np.cos(theta), np.sin(theta)
+        point = np.empty((len(i), 3))
+        point[rows, u] = self.center[i, u] + radius * cos_t
+        point[rows, v] = self.center[i, v] + radius * sin_t
+        point[rows, w] = self.start[i, w] + rise * frac
+        # d(point)/d(frac), then normalise.
+        deriv = np.empty((len(i), 3))
+        deriv[rows, u] = -radius * sin_t * sweep
+        deriv[rows, v] = radius * cos_t * sweep
+        deriv[rows, w] = rise
+        norm = np.linalg.norm(deriv, axis=1)
+        tangent = deriv / np.where(norm > 0, norm, 1.0)[:, None]
+        # Helix curvature r / (r² + c²), c = rise per radian.
+        pitch = np.divide(rise, np.abs(sweep), out=np.zeros_like(rise), where=np.abs(sweep) > 0)
+        curvature = np.divide(radius, radius**2 + pitch**2, out=np.zeros_like(radius),
+                              where=radius > 0)  # fmt: skip
+        return point, tangent, curvature
+
+    def sample(self, spacing_mm: float) -> tuple[np.ndarray, np.ndarray]:
+        """Points every ``spacing_mm`` of arc length (plus every segment end). Returns (s, points)."""
+        if spacing_mm <= 0:
+            raise ValueError("spacing_mm must be positive")
+        s = np.concatenate((np.arange(0.0, self.total_length, spacing_mm), self.s_start))
+        s = np.unique(s)
+        point, _, _ = self.evaluate(s)
+        return s, point
+
+    def nearest(
+        self,
+        points: np.ndarray,
+        first: int = 0,
+        last: int | None = None,
+        *,
+        cutting_only: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Exact distance from each point to the path between segments ``first`` and ``last`` (exclusive).
+
+        ``cutting_only`` leaves rapids out (contour error is defined on cutting moves only). Returns
+        ``(distance_mm, segment_index, s)`` arrays of shape (m,). Where no segment qualifies the distance
+        is ``inf`` and the index ``-1``. Vectorised over points × segments; pass a moving window for speed.
+        """
+        from cnc_gym.toolpath.nearest import nearest_on_segments
+
+        last = len(self) if last is None else min(last, len(self))
+        return nearest_on_segments(self, np.atleast_2d(np.asarray(points, dtype=float)), first, last,
+                                   cutting_only)  # fmt: skip
+
+    def to_records(self) -> list[dict]:
+        """One dict per segment in the ``cnc-gym trace`` JSON Lines shape."""
+        from cnc_gym.toolpath.records import toolpath_records
+
+        return toolpath_records(self)
+
+
+class ToolpathBuilder:
+    """Appends segments row by row (plain Python lists: cheap appends) and freezes them into a Toolpath."""
+
+    def __init__(self, files: tuple[str, ...] = ("<program>",)) -> None:
+        self.files = list(files)
+        self._rows: dict[str, list] = {name: [] for name in _FIELDS}
+        self.nurbs: dict[int, object] = {}
+
+    def __len__(self) -> int:
+        return len(self._rows["kind"])
+
+    def file_index(self, file: str) -> int:
+        if file not in self.files:
+            self.files.append(file)
+        return self.files.index(file)
+
+    def _append(
+        self,
+        kind: SegmentKind,
+        start: tuple[float, float, float],
+        end: tuple[float, float, float],
+        *,
+        line: int,
+        file_index: int = 0,
+        feed: float = float("nan"),
+        center: tuple[float, float, float] = (float("nan"),) * 3,
+        plane: Plane = Plane.XY,
+        radius: float = 0.0,
+        start_angle: float = 0.0,
+        sweep: float = 0.0,
+        dwell_s: float = 0.0,
+        modes: SegmentMode = SegmentMode.NONE,
+        tool: int = 0,
+        spindle_rpm: float = 0.0,
+    ) -> None:
+        r = self._rows
+        r["kind"].append(int(kind))
+        r["start"].append(start)
+        r["end"].append(end)
+        r["center"].append(center)
+        r["plane"].append(int(plane))
+        r["radius"].append(radius)
+        r["start_angle"].append(start_angle)
+        r["sweep"].append(sweep)
+        r["feed"].append(feed)
+        r["dwell_s"].append(dwell_s)
+        r["line"].append(line)
+        r["file_index"].append(file_index)
+        r["modes"].append(int(modes))
+        r["tool"].append(tool)
+        r["spindle_rpm"].append(spindle_rpm)
+
+    def rapid(self, start, end, **kw) -> None:
+        self._append(SegmentKind.RAPID, tuple(start), tuple(end), **kw)
+
+    def line(self, start, end, feed: float, **kw) -> None:
+        self._append(SegmentKind.LINE, tuple(start), tuple(end), feed=feed, **kw)
+
+    def arc(self, start, end, center, plane: Plane, sweep: float, feed: float, **kw) -> None:
+        """Append an arc/helix. ``center``'s normal coordinate is replaced by the start's."""
+        u, v, w = PLANE_AXES[Plane(plane)]
+        c = list(center)
+        c[w] = start[w]
+        radius = float(np.hypot(start[u] - c[u], start[v] - c[v]))
+        start_angle = float(np.arctan2(start[v] - c[v], start[u] - c[u]))
+        self._append(SegmentKind.ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
+                     radius=radius, start_angle=start_angle, sweep=sweep, **kw)  # fmt: skip
+
+    def dwell(self, position, seconds: float, **kw) -> None:
+        self._append(SegmentKind.DWELL, tuple(position), tuple(position), dwell_s=seconds, **kw)
+
+    def build(self) -> Toolpath:
+        r = self._rows
+        dtypes = {
+            "kind": np.int8, "plane": np.int8, "line": np.int32, "file_index": np.int16,
+            "modes": np.uint8, "tool": np.int32,
+        }  # fmt: skip
+        arrays = {}
+        for name in _FIELDS:
+            dtype = dtypes.get(name, np.float64)
+            arr = np.array(r[name], dtype=dtype)
+            if name in ("start", "end", "center"):
+                arr = arr.reshape(-1, 3)
+            arrays[name] = arr
+        return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs))
