@@ -134,7 +134,9 @@ def _check_keys(data: dict, allowed: set[str], source: str, where: str) -> None:
     unknown = sorted(set(map(str, data)) - allowed)
     if unknown:
         prefix = f"{where}." if where else ""
-        raise ConfigError(f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(allowed))})")
+        raise ConfigError(
+            f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(allowed))})"
+        )
 
 
 def _build(cls, data: Any, source: str, where: str):

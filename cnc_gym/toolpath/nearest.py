@@ -2,8 +2,8 @@
 
 Distances are computed for every (point, segment) pair in a window, vectorised with numpy, and the
 minimum is kept. Lines use the clamped projection. Flat arcs use the angular projection onto the
-circle, clamped to the swept range, compared with both end points. Helices start from the planar
-projection on the turn nearest in height and take a few Newton steps on the squared distance.
+circle, clamped to the swept range, compared with both end points. Helices start from the best point
+of a grid (16 points per turn) and take a few Newton steps on the squared distance.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from cnc_gym.toolpath.segments import Toolpath
 
 _TWO_PI = 2.0 * np.pi
-_NEWTON_STEPS = 4
+_NEWTON_STEPS = 6
 
 
 def nearest_on_segments(
@@ -88,40 +88,68 @@ def _nearest_arcs(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
     pw = points[:, w]
     phi = np.arctan2(pv - cv, pu - cu) - theta0
     phi_dir = np.mod(phi * direction, _TWO_PI)  # angle travelled from the start, in [0, 2π)
-    # Turn nearest in height for helices with more than one turn.
-    frac_h = np.divide(pw - w0, rise, out=np.zeros_like(pw), where=rise != 0)
-    turns = np.round((np.clip(frac_h, 0.0, 1.0) * abs_sweep - phi_dir) / _TWO_PI)
-    turns = np.where(rise != 0, np.maximum(turns, 0.0), 0.0)
-    travelled = np.clip(phi_dir + _TWO_PI * turns, 0.0, abs_sweep)
+    travelled = np.minimum(phi_dir, abs_sweep)  # beyond the sweep: the end points are compared below
     frac = np.divide(travelled, abs_sweep, out=np.zeros_like(travelled), where=abs_sweep > 0)
 
     def position(frac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         ang = theta0 + sweep * frac
         return cu + radius * np.cos(ang), cv + radius * np.sin(ang), w0 + rise * frac
 
-    helix = rise != 0
-    if np.any(helix):
-        for _ in range(_NEWTON_STEPS):
-            ang = theta0 + sweep * frac
-            cos_a, sin_a = np.cos(ang), np.sin(ang)
-            eu = cu + radius * cos_a - pu
-            ev = cv + radius * sin_a - pv
-            ew = w0 + rise * frac - pw
-            du, dv, dw = -radius * sin_a * sweep, radius * cos_a * sweep, rise
-            ddu, ddv = -radius * cos_a * sweep**2, -radius * sin_a * sweep**2
-            grad = eu * du + ev * dv + ew * dw
-            hess = du * du + dv * dv + dw * dw + eu * ddu + ev * ddv
-            step = np.divide(grad, hess, out=np.zeros_like(grad), where=hess > 1e-12)
-            frac = np.where(helix, np.clip(frac - step, 0.0, 1.0), frac)
-
-    def dist_at(frac: np.ndarray) -> np.ndarray:
+    def dist_at_frac(frac: np.ndarray) -> np.ndarray:
         qu, qv, qw = position(frac)
         return np.sqrt((qu - pu) ** 2 + (qv - pv) ** 2 + (qw - pw) ** 2)
 
-    d_inner = dist_at(frac)
-    d_start = dist_at(np.zeros_like(frac))
-    d_end = dist_at(np.ones_like(frac))
+    helix = rise != 0
+    if np.any(helix):
+        frac = np.where(helix, _helix_nearest_frac(points, seg, tp, helix, axes), frac)
+
+    d_inner = dist_at_frac(frac)
+    d_start = dist_at_frac(np.zeros_like(frac))
+    d_end = dist_at_frac(np.ones_like(frac))
     choice = np.argmin(np.stack((d_inner, d_start, d_end)), axis=0)
     dist = np.choose(choice, (d_inner, d_start, d_end))
     frac = np.choose(choice, (frac, np.zeros_like(frac), np.ones_like(frac)))
     return seg, dist, frac * tp.length[seg][None, :]
+
+
+def _helix_nearest_frac(points, seg, tp, helix, axes) -> np.ndarray:
+    """Sweep fraction of the nearest point on each helix column (m, k); other columns are left at 0.
+
+    A helix can have several local minima of the distance (one per turn, and more near the axis). Newton
+    steps run from every point of a grid with 16 points per turn, so every basin holds a start; the best
+    converged point wins.
+    """
+    h = np.flatnonzero(helix)
+    cols = np.arange(len(h))
+    u, v, w = axes[h, 0], axes[h, 1], axes[h, 2]
+    cu, cv = tp.center[seg[h]][cols, u], tp.center[seg[h]][cols, v]
+    w0 = tp.start[seg[h]][cols, w]
+    rise = tp.end[seg[h]][cols, w] - w0
+    radius, sweep, theta0 = tp.radius[seg[h]], tp.sweep[seg[h]], tp.start_angle[seg[h]]
+    turns = float(np.max(np.abs(sweep))) / _TWO_PI
+    grid = np.linspace(0.0, 1.0, int(min(16 * max(turns, 1.0), 512)) + 1)
+    # Shapes: (m, kh, g).
+    pu, pv, pw = (points[:, a][:, :, None] for a in (u, v, w))
+    cu, cv, w0, rise, radius, sweep, theta0 = (
+        x[None, :, None] for x in (cu, cv, w0, rise, radius, sweep, theta0)
+    )
+    frac = np.broadcast_to(grid, (len(points), len(h), len(grid))).copy()
+    for _ in range(_NEWTON_STEPS):
+        ang = theta0 + sweep * frac
+        cos_a, sin_a = np.cos(ang), np.sin(ang)
+        eu = cu + radius * cos_a - pu
+        ev = cv + radius * sin_a - pv
+        ew = w0 + rise * frac - pw
+        du, dv = -radius * sin_a * sweep, radius * cos_a * sweep
+        grad = eu * du + ev * dv + ew * rise
+        hess = du * du + dv * dv + rise * rise - (eu * cos_a + ev * sin_a) * radius * sweep**2
+        # Newton only where the model is convex; elsewhere the grid start stays (another start covers it).
+        step = np.divide(grad, hess, out=np.zeros_like(grad), where=hess > 1e-12)
+        frac = np.clip(frac - step, 0.0, 1.0)
+    ang = theta0 + sweep * frac
+    d2 = (cu + radius * np.cos(ang) - pu) ** 2 + (cv + radius * np.sin(ang) - pv) ** 2
+    d2 += (w0 + rise * frac - pw) ** 2
+    best = np.take_along_axis(frac, np.argmin(d2, axis=2)[:, :, None], axis=2)[:, :, 0]
+    out = np.zeros((len(points), len(helix)))
+    out[:, h] = best
+    return out

@@ -182,7 +182,9 @@ class Toolpath:
         local = np.clip(s_arr - self.s_start[idx], 0.0, self.length[idx])
         return self._evaluate_local(idx, local)
 
-    def _evaluate_local(self, idx: np.ndarray, local: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _evaluate_local(
+        self, idx: np.ndarray, local: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         m = len(idx)
         point = np.empty((m, 3))
         tangent = np.zeros((m, 3))
