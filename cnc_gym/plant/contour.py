@@ -131,7 +131,7 @@ class ContourErrorMeter:
         helix = rise != 0
         flat = arcs[~helix]
         u, v, w, rows = u[~helix], v[~helix], w[~helix], np.arange(len(flat))
-        start, end, center = start[~helix], end[~helix], center[~helix]
+        start, center = start[~helix], center[~helix]
         radius = tp.radius[flat]
         sweep = tp.sweep[flat]
         theta0 = tp.start_angle[flat]
@@ -157,11 +157,23 @@ class ContourErrorMeter:
             arc_dir=np.where(sweep >= 0, 1.0, -1.0),
             arc_small=abs_sweep <= np.pi,
             arc_full=abs_sweep >= 2.0 * np.pi * (1.0 - 1e-12),
-            arc_ends=np.concatenate((start, end)),
+            arc_ends=self._arc_points(u, v, w, center, radius, theta0, theta1),
             helices=tuple(int(i) for i in arcs[helix]),
         )
         self._cache[key] = window
         return window
+
+    @staticmethod
+    def _arc_points(u, v, w, center, radius, theta0, theta1) -> np.ndarray:
+        """Start then end points of flat arcs from their geometry (as the reference service does)."""
+        rows = np.arange(len(radius))
+        points = np.empty((2 * len(radius), 3))
+        for block, theta in enumerate((theta0, theta1)):
+            part = points[block * len(radius) : (block + 1) * len(radius)]
+            part[rows, u] = center[rows, u] + radius * np.cos(theta)
+            part[rows, v] = center[rows, v] + radius * np.sin(theta)
+            part[rows, w] = center[rows, w]
+        return points
 
     # ------------------------------------------------------------------ measuring
     def measure(self, points: np.ndarray, segment_hint: int | np.ndarray) -> np.ndarray:

@@ -1,0 +1,175 @@
+"""Contour-error meter: exact distances against hand-computed values, the rapid/dwell rule, the window."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cnc_gym.plant import ContourErrorMeter
+from cnc_gym.toolpath import Plane, ToolpathBuilder
+
+
+def build(*segments):
+    """segments: ("rapid"|"line", start, end) | ("arc", start, end, center, plane, sweep) | ("dwell", p)."""
+    builder = ToolpathBuilder()
+    for number, seg in enumerate(segments, start=1):
+        if seg[0] == "rapid":
+            builder.rapid(seg[1], seg[2], line=number)
+        elif seg[0] == "line":
+            builder.line(seg[1], seg[2], feed=1000.0, line=number)
+        elif seg[0] == "arc":
+            builder.arc(seg[1], seg[2], seg[3], seg[4], seg[5], feed=1000.0, line=number)
+        else:
+            builder.dwell(seg[1], 1.0, line=number)
+    return builder.build()
+
+
+def test_line_distances_by_hand():
+    tp = build(("line", (0, 0, 0), (10, 0, 0)))
+    meter = ContourErrorMeter(tp)
+    points = np.array([
+        [5.0, 3.0, 4.0],   # beside the middle: √(3² + 4²) = 5
+        [13.0, 4.0, 0.0],  # past the end: distance to (10, 0, 0) = √(9 + 16) = 5
+        [-1.0, 0.0, 0.0],  # before the start: 1
+        [7.5, 0.0, 0.0],   # on the line: 0
+    ])  # fmt: skip
+    np.testing.assert_allclose(meter.measure(points, 0), [5.0, 5.0, 1.0, 0.0], atol=1e-12)
+
+
+def test_arc_distances_by_hand():
+    # Quarter arc CCW (G03) about the origin, R 10, from (10, 0) to (0, 10) in XY.
+    tp = build(("arc", (10, 0, 0), (0, 10, 0), (0, 0, 0), Plane.XY, math.pi / 2))
+    meter = ContourErrorMeter(tp)
+    points = np.array([
+        [3.0, 4.0, 0.0],    # angle inside the sweep, radius 5: 10 − 5 = 5
+        [6.0, 8.0, 5.0],    # on the cylinder, 5 above: 5
+        [0.0, -10.0, 0.0],  # angle −90° outside the sweep: nearest end (10, 0): √(100 + 100)
+        [12.0, 16.0, 0.0],  # radius 20 inside the sweep: 10
+        [0.0, 0.0, 0.0],    # the centre: every arc point is R away
+    ])  # fmt: skip
+    expected = [5.0, 5.0, math.sqrt(200.0), 10.0, 10.0]
+    np.testing.assert_allclose(meter.measure(points, 0), expected, atol=1e-12)
+
+
+def test_large_clockwise_arc_by_hand():
+    # G02 through 270°: from (10, 0) clockwise to (0, 10), passing (0, −10) and (−10, 0). The gap is the
+    # open first quadrant (0° … 90°).
+    tp = build(("arc", (10, 0, 0), (0, 10, 0), (0, 0, 0), Plane.XY, -1.5 * math.pi))
+    meter = ContourErrorMeter(tp)
+    gap_point = 10.0 * np.array([math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0])
+    points = np.array([[0.0, -7.0, 0.0], [-13.0, 0.0, 0.0], gap_point])
+    # In the gap at 45° on the circle, both ends are a chord of 45° away: 2·10·sin(22.5°) = 7.6537.
+    expected = [3.0, 3.0, 20.0 * math.sin(math.pi / 8)]
+    np.testing.assert_allclose(meter.measure(points, 0), expected, atol=1e-12)
+
+
+def test_zx_plane_arc_and_full_circle():
+    # ZX plane (normal +Y): u = Z, v = X. Half circle about (0, 0, 0) from Z = 10 … centre on Y = 2.
+    tp = build(
+        ("arc", (0, 2, 10), (0, 2, -10), (0, 2, 0), Plane.ZX, math.pi),  # through X = +10 (CCW about +Y)
+        ("arc", (0, 2, -10), (0, 2, -10), (0, 2, 0), Plane.ZX, 2 * math.pi),  # full circle
+    )
+    meter = ContourErrorMeter(tp, window_back=0, window_ahead=0)
+    # CCW about +Y from +Z: angle in (u = Z, v = X) grows towards +X, so the half circle covers X ≥ 0.
+    points = np.array([[6.0, 2.0, 0.0], [-6.0, 2.0, 0.0], [0.0, 5.0, 0.0]])
+    # (6, 2, 0): radial 10 − 6 = 4. (−6, 2, 0) is on the missing half: nearest end is (0, 2, ±10):
+    # √(36 + 100). (0, 5, 0) is the centre lifted 3 along the normal: √(100 + 9).
+    np.testing.assert_allclose(meter.measure(points, 0), [4.0, math.sqrt(136.0), math.sqrt(109.0)],
+                               atol=1e-12)  # fmt: skip
+    # The full circle has no missing half: (−6, 2, 0) is 4 from it.
+    np.testing.assert_allclose(meter.measure(points, 1), [4.0, 4.0, math.sqrt(109.0)], atol=1e-12)
+
+
+def test_rapids_and_dwells_are_excluded():
+    tp = build(
+        ("rapid", (0, 0, 10), (0, 0, 0)),
+        ("line", (0, 0, 0), (10, 0, 0)),
+        ("dwell", (10, 0, 0)),
+        ("rapid", (10, 0, 0), (10, 0, 10)),
+    )
+    meter = ContourErrorMeter(tp)
+    far = np.array([[50.0, 50.0, 50.0], [0.0, 0.0, 5.0]])
+    # Reference on a rapid or a dwell: no contour error, whatever the actual point.
+    np.testing.assert_array_equal(meter.measure(far, 0), [0.0, 0.0])
+    np.testing.assert_array_equal(meter.measure(far, 2), [0.0, 0.0])
+    np.testing.assert_array_equal(meter.measure(far, 3), [0.0, 0.0])
+    # Reference on the cut: the rapid is no candidate, so a point on the rapid is measured to the line.
+    np.testing.assert_allclose(meter.measure(far[1:], 1), [5.0], atol=1e-12)
+    # Per-point hints: only the points whose own reference is cutting count.
+    np.testing.assert_allclose(meter.measure(far, np.array([0, 1])), [0.0, 5.0], atol=1e-12)
+    # Out-of-range hints count as not cutting (no exception, no NaN).
+    np.testing.assert_array_equal(meter.measure(far, 99), [0.0, 0.0])
+
+
+def test_window_moves_with_the_hint():
+    # A zig-zag pocket: pass A at y = 0, a 1 mm step-over, pass B back at y = 1, then far along.
+    tp = build(
+        ("line", (0, 0, 0), (100, 0, 0)),  # 0: pass A
+        ("line", (100, 0, 0), (100, 1, 0)),  # 1: step-over
+        ("line", (100, 1, 0), (0, 1, 0)),  # 2: pass B
+    )
+    point = np.array([[50.0, 0.9, 0.0]])  # 0.9 mm off pass A, 0.1 mm off pass B
+    narrow = ContourErrorMeter(tp, window_back=0, window_ahead=0)
+    assert narrow.window(0) == (0, 1)
+    assert narrow.measure(point, 0)[0] == pytest.approx(0.9)  # pass B is outside the window
+    assert narrow.measure(point, 2)[0] == pytest.approx(0.1)
+    wide = ContourErrorMeter(tp, window_back=2, window_ahead=8)
+    assert wide.window(0) == (0, 3)
+    assert wide.measure(point, 0)[0] == pytest.approx(0.1)  # a wide window sees the neighbour pass
+
+
+def test_window_back_mm_covers_lag_over_short_segments():
+    # 100 segments of 0.1 mm along X. A lag of 2.5 mm is 25 segments: 2 segments back miss it.
+    builder = ToolpathBuilder()
+    for i in range(100):
+        builder.line((0.1 * i, 0, 0), (0.1 * (i + 1), 0, 0), feed=1000.0, line=i + 1)
+    tp = builder.build()
+    actual = np.array([[5.0, 0.02, 0.0]])  # truly 0.02 mm off the path
+    short = ContourErrorMeter(tp, window_back=2, window_ahead=8)
+    assert short.measure(actual, 75)[0] == pytest.approx(np.hypot(7.3 - 5.0, 0.02))  # overestimates
+    reach = ContourErrorMeter(tp, window_back=2, window_ahead=8, window_back_mm=3.0)
+    assert reach.window(75)[0] <= 45
+    assert reach.measure(actual, 75)[0] == pytest.approx(0.02)
+
+
+def test_agrees_with_the_toolpath_nearest_service():
+    # Lines, flat arcs of every size and direction, a helix and a multi-turn helix; random points and hints.
+    tp = build(
+        ("rapid", (0, 0, 10), (0, 0, 0)),
+        ("line", (0, 0, 0), (10, 0, 0)),
+        ("arc", (10, 0, 0), (20, 0, 0), (15, 0, 0), Plane.XY, -math.pi),
+        ("line", (20, 0, 0), (20, -10, 0)),
+        ("arc", (20, -10, 0), (20, -10, 0), (15, -10, 0), Plane.XY, 2 * math.pi),
+        ("arc", (20, -10, 0), (20, -10, -3), (15, -10, 0), Plane.ZX, 1.5),
+        ("arc", (20, -10, -3), (10, -10, -6), (15, -10, -3), Plane.XY, -3 * math.pi),
+        ("dwell", (10, -10, -6)),
+        ("arc", (10, -10, -6), (10, -6, -6), (10, -8, -6), Plane.YZ, -math.pi),
+        ("line", (10, -6, -6), (0, 0, 0)),
+    )
+    meter = ContourErrorMeter(tp, window_back=2, window_ahead=3)
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(300):
+        points = rng.uniform(-5.0, 25.0, (6, 3))
+        hint = int(rng.integers(0, len(tp)))
+        measured = meter.measure(points, hint)
+        assert np.all(np.isfinite(measured))
+        if tp.kind[hint] in (0, 3):
+            continue
+        first, last = meter.window(hint)
+        reference, _, _ = tp.nearest(points, first, last, cutting_only=True)
+        np.testing.assert_allclose(measured, reference, rtol=1e-9, atol=1e-9)
+        checked += 1
+    assert checked > 150
+
+
+def test_bad_hint_shape_and_window_sizes():
+    tp = build(("line", (0, 0, 0), (10, 0, 0)))
+    meter = ContourErrorMeter(tp)
+    with pytest.raises(ValueError, match="segment_hint"):
+        meter.measure(np.zeros((3, 3)), np.array([0, 0]))
+    with pytest.raises(ValueError):
+        ContourErrorMeter(tp, window_back=-1)
+    assert meter.measure(np.zeros((0, 3)), 0).shape == (0,)
