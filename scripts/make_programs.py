@@ -65,7 +65,9 @@ CIRCLE_FEED = 3000.0
 
 def circle() -> str:
     r = CIRCLE_RADIUS_MM
-    lines = header("circle", [f"full circle R{r:g} mm, counter-clockwise (G03) from (R, 0), F{CIRCLE_FEED:g}"])
+    lines = header(
+        "circle", [f"full circle R{r:g} mm, counter-clockwise (G03) from (R, 0), F{CIRCLE_FEED:g}"]
+    )
     lines += approach(r, 0.0)
     lines.append(f"G03 X{fmt(r)} Y{fmt(0.0)} I{fmt(-r)} J{fmt(0.0)} F{fmt(CIRCLE_FEED)}")
     lines += footer()
@@ -92,7 +94,9 @@ def star_vertices(outer: float) -> np.ndarray:
 
 def star() -> str:
     v = star_vertices(STAR_OUTER_RADIUS_MM)
-    lines = header("star", [f"pentagram, tip radius {STAR_OUTER_RADIUS_MM:g} mm, ten G01 edges, F{STAR_FEED:g}"])
+    lines = header(
+        "star", [f"pentagram, tip radius {STAR_OUTER_RADIUS_MM:g} mm, ten G01 edges, F{STAR_FEED:g}"]
+    )
     lines += approach(*v[0])
     lines.append(f"G01 X{fmt(v[1, 0])} Y{fmt(v[1, 1])} F{fmt(STAR_FEED)}")
     lines += [f"X{fmt(x)} Y{fmt(y)}" for x, y in v[2:]]
@@ -125,8 +129,8 @@ def freeform() -> str:
     p = lissajous_points(LISSAJOUS_SEGMENT_MM)
     seg = np.linalg.norm(np.diff(p, axis=0), axis=1)
     lines = header("freeform", [
-        f"3:2 Lissajous x = {LISSAJOUS_AX_MM:g} sin 3t, y = {LISSAJOUS_AY_MM:g} sin 2t as {len(seg)} G01 segments",
-        f"of {seg.min():.2f}-{seg.max():.2f} mm, F{FREEFORM_FEED:g}",
+        f"3:2 Lissajous x = {LISSAJOUS_AX_MM:g} sin 3t, y = {LISSAJOUS_AY_MM:g} sin 2t",
+        f"as {len(seg)} G01 segments of {seg.min():.2f}-{seg.max():.2f} mm, F{FREEFORM_FEED:g}",
     ])  # fmt: skip
     lines += approach(*p[0])
     lines.append(f"G01 X{fmt(p[1, 0])} Y{fmt(p[1, 1])} F{fmt(FREEFORM_FEED)}")

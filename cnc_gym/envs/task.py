@@ -22,7 +22,7 @@ ACTION_MODES = ("override", "feed")
 
 @dataclass(frozen=True)
 class RewardWeights:
-    """Weights of the per-step reward ``r = -time·dt/T - contour_error·min(e/tol, cap)² - violation·[e>tol]``."""
+    """Reward weights: ``r = -time·dt/T - contour_error·min(e/tol, cap)² - violation·[e > tol]`` per step."""
 
     time: float = 10.0  # whole-episode time cost at nominal (100 %) speed
     contour_error: float = 0.05  # per step, per (e_max / tol)²
@@ -113,7 +113,7 @@ def reward_from_dict(data: Any, source: str = "<dict>") -> RewardWeights:
     return RewardWeights(**values)
 
 
-def resolve_reward(reward: None | str | Path | dict | RewardWeights) -> RewardWeights:
+def resolve_reward(reward: str | Path | dict | RewardWeights | None) -> RewardWeights:
     """The env's ``reward`` argument: None (the default task's weights), a task file, a dict or weights."""
     if reward is None:
         return load_task("default").reward
@@ -123,7 +123,9 @@ def resolve_reward(reward: None | str | Path | dict | RewardWeights) -> RewardWe
         return reward_from_dict(reward, "reward")
     if isinstance(reward, str | Path):
         return load_task(reward).reward
-    raise ConfigError(f"reward must be None, a task YAML path or a dict of weights, got {type(reward).__name__}")
+    raise ConfigError(
+        f"reward must be None, a task YAML path or a dict of weights, got {type(reward).__name__}"
+    )
 
 
 def _positive_number(raw: Any, source: str, key: str) -> float:
@@ -136,4 +138,6 @@ def _check_keys(data: dict, allowed: set[str], source: str, where: str) -> None:
     unknown = sorted(set(map(str, data)) - allowed)
     if unknown:
         prefix = f"{where}." if where else ""
-        raise ConfigError(f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(allowed))})")
+        raise ConfigError(
+            f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(allowed))})"
+        )

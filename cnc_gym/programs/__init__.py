@@ -57,7 +57,9 @@ def load_program(program: str | Path, dialect: str = "gsk25i") -> tuple[str, Too
     :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     if not isinstance(program, str | Path):
-        raise ConfigError(f"a program must be a built-in name, a path or G-code text, got {type(program).__name__}")
+        raise ConfigError(
+            f"a program must be a built-in name, a path or G-code text, got {type(program).__name__}"
+        )
     if isinstance(program, str) and program in BUILTIN_PROGRAMS:
         return program, _load_file(str(program_path(program)), dialect, 0.0)
     if isinstance(program, Path) or _looks_like_path(program):
