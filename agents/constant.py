@@ -1,0 +1,31 @@
+"""The simplest baseline: the operator leaves the override knob at one value for the whole program."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from agents.base import override_action, require_override_mode
+from cnc_gym.errors import CncGymError
+
+
+class ConstantOverride:
+    """Hold the feed override at ``override`` (1.0 = 100 %) for the whole episode."""
+
+    def __init__(self, override: float) -> None:
+        override = float(override)
+        if not np.isfinite(override) or not 0.0 <= override <= 2.0:
+            raise CncGymError(f"constant override must be within 0..2 (0 %..200 %), got {override!r}")
+        self.override = override
+        self.name = f"constant:{override:g}"
+        self._action = override_action(override)
+
+    def reset(self, env: Any) -> None:
+        require_override_mode(env, self.name)
+        max_override = float(env.unwrapped.machine.controller.max_override)
+        if self.override > max_override + 1e-12:
+            raise CncGymError(f"{self.name}: above this machine's max override {max_override:g}")
+
+    def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        return self._action.copy()

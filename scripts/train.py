@@ -1,0 +1,42 @@
+"""Train a feed-override agent with Stable-Baselines3 PPO.
+
+    .venv/bin/python scripts/train.py --config configs/train/ppo.yaml [--timesteps N] [--out DIR]
+
+The config (YAML, read with ``yaml.safe_load``; unknown keys are errors) names the env (programs, machine,
+dialect, action mode, control period, reward weights), the number of in-process envs (DummyVecEnv) and
+the PPO settings. The run writes, under ``<output_dir>/<run_name>/``: ``model.zip`` (load it with
+``PPO.load``), ``config.yaml`` (the config as used), and TensorBoard logs under ``<output_dir>/tensorboard``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from agents.training import load_config, train
+from cnc_gym.errors import CncGymError
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--config", default="configs/train/ppo.yaml", help="training config (YAML)")
+    parser.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")
+    parser.add_argument("--out", default=None, help="override output_dir")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.config)
+        train(
+            config, timesteps=args.timesteps, out=args.out, progress_bar=False if args.no_progress else None
+        )
+    except CncGymError as exc:
+        print(f"train: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,56 @@
+"""Policy specs (`constant:<x>`, `classical`, a model path) and the constant-override baseline."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agents import ClassicalPlanner, ConstantOverride, make_policy
+from agents.base import override_action
+from cnc_gym.errors import CncGymError
+
+
+@pytest.mark.parametrize(("spec", "override"), [("constant:1.0", 1.0), ("constant:0.5", 0.5),
+                                                 ("constant:2", 2.0), (" constant:1.25 ", 1.25)])  # fmt: skip
+def test_constant_spec(spec, override):
+    policy = make_policy(spec)
+    assert isinstance(policy, ConstantOverride)
+    assert policy.override == override
+    # The env maps action a to override a + 1, so the action is override − 1.
+    action = policy.act(np.zeros(4), {})
+    assert action.dtype == np.float32 and action.shape == (1,)
+    assert action[0] == pytest.approx(override - 1.0)
+
+
+def test_classical_spec():
+    assert isinstance(make_policy("classical"), ClassicalPlanner)
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("constant:fast", "needs a number"),
+        ("constant:3", "within 0..2"),
+        ("constant:-0.1", "within 0..2"),
+        ("constant:nan", "within 0..2"),
+        ("greedy", "unknown policy"),
+        ("no/such/model.zip", "no such model file"),
+    ],
+)
+def test_bad_specs_are_one_clear_error(spec, message):
+    with pytest.raises(CncGymError, match=message):
+        make_policy(spec)
+
+
+def test_a_file_that_is_not_a_model(tmp_path):
+    fake = tmp_path / "model.zip"
+    fake.write_bytes(b"not a zip at all")
+    with pytest.raises(CncGymError, match="not a Stable-Baselines3 model"):
+        make_policy(str(fake))
+
+
+def test_override_action_clips_to_the_action_box():
+    assert override_action(0.0)[0] == -1.0
+    assert override_action(2.0)[0] == 1.0
+    assert override_action(5.0)[0] == 1.0  # beyond 200 %: clipped to the box
+    assert override_action(1.5)[0] == pytest.approx(0.5)
