@@ -14,10 +14,10 @@ cutting moves only, against the programmed path after compensation (the tool pat
   just after a rapid → cut junction that the controller did not stop at, the lag left on the rapid is
   measured against the cutting segments (the rapid is not a candidate).
 - **Exactness.** Lines: clamped projection. Flat arcs: the radial distance where the point's angle lies
-  inside the swept range, else the nearer end point. Helices: the tool path's own exact service
-  (:meth:`~cnc_gym.toolpath.Toolpath.nearest`), one call per helix in the window. This module is a
-  faster, window-cached re-implementation of ``cnc_gym/toolpath/nearest.py`` for lines and flat arcs;
-  the tests check the two agree.
+  inside the swept range, else the nearer end point. Helices and NURBS: the tool path's own exact
+  service (:meth:`~cnc_gym.toolpath.Toolpath.nearest`), one call per such segment in the window. This
+  module is a faster, window-cached re-implementation of ``cnc_gym/toolpath/nearest.py`` for lines
+  and flat arcs (one matmul per call, see :class:`_Window`); the tests check the two agree.
 """
 
 from __future__ import annotations
@@ -33,32 +33,28 @@ _PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
 
 @dataclass(frozen=True)
 class _Window:
-    """Geometry of the cutting segments of one window, laid out for broadcasting against points."""
+    """The cutting geometry of one window as k *elements*, laid out so that one matmul serves them all.
 
-    first: int
-    last: int
-    # Lines (k_l,): start (k_l, 3), direction end − start (k_l, 3), 1/|d|² (0 for zero-length lines).
-    line_start: np.ndarray
-    line_dir: np.ndarray
-    line_inv_len2: np.ndarray
-    # Flat arcs (k_a,): plane axes, centre in (u, v), height w0, radius, unit radial vectors to the
-    # start and end, direction sign, whether |sweep| <= π, whether it is a full circle, end points.
-    arc_u: np.ndarray
-    arc_v: np.ndarray
-    arc_w: np.ndarray
-    arc_cu: np.ndarray
-    arc_cv: np.ndarray
-    arc_w0: np.ndarray
-    arc_radius: np.ndarray
-    arc_su: np.ndarray
-    arc_sv: np.ndarray
-    arc_eu: np.ndarray
-    arc_ev: np.ndarray
-    arc_dir: np.ndarray
-    arc_small: np.ndarray
-    arc_full: np.ndarray
-    arc_ends: np.ndarray  # (2·k_a, 3): starts then ends
-    helices: tuple[int, ...]
+    Elements are line segments, flat arc pieces of at most half a turn (longer arcs are split), and the
+    end points of both. Each element has five columns of ``weights`` (3, 5k); ``points @ weights −
+    offsets`` gives per element ``(du, dv, dw, past_start, before_end)``, and the squared distance to the
+    element is ``(hypot(du, dv) − radius)² + dw²`` where ``past_start ≥ 0`` and ``before_end ≥ 0``:
+
+    - arc piece: the point relative to the centre in the arc's own (u, v, w) axes; the cross products
+      with the unit radii to the piece's start and end (travel direction folded in) are both ≥ 0 exactly
+      when the point's angle lies in the piece's range (≤ π);
+    - line: du, dv = components along two unit normals (hypot = distance to the infinite line,
+      radius 0), dw = 0; past_start / before_end = distance along the line past its start / before its end;
+    - end point: du, dv, dw = the point minus it, radius 0, always "inside".
+
+    The columns are selections, unit vectors and offsets: no |p|² − 2p·q + |q|² cancellation, so the
+    result is exact to rounding of the coordinates. Helices and NURBS go to ``others``.
+    """
+
+    weights: np.ndarray  # (3, 5k)
+    offsets: np.ndarray  # (5k,)
+    radius: np.ndarray  # (k,)
+    others: tuple[int, ...]  # helices and NURBS: measured with Toolpath.nearest, one call each
 
 
 class ContourErrorMeter:
@@ -84,9 +80,7 @@ class ContourErrorMeter:
         self.window_ahead = int(window_ahead)
         self.window_back_mm = float(window_back_mm)
         kind = np.asarray(toolpath.kind)
-        self._cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC)
-        if np.any(kind == SegmentKind.NURBS):
-            raise NotImplementedError("contour error on NURBS segments is not built yet")
+        self._cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
         self._n = len(toolpath)
         self._cache: dict[tuple[int, int], _Window] = {}
         self.reset()
@@ -114,66 +108,9 @@ class ContourErrorMeter:
             return cached
         if len(self._cache) > 64:  # the hint moves forward: old windows are not needed again
             self._cache.clear()
-        tp = self.toolpath
-        idx = np.arange(first, last)
-        kind = tp.kind[idx]
-        lines = idx[kind == SegmentKind.LINE]
-        arcs = idx[kind == SegmentKind.ARC]
-        line_dir = tp.end[lines] - tp.start[lines]
-        len2 = np.einsum("ij,ij->i", line_dir, line_dir)
-        inv_len2 = np.divide(1.0, len2, out=np.zeros_like(len2), where=len2 > 0)
-
-        axes = _PLANE_AXES_TABLE[tp.plane[arcs].astype(np.int64)]
-        u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
-        rows = np.arange(len(arcs))
-        start, end, center = tp.start[arcs], tp.end[arcs], tp.center[arcs]
-        rise = end[rows, w] - start[rows, w]
-        helix = rise != 0
-        flat = arcs[~helix]
-        u, v, w, rows = u[~helix], v[~helix], w[~helix], np.arange(len(flat))
-        start, center = start[~helix], center[~helix]
-        radius = tp.radius[flat]
-        sweep = tp.sweep[flat]
-        theta0 = tp.start_angle[flat]
-        theta1 = theta0 + sweep
-        abs_sweep = np.abs(sweep)
-        window = _Window(
-            first=first,
-            last=last,
-            line_start=np.ascontiguousarray(tp.start[lines]),
-            line_dir=line_dir,
-            line_inv_len2=inv_len2,
-            arc_u=u,
-            arc_v=v,
-            arc_w=w,
-            arc_cu=center[rows, u],
-            arc_cv=center[rows, v],
-            arc_w0=start[rows, w],
-            arc_radius=radius,
-            arc_su=np.cos(theta0),
-            arc_sv=np.sin(theta0),
-            arc_eu=np.cos(theta1),
-            arc_ev=np.sin(theta1),
-            arc_dir=np.where(sweep >= 0, 1.0, -1.0),
-            arc_small=abs_sweep <= np.pi,
-            arc_full=abs_sweep >= 2.0 * np.pi * (1.0 - 1e-12),
-            arc_ends=self._arc_points(u, v, w, center, radius, theta0, theta1),
-            helices=tuple(int(i) for i in arcs[helix]),
-        )
+        window = _build_window(self.toolpath, first, last)
         self._cache[key] = window
         return window
-
-    @staticmethod
-    def _arc_points(u, v, w, center, radius, theta0, theta1) -> np.ndarray:
-        """Start then end points of flat arcs from their geometry (as the reference service does)."""
-        rows = np.arange(len(radius))
-        points = np.empty((2 * len(radius), 3))
-        for block, theta in enumerate((theta0, theta1)):
-            part = points[block * len(radius) : (block + 1) * len(radius)]
-            part[rows, u] = center[rows, u] + radius * np.cos(theta)
-            part[rows, v] = center[rows, v] + radius * np.sin(theta)
-            part[rows, w] = center[rows, w]
-        return points
 
     # ------------------------------------------------------------------ measuring
     def measure(self, points: np.ndarray, segment_hint: int | np.ndarray) -> np.ndarray:
@@ -209,26 +146,108 @@ class ContourErrorMeter:
 
     def _min_squared_distance(self, pts: np.ndarray, win: _Window) -> np.ndarray:
         best = np.full(len(pts), np.inf)
-        if len(win.line_start):
-            rel = pts[:, None, :] - win.line_start[None, :, :]  # (m, k, 3)
-            t = np.einsum("mkj,kj->mk", rel, win.line_dir) * win.line_inv_len2
-            np.clip(t, 0.0, 1.0, out=t)
-            diff = rel - t[:, :, None] * win.line_dir
-            best = np.minimum(best, np.einsum("mkj,mkj->mk", diff, diff).min(axis=1))
-        if len(win.arc_radius):
-            du = pts[:, win.arc_u] - win.arc_cu  # (m, k): each arc reads the point in its own plane axes
-            dv = pts[:, win.arc_v] - win.arc_cv
-            dw = pts[:, win.arc_w] - win.arc_w0
-            # Inside the swept range: on the travel side of the start radius and before the end radius.
-            past_start = win.arc_dir * (win.arc_su * dv - win.arc_sv * du) >= 0
-            before_end = win.arc_dir * (du * win.arc_ev - dv * win.arc_eu) >= 0
-            inside = np.where(win.arc_small, past_start & before_end, past_start | before_end) | win.arc_full
-            radial = np.sqrt(du * du + dv * dv) - win.arc_radius
-            d2_inside = np.where(inside, radial * radial + dw * dw, np.inf)
-            ends = pts[:, None, :] - win.arc_ends[None, :, :]
-            d2_ends = np.einsum("mkj,mkj->mk", ends, ends).min(axis=1)
-            best = np.minimum(best, np.minimum(d2_inside.min(axis=1), d2_ends))
-        for seg in win.helices:
+        k = len(win.radius)
+        if k:
+            local = (pts @ win.weights - win.offsets).reshape(len(pts), 5, k)
+            inside = np.minimum(local[:, 3], local[:, 4]) >= 0
+            off_curve = np.hypot(local[:, 0], local[:, 1]) - win.radius  # in the element's normal plane
+            dist = np.hypot(off_curve, local[:, 2])
+            best = np.where(inside, dist, np.inf).min(axis=1) ** 2
+        for seg in win.others:
             d, _, _ = self.toolpath.nearest(pts, seg, seg + 1, cutting_only=True)
             best = np.minimum(best, d * d)
         return best
+
+
+def _build_window(tp: Toolpath, first: int, last: int) -> _Window:
+    """Element columns (see :class:`_Window`) for the cutting segments in ``[first, last)``."""
+    idx = np.arange(first, last)
+    kind = tp.kind[idx]
+    is_arc = kind == SegmentKind.ARC
+    w_axis = _PLANE_AXES_TABLE[tp.plane[idx].astype(np.int64), 2]
+    rise = np.where(is_arc, tp.end[idx, w_axis] - tp.start[idx, w_axis], 0.0)
+    lines = idx[kind == SegmentKind.LINE]
+    arcs = idx[is_arc & (rise == 0)]
+    others = idx[(is_arc & (rise != 0)) | (kind == SegmentKind.NURBS)]
+
+    # Lines.
+    a = tp.start[lines]
+    delta = tp.end[lines] - a
+    length = np.linalg.norm(delta, axis=1)
+    has_length = length > 0
+    direction = delta / np.where(has_length, length, 1.0)[:, None]
+    normal1, normal2 = _unit_normals(direction)
+    along = np.einsum("ij,ij->i", a, direction)
+    line_w = np.stack((normal1, normal2, np.zeros_like(a), direction, -direction), axis=1)  # (k, 5, 3)
+    # A zero-length line gets past_start ≡ −1: only its end points count.
+    past_start_offset = np.where(has_length, along, 1.0)
+    line_o = np.stack((np.einsum("ij,ij->i", a, normal1), np.einsum("ij,ij->i", a, normal2),
+                       np.zeros(len(a)), past_start_offset, -(along + length)), axis=1)  # fmt: skip
+
+    # Flat arcs, split into pieces of at most half a turn so that "inside" is "both cross products ≥ 0".
+    n_pieces = np.maximum(1, np.ceil(np.abs(tp.sweep[arcs]) / np.pi - 1e-12)).astype(np.int64)
+    piece_arc = np.repeat(arcs, n_pieces)
+    piece_no = np.arange(len(piece_arc)) - np.repeat(np.cumsum(n_pieces) - n_pieces, n_pieces)
+    sweep = tp.sweep[piece_arc]
+    piece_sweep = sweep / np.repeat(n_pieces, n_pieces)
+    theta0 = tp.start_angle[piece_arc] + piece_no * piece_sweep
+    theta1 = theta0 + piece_sweep
+    axes = _PLANE_AXES_TABLE[tp.plane[piece_arc].astype(np.int64)]
+    u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
+    rows = np.arange(len(piece_arc))
+    center = tp.center[piece_arc]
+    cu, cv, w0 = center[rows, u], center[rows, v], tp.start[piece_arc][rows, w]
+    sign = np.where(sweep >= 0, 1.0, -1.0)
+    su, sv = sign * np.cos(theta0), sign * np.sin(theta0)
+    eu, ev = sign * np.cos(theta1), sign * np.sin(theta1)
+    arc_w = np.zeros((len(piece_arc), 5, 3))
+    arc_w[rows, 0, u] = 1.0
+    arc_w[rows, 1, v] = 1.0
+    arc_w[rows, 2, w] = 1.0
+    arc_w[rows, 3, v] = su  # past_start = sign·(su·dv − sv·du)
+    arc_w[rows, 3, u] = -sv
+    arc_w[rows, 4, u] = ev  # before_end = sign·(du·ev − dv·eu)
+    arc_w[rows, 4, v] = -eu
+    arc_o = np.stack((cu, cv, w0, su * cv - sv * cu, ev * cu - eu * cv), axis=1)
+    radius = tp.radius[piece_arc]
+
+    # End points of every line and arc piece (arc ends from the arc's geometry, as the reference does).
+    arc_ends = _arc_points(u, v, w, center, radius, theta0, theta1)
+    ends = np.unique(np.concatenate((tp.start[lines], tp.end[lines], arc_ends)), axis=0)
+    end_w = np.zeros((len(ends), 5, 3))
+    end_w[:, 0, 0] = end_w[:, 1, 1] = end_w[:, 2, 2] = 1.0
+    end_o = np.concatenate((ends, np.full((len(ends), 2), -1.0)), axis=1)  # past_start = before_end = 1
+
+    weights = np.concatenate((line_w, arc_w, end_w))  # (k, 5, 3)
+    offsets = np.concatenate((line_o, arc_o, end_o))  # (k, 5)
+    return _Window(
+        weights=np.ascontiguousarray(weights.transpose(2, 1, 0).reshape(3, -1)),
+        offsets=np.ascontiguousarray(offsets.T.reshape(-1)),
+        radius=np.concatenate((np.zeros(len(lines)), radius, np.zeros(len(ends)))),
+        others=tuple(int(i) for i in others),
+    )
+
+
+def _unit_normals(direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors perpendicular to each unit ``direction`` and to each other (any for zero rows)."""
+    # Cross with the coordinate axis least aligned with the direction: well conditioned.
+    helper = np.zeros_like(direction)
+    helper[np.arange(len(direction)), np.argmin(np.abs(direction), axis=1)] = 1.0
+    first = np.cross(direction, helper)
+    norm = np.linalg.norm(first, axis=1)
+    first = first / np.where(norm > 0, norm, 1.0)[:, None]
+    second = np.cross(direction, first)
+    return first, second
+
+
+def _arc_points(u, v, w, center, radius, theta0, theta1) -> np.ndarray:
+    """Start then end points of flat arc pieces from their geometry."""
+    n = len(radius)
+    rows = np.arange(n)
+    points = np.empty((2 * n, 3))
+    for block, theta in enumerate((theta0, theta1)):
+        part = points[block * n : (block + 1) * n]
+        part[rows, u] = center[rows, u] + radius * np.cos(theta)
+        part[rows, v] = center[rows, v] + radius * np.sin(theta)
+        part[rows, w] = center[rows, w]
+    return points

@@ -173,3 +173,56 @@ def test_bad_hint_shape_and_window_sizes():
     with pytest.raises(ValueError):
         ContourErrorMeter(tp, window_back=-1)
     assert meter.measure(np.zeros((0, 3)), 0).shape == (0,)
+
+
+def test_random_lines_and_flat_arcs_agree_with_toolpath_nearest():
+    # Random chains of lines (some of zero length) and flat arcs in all planes with sweeps across
+    # (−2π, 2π] (half turns, near-full and full circles), with points scattered close to the path
+    # (where inside/outside-the-sweep decisions matter) and far from it, at machine-sized coordinates.
+    rng = np.random.default_rng(11)
+    builder = ToolpathBuilder()
+    here = np.array([400.0, -250.0, 80.0])
+    sweeps = [math.pi, -math.pi, 2 * math.pi, -2 * math.pi, 1.999 * math.pi, 0.001, 1.0001 * math.pi]
+    for number in range(60):
+        if number % 3 == 0:
+            there = here + (0.0 if number % 9 == 0 else 1.0) * rng.normal(0, 5, 3)
+            builder.line(tuple(here), tuple(there), feed=1000.0, line=number + 1)
+        else:
+            plane = Plane(int(rng.integers(0, 3)))
+            u, v, _ = {Plane.XY: (0, 1, 2), Plane.ZX: (2, 0, 1), Plane.YZ: (1, 2, 0)}[plane]
+            center = here.copy()
+            center[u] += rng.normal(0, 4)
+            center[v] += rng.normal(0, 4)
+            sweep = sweeps[number % len(sweeps)] if number % 2 else rng.uniform(-2 * math.pi, 2 * math.pi)
+            radius = math.hypot(here[u] - center[u], here[v] - center[v])
+            angle = math.atan2(here[v] - center[v], here[u] - center[u]) + sweep
+            there = here.copy()
+            there[u] = center[u] + radius * math.cos(angle)
+            there[v] = center[v] + radius * math.sin(angle)
+            builder.arc(tuple(here), tuple(there), tuple(center), plane, sweep, feed=1000.0, line=number + 1)
+        here = there
+    tp = builder.build()
+    meter = ContourErrorMeter(tp, window_back=3, window_ahead=3)
+    _, on_path = tp.sample(0.7)
+    for hint in range(len(tp)):
+        first, last = meter.window(hint)
+        near = on_path[rng.integers(0, len(on_path), 8)] + rng.normal(0, 0.05, (8, 3))
+        far = here + rng.normal(0, 20, (4, 3))
+        points = np.concatenate((near, far))
+        reference, _, _ = tp.nearest(points, first, last, cutting_only=True)
+        np.testing.assert_allclose(meter.measure(points, hint), reference, rtol=1e-9, atol=1e-9)
+
+
+def test_points_on_the_path_measure_zero_far_from_the_origin():
+    # Exactness at machine coordinates: points on a line and on an arc 500 mm from the origin are 0 to
+    # rounding (no |p|² − 2p·q + |q|² cancellation, which would leave ~1e−5 mm here).
+    tp = build(
+        ("line", (500, 500, -300), (600, 510, -300)),
+        ("arc", (600, 510, -300), (610, 520, -300), (610, 510, -300), Plane.XY, -math.pi / 2),
+    )
+    meter = ContourErrorMeter(tp)
+    on_line = np.array([500.0, 500.0, -300.0]) + np.linspace(0, 1, 7)[:, None] * np.array([100.0, 10.0, 0.0])
+    theta = math.pi - np.linspace(0, math.pi / 2, 7)
+    on_arc = np.stack((610 + 10 * np.cos(theta), 510 + 10 * np.sin(theta), np.full(7, -300.0)), axis=1)
+    assert meter.measure(on_line, 0).max() < 1e-12
+    assert meter.measure(on_arc, 1).max() < 1e-12
