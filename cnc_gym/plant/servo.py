@@ -97,6 +97,8 @@ class ServoPlant:
         self.n_envs = int(n_envs)
         self.period_s = float(machine.controller.interpolation_period_s)
         self.filter_samples = max(1, round(machine.controller.post_filter_s / self.period_s))
+        # Raw references kept: the filter window, and at least two so settled() can see a moving reference.
+        self._n_hist = max(self.filter_samples, 2)
         models = [
             axis_discrete_model(ax.kv_1_s, ax.feedforward, ax.velocity_loop_hz, ax.velocity_loop_damping,
                                 self.period_s)
@@ -111,17 +113,20 @@ class ServoPlant:
         self._lifted: dict[int, np.ndarray] = {}
         # Internal layout is axis-major so that one batched matmul over axes serves every env.
         self._state = np.zeros((3, _N_STATES, self.n_envs))
-        self._history = np.zeros((3, self.filter_samples, self.n_envs))  # last N raw references
+        self._history = np.zeros((3, self._n_hist, self.n_envs))  # last raw references
         self._velocity = np.zeros((3, self.n_envs))
         self.reset(np.zeros(3))
 
     # ------------------------------------------------------------------ lifted matrices
     def _lifted_matrix(self, n_ticks: int) -> np.ndarray:
-        """(3, n + 3 + 1, 3 + N + n): [z_0, raw_{1−N}..raw_0, raw_1..raw_n] → [x_1..x_n, z_n, ẋ_n]."""
+        """(3, n + 3 + 1, 3 + H + n): [z_0, raw_{1−H}..raw_0, raw_1..raw_n] → [x_1..x_n, z_n, ẋ_n].
+
+        H ≥ N raw references are carried; the filtered reference r_j is the mean of raw_{j−N+1}..raw_j.
+        """
         cached = self._lifted.get(n_ticks)
         if cached is not None:
             return cached
-        n_hist = self.filter_samples
+        n_hist, n_filter = self._n_hist, self.filter_samples
         n_cols = _N_STATES + n_hist + n_ticks
         out = np.zeros((3, n_ticks + _N_STATES + 1, n_cols))
         for axis in range(3):
@@ -129,7 +134,7 @@ class ServoPlant:
             filt = np.zeros((n_ticks + 1, n_cols))
             for j in range(n_ticks + 1):
                 last_col = _N_STATES + n_hist - 1 + j  # column of raw_j
-                filt[j, last_col - n_hist + 1 : last_col + 1] = 1.0 / n_hist
+                filt[j, last_col - n_filter + 1 : last_col + 1] = 1.0 / n_filter
             z = np.zeros((_N_STATES, n_cols))
             z[:, :_N_STATES] = np.eye(_N_STATES)
             a, b_prev, b_cur = self._a[axis], self._b_prev[axis], self._b_cur[axis]
@@ -189,7 +194,7 @@ class ServoPlant:
         out = np.matmul(lifted, inputs)  # (3, n + 4, E)
         self._state = out[:, n_ticks : n_ticks + _N_STATES]
         self._velocity = out[:, -1]
-        self._history = inputs[:, -self.filter_samples :]
+        self._history = inputs[:, -self._n_hist :]
         return out[:, :n_ticks].transpose(2, 1, 0)  # (E, n, 3)
 
     @property
@@ -215,10 +220,10 @@ class ServoPlant:
     def settled(self, tolerance_mm: float) -> np.ndarray:
         """(n_envs,) bool: at rest within ``tolerance_mm`` of the last reference.
 
-        True where the reference has stopped (the last N raw references, the whole filter window, are
-        equal), the Euclidean following error is within the tolerance, and the speed is at most
-        min(Kv)·tolerance — the speed a P loop has that far from its target, so a settling axis passes
-        and one that is still crossing the band does not.
+        True where the reference has stopped (the last raw references — the whole filter window, and
+        at least two — are equal), the Euclidean following error is within the tolerance, and the speed
+        is at most min(Kv)·tolerance — the speed a P loop has that far from its target, so a settling
+        axis passes and one that is still crossing the band does not.
         """
         tol = float(tolerance_mm)
         hist = self._history

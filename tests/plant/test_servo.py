@@ -252,3 +252,15 @@ def test_other_interpolation_period_keeps_closed_form():
     ref = np.stack((F5000 * t, 0 * t, 0 * t), axis=1)
     actual = plant.step(ref)
     assert ref[-1, 0] - actual[-1, 0] == pytest.approx(F5000 / 30.0, rel=1e-9)
+
+
+def test_creeping_reference_is_not_settled():
+    # A reference creeping at 0.01 mm/s: the P loop lags 0.01/30 = 0.33 µm and moves at 0.01 mm/s
+    # (< Kv·tol = 0.03 mm/s), so only the "reference at rest" condition can tell it is not settled.
+    plant = ServoPlant(load_machine("p-loop-30"))
+    ref = ramp_reference((0.01, 0.0, 0.0), 1.0)
+    plant.step(ref)
+    assert np.linalg.norm(plant.following_error) < 1e-3
+    assert not plant.settled(1e-3)[0]
+    plant.step(np.repeat(ref[-1:], 10, axis=0))
+    assert plant.settled(1e-3)[0]
