@@ -29,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import expm
 
-from cnc_gym.machine import MachineConfig, load_machine
+from cnc_gym.errors import ConfigError
+from cnc_gym.machine import AXIS_NAMES, MachineConfig, load_machine
 
 #: Longest block of ticks handled by one lifted matrix; longer steps are split into chunks.
 MAX_LIFTED_TICKS = 64
@@ -104,6 +105,15 @@ class ServoPlant:
                                 self.period_s)
             for ax in machine.axes
         ]  # fmt: skip
+        for name, axis, model in zip(AXIS_NAMES, machine.axes, models, strict=True):
+            used = _N_STATES if axis.velocity_loop_hz > 0 else 1  # the ideal loop has the state x only
+            if np.abs(np.linalg.eigvals(model[0][:used, :used])).max() >= 1.0:
+                # Routh-Hurwitz on s³ + 2ζωn s² + ωn² s + ωn² Kv: stable iff Kv < 2ζωn.
+                raise ConfigError(
+                    f"{machine.source}: axes.{name}: the servo loop is unstable (kv_1_s = {axis.kv_1_s}, "
+                    f"velocity_loop_hz = {axis.velocity_loop_hz}, damping = {axis.velocity_loop_damping}); "
+                    "a velocity loop needs kv_1_s < 2·damping·2π·velocity_loop_hz"
+                )
         self._a = np.stack([mod[0] for mod in models])  # (3 axes, 3, 3)
         self._b_prev = np.stack([mod[1] for mod in models])  # (3, 3)
         self._b_cur = np.stack([mod[2] for mod in models])

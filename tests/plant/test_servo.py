@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
+from cnc_gym.errors import ConfigError
 from cnc_gym.machine import AxisConfig, ControllerConfig, MachineConfig, load_machine
 from cnc_gym.plant import ServoPlant
 from cnc_gym.plant.servo import MAX_LIFTED_TICKS
@@ -264,3 +265,16 @@ def test_creeping_reference_is_not_settled():
     assert not plant.settled(1e-3)[0]
     plant.step(np.repeat(ref[-1:], 10, axis=0))
     assert plant.settled(1e-3)[0]
+
+
+def test_unstable_servo_config_is_a_config_error():
+    # Routh-Hurwitz on s³ + 2ζωn s² + ωn² s + ωn² Kv: stable iff Kv < 2ζωn. At 10 Hz, ζ = 0.7:
+    # 2·0.7·62.83 = 88 1/s, so Kv = 80 is stable and Kv = 100 is not.
+    ServoPlant(make_machine(kv=(80.0, 30.0, 30.0), velocity_loop_hz=10.0))
+    with pytest.raises(ConfigError, match=r"axes\.x: the servo loop is unstable"):
+        ServoPlant(make_machine(kv=(100.0, 30.0, 30.0), velocity_loop_hz=10.0))
+    with pytest.raises(ConfigError, match=r"axes\.y"):
+        ServoPlant(make_machine(kv=(80.0, 100.0, 30.0), velocity_loop_hz=10.0))
+    # No damping: the velocity loop alone is marginal, any Kv > 0 destabilises it.
+    with pytest.raises(ConfigError, match=r"damping = 0\.0"):
+        ServoPlant(make_machine(kv=(1.0, 1.0, 1.0), velocity_loop_hz=10.0, damping=0.0))
