@@ -1,1 +1,98 @@
-"""Stage 1 of the pipeline: the G-code interpreter (program text → canonical tool path)."""
+"""Stage 1 of the pipeline: the G-code interpreter (program text → canonical tool path).
+
+    toolpath = interpret(text, dialect="gsk25i", file="part.nc")
+    toolpath = interpret_file("part.nc")
+
+Read (:mod:`~cnc_gym.gcode.reader`) → check and execute (:mod:`~cnc_gym.gcode.interpreter`) → canonical
+output (:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. Dialects are data
+(:mod:`~cnc_gym.gcode.dialect`, :mod:`cnc_gym.gcode.dialects`). See docs/gcode.md.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
+from cnc_gym.gcode.interpreter import Interpreter
+from cnc_gym.gcode.reader import Program, Reader
+
+if TYPE_CHECKING:
+    from cnc_gym.machine import MachineConfig
+    from cnc_gym.toolpath import Toolpath
+
+__all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "Reader", "get_dialect", "interpret",
+           "interpret_file", "read_program"]  # fmt: skip
+
+
+def _skip_switches(block_skip) -> frozenset[int]:
+    switches = frozenset(block_skip)
+    bad = sorted(n for n in switches if not (isinstance(n, int) and 1 <= n <= 9))
+    if bad:
+        raise ConfigError(f"block-skip switches are 1..9, got {bad}")
+    return switches
+
+
+def read_program(text: str, *, dialect: str | Dialect = "gsk25i", file: str = "<program>") -> Program:
+    """Read phase only: text → blocks (syntax errors raise ProgramError)."""
+    return Reader(get_dialect(dialect)).read(text, file)
+
+
+def interpret(
+    text: str,
+    *,
+    dialect: str | Dialect = "gsk25i",
+    file: str = "<program>",
+    machine: MachineConfig | None = None,
+    block_skip: frozenset[int] = frozenset(),
+) -> Toolpath:
+    """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
+
+    ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
+    ``machine``: when given, every segment end must lie within the axes' travel limits.
+    Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
+    """
+    spec = get_dialect(dialect)
+    switches = _skip_switches(block_skip)
+    program = Reader(spec).read(text, file)
+    toolpath = Interpreter(program, spec, block_skip=switches).run()
+    if machine is not None:
+        _check_travel(toolpath, machine)
+    return toolpath
+
+
+def interpret_file(
+    path: str | Path,
+    *,
+    dialect: str | Dialect = "gsk25i",
+    machine: MachineConfig | None = None,
+    block_skip: frozenset[int] = frozenset(),
+) -> Toolpath:
+    """Interpret a program file (errors name the path). An unreadable file raises OSError."""
+    path = Path(path)
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")  # controller files are often 8-bit ISO text
+    return interpret(text, dialect=dialect, file=str(path), machine=machine, block_skip=block_skip)
+
+
+def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
+    """Stored stroke check: segment end points within each axis's [min, max] travel (GSK alarms 170-181)."""
+    if not len(toolpath):
+        return
+    low = np.array(machine.axis_array("min_position_mm"))
+    high = np.array(machine.axis_array("max_position_mm"))
+    outside = (toolpath.end < low) | (toolpath.end > high)
+    if outside.any():
+        row, axis = np.argwhere(outside)[0]
+        value = toolpath.end[row, axis]
+        file, line = toolpath.source(int(row))
+        name = "XYZ"[axis]
+        raise ProgramError(f"{name}{value:.4f} (machine) is beyond the travel limit {low[axis]:g} .. "
+                           f"{high[axis]:g} of machine {machine.name}", code="travel-limit", file=file,
+                           line=line)  # fmt: skip

@@ -1,0 +1,258 @@
+"""Macro expressions: a recursive-descent parser over the block text and an evaluator. Never eval().
+
+Nodes are plain tuples (cheap to build, easy to test):
+
+===========================  =======================================================
+``("num", value)``           a constant
+``("var", index_node)``      ``#i`` / ``#[expr]``
+``("neg", node)``            unary minus
+``("op", name, a, b)``       ``+ - * / MOD AND OR XOR``
+``("fn", name, args)``       ``SIN[x]``, ``ATAN[y]/[x]`` (→ ``ATAN2``), ``POW[x,y]``
+===========================  =======================================================
+
+Null ("vacant") semantics follow GSK L5162-L5211: reading a null variable gives ``None``; ``#2=#1`` keeps
+null; arithmetic treats null as 0 (``#1*5`` and ``#1+#1`` give 0). A unary sign on a bare null keeps it
+null (so ``X-#1`` with #1 vacant drops the word, as ``X#1`` does).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from cnc_gym.errors import ProgramError
+
+if TYPE_CHECKING:
+    from cnc_gym.gcode.dialect import Dialect
+    from cnc_gym.gcode.variables import VariableStore
+
+Node = tuple
+
+_MUL_WORDS = ("MOD", "AND")
+_ADD_WORDS = ("XOR", "OR")
+
+
+class ExpressionParser:
+    """Parses expressions out of an (uppercased, space-free) block string starting at ``pos``."""
+
+    def __init__(self, text: str, pos: int, dialect: Dialect) -> None:
+        self.text = text
+        self.pos = pos
+        self.dialect = dialect
+        self.depth = 0
+
+    # ------------------------------------------------------------------ helpers
+    def _peek(self) -> str:
+        return self.text[self.pos] if self.pos < len(self.text) else ""
+
+    def _fail(self, message: str, code: str = "bad-expression") -> ProgramError:
+        return self.dialect.error(message, code, column=self.pos + 1)
+
+    def _open(self) -> None:
+        self.depth += 1
+        if self.depth > self.dialect.max_bracket_depth:
+            raise self._fail(f"brackets nested deeper than {self.dialect.max_bracket_depth} levels",
+                             "bracket-nesting")  # fmt: skip
+        self.pos += 1
+
+    def _close(self) -> None:
+        if self._peek() != "]":
+            got = self._peek() or "end of block"
+            raise self._fail(f"expected ']' in expression, got {got!r}")
+        self.depth -= 1
+        self.pos += 1
+
+    def _word(self) -> str:
+        """The run of letters at pos (not consumed)."""
+        end = self.pos
+        text = self.text
+        while end < len(text) and "A" <= text[end] <= "Z":
+            end += 1
+        return text[self.pos : end]
+
+    # ------------------------------------------------------------------ grammar
+    def bracketed(self) -> Node:
+        """``[ expr ]`` starting at '['."""
+        self._open()
+        node = self.expression()
+        self._close()
+        return node
+
+    def expression(self) -> Node:
+        node = self.term()
+        while True:
+            c = self._peek()
+            if c in ("+", "-") and c:
+                self.pos += 1
+                node = ("op", c, node, self.term())
+                continue
+            word = self._word()
+            op = next((w for w in _ADD_WORDS if word.startswith(w)), None)
+            if op is None:
+                return node
+            self.pos += len(op)
+            node = ("op", op, node, self.term())
+
+    def term(self) -> Node:
+        node = self.unary()
+        while True:
+            c = self._peek()
+            if c in ("*", "/") and c:
+                self.pos += 1
+                node = ("op", c, node, self.unary())
+                continue
+            word = self._word()
+            op = next((w for w in _MUL_WORDS if word.startswith(w)), None)
+            if op is None:
+                return node
+            self.pos += len(op)
+            node = ("op", op, node, self.unary())
+
+    def unary(self) -> Node:
+        c = self._peek()
+        if c == "-":
+            self.pos += 1
+            return ("neg", self.unary())
+        if c == "+":
+            self.pos += 1
+            return self.unary()
+        return self.primary()
+
+    def number(self) -> float:
+        text = self.text
+        start = self.pos
+        end = start
+        while end < len(text) and (text[end].isdigit() or text[end] == "."):
+            end += 1
+        literal = text[start:end]
+        if literal.count(".") > 1 or literal == ".":
+            raise self._fail(f"bad number {literal!r}", "bad-number")
+        self.pos = end
+        return float(literal)
+
+    def variable(self) -> Node:
+        """After '#': ``#123`` or ``#[expr]``."""
+        self.pos += 1
+        c = self._peek()
+        if c.isdigit():
+            start = self.pos
+            while self._peek().isdigit():
+                self.pos += 1
+            if self._peek() == ".":
+                raise self._fail("a variable number must be an integer", "bad-variable")
+            return ("var", ("num", float(self.text[start : self.pos])))
+        if c == "[":
+            return ("var", self.bracketed())
+        raise self._fail("'#' must be followed by a variable number or [expression]", "missing-operand")
+
+    def primary(self) -> Node:
+        c = self._peek()
+        if c.isdigit() or c == ".":
+            return ("num", self.number())
+        if c == "#":
+            return self.variable()
+        if c == "[":
+            return self.bracketed()
+        word = self._word()
+        if word:
+            name = next((f for f in sorted(self.dialect.functions, key=len, reverse=True)
+                         if word.startswith(f)), None)  # fmt: skip
+            if name is None or self.text[self.pos + len(name) : self.pos + len(name) + 1] != "[":
+                raise self._fail(f"unknown function or word {word!r} in expression")
+            self.pos += len(name)
+            return self.function(name)
+        if not c:
+            raise self._fail("expression ends where an operand is expected", "missing-operand")
+        raise self._fail(f"unexpected {c!r} in expression", "missing-operand")
+
+    def function(self, name: str) -> Node:
+        arity, _ = self.dialect.functions[name]
+        self._open()
+        args = [self.expression()]
+        while self._peek() == ",":
+            self.pos += 1
+            args.append(self.expression())
+        self._close()
+        if name == "ATAN" and len(args) == 1 and self.text.startswith("/[", self.pos):
+            # Two-argument form ATAN[y]/[x] (Fanuc Macro B; GSK precision table "ATAN b/c").
+            self.pos += 1
+            args.append(self.bracketed())
+            name = "ATAN2"
+            arity = 2
+        if len(args) != arity:
+            raise self._fail(f"{name} takes {arity} argument(s), got {len(args)}")
+        return ("fn", name, tuple(args))
+
+
+def evaluate(node: Node, variables: VariableStore, dialect: Dialect, round_step: float | None = None,
+             ) -> float | None:  # fmt: skip
+    """Value of ``node`` (None = null). ``round_step``: inside an address, ROUND rounds to that step."""
+    kind = node[0]
+    if kind == "num":
+        return node[1]
+    if kind == "var":
+        index = evaluate(node[1], variables, dialect, round_step)
+        return variables.read(index)
+    if kind == "neg":
+        value = evaluate(node[1], variables, dialect, round_step)
+        return None if value is None else -value
+    if kind == "op":
+        a = evaluate(node[2], variables, dialect, round_step) or 0.0
+        b = evaluate(node[3], variables, dialect, round_step) or 0.0
+        return _binary(node[1], a, b, dialect)
+    if kind == "fn":
+        name = node[1]
+        args = [evaluate(a, variables, dialect, round_step) or 0.0 for a in node[2]]
+        if name == "ROUND" and round_step is not None:
+            return _round_to(args[0], round_step)
+        try:
+            result = dialect.functions[name][1](*args)
+        except ZeroDivisionError:
+            raise dialect.error(f"{name}[{_fmt(args)}]: division by zero", "division-by-zero") from None
+        except (ValueError, OverflowError):
+            raise dialect.error(f"{name}[{_fmt(args)}] is undefined", "math-domain") from None
+        return _finite(result, dialect, name)
+    raise AssertionError(f"bad expression node {node!r}")
+
+
+def _binary(op: str, a: float, b: float, dialect: Dialect) -> float:
+    if op == "+":
+        result = a + b
+    elif op == "-":
+        result = a - b
+    elif op == "*":
+        result = a * b
+    elif op == "/":
+        if b == 0:
+            raise dialect.error(f"division by zero ({_fmt([a])}/0)", "division-by-zero")
+        result = a / b
+    elif op == "MOD":
+        if b == 0:
+            raise dialect.error(f"division by zero ({_fmt([a])} MOD 0)", "division-by-zero")
+        result = math.fmod(a, b)
+    else:  # AND OR XOR: on 32-bit integers (L5515-L5522)
+        ia, ib = _int32(a, op, dialect), _int32(b, op, dialect)
+        result = float(ia & ib if op == "AND" else ia | ib if op == "OR" else ia ^ ib)
+    return _finite(result, dialect, op)
+
+
+def _int32(x: float, op: str, dialect: Dialect) -> int:
+    if x != int(x) or not -(2**31) <= x < 2**31:
+        raise dialect.error(f"{op} needs 32-bit integers, got {_fmt([x])}", "math-domain")
+    return int(x)
+
+
+def _finite(x: float, dialect: Dialect, what: str) -> float:
+    if not math.isfinite(x):
+        raise dialect.error(f"{what}: result out of range", "overflow")
+    return float(x)
+
+
+def _round_to(x: float, step: float) -> float:
+    """Round half away from zero to a multiple of ``step`` (the address's least input increment)."""
+    n = math.floor(abs(x) / step + 0.5 + 1e-9)
+    return math.copysign(n * step, x) if n else 0.0
+
+
+def _fmt(values: list[float]) -> str:
+    return ",".join(f"{v:g}" for v in values)

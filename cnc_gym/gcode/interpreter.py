@@ -1,0 +1,580 @@
+"""Check and execute phases: blocks → canonical motion, driven by the dialect's tables.
+
+The core loop (:meth:`Interpreter.run`) walks the program with a program counter (so GOTO/WHILE and
+subprogram calls can be added later). Each block is
+
+1. *evaluated*: expression and variable words become numbers (a null variable drops its word, L5136);
+2. *checked* against the dialect and the modal state: unknown or not-yet-implemented codes, two codes of
+   one modal group (an error: our issue's rule, stricter than the manual's "later one wins", L509), a
+   repeated address, a word that means nothing in this block, two owners of the axis words;
+3. *executed* item by item in the dialect's order of execution (``Dialect.execution_order``), each item
+   carried out by the core action its :class:`~cnc_gym.gcode.dialect.CodeSpec` names.
+
+Motion leaves through :class:`~cnc_gym.gcode.canonical.CanonicalMachine` in machine coordinates.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.canonical import CanonicalMachine, OffsetStack
+from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
+from cnc_gym.gcode.expressions import _round_to, evaluate
+from cnc_gym.gcode.variables import VariableStore
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
+
+if TYPE_CHECKING:
+    from cnc_gym.gcode.dialect import Dialect
+    from cnc_gym.gcode.reader import Block, Program
+
+INCH_MM = 25.4
+TWO_PI = 2.0 * math.pi
+#: In-plane distance below which an arc's end is its start (full circle for I/J/K, 0° arc for R), mm.
+SAME_POINT_MM = 1e-7
+_IJK = "IJK"
+_ARC_WORDS = frozenset("IJKR")
+_PATH_MODES = {
+    "exact_stop": SegmentMode.EXACT_STOP,
+    "tapping": SegmentMode.OVERRIDE_LOCKED,
+    "auto_corner": SegmentMode.AUTO_CORNER,
+    "cutting": SegmentMode.NONE,
+}
+# Pseudo-specs for the items a word (not a code) carries.
+_WORD_SPECS = {
+    "F": CodeSpec("F", -1, "feed", step="feed"),
+    "S": CodeSpec("S", -1, "spindle_speed", step="spindle_speed"),
+    "T": CodeSpec("T", -1, "tool", step="tool"),
+}
+_IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
+
+
+class Interpreter:
+    """Runs one :class:`Program` for one dialect into a :class:`ToolpathBuilder`."""
+
+    def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
+                 start: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:  # fmt: skip
+        self.program = program
+        self.dialect = dialect
+        self.file = program.file
+        self.skip_mask = sum(1 << n for n in block_skip)
+        self.variables = VariableStore(dialect)
+        self.builder = ToolpathBuilder(files=(program.file,))
+        self.out = CanonicalMachine(self.builder, start)
+        self.offsets = OffsetStack()
+        # Modal state. ``modal`` is the raw table (group → code key, for #4001-style reads later); the
+        # attributes below are what the actions read.
+        self.modal: dict[int, int] = {}
+        self.motion = 0
+        self.plane = Plane.XY
+        self.incremental = False
+        self.inch = False
+        self.scale = 1.0  # program length unit → mm
+        self.increment = dialect.least_increment_mm
+        self.feed: float | None = None  # mm/min
+        self.spindle_speed = 0.0
+        self.spindle_direction = 0
+        self.coolant = False
+        self.tool = 0
+        self.tool_changes = 0
+        self.path_mode = SegmentMode.NONE
+        self.ended = False
+        self._g53 = False
+        self._block_words: tuple = ()
+        self._axis_owner: CodeSpec | None = None
+        self.stops: list[tuple[int, str]] = []  # (line, "program_stop" | "optional_stop" | "end")
+        self._order = {name: i for i, name in enumerate(dialect.execution_order)}
+        self._actions = {
+            "motion": self._do_motion, "plane": self._do_plane, "distance": self._do_distance,
+            "units": self._do_units, "wcs": self._do_wcs, "path_mode": self._do_path_mode,
+            "dwell": self._do_dwell, "g10": self._do_g10, "g52": self._do_g52, "g92": self._do_g92,
+            "g53": self._do_g53, "record": self._do_nothing, "feed": self._do_feed,
+            "spindle_speed": self._do_spindle_speed, "tool": self._do_tool,
+            "tool_change": self._do_tool_change,
+            "spindle": self._do_spindle, "coolant": self._do_coolant, "stop": self._do_stop,
+        }  # fmt: skip
+        missing = {s.action for s in (*dialect.gcodes.values(), *dialect.mcodes.values())
+                   if s.implemented} - set(self._actions)  # fmt: skip
+        if missing:
+            raise ValueError(f"dialect {dialect.name} names unknown actions {sorted(missing)}")
+        axes = dialect.axes
+        base = frozenset("FSTO")
+        self._allowed_with_motion = {
+            key: base | frozenset(axes) | frozenset(spec.words) for key, spec in dialect.gcodes.items()
+            if spec.action == "motion"
+        }  # fmt: skip
+        self._axis_letters = frozenset(axes)
+        for key in dialect.power_on:
+            spec = dialect.gcodes[key]
+            self.modal[spec.group] = key
+            if spec.action in ("motion", "plane", "distance", "units", "wcs", "path_mode"):
+                self._actions[spec.action](spec)
+        self._motion_key = next(k for k in dialect.power_on if dialect.gcodes[k].action == "motion")
+        self._update_modes()
+
+    # ------------------------------------------------------------------ core loop
+    def run(self) -> Toolpath:
+        blocks = self.program.blocks
+        skip_mask = self.skip_mask
+        pc = 0
+        n = len(blocks)
+        execute = self.execute
+        while pc < n:
+            block = blocks[pc]
+            pc += 1
+            if block.skip & skip_mask:
+                continue
+            try:
+                execute(block)
+            except ProgramError as err:
+                raise err.located(self.file, block.line) from None
+            if self.ended:
+                break
+        return self.builder.build()
+
+    def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
+        return self.dialect.error(message, code, alarm=alarm)
+
+    # ------------------------------------------------------------------ one block
+    def execute(self, block: Block) -> None:
+        if block.assign is not None:
+            target, value = block.assign
+            self.variables.write(evaluate(target, self.variables, self.dialect),
+                                 evaluate(value, self.variables, self.dialect))  # fmt: skip
+            return
+        words = self._evaluate_words(block.words) if block.has_expr else block.words
+        values: dict[str, float] = {}
+        gs = ms = None
+        for letter, value, _ in words:
+            if letter == "G":
+                if gs is None:
+                    gs = [value]
+                else:
+                    gs.append(value)
+            elif letter == "M":
+                if ms is None:
+                    ms = [value]
+                else:
+                    ms.append(value)
+            elif letter in values:
+                raise self.error(f"address {letter} appears twice in the block", "duplicate-word")
+            else:
+                values[letter] = value
+        self.out.line = block.line
+
+        if gs is None and ms is None:
+            # Hot path: no codes; words are axis words (modal motion), F, S, T, O.
+            allowed = self._allowed_with_motion[self._motion_key]
+            if not values.keys() <= allowed:
+                self._reject_words(values, allowed, None)
+            if "F" in values:
+                self._do_feed(None, values)
+            if "S" in values:
+                self._do_spindle_speed(None, values)
+            if "T" in values:
+                self._do_tool(None, values)
+            self._do_motion(None, values)
+            return
+        self._execute_general(gs or (), ms or (), values, block)
+
+    def _execute_general(self, gs, ms, values: dict[str, float], block: Block) -> None:
+        dialect = self.dialect
+        items: list[CodeSpec] = []
+        by_group: dict[int, CodeSpec] = {}
+        keys: dict[int, int] = {}
+        axis_owner: CodeSpec | None = None
+        motion_spec: CodeSpec | None = None
+        g53 = False
+        for number in gs:
+            key = gkey(number)
+            spec = dialect.gcodes.get(key)
+            if spec is None:
+                raise self.error(f"unknown G code {code_name('G', key)}", "unknown-code")
+            if not spec.implemented:
+                raise self.error(f"{spec.name} is not implemented yet: {spec.note}", "not-implemented")
+            other = by_group.get(spec.group)
+            if other is not None:
+                raise self.error(f"{other.name} and {spec.name} are both in modal group {spec.group:02d}; "
+                                 "one block may hold one code per group", "group-conflict")  # fmt: skip
+            by_group[spec.group] = spec
+            keys[spec.group] = key
+            if spec.action == "motion":
+                motion_spec = spec
+            elif spec.action == "g53":
+                g53 = True
+            if spec.uses_axes:
+                axis_owner = spec
+            items.append(spec)
+        if ms:
+            if len(ms) > dialect.max_m_per_block:
+                raise self.error(f"{len(ms)} M codes in one block (at most {dialect.max_m_per_block})",
+                                 "too-many-m-codes")  # fmt: skip
+            m_seen: dict[str, CodeSpec] = {}
+            for number in ms:
+                key = gkey(number)
+                spec = dialect.mcodes.get(key)
+                if spec is None:
+                    raise self.error(f"unknown M code {code_name('M', key)}", "unknown-code",
+                                     alarm=dialect.addresses["M"].alarm)  # fmt: skip
+                if not spec.implemented:
+                    raise self.error(f"{spec.name} is not implemented yet: {spec.note}", "not-implemented",
+                                     alarm=dialect.addresses["M"].alarm)  # fmt: skip
+                for group, members in dialect.m_groups.items():
+                    if key in members:
+                        if group in m_seen:
+                            raise self.error(f"{m_seen[group].name} and {spec.name} conflict (both {group} "
+                                             "codes)", "group-conflict")  # fmt: skip
+                        m_seen[group] = spec
+                items.append(spec)
+
+        # Who owns the axis words: a one-shot code that uses them (G04 X, G10, G52, G92) or the motion.
+        has_axes = not self._axis_letters.isdisjoint(values)
+        if axis_owner is not None and motion_spec is not None and has_axes:
+            raise self.error(f"{axis_owner.name} and {motion_spec.name} both use the axis words of the block",
+                             "axis-word-conflict")  # fmt: skip
+        if g53 and motion_spec is not None and motion_spec.value not in (0, 1):
+            raise self.error(f"G53 positions at rapid; it cannot be combined with {motion_spec.name}",
+                             "bad-combination")  # fmt: skip
+        base = frozenset("FSTO")
+        if axis_owner is not None:
+            allowed = base | self._axis_letters | frozenset(axis_owner.words)
+        elif g53:
+            allowed = base | self._axis_letters
+        else:
+            allowed = self._allowed_with_motion[keys[1] if motion_spec is not None else self._motion_key]
+        for spec in items:
+            if spec.words:
+                allowed = allowed | frozenset(spec.words)
+        if not values.keys() <= allowed:
+            self._reject_words(values, allowed, axis_owner)
+
+        # Modal table (raw), then the items in the dialect's order of execution.
+        for group, key in keys.items():
+            if group > 0:
+                self.modal[group] = key
+        if motion_spec is not None:
+            self._motion_key = keys[motion_spec.group]
+        for letter in ("F", "S", "T"):
+            if letter in values:
+                items.append(_WORD_SPECS[letter])
+        if motion_spec is None and axis_owner is None and not g53:
+            items.append(_IMPLICIT_MOTION)
+        order = self._order
+        items.sort(key=lambda s: order[s.step])
+        self._block_words = block.words
+        self._g53 = g53
+        self._axis_owner = axis_owner
+        actions = self._actions
+        for spec in items:
+            actions[spec.action](spec, values)
+            if self.ended:
+                return
+
+    def _reject_words(self, values: dict[str, float], allowed: frozenset, owner: CodeSpec | None) -> None:
+        for letter in values:
+            if letter in allowed:
+                continue
+            if letter in self.dialect.other_axes:
+                raise self.error(f"axis {letter} is not on this machine (axes: {self.dialect.axes})",
+                                 "unsupported-axis")  # fmt: skip
+            if letter in "HD":
+                raise self.error(f"{letter} (tool offset number) is not implemented yet: tool length and "
+                                 "cutter compensation come in a later issue", "not-implemented")  # fmt: skip
+            context = f"with {owner.name}" if owner is not None else "in this block"
+            raise self.error(f"address {letter} has no meaning {context}", "unused-word")
+
+    def _evaluate_words(self, words: tuple) -> list:
+        """Expression words → numbers, with the address's rounding and range rules (L5126, L5136)."""
+        dialect = self.dialect
+        out = []
+        for letter, value, text in words:
+            if text is not None:
+                out.append((letter, value, text))
+                continue
+            rule = dialect.addresses[letter]
+            step = self.increment if rule.unit == "length" else None
+            number = evaluate(value, self.variables, dialect, step)
+            if number is None:
+                continue  # a null variable drops the word
+            if rule.unit == "length":
+                number = _round_to(number, self.increment)
+            elif rule.unit == "integer":
+                number = float(math.floor(abs(number) + 0.5)) * (1 if number >= 0 else -1)
+            elif letter in "GM":
+                number = round(number * 10) / 10
+            if not rule.low <= number <= rule.high:
+                raise self.error(f"{letter}={number:g} is out of range {rule.low:g} to {rule.high:g}",
+                                 "value-out-of-range", alarm=rule.alarm)  # fmt: skip
+            out.append((letter, number, None))
+        return out
+
+    # ------------------------------------------------------------------ modal actions
+    def _do_nothing(self, spec: CodeSpec, values: dict | None = None) -> None:
+        pass
+
+    def _do_plane(self, spec: CodeSpec, values: dict | None = None) -> None:
+        self.plane = spec.value
+
+    def _do_distance(self, spec: CodeSpec, values: dict | None = None) -> None:
+        self.incremental = spec.value
+
+    def _do_units(self, spec: CodeSpec, values: dict | None = None) -> None:
+        self.inch = spec.value
+        self.scale = INCH_MM if spec.value else 1.0
+        self.increment = self.dialect.least_increment_inch if spec.value else self.dialect.least_increment_mm
+        self._update_modes()
+
+    def _do_wcs(self, spec: CodeSpec, values: dict | None = None) -> None:
+        self.offsets.select_wcs(spec.value - 1)
+
+    def _do_path_mode(self, spec: CodeSpec, values: dict | None = None) -> None:
+        self.path_mode = _PATH_MODES[spec.value]
+        self._update_modes()
+
+    def _update_modes(self) -> None:
+        self.out.modes = self.path_mode | (SegmentMode.INCH_PROGRAM if self.inch else SegmentMode.NONE)
+
+    # ------------------------------------------------------------------ word actions
+    def _do_feed(self, spec: CodeSpec | None, values: dict) -> None:
+        self.feed = values["F"] * self.scale  # inch/min → mm/min in G20
+
+    def _do_spindle_speed(self, spec: CodeSpec | None, values: dict) -> None:
+        self.spindle_speed = values["S"]
+        self.out.spindle_rpm = self.spindle_speed * self.spindle_direction
+
+    def _do_tool(self, spec: CodeSpec | None, values: dict) -> None:
+        self.tool = int(values["T"])
+        self.out.tool = self.tool
+
+    def _do_tool_change(self, spec: CodeSpec, values: dict) -> None:
+        self.tool_changes += 1
+
+    def _do_spindle(self, spec: CodeSpec, values: dict) -> None:
+        self.spindle_direction = spec.value
+        self.out.spindle_rpm = self.spindle_speed * self.spindle_direction
+
+    def _do_coolant(self, spec: CodeSpec, values: dict) -> None:
+        self.coolant = spec.value
+
+    def _do_stop(self, spec: CodeSpec, values: dict) -> None:
+        self.stops.append((self.out.line, spec.value))
+        if spec.value == "program_stop":
+            # M00: the machine stops with an in-position check; a 0 s dwell carries that to the controller.
+            self.out.dwell(0.0, SegmentMode.EXACT_STOP)
+        elif spec.value == "end":
+            self.ended = True
+        # M01 (optional stop): the optional-stop switch is off in simulation, so the program runs on.
+
+    # ------------------------------------------------------------------ one-shot actions
+    def _word_text(self, letter: str) -> str | None:
+        for word_letter, _, text in self._block_words:
+            if word_letter == letter:
+                return text
+        return None
+
+    def _do_dwell(self, spec: CodeSpec, values: dict) -> None:
+        """G04: P in ms (integer), X in s; P wins; neither = exact stop (L1305-L1320)."""
+        for letter in "YZ":
+            if letter in values:
+                raise self.error(f"address {letter} has no meaning with G04", "unused-word")
+        if "P" in values:
+            text = self._word_text("P")
+            if text is not None and "." in text:
+                raise self.error(f"G04 P{text}: P is in milliseconds and takes no decimal point (use X for "
+                                 "seconds)", "decimal-point-not-allowed")  # fmt: skip
+            raw = values["P"]
+            seconds = round(raw) / 1000.0
+        elif "X" in values:
+            raw = values["X"]
+            seconds = raw
+        else:
+            self.out.dwell(0.0, SegmentMode.EXACT_STOP)
+            return
+        if raw < 0:
+            raise self.error(f"G04 dwell time {raw:g} is negative", "bad-dwell")
+        self.out.dwell(seconds)
+
+    def _do_g10(self, spec: CodeSpec, values: dict) -> None:
+        """G10 L2 Pp IP_: work offset p (0 = external, 1..6 = G54..G59); G90 sets, G91 adds (L1567-L1573)."""
+        if "L" not in values:
+            raise self.error("G10 needs an L word (L2: work offsets)", "missing-value")
+        kind = int(values["L"])
+        if kind != 2:
+            names = {10: "tool length geometry offsets", 11: "tool length wear offsets",
+                     12: "cutter radius geometry offsets", 13: "cutter radius wear offsets",
+                     20: "additional work coordinate systems", 50: "parameter input"}  # fmt: skip
+            if kind in names:
+                raise self.error(f"G10 L{kind} ({names[kind]}) is not implemented yet", "not-implemented")
+            raise self.error(f"G10 L{kind} does not exist", "bad-g10")
+        if "R" in values:
+            raise self.error("address R has no meaning with G10 L2", "unused-word")
+        if "P" not in values:
+            raise self.error("G10 L2 needs P0..P6 (0 = external offset, 1..6 = G54..G59)", "bad-g10")
+        text = self._word_text("P")
+        p = values["P"]
+        if (text is not None and "." in text) or p != int(p) or not 0 <= p <= 6:
+            raise self.error(f"G10 L2 P{text or p:}: P must be 0..6 (0 = external offset, 1..6 = G54..G59)",
+                             "bad-g10")  # fmt: skip
+        target = self.offsets.external if p == 0 else self.offsets.wcs[int(p) - 1]
+        for axis, letter in enumerate(self.dialect.axes):
+            if letter in values:
+                mm = values[letter] * self.scale
+                target[axis] = target[axis] + mm if self.incremental else mm
+        self.offsets.update()
+
+    def _do_g52(self, spec: CodeSpec, values: dict) -> None:
+        """G52 IP_: local origin at IP in the current work system; IP0 cancels per axis (L1718-L1753).
+        The values are a setting, absolute whatever G90/G91 (docs/gcode.md)."""
+        for axis, letter in enumerate(self.dialect.axes):
+            if letter in values:
+                self.offsets.local[axis] = values[letter] * self.scale
+        self.offsets.update()
+
+    def _do_g92(self, spec: CodeSpec, values: dict) -> None:
+        """G92 IP_: the current position gets coordinates IP in a floating system (L1670-L1716)."""
+        position = self.out.position
+        for axis, letter in enumerate(self.dialect.axes):
+            if letter in values:
+                self.offsets.set_floating(axis, position[axis], values[letter] * self.scale)
+        self.offsets.update()
+
+    # ------------------------------------------------------------------ motion
+    def _do_motion(self, spec: CodeSpec | None = None, values: dict | None = None) -> None:
+        if spec is not None and spec.value is not None:
+            self.motion = spec.value
+            if self._g53:
+                return  # G53 makes this block's move (a rapid in machine coordinates)
+        if values is None:
+            return  # power-on
+        x = values.get("X")
+        y = values.get("Y")
+        z = values.get("Z")
+        motion = self.motion
+        if motion >= 2:
+            if x is None and y is None and z is None and not _ARC_WORDS.intersection(values):
+                return  # no geometry in the block: the arc mode is only (re)selected
+            return self._arc(motion, x, y, z, values)
+        if x is None and y is None and z is None:
+            return  # a motion code with no axis words only sets the mode (L938)
+        pos = self.out.position
+        s = self.scale
+        if self.incremental:
+            target = (pos[0] if x is None else pos[0] + x * s, pos[1] if y is None else pos[1] + y * s,
+                      pos[2] if z is None else pos[2] + z * s)  # fmt: skip
+        else:
+            o = self.offsets.origin
+            target = (pos[0] if x is None else x * s + o[0], pos[1] if y is None else y * s + o[1],
+                      pos[2] if z is None else z * s + o[2])  # fmt: skip
+        if motion == 0:
+            self.out.straight_traverse(target)
+        else:
+            feed = self.feed
+            if not feed:
+                raise self.error("G01 needs a feed: no F programmed yet" if feed is None else
+                                 "G01 with F0: the feed is zero", "missing-feed")  # fmt: skip
+            self.out.straight_feed(target, feed)
+
+    def _do_g53(self, spec: CodeSpec, values: dict) -> None:
+        """G53 IP_: rapid to machine coordinates; one-shot; ignored in G91 (L1656)."""
+        if self.incremental:
+            return
+        pos = self.out.position
+        s = self.scale
+        target = tuple(pos[a] if letter not in values else values[letter] * s
+                       for a, letter in enumerate(self.dialect.axes))  # fmt: skip
+        self.out.straight_traverse(target)  # type: ignore[arg-type]
+
+    def _arc(self, motion: int, x, y, z, values: dict) -> None:
+        """G02/G03 in the selected plane, I/J/K (incremental, L1025) or R (R wins, L510; R<0 > 180°)."""
+        name = "G02" if motion == 2 else "G03"
+        feed = self.feed
+        if feed is None:
+            raise self.error(f"{name} needs a feed: no F programmed yet", "missing-feed")
+        if feed == 0:
+            raise self.error(f"{name} with F0: zero feed is not allowed on an arc", "zero-feed")
+        plane = self.plane
+        u, v, w = PLANE_AXES[plane]
+        pos = self.out.position
+        s = self.scale
+        xyz = (x, y, z)
+        if self.incremental:
+            end = [pos[a] if xyz[a] is None else pos[a] + xyz[a] * s for a in range(3)]
+        else:
+            o = self.offsets.origin
+            end = [pos[a] if xyz[a] is None else xyz[a] * s + o[a] for a in range(3)]
+        du = end[u] - pos[u]
+        dv = end[v] - pos[v]
+        chord = math.hypot(du, dv)
+        ccw = motion == 3
+        tol = self.dialect.arc_radius_tolerance_mm
+        center = [0.0, 0.0, 0.0]
+        center[w] = pos[w]
+        if "R" in values:
+            radius = values["R"] * s
+            if chord < SAME_POINT_MM:
+                if abs(end[w] - pos[w]) > SAME_POINT_MM:
+                    raise self.error(f"{name} with R: end point equals start in the plane, so the arc is 0° "
+                                     "and cannot carry a helical move (use I/J/K for a full turn)",
+                                     "arc-impossible")  # fmt: skip
+                return  # "G02 R;": a 0° arc, the tool does not move (L1036)
+            if radius == 0:
+                raise self.error(f"{name} with R0", "arc-impossible")
+            half = chord / 2.0
+            r_abs = abs(radius)
+            if half > r_abs:
+                if half - r_abs > max(tol, 1e-9):
+                    raise self.error(f"{name}: R{abs(radius) / s:g} is too small for the chord of "
+                                     f"{chord / s:.4f} (need |R| >= {half / s:.4f})",
+                                     "arc-impossible")  # fmt: skip
+                h = 0.0
+            else:
+                h = math.sqrt(r_abs * r_abs - half * half)
+            # Centre on the left of the chord for a CCW minor arc; right for CW; flipped for R < 0.
+            side = (1.0 if ccw else -1.0) * (1.0 if radius > 0 else -1.0)
+            nu, nv = -dv / chord, du / chord
+            center[u] = pos[u] + du / 2.0 + side * h * nu
+            center[v] = pos[v] + dv / 2.0 + side * h * nv
+            r_start = math.hypot(pos[u] - center[u], pos[v] - center[v])
+            full = False
+        else:
+            letter_u, letter_v, letter_w = _IJK[u], _IJK[v], _IJK[w]
+            if letter_w in values:
+                raise self.error(f"{name}: {letter_w} is not an axis of the {plane.name} plane (use "
+                                 f"{letter_u}/{letter_v}, or select the plane with G17/G18/G19)",
+                                 "arc-bad-offset")  # fmt: skip
+            if letter_u not in values and letter_v not in values:
+                raise self.error(f"{name} needs R or a centre {letter_u}/{letter_v} in the {plane.name} "
+                                 "plane",
+                                 "arc-missing-center")  # fmt: skip
+            center[u] = pos[u] + values.get(letter_u, 0.0) * s
+            center[v] = pos[v] + values.get(letter_v, 0.0) * s
+            r_start = math.hypot(pos[u] - center[u], pos[v] - center[v])
+            if r_start < SAME_POINT_MM:
+                raise self.error(f"{name}: the centre is the start point (radius 0)", "arc-impossible")
+            full = chord < SAME_POINT_MM
+            if full:
+                end[u], end[v] = pos[u], pos[v]
+            else:
+                r_end = math.hypot(end[u] - center[u], end[v] - center[v])
+                if tol > 0 and abs(r_end - r_start) > tol:
+                    raise self.error(f"{name}: radius at the start {r_start / s:.4f} and at the end "
+                                     f"{r_end / s:.4f} differ by {abs(r_end - r_start) / s:.4f}, more than "
+                                     f"the tolerance {tol:g} mm (P1810)", "arc-radius-mismatch")  # fmt: skip
+                if r_end < SAME_POINT_MM:
+                    raise self.error(f"{name}: the centre is the end point", "arc-impossible")
+                # Within tolerance: keep the centre and the radius, move the end point radially onto the
+                # circle (at most the tolerance away from the programmed one). docs/gcode.md.
+                k = r_start / r_end
+                end[u] = center[u] + (end[u] - center[u]) * k
+                end[v] = center[v] + (end[v] - center[v]) * k
+        a0 = math.atan2(pos[v] - center[v], pos[u] - center[u])
+        if full:
+            sweep = TWO_PI if ccw else -TWO_PI
+        else:
+            a1 = math.atan2(end[v] - center[v], end[u] - center[u])
+            sweep = (a1 - a0) % TWO_PI if ccw else -((a0 - a1) % TWO_PI)
+            if "R" in values and h == 0.0:
+                sweep = math.pi if ccw else -math.pi
+        del r_start
+        self.out.arc_feed((end[0], end[1], end[2]), (center[0], center[1], center[2]), plane, sweep, feed)

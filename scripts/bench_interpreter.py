@@ -1,0 +1,102 @@
+"""Interpreter speed: lines per second on a generated plain G01/G02 program, against a plain-Python baseline.
+
+    .venv/bin/python scripts/bench_interpreter.py [--lines 100000] [--repeats 5]
+
+The program is a zig-zag of G01 lines with G02 arcs (I/J and R forms alternating) between them: the
+typical shape of CAM output. The baseline, run on the same text in the same process, is the least any
+Python G-code reader must do: split lines, regex-tokenise each into (letter, number) words and convert
+the numbers to float. The report gives the median of the repeats for each, and the ratio.
+Goal: >= 100 000 lines/s (must: >= 30 000 lines/s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from cnc_gym.gcode import interpret
+
+GOAL_LINES_PER_S = 100_000
+FLOOR_LINES_PER_S = 30_000
+
+
+def generate_program(n_lines: int) -> str:
+    """``n_lines`` blocks: a header, then G01 moves and G02 arcs alternating, then M30."""
+    out = ["%", "O1000", "G21 G17 G90 G94 G54", "G00 X0 Y0 Z5", "G01 Z-1 F800"]
+    x, y = 0.0, 0.0
+    step = 0.5
+    k = 0
+    while len(out) < n_lines - 2:
+        k += 1
+        if k % 4 == 1:
+            y += step
+            out.append(f"G01 X{x:.3f} Y{y:.3f} F1200")
+        elif k % 4 == 2:
+            # Semicircle-free quarter arc via I/J: start (x, y), centre (x, y + r), end (x + r, y + r), CW.
+            r = 1.0
+            out.append(f"G02 X{x + r:.3f} Y{y + r:.3f} I0 J{r:.3f}")
+            x, y = x + r, y + r
+        elif k % 4 == 3:
+            x += 2.0
+            out.append(f"G01 X{x:.3f}")
+        else:
+            r = 1.0
+            out.append(f"G02 X{x + r:.3f} Y{y - r:.3f} R{r:.3f}")
+            x, y = x + r, y - r
+    out.append("M30")
+    out.append("%")
+    return "\n".join(out) + "\n"
+
+
+_WORD = re.compile(r"([A-Z])\s*([+-]?\d*\.?\d+)")
+
+
+def baseline(text: str) -> int:
+    """Minimal tokenise-and-float loop: the floor for any Python reader."""
+    words = 0
+    for line in text.splitlines():
+        for _letter, number in _WORD.findall(line.upper()):
+            float(number)
+            words += 1
+    return words
+
+
+def median_seconds(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lines", type=int, default=100_000)
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args(argv)
+    text = generate_program(args.lines)
+    n_lines = text.count("\n")
+    toolpath = interpret(text, file="bench.nc")  # warm-up, and a sanity check of the output
+    t_interp = median_seconds(lambda: interpret(text, file="bench.nc"), args.repeats)
+    t_base = median_seconds(lambda: baseline(text), args.repeats)
+    rate = n_lines / t_interp
+    base_rate = n_lines / t_base
+    print(f"program: {n_lines} lines, {len(toolpath)} segments, {toolpath.total_length:.1f} mm path")
+    print(f"interpreter : {rate:12,.0f} lines/s  (median of {args.repeats}: {t_interp * 1e3:.1f} ms)")
+    print(f"baseline    : {base_rate:12,.0f} lines/s  (regex tokenise + float, same text)")
+    print(f"ratio       : interpreter takes {t_interp / t_base:.2f}x the baseline's time")
+    verdict = "goal met" if rate >= GOAL_LINES_PER_S else ("floor met" if rate >= FLOOR_LINES_PER_S else
+                                                           "BELOW THE FLOOR")  # fmt: skip
+    print(f"target      : goal {GOAL_LINES_PER_S:,} lines/s, floor {FLOOR_LINES_PER_S:,}: {verdict}")
+    return 0 if rate >= FLOOR_LINES_PER_S else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
