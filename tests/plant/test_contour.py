@@ -226,3 +226,36 @@ def test_points_on_the_path_measure_zero_far_from_the_origin():
     on_arc = np.stack((610 + 10 * np.cos(theta), 510 + 10 * np.sin(theta), np.full(7, -300.0)), axis=1)
     assert meter.measure(on_line, 0).max() < 1e-12
     assert meter.measure(on_arc, 1).max() < 1e-12
+
+
+def test_plant_and_meter_together_give_the_circle_closed_form():
+    # End to end: a programmed full circle R 50 (G03) after a 1 mm lead-in line, a constant F5000
+    # reference sampled from the tool path by arc length, the p-loop-30 plant, then the meter with the
+    # reference's own segment index as hint. After the transient (e^(−30 t)) the contour error on the
+    # circle is the radial shrink R(1 − 1/√(1 + (v/(R Kv))²)) = 0.07698 mm ≈ v²/(2 R Kv²) = 0.0772 mm.
+    from cnc_gym.machine import load_machine
+    from cnc_gym.plant import ServoPlant
+
+    radius, speed, period = 50.0, 5000.0 / 60.0, 0.002
+    tp = build(
+        ("rapid", (-1.0, -radius, 5.0), (-1.0, -radius, 0.0)),
+        ("line", (-1.0, -radius, 0.0), (0.0, -radius, 0.0)),
+        ("arc", (0.0, -radius, 0.0), (0.0, -radius, 0.0), (0.0, 0.0, 0.0), Plane.XY, 2 * math.pi),
+    )
+    s = tp.s_start[1] + speed * period * np.arange(1, round((1.0 + 2 * math.pi * radius) / speed / period))
+    reference, _, _ = tp.evaluate(s)
+    hints = tp.segment_at(s)
+    plant = ServoPlant(load_machine("p-loop-30"))
+    plant.reset(tp.start[1])
+    meter = ContourErrorMeter(tp)
+    # The env steps in chunks of a few ticks; the meter gets one hint per chunk (the chunk's last).
+    errors = [
+        meter.measure(plant.step(reference[k : k + 5]), int(hints[k : k + 5][-1]))
+        for k in range(0, len(s), 5)
+    ]
+    error = np.concatenate(errors)
+    assert np.all(np.isfinite(error))
+    steady = (hints == 2) & (s - tp.s_start[2] > 1.0 * speed)  # on the circle, after 1 s
+    exact = radius * (1 - 1 / math.sqrt(1 + (speed / (radius * 30.0)) ** 2))
+    np.testing.assert_allclose(error[steady], exact, atol=5e-4)
+    assert error[steady].mean() == pytest.approx(speed**2 / (2 * radius * 30.0**2), rel=0.10)
