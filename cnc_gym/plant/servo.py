@@ -78,18 +78,24 @@ def axis_discrete_model(
 
 
 class ServoPlant:
-    """Servo axes X, Y, Z of ``n_envs`` identical machines: reference positions in, actual positions out.
+    """Servo axes X, Y, Z of ``n_envs`` machines: reference positions in, actual positions out.
 
     ``machine`` is a :class:`~cnc_gym.machine.MachineConfig` (or a preset name). One sample per
     interpolation period (``machine.controller.interpolation_period_s``). Per-axis Kv, feed-forward
-    and velocity loop come from ``machine.axes``; unequal Kv between axes is the gain mismatch. See the
-    module docstring for the model.
+    and velocity loop come from ``machine.axes``; unequal Kv between axes is the gain mismatch.
+    ``kv_scale`` ((3,) or (n_envs, 3), default all 1) multiplies each env's per-axis Kv, e.g. for
+    randomising the mismatch per episode (see :meth:`set_kv_scale`). See the module docstring for the model.
 
     Attributes (all ``(n_envs, 3)``, mm and mm/s): ``position``, ``velocity``, ``following_error``
     (raw reference − actual at the last sample), ``reference`` (last raw reference).
     """
 
-    def __init__(self, machine: MachineConfig | str = "vmc-small", n_envs: int = 1) -> None:
+    def __init__(
+        self,
+        machine: MachineConfig | str = "vmc-small",
+        n_envs: int = 1,
+        kv_scale: np.ndarray | None = None,
+    ) -> None:
         if isinstance(machine, str):
             machine = load_machine(machine)
         if int(n_envs) < 1:
@@ -100,61 +106,120 @@ class ServoPlant:
         self.filter_samples = max(1, round(machine.controller.post_filter_s / self.period_s))
         # Raw references kept: the filter window, and at least two so settled() can see a moving reference.
         self._n_hist = max(self.filter_samples, 2)
-        models = [
-            axis_discrete_model(ax.kv_1_s, ax.feedforward, ax.velocity_loop_hz, ax.velocity_loop_damping,
-                                self.period_s)
-            for ax in machine.axes
-        ]  # fmt: skip
-        for name, axis, model in zip(AXIS_NAMES, machine.axes, models, strict=True):
-            used = _N_STATES if axis.velocity_loop_hz > 0 else 1  # the ideal loop has the state x only
-            if np.abs(np.linalg.eigvals(model[0][:used, :used])).max() >= 1.0:
-                # Routh-Hurwitz on s³ + 2ζωn s² + ωn² s + ωn² Kv: stable iff Kv < 2ζωn.
-                raise ConfigError(
-                    f"{machine.source}: axes.{name}: the servo loop is unstable (kv_1_s = {axis.kv_1_s}, "
-                    f"velocity_loop_hz = {axis.velocity_loop_hz}, damping = {axis.velocity_loop_damping}); "
-                    "a velocity loop needs kv_1_s < 2·damping·2π·velocity_loop_hz"
-                )
-        self._a = np.stack([mod[0] for mod in models])  # (3 axes, 3, 3)
-        self._b_prev = np.stack([mod[1] for mod in models])  # (3, 3)
-        self._b_cur = np.stack([mod[2] for mod in models])
-        self._c_vel = np.stack([mod[3] for mod in models])
-        self._d_vel = np.stack([mod[4] for mod in models])  # (3, 2)
-        self.kv_1_s = np.array(machine.axis_array("kv_1_s"))
+        self._base_kv = np.array(machine.axis_array("kv_1_s"))
+        # Shared mode: one model per axis for all envs, lifted (3, rows, cols). Per-env mode (after a
+        # kv_scale that differs between envs): lifted (3, n_envs, rows, cols).
+        self._kv_scale = np.ones((self.n_envs, 3))
+        self._shared_models = self._axis_models(np.ones(3))
+        self._env_models: list[list[tuple]] | None = None
         self._lifted: dict[int, np.ndarray] = {}
         # Internal layout is axis-major so that one batched matmul over axes serves every env.
         self._state = np.zeros((3, _N_STATES, self.n_envs))
         self._history = np.zeros((3, self._n_hist, self.n_envs))  # last raw references
         self._velocity = np.zeros((3, self.n_envs))
+        if kv_scale is not None:
+            self.set_kv_scale(kv_scale)
         self.reset(np.zeros(3))
+
+    # ------------------------------------------------------------------ models
+    @property
+    def kv_1_s(self) -> np.ndarray:
+        """Position gains in force, (n_envs, 3), 1/s."""
+        return self._base_kv * self._kv_scale
+
+    def _axis_models(self, scale: np.ndarray) -> list[tuple]:
+        """Discrete models of X, Y, Z with Kv multiplied by ``scale`` (3,); unstable loops are refused."""
+        models = []
+        for name, axis, factor in zip(AXIS_NAMES, self.machine.axes, scale, strict=True):
+            kv = axis.kv_1_s * float(factor)
+            model = axis_discrete_model(
+                kv, axis.feedforward, axis.velocity_loop_hz, axis.velocity_loop_damping, self.period_s
+            )
+            used = _N_STATES if axis.velocity_loop_hz > 0 else 1  # the ideal loop has the state x only
+            if np.abs(np.linalg.eigvals(model[0][:used, :used])).max() >= 1.0:
+                # Routh-Hurwitz on s³ + 2ζωn s² + ωn² s + ωn² Kv: stable iff Kv < 2ζωn.
+                raise ConfigError(
+                    f"{self.machine.source}: axes.{name}: the servo loop is unstable (kv_1_s = {kv:g}, "
+                    f"velocity_loop_hz = {axis.velocity_loop_hz}, damping = {axis.velocity_loop_damping}); "
+                    "a velocity loop needs kv_1_s < 2·damping·2π·velocity_loop_hz"
+                )
+            models.append(model)
+        return models
+
+    def set_kv_scale(self, kv_scale: np.ndarray, env: int | None = None) -> None:
+        """Multiply the preset's per-axis Kv by ``kv_scale``: (3,) or (n_envs, 3) for all envs, or (3,)
+        for one ``env``. Takes effect from the next step; the state is kept. Cached lifted matrices are
+        rebuilt for the envs that change (a few ms per env), so call it at resets, not every step.
+        """
+        scale = np.asarray(kv_scale, dtype=float)
+        if env is None:
+            scale = np.broadcast_to(scale, (self.n_envs, 3)) if scale.ndim <= 1 else scale
+            if scale.shape != (self.n_envs, 3):
+                raise ValueError(f"kv_scale must be (3,) or (n_envs={self.n_envs}, 3), got {scale.shape}")
+            envs = range(self.n_envs)
+        else:
+            if scale.shape != (3,):
+                raise ValueError(f"kv_scale for one env must be (3,), got {scale.shape}")
+            if not 0 <= env < self.n_envs:
+                raise ValueError(f"env {env} out of range 0..{self.n_envs - 1}")
+            scale = np.broadcast_to(scale, (self.n_envs, 3)).copy()
+            envs = [env]
+        if not np.all(np.isfinite(scale)) or np.any(scale <= 0):
+            raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
+        new_scale = self._kv_scale.copy()
+        for e in envs:
+            new_scale[e] = scale[e]
+        if np.all(new_scale == new_scale[0]):
+            # Every env alike again: back to one shared model per axis.
+            self._shared_models = self._axis_models(new_scale[0])
+            self._env_models = None
+            self._lifted.clear()
+        else:
+            if self._env_models is None:
+                self._env_models = [list(self._shared_models) for _ in range(self.n_envs)]
+                self._lifted = {
+                    n: np.repeat(lifted[:, None], self.n_envs, axis=1) for n, lifted in self._lifted.items()
+                }
+            changed = [e for e in envs if not np.array_equal(new_scale[e], self._kv_scale[e])]
+            for e in changed:
+                self._env_models[e] = self._axis_models(new_scale[e])
+                for n_ticks, lifted in self._lifted.items():
+                    lifted[:, e] = self._lift_models(self._env_models[e], n_ticks)
+        self._kv_scale = new_scale
 
     # ------------------------------------------------------------------ lifted matrices
     def _lifted_matrix(self, n_ticks: int) -> np.ndarray:
+        cached = self._lifted.get(n_ticks)
+        if cached is not None:
+            return cached
+        if self._env_models is None:
+            lifted = self._lift_models(self._shared_models, n_ticks)
+        else:
+            lifted = np.stack([self._lift_models(models, n_ticks) for models in self._env_models], axis=1)
+        self._lifted[n_ticks] = lifted
+        return lifted
+
+    def _lift_models(self, models: list[tuple], n_ticks: int) -> np.ndarray:
         """(3, n + 3 + 1, 3 + H + n): [z_0, raw_{1−H}..raw_0, raw_1..raw_n] → [x_1..x_n, z_n, ẋ_n].
 
         H ≥ N raw references are carried; the filtered reference r_j is the mean of raw_{j−N+1}..raw_j.
         """
-        cached = self._lifted.get(n_ticks)
-        if cached is not None:
-            return cached
         n_hist, n_filter = self._n_hist, self.filter_samples
         n_cols = _N_STATES + n_hist + n_ticks
+        # Filtered reference r_j (j = 0..n) as rows over the raw columns: mean of the N raws ending at j.
+        filt = np.zeros((n_ticks + 1, n_cols))
+        for j in range(n_ticks + 1):
+            last_col = _N_STATES + n_hist - 1 + j  # column of raw_j
+            filt[j, last_col - n_filter + 1 : last_col + 1] = 1.0 / n_filter
         out = np.zeros((3, n_ticks + _N_STATES + 1, n_cols))
-        for axis in range(3):
-            # Filtered reference r_j (j = 0..n) as rows over the raw columns: mean of the N raws ending at j.
-            filt = np.zeros((n_ticks + 1, n_cols))
-            for j in range(n_ticks + 1):
-                last_col = _N_STATES + n_hist - 1 + j  # column of raw_j
-                filt[j, last_col - n_filter + 1 : last_col + 1] = 1.0 / n_filter
+        for axis, (a, b_prev, b_cur, c_vel, d_vel) in enumerate(models):
             z = np.zeros((_N_STATES, n_cols))
             z[:, :_N_STATES] = np.eye(_N_STATES)
-            a, b_prev, b_cur = self._a[axis], self._b_prev[axis], self._b_cur[axis]
             for k in range(1, n_ticks + 1):
                 z = a @ z + np.outer(b_prev, filt[k - 1]) + np.outer(b_cur, filt[k])
                 out[axis, k - 1] = z[0]
             out[axis, n_ticks : n_ticks + _N_STATES] = z
-            d_prev, d_cur = self._d_vel[axis]
-            out[axis, -1] = self._c_vel[axis] @ z + d_prev * filt[n_ticks - 1] + d_cur * filt[n_ticks]
-        self._lifted[n_ticks] = out
+            out[axis, -1] = c_vel @ z + d_vel[0] * filt[n_ticks - 1] + d_vel[1] * filt[n_ticks]
         return out
 
     # ------------------------------------------------------------------ public API
@@ -200,8 +265,11 @@ class ServoPlant:
     def _step_block(self, new: np.ndarray) -> np.ndarray:
         n_ticks = new.shape[1]
         lifted = self._lifted_matrix(n_ticks)
-        inputs = np.concatenate((self._state, self._history, new), axis=1)
-        out = np.matmul(lifted, inputs)  # (3, n + 4, E)
+        inputs = np.concatenate((self._state, self._history, new), axis=1)  # (3, cols, E)
+        if lifted.ndim == 3:
+            out = np.matmul(lifted, inputs)  # (3, n + 4, E)
+        else:  # per-env gains: (3, E, rows, cols) @ (3, E, cols, 1)
+            out = np.matmul(lifted, inputs.transpose(0, 2, 1)[..., None])[..., 0].transpose(0, 2, 1)
         self._state = out[:, n_ticks : n_ticks + _N_STATES]
         self._velocity = out[:, -1]
         self._history = inputs[:, -self._n_hist :]
@@ -241,5 +309,5 @@ class ServoPlant:
         err = hist[:, -1, :] - self._state[:, 0, :]
         close = np.einsum("ae,ae->e", err, err) <= tol * tol
         speed2 = np.einsum("ae,ae->e", self._velocity, self._velocity)
-        slow = speed2 <= (float(self.kv_1_s.min()) * tol) ** 2
+        slow = speed2 <= (self.kv_1_s.min(axis=1) * tol) ** 2
         return ref_at_rest & close & slow

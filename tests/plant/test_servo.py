@@ -278,3 +278,49 @@ def test_unstable_servo_config_is_a_config_error():
     # No damping: the velocity loop alone is marginal, any Kv > 0 destabilises it.
     with pytest.raises(ConfigError, match=r"damping = 0\.0"):
         ServoPlant(make_machine(kv=(1.0, 1.0, 1.0), velocity_loop_hz=10.0, damping=0.0))
+
+
+def test_per_env_kv_scale_equals_a_machine_with_those_gains():
+    # Env 1 scales Y's Kv by 1.1 (30 → 33): it must behave exactly like a plant built from a preset
+    # with Kv (30, 33, 30), while env 0 stays the plain p-loop-30.
+    base = load_machine("p-loop-30")
+    rng = np.random.default_rng(5)
+    ref = np.cumsum(rng.normal(0.0, 0.1, (2, 40, 3)), axis=1)
+    plant = ServoPlant(base, n_envs=2)
+    plant.step(ref[:, :7])  # caches a lifted matrix before the change: it must be updated too
+    plant.reset(np.zeros(3))
+    plant.set_kv_scale([1.0, 1.1, 1.0], env=1)
+    np.testing.assert_allclose(plant.kv_1_s, [[30, 30, 30], [30, 33, 30]])
+    out = np.concatenate([plant.step(ref[:, k : k + 7]) for k in range(0, 40, 7)], axis=1)
+    plain = ServoPlant(base)
+    mismatched = ServoPlant(make_machine(kv=(30.0, 33.0, 30.0)))
+    np.testing.assert_allclose(out[0], plain.step(ref[0]), atol=1e-12)
+    np.testing.assert_allclose(out[1], mismatched.step(ref[1]), atol=1e-12)
+    # Setting the same scale everywhere returns to the shared model (and the same results).
+    plant.set_kv_scale([1.0, 1.1, 1.0])
+    plant.reset(np.zeros(3))
+    again = plant.step(ref)
+    for env in range(2):
+        np.testing.assert_allclose(again[env], ServoPlant(make_machine(kv=(30.0, 33.0, 30.0))).step(ref[env]),
+                                   atol=1e-12)  # fmt: skip
+    # Construction with per-env scales.
+    direct = ServoPlant(base, n_envs=2, kv_scale=[[1.0, 1.0, 1.0], [1.0, 1.1, 1.0]])
+    mismatched = ServoPlant(make_machine(kv=(30.0, 33.0, 30.0)))
+    expected = np.stack((ServoPlant(base).step(ref[0]), mismatched.step(ref[1])))
+    np.testing.assert_allclose(direct.step(ref), expected, atol=1e-12)
+
+
+def test_bad_kv_scale():
+    plant = ServoPlant("p-loop-30", n_envs=2)
+    with pytest.raises(ConfigError, match="positive"):
+        plant.set_kv_scale([1.0, 0.0, 1.0])
+    with pytest.raises(ConfigError, match="positive"):
+        plant.set_kv_scale([1.0, np.nan, 1.0], env=0)
+    with pytest.raises(ValueError, match="kv_scale"):
+        plant.set_kv_scale(np.ones((3, 3)))
+    with pytest.raises(ValueError, match="out of range"):
+        plant.set_kv_scale(np.ones(3), env=2)
+    # A scale that makes a velocity loop unstable is refused like an unstable preset.
+    loop = ServoPlant(make_machine(kv=(80.0, 30.0, 30.0), velocity_loop_hz=10.0))
+    with pytest.raises(ConfigError, match="unstable"):
+        loop.set_kv_scale([1.5, 1.0, 1.0])
