@@ -19,9 +19,10 @@ augmented with ``r`` and ``ṙ`` (``expm``). A consequence worth knowing: a ramp
 continuous-time lag (1 − f)·v/Kv, with no extra half-sample delay that a zero-order hold would add.
 
 Vectorisation: for a given number of ticks n the recursion is lifted into one matrix per axis that maps
-``[state (3), raw reference history (N), new references (n)]`` to ``[actual x_1..x_n, state_n, ẋ_n]``;
-a step is one batched matmul over (axis, env). Lifted matrices are cached per n (n up to
-``MAX_LIFTED_TICKS``; longer steps are done in chunks).
+``[state (3), raw reference history (H ≥ N), new references (n)]`` to ``[actual x_1..x_n, state_n,
+ẋ_n]``; a step is one batched matmul over (axis, env). Lifted matrices are cached per n (n up to
+``MAX_LIFTED_TICKS``; longer steps are done in chunks). With per-env Kv (``set_kv_scale``) there is
+one lifted matrix per (axis, env).
 """
 
 from __future__ import annotations
