@@ -94,6 +94,9 @@ class ContourErrorMeter:
         """``[first, last)`` segments searched for a reference on ``segment_hint`` (int or array)."""
         hint = np.asarray(segment_hint)
         lo, hi = (int(hint.min()), int(hint.max())) if hint.ndim else (int(hint), int(hint))
+        return self._window_range(lo, hi)
+
+    def _window_range(self, lo: int, hi: int) -> tuple[int, int]:
         first = max(0, lo - self.window_back)
         if self.window_back_mm > 0 and 0 <= lo < self._n:
             s_from = self.toolpath.s_start[lo] - self.window_back_mm
@@ -123,39 +126,47 @@ class ContourErrorMeter:
         if pts.ndim == 1:
             pts = pts[None]
         m = len(pts)
-        hint = np.asarray(segment_hint)
-        if hint.ndim == 0:
-            h = int(hint)
-            if not (0 <= h < self._n) or not self._cutting[h]:
+        counted = None  # None: every point counts
+        if np.ndim(segment_hint) == 0:
+            lo = hi = int(segment_hint)
+            if not (0 <= lo < self._n) or not self._cutting[lo]:
                 return np.zeros(m)
-            counted = None
         else:
+            hint = np.asarray(segment_hint, dtype=np.intp)
             if hint.shape != (m,):
                 raise ValueError(f"segment_hint must be an int or shape ({m},), got {hint.shape}")
-            inside = (hint >= 0) & (hint < self._n)
-            counted = np.zeros(m, dtype=bool)
-            counted[inside] = self._cutting[hint[inside]]
-            if not counted.any():
+            if m == 0:
+                return np.zeros(0)
+            lo, hi = int(hint.min()), int(hint.max())
+            if lo >= 0 and hi < self._n:
+                counted = self._cutting[hint]
+            else:
+                in_range = (hint >= 0) & (hint < self._n)
+                counted = np.zeros(m, dtype=bool)
+                counted[in_range] = self._cutting[hint[in_range]]
+            if counted.all():
+                counted = None
+            elif not counted.any():
                 return np.zeros(m)
-            hint = hint[counted]
-        first, last = self.window(hint)
-        dist = np.sqrt(self._min_squared_distance(pts, self._window_geometry(first, last)))
+            else:
+                lo, hi = int(hint[counted].min()), int(hint[counted].max())
+        first, last = self._window_range(lo, hi)
+        dist = self._min_distance(pts, self._window_geometry(first, last))
         if counted is not None:
             dist = np.where(counted, dist, 0.0)
         return dist
 
-    def _min_squared_distance(self, pts: np.ndarray, win: _Window) -> np.ndarray:
+    def _min_distance(self, pts: np.ndarray, win: _Window) -> np.ndarray:
         best = np.full(len(pts), np.inf)
         k = len(win.radius)
         if k:
             local = (pts @ win.weights - win.offsets).reshape(len(pts), 5, k)
             inside = np.minimum(local[:, 3], local[:, 4]) >= 0
             off_curve = np.hypot(local[:, 0], local[:, 1]) - win.radius  # in the element's normal plane
-            dist = np.hypot(off_curve, local[:, 2])
-            best = np.where(inside, dist, np.inf).min(axis=1) ** 2
+            best = np.where(inside, np.hypot(off_curve, local[:, 2]), np.inf).min(axis=1)
         for seg in win.others:
             d, _, _ = self.toolpath.nearest(pts, seg, seg + 1, cutting_only=True)
-            best = np.minimum(best, d * d)
+            best = np.minimum(best, d)
         return best
 
 

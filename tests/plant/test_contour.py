@@ -101,6 +101,10 @@ def test_rapids_and_dwells_are_excluded():
     np.testing.assert_allclose(meter.measure(far, np.array([0, 1])), [0.0, 5.0], atol=1e-12)
     # Out-of-range hints count as not cutting (no exception, no NaN).
     np.testing.assert_array_equal(meter.measure(far, 99), [0.0, 0.0])
+    np.testing.assert_allclose(meter.measure(far, np.array([-1, 1])), [0.0, 5.0], atol=1e-12)
+    np.testing.assert_array_equal(meter.measure(far, np.array([3, 99])), [0.0, 0.0])
+    # All points on the cut: the same as one int hint.
+    np.testing.assert_allclose(meter.measure(far, np.array([1, 1])), meter.measure(far, 1), atol=0)
 
 
 def test_window_moves_with_the_hint():
