@@ -13,7 +13,9 @@ program-coordinate targets and :meth:`CanonicalMachine.straight_feed` & co.
 
 from __future__ import annotations
 
-from cnc_gym.toolpath import Plane, SegmentMode, ToolpathBuilder
+import math
+
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, ToolpathBuilder
 
 Vec = tuple[float, float, float]
 ZERO: Vec = (0.0, 0.0, 0.0)
@@ -62,6 +64,25 @@ class OffsetStack:
     def to_program(self, machine: Vec) -> Vec:
         o = self.origin
         return (machine[0] - o[0], machine[1] - o[1], machine[2] - o[2])
+
+
+class FastToolpathBuilder(ToolpathBuilder):
+    """ToolpathBuilder with a scalar-math ``arc``: the same rows, about 4x cheaper per arc.
+
+    The base class computes radius and start angle with numpy scalar functions (several µs per call on
+    the interpreter's hot path). This override computes the same two values with :mod:`math`; the test
+    ``tests/gcode/test_canonical.py`` checks row for row that both give the same Toolpath.
+    """
+
+    def arc(self, start, end, center, plane: Plane, sweep: float, feed: float, **kw) -> None:
+        u, v, w = PLANE_AXES[plane]
+        c = list(center)
+        c[w] = start[w]
+        du = start[u] - c[u]
+        dv = start[v] - c[v]
+        self._append(SegmentKind.ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
+                     radius=math.hypot(du, dv), start_angle=math.atan2(dv, du), sweep=sweep,
+                     **kw)  # fmt: skip
 
 
 class CanonicalMachine:

@@ -19,11 +19,12 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.canonical import CanonicalMachine, OffsetStack
+from cnc_gym.gcode.canonical import CanonicalMachine, FastToolpathBuilder, OffsetStack
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
+from cnc_gym.gcode.reader import split_words
 from cnc_gym.gcode.variables import VariableStore
-from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -60,7 +61,7 @@ class Interpreter:
         self.file = program.file
         self.skip_mask = sum(1 << n for n in block_skip)
         self.variables = VariableStore(dialect)
-        self.builder = ToolpathBuilder(files=(program.file,))
+        self.builder = FastToolpathBuilder(files=(program.file,))
         self.out = CanonicalMachine(self.builder, start)
         self.offsets = OffsetStack()
         # Modal state. ``modal`` is the raw table (group → code key, for #4001-style reads later); the
@@ -105,6 +106,8 @@ class Interpreter:
             if spec.action == "motion"
         }  # fmt: skip
         self._axis_letters = frozenset(axes)
+        self._motion_specs = {key: spec for key, spec in dialect.gcodes.items()
+                              if spec.action == "motion" and spec.implemented}  # fmt: skip
         for key in dialect.power_on:
             spec = dialect.gcodes[key]
             self.modal[spec.group] = key
@@ -143,28 +146,21 @@ class Interpreter:
             self.variables.write(evaluate(target, self.variables, self.dialect),
                                  evaluate(value, self.variables, self.dialect))  # fmt: skip
             return
-        words = self._evaluate_words(block.words) if block.has_expr else block.words
-        values: dict[str, float] = {}
-        gs = ms = None
-        for letter, value, _ in words:
-            if letter == "G":
-                if gs is None:
-                    gs = [value]
-                else:
-                    gs.append(value)
-            elif letter == "M":
-                if ms is None:
-                    ms = [value]
-                else:
-                    ms.append(value)
-            elif letter in values:
-                raise self.error(f"address {letter} appears twice in the block", "duplicate-word")
-            else:
-                values[letter] = value
+        if block.has_expr:
+            gs, ms, values = split_words(self._evaluate_words(block.words))
+        else:
+            gs, ms, values = block.gs, block.ms, block.values
         self.out.line = block.line
 
-        if gs is None and ms is None:
-            # Hot path: no codes; words are axis words (modal motion), F, S, T, O.
+        if ms is None and (gs is None or (len(gs) == 1 and round(gs[0] * 10) in self._motion_specs)):
+            # Hot path: no code, or one group-01 motion code; the other words are axis words, arc words,
+            # F, S, T, O. Same checks and order as the general path, without building a plan.
+            if gs is not None:
+                key = round(gs[0] * 10)
+                spec = self._motion_specs[key]
+                self.motion = spec.value
+                self._motion_key = key
+                self.modal[spec.group] = key
             allowed = self._allowed_with_motion[self._motion_key]
             if not values.keys() <= allowed:
                 self._reject_words(values, allowed, None)
@@ -368,9 +364,9 @@ class Interpreter:
 
     # ------------------------------------------------------------------ one-shot actions
     def _word_text(self, letter: str) -> str | None:
-        for word_letter, _, text in self._block_words:
-            if word_letter == letter:
-                return text
+        for word in self._block_words:
+            if word[0] == letter:
+                return word[-1]
         return None
 
     def _do_dwell(self, spec: CodeSpec, values: dict) -> None:

@@ -22,14 +22,16 @@ import re
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.expressions import ExpressionParser
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
 
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
-_PLAIN_BLOCK = re.compile(rf"(?:[A-Z]{_NUMBER})+")
-_PLAIN_WORD = re.compile(rf"([A-Z])({_NUMBER})")
+# Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".".
+_PLAIN_BLOCK = re.compile(r"(?:[A-Z][-+]?[0-9.]+)+")
+_PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 _SPACES = re.compile(r"[ \t\r\f\v]+")
 _NUMBER_AT = re.compile(_NUMBER)
 
@@ -37,13 +39,17 @@ _NUMBER_AT = re.compile(_NUMBER)
 class Block:
     """One block after reading.
 
-    ``words``: tuple of ``(letter, value, text)``; ``value`` is a float for a literal (``text`` its
-    digits, for decimal-point checks) or an expression node (``text`` None) evaluated at execution.
+    ``words``: ``(letter, value, text)`` tuples; ``value`` is a float for a literal (``text`` its
+    digits, for decimal-point checks) or an expression node (``text`` None) evaluated at execution. A
+    plain block (read on the hot path) keeps just ``(letter, digits)`` pairs; ``word[-1]`` is the text
+    either way.
     ``assign``: ``(target_node, value_node)`` for a macro assignment block (then ``words`` is empty).
     ``skip``: bit mask of the block-skip switches (bit n for ``/n``) that suppress the block.
+    ``gs``, ``ms``, ``values``: for a block without expressions, the words split once at read time (G
+    numbers, M numbers, other addresses → value); None when the block has expressions.
     """
 
-    __slots__ = ("assign", "has_expr", "line", "number", "skip", "words")
+    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
 
     def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
                  assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
@@ -53,9 +59,31 @@ class Block:
         self.has_expr = has_expr
         self.assign = assign
         self.number = number
+        if has_expr:
+            self.gs = self.ms = self.values = None
+        else:
+            self.gs, self.ms, self.values = split_words(words)
 
     def __repr__(self) -> str:
         return f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r})"
+
+
+def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
+    """(G numbers or None, M numbers or None, {address: value}); a repeated address is an error."""
+    values: dict[str, float] = {}
+    gs = ms = None
+    for letter, value, _ in words:
+        if letter == "G":
+            gs = [value] if gs is None else [*gs, value]
+        elif letter == "M":
+            ms = [value] if ms is None else [*ms, value]
+        elif letter in values:
+            # The manual's default is "the later one is valid" (L503, 1802#6 AD2 = 0); we take the
+            # AD2 = 1 behaviour, an alarm, as with two G codes of one group (docs/gcode.md).
+            raise ProgramError(f"address {letter} appears twice in the block", code="duplicate-word")
+        else:
+            values[letter] = value
+    return gs, ms, values
 
 
 @dataclass
@@ -105,14 +133,17 @@ class Reader:
                 seen_percent = True
                 continue
             try:
-                for block in self.read_line(stripped, line_no):
-                    blocks.append(block)
-            except Exception as exc:
-                from cnc_gym.errors import ProgramError
-
-                if isinstance(exc, ProgramError):
-                    raise exc.located(file, line_no) from None
-                raise
+                # Hot path inline: a plain line (no comment, ';', expression) is one regex match.
+                if "(" not in stripped and ")" not in stripped and ";" not in stripped:
+                    text_block = stripped.replace(" ", "").upper()
+                    if "\t" in text_block:
+                        text_block = _SPACES.sub("", text_block)
+                    if _PLAIN_BLOCK.fullmatch(text_block):
+                        blocks.append(self._plain_block(text_block, line_no))
+                        continue
+                blocks.extend(self.read_line(stripped, line_no))
+            except ProgramError as exc:
+                raise exc.located(file, line_no) from None
         program = Program(blocks, file=file)
         for index, block in enumerate(blocks):
             if block.number is not None:
@@ -127,6 +158,8 @@ class Reader:
         if "(" in text or ")" in text:
             text = self._strip_comments(text, line)
         text = _SPACES.sub("", text).upper()
+        if "%" in text:
+            raise self.error("'%' must stand alone on its line (tape start/end mark)", "bad-character", line)
         if ";" in text:
             return [b for part in text.split(";") if part and (b := self.read_block(part, line)) is not None]
         if not text:
@@ -160,15 +193,63 @@ class Reader:
         return self._scan_block(text, line)
 
     def _plain_block(self, text: str, line: int) -> Block:
-        """The hot path: letters and literal numbers only."""
+        """The hot path: letters and literal numbers only. Words are split and checked in one pass;
+        ``Block.words`` keeps the ``(letter, digits)`` pairs for decimal-point checks."""
         rules = self._fast_rules
-        words = []
+        pairs = _PLAIN_WORD.findall(text)
+        values: dict[str, float] = {}
+        gs = ms = None
+        for letter, digits in pairs:
+            low, high, point_allowed, is_length = rules[letter]
+            try:
+                if "." in digits:
+                    fraction = len(digits) - digits.index(".") - 1
+                    if not point_allowed or (is_length and fraction > self._decimals):
+                        value = self._literal(letter, digits, rules[letter], line)
+                    else:
+                        value = float(digits)
+                elif is_length and not self.dialect.integer_is_unit:
+                    value = self._literal(letter, digits, rules[letter], line)
+                else:
+                    value = float(digits)
+            except ValueError:
+                raise self.error(f"bad number {letter}{digits}", "bad-number", line) from None
+            if not low <= value <= high:
+                self._literal(letter, digits, rules[letter], line)  # raises with the right code
+            if letter == "G":
+                if gs is None:
+                    gs = [value]
+                else:
+                    gs.append(value)
+            elif letter == "M":
+                if ms is None:
+                    ms = [value]
+                else:
+                    ms.append(value)
+            elif letter in values:
+                raise self.error(f"address {letter} appears twice in the block", "duplicate-word", line)
+            else:
+                values[letter] = value
         number = None
-        for letter, digits in _PLAIN_WORD.findall(text):
-            words.append((letter, self._literal(letter, digits, rules[letter], line), digits))
-        if words[0][0] in "ON":
-            words, number = self._head(words, line)
-        return Block(line, tuple(words), number=number)
+        if "N" in values or "O" in values:
+            head = pairs[0][0]
+            if "O" in values and head != "O":
+                raise self.error("O must be at the head of the block", "misplaced-word", line)
+            if "N" in values:
+                if not (head == "N" or (head == "O" and pairs[1][0] == "N")):
+                    raise self.error("N must be at the head of the block", "misplaced-word", line)
+                number = int(values.pop("N"))
+        block = Block.__new__(Block)
+        block.line = line
+        block.words = pairs
+        block.skip = 0
+        block.has_expr = False
+        block.assign = None
+        block.number = number
+        block.gs = gs
+        block.ms = ms
+        block.values = values
+        return block
 
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:
         low, high, point_allowed, is_length = rule

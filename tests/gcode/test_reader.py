@@ -1,0 +1,131 @@
+"""Lexical rules of the GSK 25i dialect (seed notes §1): %, O, N, comments, block skip, numbers, case."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from gcode_helpers import close, moves, program_error, records
+
+from cnc_gym.gcode import get_dialect, interpret, read_program
+
+GSK = get_dialect("gsk25i")
+
+
+def test_percent_marks_o_and_n_numbers_are_not_motion():
+    program = read_program("%\nO0001\nN10 G00 X1\nN20 X2\n%\nG01 X99 (after the end of tape: never read)\n")
+    assert program.program_number == 1
+    assert [b.number for b in program.blocks] == [None, 10, 20]
+    assert program.sequence_index == {10: [1], 20: [2]}
+    # The second '%' ends the tape: the G01 without F after it is not read, let alone executed.
+    assert [r["end"][0] for r in moves("%\nO0001\nN10 G00 X1\nN20 X2\n%\nG01 X99\n")] == [1.0, 2.0]
+
+
+def test_comments_case_spaces_and_semicolon_end_of_block():
+    text = "g0 x 1 0 . 5 (a comment with X99 inside) y-2;  G 1 X  11 F 1 0 0 ; (whole-line comment)\n"
+    out = moves(text)
+    # Spaces are ignored inside numbers too (x 1 0 . 5 = X10.5); ';' separates two blocks on one line.
+    assert [r["kind"] for r in out] == ["rapid", "line"]
+    assert close(out[0]["end"], [10.5, -2.0, 0.0])
+    assert close(out[1]["end"], [11.0, -2.0, 0.0]) and out[1]["feed"] == 100.0
+    assert [r["line"] for r in out] == [1, 1]
+
+
+def test_number_without_decimal_point_is_mm_and_literals_are_truncated():
+    # GSK 1800#0 DPI = 1 (standard): X10 is 10 mm (L684). X9.87654 is truncated (not rounded) to the
+    # least input increment 0.0001 mm: 9.8765 (L685-L690, worked example X6).
+    out = moves("G00 X10 Y9.87654 Z-0.00009\n")
+    assert out[0]["end"] == [10.0, 9.8765, 0.0]  # -0.00009 truncates to -0.0000
+
+
+def test_truncation_at_a_0_001_mm_increment_and_dpi_0():
+    # The same literal at a 0.001 mm increment becomes 9.876 (L686, X6). With DPI = 0 a number without a
+    # point counts least increments: X10000 = 10 mm at 0.001 mm (the Fanuc-style examples, L4523).
+    coarse = dataclasses.replace(GSK, least_increment_mm=0.001, least_increment_inch=0.001)
+    assert moves("G00 X9.87654\n", dialect=coarse)[0]["end"][0] == 9.876
+    dpi0 = dataclasses.replace(coarse, integer_is_unit=False)
+    assert moves("G00 X10000 Y2.5 F1\n", dialect=dpi0)[0]["end"][:2] == [10.0, 2.5]
+
+
+@pytest.mark.parametrize(
+    ("switches", "expected_x"),
+    [
+        (frozenset(), [1.0, 2.0, 3.0, 4.0]),  # every switch off: all blocks run
+        (frozenset({1}), [1.0, 4.0]),  # '/' = '/1' and '/1/3' both skipped
+        (frozenset({3}), [1.0, 2.0, 4.0]),  # only the /1/3 block
+        (frozenset({2}), [1.0, 2.0, 3.0, 4.0]),  # no block marked /2
+    ],
+)
+def test_optional_block_skip(switches, expected_x):
+    text = "G00 X1\n/X2\n/1/3 X3\nX4\n"
+    assert [r["end"][0] for r in moves(text, block_skip=switches)] == expected_x
+
+
+def test_block_skip_applies_to_program_end():
+    # "/M30" does not end the program when the switch is on (L516).
+    assert len(moves("G00 X1\n/M30\nX2\n", block_skip=frozenset({1}))) == 2
+    assert len(moves("G00 X1\n/M30\nX2\n")) == 1
+
+
+def test_slash_inside_a_block_discards_the_rest():
+    # L533-L535: "information between the slash and EOB code is ignored".
+    assert moves("G00 X10 /Y20\n")[0]["end"] == [10.0, 0.0, 0.0]
+
+
+def test_block_skip_syntax_errors():
+    assert program_error("//3 G00 X10.0\n").code == "bad-block-skip"  # written /1/3 (L522-L524)
+    assert program_error("/0 G00 X1\n").code == "bad-block-skip"
+    err = program_error("/#2 G00 X100.0\n")
+    assert err.code == "variable-not-allowed"  # L5159
+
+
+def test_o_and_n_must_lead_the_block():
+    assert program_error("G00 N10 X1\n").code == "misplaced-word"
+    assert program_error("G00 X1 O12\n").code == "misplaced-word"
+    assert program_error("N#3 Y200.0\n").code == "variable-not-allowed"  # L5160
+
+
+@pytest.mark.parametrize(
+    ("text", "code", "alarm"),
+    [
+        ("G01 X1.2.3 F100\n", "bad-number", 8),
+        ("G01 X. F100\n", "bad-number", 8),
+        ("G01 X F100\n", "missing-value", 5),
+        ("G01 X- F100\n", "bad-number", 8),
+        ("G01 X10 F100 $\n", "bad-character", 9),
+        ("G01 X10 F100 (unclosed\n", "unclosed-comment", None),
+        ("G01 X10 F100 )\n", "bad-character", 9),
+        ("G00 X1 % \n", "bad-character", 9),
+        ("M3.5\n", "decimal-point-not-allowed", 7),
+        ("T1.0\n", "decimal-point-not-allowed", 7),
+        ("N1234567 G00 X1\n", "value-out-of-range", 16),
+        ("S99999\n", "value-out-of-range", 200),
+        ("G01 X1 F-100\n", "bad-sign", 6),
+        ("G00 X1000000\n", "value-out-of-range", 8),
+    ],
+)
+def test_lexical_errors(text, code, alarm):
+    err = program_error(text, file="part.nc")
+    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", 1)
+
+
+def test_error_line_counts_blank_and_comment_lines():
+    err = program_error("\n(header)\n\nG00 X1\nG01 X1.2.3\n", file="p.nc")
+    assert err.line == 5
+    assert str(err).startswith("p.nc:5: ") and str(err).endswith("[bad-number]")
+
+
+def test_lowercase_and_uppercase_give_the_same_toolpath():
+    text = "G17 G90 G01 X12.5 Y-3 F250\nG02 X20 Y4.5 R8\nM30\n"
+    assert records(text) == records(text.lower())
+
+
+def test_two_words_of_one_address_are_an_error():
+    # The manual's default is "the later one is valid" (L503); this interpreter raises instead
+    # (1802#6 AD2 = 1 behaviour), consistently with group conflicts. docs/gcode.md.
+    assert program_error("G01 X1 X2 F100\n").code == "duplicate-word"
+
+
+def test_interpret_keeps_the_file_name_in_the_toolpath():
+    tp = interpret("G00 X1\n", file="dir/part.nc")
+    assert tp.files[0] == "dir/part.nc"
