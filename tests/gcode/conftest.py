@@ -1,4 +1,4 @@
-"""Make the shared helper module ``gcode_helpers`` importable (the suite runs with --import-mode=importlib)."""
+"""Make the helper module ``gcode_helpers`` importable (the suite uses --import-mode=importlib)."""
 
 import sys
 from pathlib import Path

@@ -188,7 +188,7 @@ _BIG = 999999.9999
 ADDRESSES = {
     **{a: AddressRule(-_BIG, _BIG, "length") for a in "XYZIJKRQ"},
     "F": AddressRule(0.0, 1000000.0, "feed"),
-    "P": AddressRule(0.0, 99999999.0, "plain"),
+    "P": AddressRule(-99999999.0, 99999999.0, "plain"),  # sign checked by the code using P (G04: alarm 18)
     "L": AddressRule(0.0, 9999.0, "integer", point_allowed=False),
     "N": AddressRule(0.0, 999999.0, "integer", point_allowed=False, alarm=16),
     "O": AddressRule(0.0, 9999.0, "integer", point_allowed=False, alarm=74),
