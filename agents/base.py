@@ -30,9 +30,13 @@ class Policy(Protocol):
         """The env action for this control step."""
 
 
-def override_action(override: float) -> np.ndarray:
-    """Override-mode action for a knob value: the env maps a ∈ [-1, 1] to override a + 1 (0 %..200 %)."""
-    return np.array([np.clip(override - 1.0, -1.0, 1.0)], dtype=np.float32)
+def override_action(override: float, max_override: float = 2.0) -> np.ndarray:
+    """Override-mode action for a knob value.
+
+    The env maps a ∈ [-1, 1] to override ``(a + 1)/2 · max_override`` (0 %..200 % on the presets, where
+    that is simply a + 1), so a = 2·override/max_override − 1, clipped to the action box.
+    """
+    return np.array([np.clip(2.0 * override / max_override - 1.0, -1.0, 1.0)], dtype=np.float32)
 
 
 def require_override_mode(env: Any, policy_name: str) -> None:

@@ -148,23 +148,25 @@ def jerk_limited_reach(v0: float, distance_mm: float, accel: float, jerk: float)
     return max(w - v0, v0)
 
 
-def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float, jerk: float) -> np.ndarray:
+def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float) -> np.ndarray:
     """Largest speed profile ≤ ``cap`` whose rises and falls are reachable under (A, J).
 
     Backward pass (can we slow down in time for every later cap?) then forward pass (can we speed up
-    that fast?). Each pass keeps one anchor, the last point where the cap itself was binding.
+    that fast?). Each pass keeps one anchor, the last point where the cap itself was binding; ``accel``
+    may vary along the path (one value per point; the anchor's applies to the ramp leaving it).
     """
     out = np.array(cap, dtype=float)
+    accel_at = np.broadcast_to(np.asarray(accel, dtype=float), out.shape)
     for order in (range(len(s) - 1, -1, -1), range(len(s))):
-        anchor_s, anchor_v = None, None
+        anchor_s, anchor_v, anchor_a = None, 0.0, 0.0
         for i in order:
             if anchor_s is not None:
                 distance = abs(anchor_s - s[i])
                 # Cheap test first: is the cap itself reachable from the anchor?
-                if _ramp_length(anchor_v, out[i], accel, jerk) > distance:
-                    out[i] = jerk_limited_reach(anchor_v, distance, accel, jerk)
+                if _ramp_length(anchor_v, out[i], anchor_a, jerk) > distance:
+                    out[i] = jerk_limited_reach(anchor_v, distance, anchor_a, jerk)
                     continue
-            anchor_s, anchor_v = s[i], out[i]
+            anchor_s, anchor_v, anchor_a = s[i], out[i], float(accel_at[i])
     return out
 
 
@@ -194,12 +196,14 @@ class ClassicalPlanner:
         refine_iterations: int = 12,
         reaction_time_s: float | None = None,
         grid_mm: float | None = None,
+        min_override: float = 0.05,
     ) -> None:
         self.name = "classical"
         self.margin = float(margin)
         self.refine_iterations = int(refine_iterations)
         self.reaction_time_s = reaction_time_s
         self.grid_mm = grid_mm
+        self.min_override = float(min_override)
         self._cache: dict[tuple, tuple[Toolpath, Schedule]] = {}
         self.schedule: Schedule | None = None
         self._max_override = 2.0
@@ -223,7 +227,7 @@ class ClassicalPlanner:
         self._cache[key] = (toolpath, self.schedule)  # keeps the toolpath alive so its id stays unique
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
-        return override_action(self.override_at(float(info.get("path_s", 0.0)), info))
+        return override_action(self.override_at(float(info.get("path_s", 0.0)), info), self._max_override)
 
     # ------------------------------------------------------------------ schedule
     def override_at(self, path_s: float, info: dict[str, Any] | None = None) -> float:
@@ -253,31 +257,60 @@ class ClassicalPlanner:
         accel = min(machine.axis_array("max_accel_mm_s2"))
         jerk = min(machine.axis_array("max_jerk_mm_s3"))
         # The applied override follows the knob at a limited slew: that bounds speed changes too.
-        slew_accel = float(machine.controller.override_slew_per_s) * float(
-            np.min(feed_mm_s[cutting], initial=1e9)
-        )
-        accel_eff = max(min(accel, slew_accel), 1e-3)
+        slew_accel = float(machine.controller.override_slew_per_s) * feed_mm_s
+        accel_eff = np.where(cutting & (feed_mm_s > 0), np.minimum(accel, slew_accel), accel)
+        accel_eff = np.maximum(accel_eff, 1e-3)
         schedule = self._schedule(s, cap, cutting, feed_mm_s, accel_eff, jerk)
         self.schedule = schedule
         if env is None or self.refine_iterations <= 0:
             return schedule
+        # Offending places of the previous round: (path position, error, speed). A place whose error did
+        # not drop although the speed there did does not depend on the feed (e.g. the servo still
+        # settling from a rapid when the cut begins); lowering the cap there would only cost time.
+        floor = np.where(cutting, self.min_override * feed_mm_s, 0.0)
+        previous: list[tuple[float, float, float]] = []
+        unresponsive: list[float] = []
         for iteration in range(1, self.refine_iterations + 1):
-            path_s, error = self._simulate(env)
+            path_s, error, speed = self._simulate(env)
             if path_s is None:  # env could not be copied: model-only schedule
                 return schedule
-            over = error > target
             schedule.iterations = iteration
             schedule.predicted_violations = int(np.sum(error > tolerance))
-            if not np.any(over):
+            offending = []
+            for k in np.flatnonzero(error > target):
+                where, err = float(path_s[k]), float(error[k])
+                if any(abs(where - u) < 0.5 for u in unresponsive):
+                    continue
+                before = [(e, v) for (w, e, v) in previous if abs(w - where) < 0.5]
+                if (
+                    before
+                    and speed[k] < 0.9 * max(v for _, v in before)
+                    and err > 0.99 * max(e for e, _ in before)
+                ):
+                    unresponsive.append(where)
+                    continue
+                offending.append((k, where, err))
+            previous = [
+                (float(path_s[k]), float(error[k]), float(speed[k])) for k in np.flatnonzero(error > target)
+            ]
+            if not offending:
                 break
             # Lower the cap on the stretch behind each offending step (the error builds up over the
-            # servo's settling distance) by the ratio target/error, a little more to converge quickly.
-            for where, err in zip(path_s[over], error[over], strict=True):
-                speed_here = float(np.interp(where, s, schedule.speed_mm_s))
-                back = max(2.0, 4.0 * speed_here * float(np.max(1.0 / model.kv)))
+            # servo's settling distance) to the speed actually run there times target/error (a little
+            # less, to converge quickly). The speed actually run, not the schedule's: the controller may
+            # already go slower than asked (its own corner limit), and only going below that helps.
+            # Overlapping stretches take the smallest ratio (never a product of ratios). The floor
+            # keeps the knob from stalling the program where the feed is not the cause.
+            order = np.argsort(path_s, kind="stable")
+            run_speed = np.interp(s, path_s[order], speed[order])
+            ratio = np.ones(len(s))
+            for k, where, err in offending:
+                back = max(2.0, 4.0 * float(speed[k]) * float(np.max(1.0 / model.kv)))
                 window = (s >= where - back) & (s <= where + 1.0)
-                scaled = np.minimum(cap[window], schedule.speed_mm_s[window])
-                cap[window] = np.minimum(cap[window], scaled * max(0.3, 0.95 * target / err))
+                ratio[window] = np.minimum(ratio[window], max(0.3, 0.95 * target / err))
+            lowered = ratio < 1.0
+            new_cap = np.maximum(np.minimum(run_speed, schedule.speed_mm_s) * ratio, floor)
+            cap[lowered] = np.minimum(cap[lowered], new_cap[lowered])
             schedule = self._schedule(s, cap, cutting, feed_mm_s, accel_eff, jerk)
             schedule.iterations = iteration
             self.schedule = schedule
@@ -313,20 +346,23 @@ class ClassicalPlanner:
         override[fed] = np.clip(speed[fed] / feed_mm_s[fed], 0.0, self._max_override)
         return Schedule(s=s, cap_mm_s=cap.copy(), speed_mm_s=speed, override=override)
 
-    def _simulate(self, env: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Run a copy of the (just reset) env with the current schedule; per-step path position and error."""
+    def _simulate(self, env: Any) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+        """Run a copy of the (just reset) env with the current schedule.
+
+        Returns per control step: path position (mm), contour error (mm) and path speed (mm/s).
+        """
         try:
             sim = copy.deepcopy(env)
         except Exception:  # an env that cannot be copied: fall back to the model-only schedule
-            return None, None
+            return None, None, None
         info: dict[str, Any] = {}
-        positions, errors = [], []
-        max_steps = 10_000_000
-        for _ in range(max_steps):
-            action = override_action(self.override_at(float(info.get("path_s", 0.0)), info))
-            _, _, terminated, truncated, info = sim.step(action)
+        observation = None
+        positions, errors, speeds = [], [], []
+        for _ in range(10_000_000):
+            _, _, terminated, truncated, info = sim.step(self.act(observation, info))
             positions.append(float(info.get("path_s", 0.0)))
             errors.append(float(info.get("contour_error_mm", 0.0)))
+            speeds.append(float(info.get("feed_mm_min", 0.0)) / 60.0)
             if terminated or truncated:
                 break
-        return np.asarray(positions), np.asarray(errors)
+        return np.asarray(positions), np.asarray(errors), np.asarray(speeds)

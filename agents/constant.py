@@ -26,6 +26,7 @@ class ConstantOverride:
         max_override = float(env.unwrapped.machine.controller.max_override)
         if self.override > max_override + 1e-12:
             raise CncGymError(f"{self.name}: above this machine's max override {max_override:g}")
+        self._action = override_action(self.override, max_override)
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         return self._action.copy()

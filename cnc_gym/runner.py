@@ -181,7 +181,10 @@ def plot_run(result: RunResult, path: str | Path) -> Path:
 def run_cli(args: Any) -> int:
     """``cnc-gym run``: errors (bad program, policy, model) propagate as CncGymError for the CLI to print."""
     progress = not getattr(args, "no_progress", False) and sys.stderr.isatty()
-    result = simulate(args.program, dialect=args.dialect, machine=args.machine,
+    # The CLI leaves --machine unset (None) when not given: the runner's default is vmc-small.
+    machine = getattr(args, "machine", None) or "vmc-small"
+    dialect = getattr(args, "dialect", None) or "gsk25i"
+    result = simulate(args.program, dialect=dialect, machine=machine,
                       policy=getattr(args, "policy", None) or "constant:1.0", progress=progress)  # fmt: skip
     if getattr(args, "plot", None):
         plot_run(result, args.plot)
