@@ -27,9 +27,9 @@ import numpy as np
 OUT_DIR = Path(__file__).resolve().parent.parent / "cnc_gym" / "programs"
 
 SAFE_Z = 5.0
-APPROACH_Z = 1.0
+APPROACH_Z = 4.0
 CUT_Z = -1.0
-PLUNGE_FEED = 1000.0
+PLUNGE_FEED = 600.0
 SPINDLE_RPM = 8000
 
 
@@ -109,10 +109,10 @@ def star() -> str:
 
 
 # -------------------------------------------------------------------------------------------- freeform
-LISSAJOUS_AX_MM = 24.0
-LISSAJOUS_AY_MM = 16.0
-LISSAJOUS_SEGMENT_MM = 1.0
-FREEFORM_FEED = 3000.0
+LISSAJOUS_AX_MM = 18.0
+LISSAJOUS_AY_MM = 27.0
+LISSAJOUS_SEGMENT_MM = 0.5
+FREEFORM_FEED = 2400.0
 
 
 def lissajous_points(segment_mm: float) -> np.ndarray:
@@ -144,58 +144,80 @@ def freeform() -> str:
 
 
 # ---------------------------------------------------------------------------------------------- pocket
-#: (half width, half height, corner radius) of each roughing loop, inside out; step-over 4 mm.
-POCKET_LOOPS = ((8.0, 5.0, 4.0), (12.0, 9.0, 5.0), (16.0, 13.0, 6.0))
-POCKET_FINISH = (18.0, 14.0, 6.0)
+#: Loops of the spiral, inside out: (half width, half height, corner radius). Each loop grows by the
+#: step-over (4 mm) on every side; the last one is the finishing pass.
+POCKET_LOOPS = ((8.0, 6.0, 4.0), (12.0, 10.0, 6.0), (16.0, 14.0, 8.0))
+POCKET_STEP_OVER_MM = 4.0
 POCKET_ROUGH_FEED = 3000.0
 POCKET_FINISH_FEED = 2000.0
 
 
-def rounded_rectangle(a: float, b: float, r: float, clockwise: bool) -> list[str]:
-    """One loop of a rounded rectangle centred on the origin, from and back to (a, 0), absolute moves."""
-    if clockwise:
-        return [
-            f"G01 Y{fmt(-b + r)}",
-            f"G02 X{fmt(a - r)} Y{fmt(-b)} I{fmt(-r)} J{fmt(0.0)}",
-            f"G01 X{fmt(-a + r)}",
-            f"G02 X{fmt(-a)} Y{fmt(-b + r)} I{fmt(0.0)} J{fmt(r)}",
-            f"G01 Y{fmt(b - r)}",
-            f"G02 X{fmt(-a + r)} Y{fmt(b)} I{fmt(r)} J{fmt(0.0)}",
-            f"G01 X{fmt(a - r)}",
-            f"G02 X{fmt(a)} Y{fmt(b - r)} I{fmt(0.0)} J{fmt(-r)}",
-            f"G01 Y{fmt(0.0)}",
+def pocket_moves() -> list[tuple[str, tuple[float, float], tuple[float, float] | None, float]]:
+    """The pocket as moves ``(kind, end, centre, feed)``: a tangent-continuous spiral of rounded rectangles.
+
+    Clockwise (G02). Each loop starts on its right side heading -Y; instead of its last corner (top
+    right) it takes a wider arc, radius r + step-over, that lands on the right side of the next loop,
+    so the step-over has no sharp corner (on vmc-small a corner taken at the controller's corner-speed
+    limit alone exceeds the 0.02 mm tolerance). Built counter-clockwise in (x, y) and mirrored y → -y.
+    """
+    moves: list[tuple[str, tuple[float, float], tuple[float, float] | None, float]] = []  # CCW frame
+    d = POCKET_STEP_OVER_MM
+    for i, (a, b, r) in enumerate(POCKET_LOOPS):
+        last = i == len(POCKET_LOOPS) - 1
+        feed = POCKET_FINISH_FEED if last else POCKET_ROUGH_FEED
+        moves += [
+            ("line", (a, b - r), None, feed),
+            ("arc", (a - r, b), (a - r, b - r), feed),
+            ("line", (-a + r, b), None, feed),
+            ("arc", (-a, b - r), (-a + r, b - r), feed),
+            ("line", (-a, -b + r), None, feed),
+            ("arc", (-a + r, -b), (-a + r, -b + r), feed),
+            ("line", (a - r, -b), None, feed),
         ]
-    return [
-        f"G01 Y{fmt(b - r)}",
-        f"G03 X{fmt(a - r)} Y{fmt(b)} I{fmt(-r)} J{fmt(0.0)}",
-        f"G01 X{fmt(-a + r)}",
-        f"G03 X{fmt(-a)} Y{fmt(b - r)} I{fmt(0.0)} J{fmt(-r)}",
-        f"G01 Y{fmt(-b + r)}",
-        f"G03 X{fmt(-a + r)} Y{fmt(-b)} I{fmt(r)} J{fmt(0.0)}",
-        f"G01 X{fmt(a - r)}",
-        f"G03 X{fmt(a)} Y{fmt(-b + r)} I{fmt(0.0)} J{fmt(r)}",
-        f"G01 Y{fmt(0.0)}",
-    ]
+        if last:
+            moves.append(("arc", (a, -b + r), (a - r, -b + r), feed))
+        else:  # the wider corner arc onto the next loop's right side
+            big = r + d
+            moves.append(("step-over", (a + d, -b + big), (a - r, -b + big), feed))
+    moves.append(
+        ("line", (POCKET_LOOPS[-1][0], pocket_start_y(len(POCKET_LOOPS) - 1)), None, POCKET_FINISH_FEED)
+    )
+    return [(kind, (x, -y), None if c is None else (c[0], -c[1]), f) for kind, (x, y), c, f in moves]
+
+
+def pocket_start_y(i: int) -> float:
+    """y where loop ``i`` starts (counter-clockwise frame); loop 0 at the low end of its right side."""
+    if i == 0:
+        _, b, r = POCKET_LOOPS[0]
+        return -b + r
+    _, b, r = POCKET_LOOPS[i - 1]
+    return -b + r + POCKET_STEP_OVER_MM
 
 
 def pocket() -> str:
+    a0 = POCKET_LOOPS[0][0]
+    af, bf, _ = POCKET_LOOPS[-1]
     lines = header("pocket", [
-        f"rounded-rectangle pocket {2 * POCKET_FINISH[0]:g} x {2 * POCKET_FINISH[1]:g} mm: "
-        f"{len(POCKET_LOOPS)} roughing loops G03 at F{POCKET_ROUGH_FEED:g}",
-        f"with incremental G91 step-overs, then a finishing pass G02 at F{POCKET_FINISH_FEED:g}",
+        f"pocket-like spiral of {len(POCKET_LOOPS)} rounded rectangles out to {2 * af:g} x {2 * bf:g} mm",
+        f"clockwise G02, tangent step-over arcs of {POCKET_STEP_OVER_MM:g} mm written in incremental G91",
+        f"roughing F{POCKET_ROUGH_FEED:g}, finishing loop F{POCKET_FINISH_FEED:g}",
     ])  # fmt: skip
-    first_a = POCKET_LOOPS[0][0]
-    lines += approach(0.0, 0.0)
-    lines.append(f"G01 X{fmt(first_a)} F{fmt(POCKET_ROUGH_FEED)}")
-    previous_a = first_a
-    for i, (a, b, r) in enumerate(POCKET_LOOPS):
-        if i:
-            lines += ["G91", f"G01 X{fmt(a - previous_a)}", "G90"]
-        lines += rounded_rectangle(a, b, r, clockwise=False)
-        previous_a = a
-    a, b, r = POCKET_FINISH
-    lines += ["G91", f"G01 X{fmt(a - previous_a)} F{fmt(POCKET_FINISH_FEED)}", "G90"]
-    lines += rounded_rectangle(a, b, r, clockwise=True)
+    start = (a0, -pocket_start_y(0))
+    lines += approach(*start)
+    x, y = start
+    feed_now = None
+    for kind, (ex, ey), centre, feed in pocket_moves():
+        f_word = f" F{fmt(feed)}" if feed != feed_now else ""
+        feed_now = feed
+        if kind == "line":
+            lines.append(f"G01 X{fmt(ex)} Y{fmt(ey)}{f_word}")
+        elif kind == "step-over":
+            # Step-over arc: written incrementally (G91), I/J are always relative to the start.
+            arc = f"G02 X{fmt(ex - x)} Y{fmt(ey - y)} I{fmt(centre[0] - x)} J{fmt(centre[1] - y)}{f_word}"
+            lines += ["G91", arc, "G90"]
+        else:
+            lines.append(f"G02 X{fmt(ex)} Y{fmt(ey)} I{fmt(centre[0] - x)} J{fmt(centre[1] - y)}{f_word}")
+        x, y = ex, ey
     lines += footer()
     return "\n".join(lines) + "\n"
 
