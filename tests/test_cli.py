@@ -1,0 +1,135 @@
+"""The `cnc-gym` command: the trace contract and the error contract (DESIGN.md)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import pytest
+
+from cnc_gym.cli import main
+
+CONTRACT_KEYS = {
+    "rapid": {"kind", "line", "end"},
+    "line": {"kind", "line", "end", "feed"},
+    "arc": {"kind", "line", "end", "feed", "center", "plane", "sweep_deg"},
+    "dwell": {"kind", "line", "seconds"},
+}
+
+
+def write(tmp_path: Path, text: str, name: str = "part.nc") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def run_main(argv: list[str], capsys) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_trace_prints_json_lines_per_the_contract(tmp_path, capsys):
+    text = "G00 X10 Y5\nG01 Z-1 F200\nG02 X20 Y5 I5 F400\nG04 P250\nG18 G03 X30 Z-1 R5\nM30\n"
+    program = write(tmp_path, text)
+    code, out, err = run_main(["trace", program], capsys)
+    assert code == 0 and err == ""
+    recs = [json.loads(line) for line in out.splitlines()]
+    assert [r["kind"] for r in recs] == ["rapid", "line", "arc", "dwell", "arc"]
+    assert [r["line"] for r in recs] == [1, 2, 3, 4, 5]
+    for rec in recs:
+        assert CONTRACT_KEYS[rec["kind"]] <= set(rec)
+    # Values: a half circle CW about (15, 5) from (10, 5) to (20, 5) at F400; G04 P250 = 0.25 s.
+    assert recs[2]["center"] == [15.0, 5.0, -1.0] and recs[2]["sweep_deg"] == -180.0
+    assert recs[2]["feed"] == 400.0
+    assert recs[3]["seconds"] == 0.25
+    assert recs[4]["plane"] == "ZX" and recs[4]["end"] == [30.0, 5.0, -1.0]
+
+
+def test_trace_block_skip_switches(tmp_path, capsys):
+    program = write(tmp_path, "G00 X1\n/G00 X2\n/2 G00 X3\n")
+    _, out_off, _ = run_main(["trace", program], capsys)
+    _, out_on, _ = run_main(["trace", program, "--block-skip", "1", "2"], capsys)
+    assert len(out_off.splitlines()) == 3 and len(out_on.splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "code"),
+    [
+        ("G00 X1\nG01 X1.2.3 F100\n", 2, "bad-number"),
+        ("G00 X1\nG01 X F100\n", 2, "missing-value"),
+        ("G00 X1\nG12 X1\n", 2, "unknown-code"),
+        ("G00 X1\nG41 D1 X1\n", 2, "not-implemented"),
+        ("G00 X1\nG02 X30 R10 F100\n", 2, "arc-impossible"),
+        ("G00 X10\nG03 X0 Y10.5 I-10 F100\n", 2, "arc-radius-mismatch"),
+        ("G00 X1\n\nG01 X2\n", 3, "missing-feed"),
+        ("G00 X1\nG00 G01 X2 F100\n", 2, "group-conflict"),
+        ("G00 X1\nG00 X[1/0]\n", 2, "division-by-zero"),
+    ],
+)
+def test_program_errors_exit_2_with_one_line_and_no_stdout(tmp_path, capsys, text, line, code):
+    program = write(tmp_path, text)
+    status, out, err = run_main(["trace", program], capsys)
+    assert status == 2
+    assert out == ""  # nothing on stdout, not even the records before the error
+    lines = err.splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith(f"{program}:{line}: ") and lines[0].endswith(f"[{code}]")
+
+
+def test_missing_and_unreadable_files(tmp_path, capsys):
+    status, out, err = run_main(["trace", str(tmp_path / "nope.nc")], capsys)
+    assert status == 2 and out == "" and len(err.splitlines()) == 1 and "nope.nc" in err
+    status, out, err = run_main(["trace", str(tmp_path)], capsys)  # a directory
+    assert status == 2 and out == "" and len(err.splitlines()) == 1
+
+
+def test_bad_dialect_and_machine_are_one_line_errors(tmp_path, capsys):
+    program = write(tmp_path, "G00 X1\n")
+    for argv in (["--dialect", "h4cm"], ["--dialect", "nonsense"], ["--machine", "no-such-machine"]):
+        status, out, err = run_main(["trace", program, *argv], capsys)
+        assert status == 2 and out == "" and len(err.splitlines()) == 1, argv
+
+
+def test_machine_travel_limits_are_checked(tmp_path, capsys):
+    machine = tmp_path / "tiny.yaml"
+    machine.write_text("name: tiny\naxis_defaults: {min_position_mm: -100, max_position_mm: 100}\n")
+    program = write(tmp_path, "G00 X50\nG00 X150\n")
+    status, out, err = run_main(["trace", program, "--machine", str(machine)], capsys)
+    assert status == 2 and out == "" and err.startswith(f"{program}:2: ") and "[travel-limit]" in err
+    inside = write(tmp_path, "G00 X50\n", "ok.nc")
+    status, out, _ = run_main(["trace", inside, "--machine", str(machine)], capsys)
+    assert status == 0 and out
+
+
+def test_run_dispatches_to_the_runner(tmp_path, capsys, monkeypatch):
+    seen = {}
+
+    def run_cli(args):
+        seen.update(vars(args))
+        return 0
+
+    monkeypatch.setitem(sys.modules, "cnc_gym.runner", types.SimpleNamespace(run_cli=run_cli))
+    program = write(tmp_path, "G00 X1\n")
+    assert main(["run", program, "--json", "--plot", "p.png", "--no-progress"]) == 0
+    assert seen["program"] == program and seen["policy"] == "constant:1.0" and seen["json"] is True
+    assert seen["plot"] == "p.png" and seen["no_progress"] is True and seen["dialect"] == "gsk25i"
+
+
+def test_run_without_a_runner_is_a_one_line_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "cnc_gym.runner", None)  # import fails
+    status, out, err = run_main(["run", write(tmp_path, "G00 X1\n")], capsys)
+    assert status == 2 and out == "" and len(err.splitlines()) == 1 and "runner" in err
+
+
+def test_console_command_never_prints_a_traceback(tmp_path):
+    # The real entry point in a fresh interpreter: exit status 2, one stderr line, empty stdout.
+    program = write(tmp_path, "G01 X10 F100\nG02 X50 R5\n")
+    proc = subprocess.run([sys.executable, "-m", "cnc_gym.cli", "trace", program], capture_output=True,
+                          text=True, timeout=60)  # fmt: skip
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith(f"{program}:2: ") and proc.stderr.rstrip().endswith("[arc-impossible]")
