@@ -1,0 +1,475 @@
+"""``cnc_gym/Feedrate-v0``: learn the feed-override knob of a CNC controller running a real G-code program."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from cnc_gym.envs.task import ACTION_MODES, RewardWeights, load_task, resolve_reward
+from cnc_gym.errors import ConfigError
+from cnc_gym.machine import MachineConfig, load_machine
+from cnc_gym.motion import ActionError  # one error type for bad actions, env and controller alike
+from cnc_gym.programs import load_program
+from cnc_gym.toolpath import SegmentKind, Toolpath
+
+#: Scalar observation entries, in order (the look-ahead block follows them).
+SCALAR_FEATURES = (
+    "speed",
+    "accel",
+    "override",
+    "knob",
+    "following_error",
+    "contour_error_step",
+    "contour_error_now",
+    "progress",
+    "distance_to_stop",
+)
+#: Per-point look-ahead entries; each is a block of ``lookahead_points`` values.
+LOOKAHEAD_FEATURES = ("speed_limit", "curvature", "turn_angle", "programmed_feed")
+
+# Normalisation constants (documented in the class docstring).
+_CURVATURE_LENGTH_MM = 10.0  # curvature κ is observed as κL/(1 + κL): R 50 mm → 0.17, R 1 mm → 0.91
+_FOLLOWING_ERROR_REF_MM = 1.0
+
+
+def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
+    """The program's time at 100 % feed with infinite acceleration: Σ length / programmed feed.
+
+    Rapids count at the slowest axis' rapid rate (a lower bound on the rapid speed, so this never
+    underestimates a rapid), dwells at their programmed time. This is ``T_nominal`` of the reward.
+    """
+    kind = toolpath.kind
+    length = toolpath.length
+    cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
+    path_feed_mm_s = toolpath.path_feed / 60.0
+    safe_feed = np.where(cutting & (path_feed_mm_s > 0), path_feed_mm_s, 1.0)
+    cut_s = float(np.sum(np.where(cutting, length / safe_feed, 0.0)))
+    rapid_mm_s = min(machine.axis_array("rapid_mm_min")) / 60.0
+    rapid_s = float(np.sum(length[kind == SegmentKind.RAPID])) / rapid_mm_s
+    dwell_s = float(np.sum(toolpath.dwell_s))
+    return max(cut_s + rapid_s + dwell_s, 1e-3)
+
+
+class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
+    r"""Feed-rate control of a simulated CNC milling controller on real G-code.
+
+    Each episode runs one G-code program (chosen among ``programs``) from the start to the end of the
+    program. Every control step (``control_period_s``, default 10 ms = 5 interpolation periods on
+    ``vmc-small``) the agent sets the feed-override knob (or, in ``"feed"`` mode, commands the feed
+    directly). The controller (look-ahead, jerk-limited profile, corner and arc limits) turns the program
+    into a reference position every interpolation period, the servo axes follow it, and the contour error
+    (distance of the actual tool position from the programmed path, on cutting moves) is measured at every
+    servo sample. The agent is rewarded for finishing sooner and penalised for contour error, and for
+    every control step whose contour error exceeds the machine's tolerance.
+
+    ## Action Space
+
+    ``Box(-1, 1, (1,), float32)``; values outside [-1, 1] are clipped, NaN/inf or a wrong shape raise
+    :class:`ActionError` (a ``ValueError``).
+
+    | action_mode | meaning of a ∈ [-1, 1] |
+    |---|---|
+    | ``override`` (default) | override ``(a + 1) / 2 · max_override``: 0 … 200 % (vmc-small), a = 0 → 100 % |
+    | ``feed`` | feed ``(a + 1) / 2 · max_feed_mm_min``: 0 … 15 000 mm/min on vmc-small (replaces F) |
+
+    The controller's look-ahead and limits stay in force in both modes: the knob asks, the controller
+    keeps the motion within acceleration, jerk, corner and arc limits and never breaks its braking
+    envelope (so a high override cannot make the machine overshoot a stop, only cut less accurately).
+
+    ## Observation Space
+
+    ``Box(low, high, (9 + 4·N,), float32)`` with ``N = lookahead_points`` (default 8, so 41 entries),
+    clipped to the bounds below. ``v_ref = max_feed_mm_min / 60`` (250 mm/s on vmc-small),
+    ``a_ref`` = the largest axis acceleration, ``tol`` = the machine's contour tolerance, ``H`` =
+    ``lookahead_mm`` (default 24 mm), ``L_k`` = 10 mm.
+
+    | index | observation | formula | range |
+    |---|---|---|---|
+    | 0 | path speed | ``v / v_ref`` | [0, 2] |
+    | 1 | path acceleration | ``a / a_ref`` | [-2, 2] |
+    | 2 | applied override | ``override / max_override`` | [0, 1] |
+    | 3 | last action (knob) | ``a`` | [-1, 1] |
+    | 4 | following error | ``‖reference − actual‖ / 1 mm`` | [0, 5] |
+    | 5 | contour error, max over the last step | ``e_max / tol`` | [0, 5] |
+    | 6 | contour error, last servo sample | ``e / tol`` | [0, 5] |
+    | 7 | progress | ``s / L`` (path length done) | [0, 1] |
+    | 8 | distance to the next stop | ``min(d_stop / H, 1)`` | [0, 1] |
+    | 9 … 8+N | speed limit ahead | controller's limit at N points over the next H mm, ``/ v_ref`` | [0, 2] |
+    | 9+N … 8+2N | curvature ahead | ``κ L_k / (1 + κ L_k)`` | [0, 1] |
+    | 9+2N … 8+3N | turning angle ahead | ``θ / π``, the largest junction turn in each bin | [0, 1] |
+    | 9+3N … 8+4N | programmed feed ahead | ``F / 60 / v_ref`` | [0, 2] |
+
+    The look-ahead block describes the path, not the program, so one policy can run any program.
+
+    ## Rewards
+
+    Per control step of ``dt = control_period_s``, with ``e_max`` the largest contour error (mm) over the
+    step's servo samples:
+
+    .. math::
+
+        r = - w_\text{time} \frac{dt}{T_\text{nominal}}
+            - w_\text{error} \min\left(\frac{e_\text{max}}{tol}, c\right)^2
+            - w_\text{violation} [e_\text{max} > tol]
+
+    ``T_nominal`` is the program's time at 100 % feed (Σ length / programmed feed; see
+    :func:`nominal_time_s`), so running the whole program at 100 % costs about ``w_time`` (a bit more
+    because of acceleration and corners). Weights (``configs/tasks/default.yaml``): ``w_time = 10``,
+    ``w_error = 0.05``, ``w_violation = 1``, cap ``c = 10``. ``info["cost"] = [e_max > tol]`` is the
+    same violation indicator, for constrained RL.
+
+    ## Starting State
+
+    The machine at its start position (the program's first point, the origin for the built-ins), at
+    rest, axes settled, override 100 %. There is no randomness apart from the choice of program.
+
+    ## Episode End
+
+    - **Termination**: the controller has finished the program (reference at rest at the end, dwells
+      done) and every axis is within the in-position width (``in_position_mm``).
+    - **Truncation**: after ``max_episode_steps`` control steps (default: 5 × ``T_nominal`` / ``dt`` plus
+      one second to settle), e.g. when the knob is held at 0.
+
+    ## Arguments
+
+    ``programs`` (built-in names, paths or G-code text; None = the default task's set), ``dialect``,
+    ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
+    of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
+    ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
+    ``lookahead_points``. ``reset(seed=..., options={"program": name_or_index})``: with several programs
+    the episode's program is drawn with ``self.np_random``; the option picks one (a name not in the set
+    is loaded for that episode).
+
+    ## Info
+
+    ``cycle_time_s``, ``contour_error_mm`` (max in this step), ``contour_error_max_mm``,
+    ``contour_error_rms_mm`` (over cutting samples so far), ``tolerance_mm``, ``violations`` (control
+    steps so far with ``e_max > tol``), ``cost``, ``line`` (source line of the current block),
+    ``override`` (applied), ``feed_mm_min`` (current path speed × 60), ``path_s``, ``progress``,
+    ``program``, ``steps``. At the end of an episode these are the episode's totals.
+
+    ## Version History
+
+    - v0: first version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}
+
+    def __init__(
+        self,
+        programs: Sequence[str | Path] | str | Path | None = None,
+        dialect: str = "gsk25i",
+        machine: str | Path | MachineConfig = "vmc-small",
+        action_mode: str = "override",
+        control_period_s: float = 0.01,
+        reward: str | Path | dict | RewardWeights | None = None,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        lookahead_mm: float = 24.0,
+        lookahead_points: int = 8,
+    ) -> None:
+        from cnc_gym.motion import Controller
+        from cnc_gym.plant import ContourErrorMeter, ServoPlant
+
+        self._controller_cls = Controller
+        self._meter_cls = ContourErrorMeter
+        if action_mode not in ACTION_MODES:
+            raise ConfigError(f"action_mode must be one of {', '.join(ACTION_MODES)}, got {action_mode!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ConfigError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if max_episode_steps is not None and (
+            isinstance(max_episode_steps, bool)
+            or not isinstance(max_episode_steps, int)
+            or max_episode_steps < 1
+        ):
+            raise ConfigError(f"max_episode_steps must be a positive integer, got {max_episode_steps!r}")
+        if not (isinstance(lookahead_points, int) and lookahead_points >= 1):
+            raise ConfigError(f"lookahead_points must be a positive integer, got {lookahead_points!r}")
+        if not (isinstance(lookahead_mm, int | float) and math.isfinite(lookahead_mm) and lookahead_mm > 0):
+            raise ConfigError(f"lookahead_mm must be a positive number, got {lookahead_mm!r}")
+
+        self.machine: MachineConfig = load_machine(machine)
+        self.action_mode = action_mode
+        self.render_mode = render_mode
+        self.dialect = dialect
+        self.reward_weights = resolve_reward(reward)
+        ctrl = self.machine.controller
+        self.interpolation_period_s = ctrl.interpolation_period_s
+        if (
+            isinstance(control_period_s, bool)
+            or not isinstance(control_period_s, int | float)
+            or not math.isfinite(control_period_s)
+            or control_period_s <= 0
+        ):
+            raise ConfigError(f"control_period_s must be a positive number, got {control_period_s!r}")
+        ticks = round(control_period_s / ctrl.interpolation_period_s)
+        if ticks < 1 or abs(ticks * ctrl.interpolation_period_s - control_period_s) > 1e-9 * max(1.0, ticks):
+            raise ConfigError(
+                f"control_period_s ({control_period_s} s) must be a whole multiple of the interpolation "
+                f"period ({ctrl.interpolation_period_s} s) of machine {self.machine.name!r}"
+            )
+        self.ticks_per_step = int(ticks)
+        self.control_period_s = ticks * ctrl.interpolation_period_s
+        self.tolerance_mm = float(ctrl.contour_tolerance_mm)
+        self.in_position_mm = float(ctrl.in_position_mm)
+        self.max_override = float(ctrl.max_override)
+        self.max_feed_mm_min = float(ctrl.max_feed_mm_min)
+        self._v_ref = self.max_feed_mm_min / 60.0
+        self._a_ref = max(self.machine.axis_array("max_accel_mm_s2"))
+        self._max_lag_mm = self._v_ref / min(self.machine.axis_array("kv_1_s"))
+        self.lookahead_mm = float(lookahead_mm)
+        self.lookahead_points = int(lookahead_points)
+        self._max_episode_steps_arg = max_episode_steps
+
+        # Programs: interpreted once (cached by cnc_gym.programs), controllers built lazily per program.
+        if programs is None:
+            programs = load_task("default").programs
+        elif isinstance(programs, str | Path):
+            programs = [programs]
+        if len(programs) == 0:
+            raise ConfigError("programs must name at least one program")
+        self._programs: list[tuple[str, Toolpath]] = [load_program(p, dialect) for p in programs]
+        self._episode_cache: dict[str, dict[str, Any]] = {}
+        self.program_names = [name for name, _ in self._programs]
+
+        self.plant = ServoPlant(self.machine, n_envs=1)
+
+        # Spaces.
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
+        n = self.lookahead_points
+        low = np.array([0, -2, 0, -1, 0, 0, 0, 0, 0] + [0] * (4 * n), dtype=np.float32)
+        high = np.array([2, 2, 1, 1, 5, 5, 5, 1, 1] + [2] * n + [1] * n + [1] * n + [2] * n, dtype=np.float32)
+        self.observation_space = spaces.Box(low, high, dtype=np.float32)
+        self._obs = np.zeros(len(low), dtype=np.float32)
+        self._obs_low, self._obs_high = low, high
+        self._la = slice(len(SCALAR_FEATURES), len(low))
+
+        # Per-tick buffers for the settle phase after the controller has finished.
+        self._settle_reference = np.zeros((self.ticks_per_step, 3))
+        self._renderer = None
+        if render_mode == "rgb_array":
+            from cnc_gym.envs.render import EpisodeRenderer
+
+            self._renderer = EpisodeRenderer(self.tolerance_mm)  # records per step; draws on render()
+        self._select(0)
+        self._reset_stats()
+
+    # ------------------------------------------------------------------------------------------ episode
+    def _episode_objects(self, name: str, toolpath: Toolpath) -> dict[str, Any]:
+        """Controller, meter and nominal time of a program (built once, reused by every reset)."""
+        key = f"{name}:{id(toolpath)}"
+        objects = self._episode_cache.get(key)
+        if objects is None:
+            t_nominal = nominal_time_s(toolpath, self.machine)
+            budget = self._max_episode_steps_arg or (
+                math.ceil(5.0 * t_nominal / self.control_period_s) + math.ceil(1.0 / self.control_period_s)
+            )
+            kind = toolpath.kind
+            objects = {
+                "controller": self._controller_cls(toolpath, self.machine),
+                # The window reaches back over the largest possible lag (max feed / Kv) so that on
+                # short-segment programs the actual point is never measured against the wrong segment.
+                "meter": self._meter_cls(toolpath, window_back_mm=self._max_lag_mm),
+                "nominal_time_s": t_nominal,
+                "max_episode_steps": int(budget),
+                "cutting": (kind == SegmentKind.LINE)
+                | (kind == SegmentKind.ARC)
+                | (kind == SegmentKind.NURBS),
+                "start": toolpath.start[0].copy() if len(toolpath) else np.zeros(3),
+            }
+            self._episode_cache[key] = objects
+        return objects
+
+    def _select(self, index_or_name: int | str) -> None:
+        if isinstance(index_or_name, int | np.integer) and not isinstance(index_or_name, bool):
+            if not 0 <= index_or_name < len(self._programs):
+                raise ConfigError(f"program index {index_or_name} out of range 0..{len(self._programs) - 1}")
+            name, toolpath = self._programs[int(index_or_name)]
+        elif isinstance(index_or_name, str | Path):
+            found = [p for p in self._programs if p[0] == index_or_name]
+            name, toolpath = found[0] if found else load_program(index_or_name, self.dialect)
+        else:
+            raise ConfigError(
+                f"options['program'] must be a name, path, text or index, got {index_or_name!r}"
+            )
+        objects = self._episode_objects(name, toolpath)
+        self.program_name: str = name
+        self.toolpath: Toolpath = toolpath
+        self.controller = objects["controller"]
+        self.meter = objects["meter"]
+        self.nominal_time_s: float = objects["nominal_time_s"]
+        self.max_episode_steps: int = objects["max_episode_steps"]
+        self._cutting_segments: np.ndarray = objects["cutting"]
+        self._start = objects["start"]
+        self._total_length = max(toolpath.total_length, 1e-9)
+        self._time_reward = self.reward_weights.time * self.control_period_s / self.nominal_time_s
+
+    def _reset_stats(self) -> None:
+        self._steps = 0
+        self._ticks = 0
+        self._error_max_mm = 0.0
+        self._error_sq_sum = 0.0
+        self._error_samples = 0
+        self._violations = 0
+        self._knob = 0.0
+        self._last_segment = 0
+        self._last_reference = self._start
+        self._last_error_step = 0.0
+        self._last_error_now = 0.0
+        self._following_error_mm = 0.0
+        if self._renderer is not None:
+            self._renderer.clear()
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        super().reset(seed=seed)
+        choice: int | str | None = None
+        if options is not None:
+            if not isinstance(options, dict):
+                raise ConfigError(f"options must be a dict, got {type(options).__name__}")
+            unknown = sorted(set(options) - {"program"})
+            if unknown:
+                raise ConfigError(f"unknown reset option {unknown[0]!r} (allowed: program)")
+            choice = options.get("program")
+        if choice is None:
+            choice = int(self.np_random.integers(len(self._programs))) if len(self._programs) > 1 else 0
+        self._select(choice)
+        self.controller.reset()
+        self.meter.reset()
+        self.plant.reset(self._start[None, :])
+        self._reset_stats()
+        if self._renderer is not None:
+            self._renderer.start(self)
+        return self._observe(), self._info(0.0, 0.0)
+
+    # --------------------------------------------------------------------------------------------- step
+    def _parse_action(self, action: Any) -> float:
+        try:
+            value = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ActionError(f"action must be a number or an array of shape (1,), got {action!r}") from None
+        if value.size != 1 or value.ndim > 1:
+            raise ActionError(f"action must have shape (1,), got shape {value.shape}")
+        knob = float(value.reshape(()))
+        if not math.isfinite(knob):
+            raise ActionError(f"action must be finite, got {knob}")
+        return min(max(knob, -1.0), 1.0)
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        knob = self._parse_action(action)
+        self._knob = knob
+        controller = self.controller
+        n = self.ticks_per_step
+        if not controller.finished:
+            if self.action_mode == "override":
+                chunk = controller.advance(n, override=(knob + 1.0) * 0.5 * self.max_override)
+            else:
+                chunk = controller.advance(n, feed_mm_min=(knob + 1.0) * 0.5 * self.max_feed_mm_min)
+            reference = chunk.position
+            segment = chunk.segment
+            if len(reference) < n:  # the program ended inside this step: hold the end point
+                reference = np.concatenate((reference, np.repeat(reference[-1:], n - len(reference), axis=0)))
+                segment = np.concatenate((segment, np.repeat(segment[-1:], n - len(segment))))
+            self._last_segment = int(segment[-1])
+            self._last_reference = reference[-1]
+        else:  # settling at the end: the reference rests at the last point
+            reference = self._settle_reference
+            reference[:] = self._last_reference
+            segment = np.full(n, self._last_segment)
+        actual = self.plant.step(reference[None])[0]
+        error = self.meter.measure(actual, segment)
+        self._ticks += n
+        self._steps += 1
+
+        e_max = float(error.max())
+        cutting = self._cutting_segments[segment]
+        n_cut = int(np.count_nonzero(cutting))
+        if n_cut:
+            cut_error = error[cutting]
+            self._error_sq_sum += float(cut_error @ cut_error)
+            self._error_samples += n_cut
+        if e_max > self._error_max_mm:
+            self._error_max_mm = e_max
+        violated = e_max > self.tolerance_mm
+        self._violations += violated
+        self._last_error_step = e_max
+        self._last_error_now = float(error[-1])
+        self._following_error_mm = float(np.linalg.norm(reference[-1] - actual[-1]))
+
+        w = self.reward_weights
+        ratio = min(e_max / self.tolerance_mm, w.error_ratio_cap)
+        reward = -self._time_reward - w.contour_error * ratio * ratio - (w.violation if violated else 0.0)
+
+        terminated = bool(controller.finished and self.plant.settled(self.in_position_mm))
+        truncated = (not terminated) and self._steps >= self.max_episode_steps
+        if self._renderer is not None:
+            self._renderer.record(actual, error)
+        return self._observe(), float(reward), terminated, truncated, self._info(e_max, float(violated))
+
+    # ------------------------------------------------------------------------------------ observations
+    def _observe(self) -> np.ndarray:
+        obs = self._obs
+        controller = self.controller
+        features = controller.lookahead(self.lookahead_mm, self.lookahead_points)
+        tol = self.tolerance_mm
+        obs[0] = controller.speed / self._v_ref
+        obs[1] = controller.accel / self._a_ref
+        obs[2] = controller.override_applied / self.max_override
+        obs[3] = self._knob
+        obs[4] = self._following_error_mm / _FOLLOWING_ERROR_REF_MM
+        obs[5] = self._last_error_step / tol
+        obs[6] = self._last_error_now / tol
+        obs[7] = controller.path_s / self._total_length
+        obs[8] = float(np.min(features.distance_to_stop_mm)) / self.lookahead_mm
+        n = self.lookahead_points
+        base = len(SCALAR_FEATURES)
+        obs[base : base + n] = features.speed_limit_mm_s
+        obs[base : base + n] /= self._v_ref
+        kappa_l = np.asarray(features.curvature_1_mm) * _CURVATURE_LENGTH_MM
+        obs[base + n : base + 2 * n] = kappa_l / (1.0 + kappa_l)
+        obs[base + 2 * n : base + 3 * n] = features.turn_angle_rad
+        obs[base + 2 * n : base + 3 * n] /= math.pi
+        obs[base + 3 * n : base + 4 * n] = features.programmed_feed_mm_s
+        obs[base + 3 * n : base + 4 * n] /= self._v_ref
+        np.nan_to_num(obs, copy=False, nan=0.0, posinf=2.0, neginf=-2.0)
+        np.clip(obs, self._obs_low, self._obs_high, out=obs)
+        return obs.copy()  # callers (replay buffers) may keep it; the buffer is reused
+
+    def _info(self, step_error_mm: float, cost: float) -> dict[str, Any]:
+        controller = self.controller
+        segment = min(max(int(controller.segment_index), 0), max(len(self.toolpath) - 1, 0))
+        rms = math.sqrt(self._error_sq_sum / self._error_samples) if self._error_samples else 0.0
+        return {
+            "cycle_time_s": self._ticks * self.interpolation_period_s,
+            "contour_error_mm": step_error_mm,
+            "contour_error_max_mm": self._error_max_mm,
+            "contour_error_rms_mm": rms,
+            "tolerance_mm": self.tolerance_mm,
+            "violations": self._violations,
+            "cost": cost,
+            "line": int(self.toolpath.line[segment]) if len(self.toolpath) else 0,
+            "override": float(controller.override_applied),
+            "feed_mm_min": float(controller.speed) * 60.0,
+            "path_s": float(controller.path_s),
+            "progress": min(float(controller.path_s) / self._total_length, 1.0),
+            "program": self.program_name,
+            "steps": self._steps,
+        }
+
+    # ------------------------------------------------------------------------------------------ render
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
+            return None
+        return self._renderer.draw(self)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()

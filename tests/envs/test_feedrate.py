@@ -1,0 +1,355 @@
+"""cnc_gym/Feedrate-v0: API compliance, episodes, seeding, action modes, reward formula, info, render."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import cnc_gym  # noqa: F401  (registers the env)
+from cnc_gym.envs.feedrate import ActionError, FeedrateEnv, nominal_time_s
+from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.programs import BUILTIN_PROGRAMS, load_program
+
+ENV_ID = "cnc_gym/Feedrate-v0"
+INFO_KEYS = {
+    "cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm",
+    "violations", "cost", "line", "override", "feed_mm_min", "path_s", "progress", "program", "steps",
+}  # fmt: skip
+# circle.nc at 100 % with infinite acceleration, by hand (test_nominal_time_by_hand).
+T_NOMINAL_CIRCLE = 2 * math.pi * 30 / 50 + 0.5 + 0.084
+
+
+def run_constant(env: FeedrateEnv, knob: float, program: str | None = None, max_steps: int = 100_000):
+    """Run one episode at a constant action; returns (rewards, infos, terminated, truncated)."""
+    options = {"program": program} if program is not None else None
+    _, info = env.reset(seed=0, options=options)
+    rewards, infos = [], [info]
+    action = np.array([knob], dtype=np.float32)
+    for _ in range(max_steps):
+        _, reward, terminated, truncated, info = env.step(action)
+        rewards.append(reward)
+        infos.append(info)
+        if terminated or truncated:
+            return np.array(rewards), infos, terminated, truncated
+    raise AssertionError("episode did not end")
+
+
+@pytest.fixture(scope="module")
+def circle_env():
+    env = FeedrateEnv(programs=["circle"])
+    yield env
+    env.close()
+
+
+# ------------------------------------------------------------------------------------------ API checks
+def test_make_with_no_arguments():
+    env = gym.make(ENV_ID)
+    obs, info = env.reset(seed=1)
+    assert env.observation_space.contains(obs)
+    assert set(info) == INFO_KEYS
+    assert info["program"] in BUILTIN_PROGRAMS
+    assert env.unwrapped.machine.name == "vmc-small"
+    env.close()
+
+
+def test_gymnasium_check_env_without_warnings():
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make(ENV_ID, programs=["star", "circle"]).unwrapped
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any checker warning fails the test
+        check_env(env)  # also makes a render_mode="rgb_array" twin through the spec and renders it
+    env.close()
+
+
+def test_sb3_check_env_without_warnings():
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.env_checker import check_env
+
+    env = FeedrateEnv(programs=["star"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env, warn=True)
+    env.close()
+
+
+def test_spaces():
+    env = FeedrateEnv(programs=["circle"], lookahead_points=6)
+    assert env.action_space.shape == (1,)
+    assert env.action_space.low[0] == -1.0 and env.action_space.high[0] == 1.0
+    assert env.observation_space.shape == (9 + 4 * 6,)
+    assert env.observation_space.dtype == np.float32
+    assert np.all(np.isfinite(env.observation_space.low)) and np.all(np.isfinite(env.observation_space.high))
+
+
+# ------------------------------------------------------------------------------------------- episodes
+@pytest.mark.parametrize("program", BUILTIN_PROGRAMS)
+def test_episode_terminates_at_constant_override(program):
+    env = FeedrateEnv(programs=[program])
+    rewards, infos, terminated, truncated = run_constant(env, 0.0)  # a = 0 is 100 % override
+    end = infos[-1]
+    assert terminated and not truncated
+    assert end["progress"] == pytest.approx(1.0)
+    assert bool(env.plant.settled(env.in_position_mm)[0])
+    assert env.controller.finished
+    # Cycle time: steps × 10 ms, and never shorter than the cutting moves at their programmed feed
+    # (100 % override cannot exceed F): Σ length / F over cutting segments.
+    assert end["cycle_time_s"] == pytest.approx(end["steps"] * 0.01)
+    tp = env.toolpath
+    cut = np.isfinite(tp.feed) & (tp.length > 0)
+    assert end["cycle_time_s"] > float(np.sum(tp.length[cut] / (tp.feed[cut] / 60.0)))
+    # Every observation along the way was inside the space (check at the end state here).
+    assert all(set(i) == INFO_KEYS for i in infos)
+    assert np.all(np.isfinite(rewards))
+    env.close()
+
+
+def test_truncation_by_step_budget():
+    env = FeedrateEnv(programs=["circle"], max_episode_steps=100)
+    rewards, infos, terminated, truncated = run_constant(env, -1.0)  # override 0: the machine never moves on
+    assert truncated and not terminated
+    assert len(rewards) == 100
+    # Rapids ignore the feed override, so the approach still happens; no cutting move ever starts.
+    first_cut = int(np.flatnonzero(np.isfinite(env.toolpath.feed))[0])
+    assert infos[-1]["path_s"] == pytest.approx(env.toolpath.s_start[first_cut], abs=1e-6)
+
+
+def test_default_budget_is_five_times_nominal_time(circle_env):
+    t_nominal = nominal_time_s(circle_env.toolpath, circle_env.machine)
+    assert circle_env.max_episode_steps == math.ceil(5 * t_nominal / 0.01) + 100
+
+
+def test_nominal_time_by_hand():
+    # circle.nc: full circle R 30 at F3000 (50 mm/s): 2π·30/50 = 3.76991 s; plunge Z4 → Z-1 at F600:
+    # 5/10 = 0.5 s; rapids Z0→5, (0,0)→(30,0), Z5→4 and the final Z-1→5 = 5 + 30 + 1 + 6 = 42 mm at
+    # the slowest rapid rate, 30 000 mm/min = 500 mm/s: 0.084 s. Total 4.35391 s.
+    _, tp = load_program("circle")
+    env = FeedrateEnv(programs=["circle"])
+    assert nominal_time_s(tp, env.machine) == pytest.approx(T_NOMINAL_CIRCLE, rel=1e-9)
+
+
+# -------------------------------------------------------------------------------------------- seeding
+def rollout(env: FeedrateEnv, seed: int, n_steps: int = 40):
+    obs, info = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    trace = [obs]
+    for _ in range(n_steps):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        trace.append(np.append(obs, reward))
+        if terminated or truncated:
+            break
+    return info["program"], np.concatenate(trace)
+
+
+def test_same_seed_same_episode():
+    a = FeedrateEnv()
+    b = FeedrateEnv()
+    program_a, trace_a = rollout(a, seed=7)
+    program_b, trace_b = rollout(b, seed=7)
+    assert program_a == program_b
+    np.testing.assert_array_equal(trace_a, trace_b)
+    # Re-running on the same env (after other episodes) reproduces it too.
+    rollout(a, seed=3)
+    program_c, trace_c = rollout(a, seed=7)
+    assert program_c == program_a
+    np.testing.assert_array_equal(trace_c, trace_a)
+
+
+def test_seed_draws_the_program_and_options_override_it():
+    env = FeedrateEnv()
+    drawn = {env.reset(seed=seed)[1]["program"] for seed in range(30)}
+    assert drawn == set(BUILTIN_PROGRAMS)  # 30 draws from 4 programs: all appear (P(miss) < 4·0.75^30)
+    for seed in range(5):
+        assert env.reset(seed=seed, options={"program": "pocket"})[1]["program"] == "pocket"
+    assert env.reset(options={"program": 1})[1]["program"] == "star"
+    with pytest.raises(ConfigError):
+        env.reset(options={"program": 9})
+    with pytest.raises(ConfigError):
+        env.reset(options={"toolpath": "circle"})
+
+
+def test_reset_option_loads_a_program_outside_the_set():
+    env = FeedrateEnv(programs=["circle"])
+    _, info = env.reset(options={"program": "G90 G21\nG01 X5.0 F1200.0\nM30\n"})
+    assert info["program"].startswith("text-")
+    assert env.toolpath.total_length == pytest.approx(5.0)
+
+
+# -------------------------------------------------------------------------------------- action modes
+def test_override_mapping_and_clipping(circle_env):
+    circle_env.reset(seed=0)
+    for _ in range(80):
+        circle_env.step(np.array([0.5], dtype=np.float32))
+    # a = 0.5 → (0.5 + 1)/2 · 2.0 = 1.5 (150 %); the applied override has had 0.8 s to follow the knob.
+    assert circle_env.unwrapped.controller.override_applied == pytest.approx(1.5, abs=1e-6)
+    obs, *_ = circle_env.step(np.array([7.0], dtype=np.float32))  # clipped to 1.0 (200 %)
+    assert obs[3] == pytest.approx(1.0)
+
+
+def test_feed_mode_commands_the_feed():
+    # a = -0.6 → (−0.6 + 1)/2 · 15 000 = 3000 mm/min; on the circle (programmed F3000) the path speed in
+    # the middle of the circle is then 50 mm/s, the same as 100 % override in override mode. The
+    # commanded feed replaces F on every cutting move, so the 5 mm plunge (F600 = 10 mm/s in the program)
+    # runs at 50 mm/s: 0.5 s − 0.1 s = 0.4 s saved, less a little for the longer acceleration.
+    env = FeedrateEnv(programs=["circle"], action_mode="feed")
+    _, infos, terminated, _ = run_constant(env, -0.6)
+    assert terminated
+    middle = [i for i in infos if 0.3 < i["progress"] < 0.7]
+    assert middle and all(i["feed_mm_min"] == pytest.approx(3000.0, rel=1e-3) for i in middle)
+    _, infos_override, _, _ = run_constant(FeedrateEnv(programs=["circle"]), 0.0)
+    saved = infos_override[-1]["cycle_time_s"] - infos[-1]["cycle_time_s"]
+    assert 0.3 < saved < 0.4
+
+
+def test_faster_override_finishes_sooner_with_more_error():
+    env = FeedrateEnv(programs=["circle"])
+    _, slow, *_ = run_constant(env, -0.5)  # 50 %
+    _, fast, *_ = run_constant(env, 1.0)  # 200 %
+    assert fast[-1]["cycle_time_s"] < 0.6 * slow[-1]["cycle_time_s"]
+    assert fast[-1]["contour_error_max_mm"] > 2 * slow[-1]["contour_error_max_mm"]
+
+
+@pytest.mark.parametrize(
+    "action",
+    [np.array([np.nan], dtype=np.float32), np.array([np.inf]), np.zeros(2), np.zeros((1, 2)), "fast", None],
+)
+def test_bad_actions_raise_one_clear_error(circle_env, action):
+    circle_env.reset(seed=0)
+    with pytest.raises(ActionError) as err:
+        circle_env.step(action)
+    assert isinstance(err.value, ValueError) and isinstance(err.value, CncGymError)
+    assert "action" in str(err.value)
+
+
+def test_scalar_and_python_float_actions_are_accepted(circle_env):
+    circle_env.reset(seed=0)
+    circle_env.step(0.0)
+    circle_env.step(np.float32(0.0))
+    circle_env.step([0.0])
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"action_mode": "velocity"}, "action_mode"),
+        ({"control_period_s": 0.003}, "multiple"),
+        ({"control_period_s": -0.01}, "control_period_s"),
+        ({"reward": {"time": 1.0, "speed": 2.0}}, "unknown key reward.speed"),
+        ({"reward": {"violation": -1.0}}, "violation"),
+        ({"render_mode": "human"}, "render_mode"),
+        ({"max_episode_steps": 0}, "max_episode_steps"),
+        ({"programs": []}, "at least one"),
+        ({"programs": ["nosuchprogram"]}, "unknown program"),
+        ({"machine": "nosuchmachine"}, "unknown machine"),
+    ],
+)
+def test_bad_configuration_is_a_config_error(kwargs, match):
+    with pytest.raises(ConfigError, match=match):
+        FeedrateEnv(**{"programs": ["circle"], **kwargs})
+
+
+# -------------------------------------------------------------------------------------------- reward
+def test_reward_matches_the_documented_formula():
+    # r = −w_time·dt/T_nominal − w_error·min(e/tol, cap)² − w_violation·[e > tol], with weights chosen here
+    # and T_nominal of circle.nc computed by hand (see test_nominal_time_by_hand): 4.35391 s.
+    weights = {"time": 2.0, "contour_error": 0.3, "violation": 5.0, "error_ratio_cap": 1.5}
+    env = FeedrateEnv(programs=["circle"], reward=weights)
+    t_nominal = T_NOMINAL_CIRCLE
+    rewards, infos, *_ = run_constant(env, 1.0)  # 200 %: some steps exceed the tolerance
+    tol = 0.02
+    seen_violation = seen_capped = False
+    for reward, info in zip(rewards, infos[1:], strict=True):
+        e = info["contour_error_mm"]
+        ratio = min(e / tol, 1.5)
+        expected = -2.0 * 0.01 / t_nominal - 0.3 * ratio**2 - (5.0 if e > tol else 0.0)
+        assert reward == pytest.approx(expected, rel=1e-9, abs=1e-12)
+        assert info["cost"] == (1.0 if e > tol else 0.0)
+        seen_violation |= e > tol
+        seen_capped |= e > 1.5 * tol
+    assert seen_violation and seen_capped
+    assert infos[-1]["violations"] == sum(i["cost"] for i in infos[1:])
+
+
+def test_hand_checked_first_step(circle_env):
+    # First step from rest: the tool rises from Z0 on a rapid, which is not a cutting move, so the contour
+    # error is 0 and the reward is the time term alone: −10 · 0.01 / 4.35391 = −0.0229679.
+    circle_env.reset(seed=0)
+    _, reward, *_, info = circle_env.step(np.zeros(1, dtype=np.float32))
+    assert info["contour_error_mm"] == 0.0
+    assert reward == pytest.approx(-0.0229679, rel=1e-5)
+
+
+def test_reward_yaml_path(tmp_path):
+    path = tmp_path / "task.yaml"
+    path.write_text("reward:\n  time: 1.0\n  contour_error: 0.0\n  violation: 0.0\n")
+    env = FeedrateEnv(programs=["circle"], reward=path)
+    rewards, infos, *_ = run_constant(env, 1.0)
+    # Only the time term: the return is −1 · (cycle time / T_nominal).
+    t_nominal = nominal_time_s(env.toolpath, env.machine)
+    assert rewards.sum() == pytest.approx(-infos[-1]["cycle_time_s"] / t_nominal, rel=1e-9)
+    path.write_text("reward:\n  time: 1.0\nprogrammes: [circle]\n")
+    with pytest.raises(ConfigError, match="programmes"):
+        FeedrateEnv(programs=["circle"], reward=path)
+
+
+def test_default_return_is_in_a_sane_range():
+    # At 100 % the time term sums to about −w_time·(cycle time / T_nominal) ≈ −10 … −15; the episode
+    # return stays within the order 1–100 that PPO handles without reward scaling.
+    env = FeedrateEnv(programs=["star"])
+    rewards, *_ = run_constant(env, 0.0)
+    assert -100.0 < rewards.sum() < -5.0
+
+
+# ---------------------------------------------------------------------------------------------- info
+def test_info_totals_are_consistent(circle_env):
+    rewards, infos, *_ = run_constant(circle_env, 0.6)
+    end = infos[-1]
+    assert set(end) == INFO_KEYS
+    step_errors = np.array([i["contour_error_mm"] for i in infos[1:]])
+    assert end["contour_error_max_mm"] == pytest.approx(step_errors.max())
+    assert 0 < end["contour_error_rms_mm"] <= end["contour_error_max_mm"]
+    assert end["violations"] == int(np.sum(step_errors > 0.02))
+    assert end["tolerance_mm"] == 0.02
+    assert end["steps"] == len(rewards)
+    assert end["program"] == "circle"
+    # The circle block (G03) is line 10 of circle.nc; mid-episode the current line is that block.
+    middle = infos[len(infos) // 2]
+    assert middle["line"] == 10
+    assert middle["override"] == pytest.approx(1.6, abs=1e-6)
+    assert middle["feed_mm_min"] == pytest.approx(1.6 * 3000.0, rel=1e-3)
+
+
+def test_lookahead_sees_the_star_tips():
+    # A pentagram tip turns by 144°; while the tool approaches it the look-ahead block must show a
+    # turning angle near 144/180 = 0.8 (in absolute value) somewhere in the window.
+    env = FeedrateEnv(programs=["star"])
+    obs, _ = env.reset(seed=0)
+    n = env.lookahead_points
+    turn = slice(9 + 2 * n, 9 + 3 * n)
+    seen = []
+    for _ in range(200):
+        obs, *_ = env.step(np.zeros(1, dtype=np.float32))
+        seen.append(np.abs(obs[turn]).max())
+    assert max(seen) == pytest.approx(0.8, abs=0.02)
+
+
+# -------------------------------------------------------------------------------------------- render
+def test_render_rgb_array():
+    env = FeedrateEnv(programs=["star"], render_mode="rgb_array")
+    env.reset(seed=0)
+    for _ in range(60):
+        env.step(np.ones(1, dtype=np.float32))
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
+    assert frame.shape[0] > 100 and frame.shape[1] > 100
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 10  # a drawing, not a blank canvas
+    env.close()
+
+
+def test_no_render_mode_builds_nothing(circle_env):
+    assert circle_env.render_mode is None
+    assert circle_env._renderer is None
