@@ -1,0 +1,292 @@
+"""The controller: look-ahead, jerk-limited (S-curve) feed profile and real-time override.
+
+``Controller(toolpath, machine)`` precomputes every static limit once (:mod:`cnc_gym.motion.limits`);
+``advance(n_ticks, override=...)`` then produces the reference position every interpolation period,
+one compiled loop per call (:mod:`cnc_gym.motion.kernel`). The algorithm and its guarantees are
+described in ``docs/motion.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cnc_gym.errors import CncGymError
+from cnc_gym.machine import MachineConfig
+from cnc_gym.motion import kernel as K
+from cnc_gym.motion.limits import PathLimits, build_limits
+from cnc_gym.toolpath import SegmentKind, Toolpath
+
+
+class ActionError(CncGymError, ValueError):
+    """A bad argument to the controller (NaN or out-of-range override or feed, negative tick count)."""
+
+
+@dataclass
+class MotionChunk:
+    """Reference output of one :meth:`Controller.advance` call: one row per interpolation period.
+
+    ==========  ========  =======================================================================
+    time_s      (n,)      time at the end of each period, s (from program start)
+    position    (n, 3)    reference position, machine coordinates, mm
+    path_s      (n,)      arc length along the tool path, mm
+    speed       (n,)      path speed, mm/s
+    accel       (n,)      tangential acceleration, mm/s^2
+    jerk        (n,)      tangential jerk applied during the period, mm/s^3
+    segment     (n,)      index of the toolpath segment (a dwell's index while dwelling)
+    cutting     (n,)      True on lines and arcs, False on rapids and dwells
+    ==========  ========  =======================================================================
+    """
+
+    time_s: np.ndarray
+    position: np.ndarray
+    path_s: np.ndarray
+    speed: np.ndarray
+    accel: np.ndarray
+    jerk: np.ndarray
+    segment: np.ndarray
+    cutting: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.time_s)
+
+
+@dataclass
+class LookaheadFeatures:
+    """The path ahead in ``n`` equal arc-length bins of ``horizon / n`` mm from the current position.
+
+    ======================  =====  ===============================================================
+    speed_limit_mm_s        (n,)   the controller's static limit at 100 % override: min over the bin
+                                   of programmed feed, axis/curvature/chord caps and junction limits
+                                   inside it; 0 where the bin holds a mandatory stop or lies past the
+                                   program end
+    curvature_1_mm          (n,)   largest curvature in the bin
+    turn_angle_rad          (n,)   largest junction turning angle in the bin (0 if none)
+    programmed_feed_mm_s    (n,)   programmed path feed (rapid rate on rapids) at the bin's far end;
+                                   0 past the program end
+    distance_to_stop_mm     float  distance to the next mandatory stop (exact stop, dwell, rapid,
+                                   program end)
+    ======================  =====  ===============================================================
+    """
+
+    speed_limit_mm_s: np.ndarray
+    curvature_1_mm: np.ndarray
+    turn_angle_rad: np.ndarray
+    programmed_feed_mm_s: np.ndarray
+    distance_to_stop_mm: float
+
+
+class Controller:
+    """Simulated CNC controller for one tool path on one machine.
+
+    Look-ahead over ``machine.controller.lookahead_blocks`` motion blocks, speed limits from programmed
+    feed × override (clamped), per-axis velocity/acceleration/jerk projected on the path, curvature,
+    chord error, corner steps, exact stops, rapids, dwells and program end; a jerk-limited profile that
+    reacts to the override knob in real time and never violates a geometric limit. ``advance`` returns a
+    :class:`MotionChunk`; ``lookahead`` returns :class:`LookaheadFeatures` for observations.
+    """
+
+    def __init__(self, toolpath: Toolpath, machine: MachineConfig) -> None:
+        self.toolpath = toolpath
+        self.machine = machine
+        ctl = machine.controller
+        self.dt = float(ctl.interpolation_period_s)
+        self.max_override = float(ctl.max_override)
+        self.limits: PathLimits = build_limits(toolpath, machine)
+        self._n_seg = self.limits.seg_f.shape[0]
+        window = max(int(ctl.lookahead_blocks), 1)
+        self._cfg = np.array([self.dt, window, ctl.override_slew_per_s, *self.limits.rest_position])
+        self._scratch = np.zeros((window + 2, 3))
+        self._kinds = toolpath.kind
+        self._st_f = np.zeros(K.N_STATE_F)
+        self._st_i = np.zeros(K.N_STATE_I, dtype=np.int64)
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Back to the program start: t = 0, at rest, override 100 %."""
+        self._st_f[:] = 0.0
+        self._st_f[K.S_OV] = 1.0
+        st_i = self._st_i
+        st_i[:] = 0
+        st_i[K.K_DWELL] = -1
+        pt_i = self.limits.pt_i
+        if pt_i[0, K.Q_DW1] > pt_i[0, K.Q_DW0]:  # dwells before the first move
+            st_i[K.K_PHASE] = K.PHASE_DWELL
+            st_i[K.K_DWELL] = pt_i[0, K.Q_DW0]
+            self._st_f[K.S_DWELL_LEFT] = self.limits.dwell_f[pt_i[0, K.Q_DW0], 0]
+        elif self._n_seg == 0:
+            st_i[K.K_PHASE] = K.PHASE_DONE
+        if self._n_seg:
+            self._st_f[K.S_S] = self.limits.pt_f[0, K.P_S]
+        self._last_position = self._rest_position_now()
+
+    def _rest_position_now(self) -> np.ndarray:
+        if self._n_seg:
+            out = np.zeros((1, K.N_OUT))
+            k = int(self._st_i[K.K_SEG])
+            K._position(self.limits.seg_f, self.limits.seg_i, k, self._st_f[K.S_S], out, 0)
+            return out[0, 1:4].copy()
+        return self.limits.rest_position.copy()
+
+    @property
+    def finished(self) -> bool:
+        """True once the reference is at rest at the program end and every dwell is done."""
+        return bool(self._st_i[K.K_PHASE] == K.PHASE_DONE)
+
+    @property
+    def time_s(self) -> float:
+        return float(self._st_f[K.S_T])
+
+    @property
+    def path_s(self) -> float:
+        return float(self._st_f[K.S_S])
+
+    @property
+    def speed(self) -> float:
+        return float(self._st_f[K.S_V])
+
+    @property
+    def accel(self) -> float:
+        return float(self._st_f[K.S_A])
+
+    @property
+    def override_applied(self) -> float:
+        """The override in force (it follows the knob at ``override_slew_per_s``)."""
+        return float(self._st_f[K.S_OV])
+
+    @property
+    def segment_index(self) -> int:
+        """Toolpath index of the segment the reference is on (a dwell's index while dwelling)."""
+        st_i = self._st_i
+        if st_i[K.K_DWELL] >= 0 and st_i[K.K_PHASE] != K.PHASE_MOVE:
+            return int(self.limits.dwell_f[st_i[K.K_DWELL], 1])
+        if self._n_seg == 0:
+            return -1
+        return int(self.limits.seg_i[st_i[K.K_SEG], K.I_TP])
+
+    @property
+    def position(self) -> np.ndarray:
+        """Current reference position, mm."""
+        return self._last_position.copy()
+
+    # ------------------------------------------------------------------ stepping
+    def advance(
+        self,
+        n_ticks: int,
+        override: float | None = None,
+        rapid_override: float = 1.0,
+        *,
+        feed_mm_min: float | None = None,
+    ) -> MotionChunk:
+        """Run ``n_ticks`` interpolation periods with the override knob at ``override`` (0..max_override)
+        or, in 'feed' action mode, with ``feed_mm_min`` commanded instead of F × override (still clamped by
+        every limit). ``rapid_override`` (0..1) scales rapids. Returns the reference of these periods."""
+        if isinstance(n_ticks, bool) or not isinstance(n_ticks, int | np.integer) or n_ticks < 0:
+            raise ActionError(f"n_ticks must be a non-negative integer, got {n_ticks!r}")
+        if feed_mm_min is not None:
+            if override is not None:
+                raise ActionError("give either override or feed_mm_min, not both")
+            feed = _finite(feed_mm_min, "feed_mm_min")
+            if feed < 0:
+                raise ActionError(f"feed_mm_min must not be negative, got {feed_mm_min!r}")
+            mode, knob, cmd = 1, 1.0, feed / 60.0
+        else:
+            knob = 1.0 if override is None else _finite(override, "override")
+            if not 0.0 <= knob <= self.max_override:
+                raise ActionError(f"override must be within 0..{self.max_override:g}, got {override!r}")
+            mode, cmd = 0, 0.0
+        rapid = _finite(rapid_override, "rapid_override")
+        if not 0.0 <= rapid <= 1.0:
+            raise ActionError(f"rapid_override must be within 0..1, got {rapid_override!r}")
+        return _chunk(self._advance_raw(int(n_ticks), knob, rapid, mode, cmd))
+
+    def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
+                     cmd: float = 0.0) -> np.ndarray:  # fmt: skip
+        lim = self.limits
+        out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, self._cfg, self._st_f,
+                               self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch)  # fmt: skip
+        if n_ticks:
+            self._last_position = out[-1, K.O_X : K.O_Z + 1].copy()
+        return out
+
+    def run_to_end(
+        self, override: float = 1.0, max_ticks: int = 50_000_000, chunk: int = 4096
+    ) -> MotionChunk:
+        """Advance at a constant override until the program is finished; the result ends with the tick at
+        which the controller finished (for tests, scripts and baselines)."""
+        parts = []
+        done = 0
+        while not self.finished:
+            if done >= max_ticks:
+                raise CncGymError(f"program did not finish within {max_ticks} interpolation periods")
+            part = self._advance_raw(chunk, override)
+            finished_rows = np.flatnonzero(part[:, K.O_DONE] > 0.5)
+            if len(finished_rows):
+                part = part[: finished_rows[0] + 1]
+            parts.append(part)
+            done += chunk
+        out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
+        return _chunk(out)
+
+    # ------------------------------------------------------------------ observations
+    def lookahead(self, horizon_mm: float, n_points: int) -> LookaheadFeatures:
+        """Features of the path ahead of the current position (see :class:`LookaheadFeatures`)."""
+        horizon = _finite(horizon_mm, "horizon_mm")
+        if horizon <= 0:
+            raise ActionError(f"horizon_mm must be positive, got {horizon_mm!r}")
+        if isinstance(n_points, bool) or not isinstance(n_points, int | np.integer) or n_points < 1:
+            raise ActionError(f"n_points must be a positive integer, got {n_points!r}")
+        lim = self.limits
+        k = int(self._st_i[K.K_SEG])
+        done = self._st_i[K.K_PHASE] == K.PHASE_DONE
+        if self._n_seg and k >= self._n_seg:
+            k = self._n_seg - 1
+        limit, curv, turn, feed, d_stop = K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, k,
+                                                             float(self._st_f[K.S_S]), bool(done), horizon,
+                                                             int(n_points))  # fmt: skip
+        return LookaheadFeatures(limit, curv, turn, feed, float(d_stop))
+
+    # ------------------------------------------------------------------ introspection (tests, planners)
+    def segment_limits(self) -> dict[str, np.ndarray]:
+        """Static per-motion-segment limits (mm, s): toolpath index, cap, base speed, accel, jerk."""
+        f, i = self.limits.seg_f, self.limits.seg_i
+        return {"index": i[:, K.I_TP].copy(), "cap_mm_s": f[:, K.F_CAP].copy(),
+                "base_mm_s": f[:, K.F_BASE].copy(), "accel_mm_s2": f[:, K.F_ACC].copy(),
+                "jerk_mm_s3": f[:, K.F_JERK].copy(), "s_start": f[:, K.F_S0].copy(),
+                "length": f[:, K.F_LEN].copy()}  # fmt: skip
+
+    def junction_limits(self) -> dict[str, np.ndarray]:
+        """Static per-point limits: arc length, hard speed limit (0 = mandatory stop), turning angle."""
+        f, i = self.limits.pt_f, self.limits.pt_i
+        return {"s": f[:, K.P_S].copy(), "limit_mm_s": f[:, K.P_HARD].copy(),
+                "stop": i[:, K.Q_STOP].astype(bool), "turn_rad": f[:, K.P_TURN].copy()}  # fmt: skip
+
+    @property
+    def cutting_kinds(self) -> tuple[int, int]:
+        return (int(SegmentKind.LINE), int(SegmentKind.ARC))
+
+
+def _chunk(out: np.ndarray) -> MotionChunk:
+    return MotionChunk(
+        time_s=out[:, K.O_T],
+        position=out[:, K.O_X : K.O_Z + 1],
+        path_s=out[:, K.O_S],
+        speed=out[:, K.O_V],
+        accel=out[:, K.O_A],
+        jerk=out[:, K.O_J],
+        segment=out[:, K.O_SEG].astype(np.int64),
+        cutting=out[:, K.O_CUT] > 0.5,
+    )
+
+
+def _finite(value: object, name: str) -> float:
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ActionError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ActionError(f"{name} must be finite, got {value!r}")
+    return x

@@ -1,0 +1,693 @@
+"""The controller's hot path: one interpolation period at a time, compiled with numba.
+
+Everything here works on flat arrays packed by :mod:`cnc_gym.motion.limits` (column indices below) and
+on a small state vector, so that a call from Python costs a handful of argument conversions.
+
+The planner is a *safe-set* jerk-limited tracker (see ``docs/motion.md``):
+
+* ``brake(v, a, w, A, J)`` is the distance and time of the time-optimal jerk-limited manoeuvre that
+  takes the path speed from ``v`` (with tangential acceleration ``a``) down to ``w`` and ends with zero
+  acceleration (phases: jerk towards ``-A``, hold ``-A``, jerk back to 0).
+* A state is *safe* when, for every limit point ``p`` ahead in the look-ahead window (junction speeds,
+  segment speed caps, mandatory stops, and a stop at the end of the window), ``brake(v, a, w_p) <= d_p``.
+  Because the manoeuvres to lower targets decelerate at least as hard at every instant, the single
+  manoeuvre that stops at the window end then meets every point: the test is necessary *and* sufficient.
+* Each tick applies one constant jerk: the largest jerk whose end state is still safe and does not
+  overshoot the speed target (bisection; both tests are monotone in the jerk), bounded below by the
+  acceleration limit and by "no reverse motion". If the feed target itself cannot be met any more (the
+  override was turned down), the jerk is the smallest one that does not undershoot it, still capped by
+  the hard (geometric) safety test, so the override moves the speed with jerk-limited transitions while
+  every downstream geometric limit is kept.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# ---------------------------------------------------------------- packed layout (see limits.py)
+# Per motion segment, float columns.
+F_S0 = 0  # arc length at the segment start, mm
+F_LEN = 1  # length, mm
+F_CAP = 2  # hard speed cap (geometry, axis limits, clamps), mm/s
+F_BASE = 3  # speed at 100 % override: programmed path feed (cutting) or rapid rate (rapids), mm/s
+F_ACC = 4  # tangential acceleration limit, mm/s^2
+F_JERK = 5  # tangential jerk limit, mm/s^3
+F_CURV = 6  # curvature, 1/mm
+F_SX, F_SY, F_SZ = 7, 8, 9  # start point
+F_EX, F_EY, F_EZ = 10, 11, 12  # end point
+F_CX, F_CY, F_CZ = 13, 14, 15  # arc centre
+F_RADIUS = 16
+F_ANG0 = 17  # start angle, rad
+F_SWEEP = 18  # signed sweep, rad
+F_RISE = 19  # helix rise along the plane normal, mm
+F_FEED = 20  # programmed path feed, mm/s (0 for rapids)
+N_SEG_F = 21
+
+# Per motion segment, int columns.
+I_KIND = 0  # SegmentKind value
+I_PU, I_PV, I_PW = 1, 2, 3  # plane axes (u, v, w) of an arc
+I_TP = 4  # index of the segment in the Toolpath
+I_LOCKED = 5  # 1 = override fixed at 100 % (G63)
+I_RAPID = 6  # 1 = rapid
+N_SEG_I = 7
+
+# Per limit point q (the start of motion segment q; q = n is the program end), float columns.
+P_S = 0  # arc length, mm
+P_HARD = 1  # hard speed limit at the point (corner, caps of both sides; 0 = mandatory stop), mm/s
+P_AIN = 2  # acceleration bound on arrival (backward-smoothed, see limits.py), mm/s^2
+P_TURN = 3  # turning angle of the junction, rad
+N_PT_F = 4
+
+# Per limit point, int columns.
+Q_STOP = 0  # 1 = mandatory stop (exact stop, dwell, mode change, program end)
+Q_DW0 = 1  # dwells to run at this point: rows Q_DW0 .. Q_DW1-1 of the dwell table
+Q_DW1 = 2
+Q_NEXT_STOP = 3  # index of the first mandatory stop at or after this point
+N_PT_I = 4
+
+# State vectors.
+S_T, S_S, S_V, S_A, S_OV, S_DWELL_LEFT, S_J = 0, 1, 2, 3, 4, 5, 6
+N_STATE_F = 7
+K_SEG, K_PHASE, K_DWELL = 0, 1, 2  # motion segment, phase, current dwell row
+N_STATE_I = 3
+PHASE_MOVE, PHASE_DWELL, PHASE_DONE = 0, 1, 2
+
+# Output columns of advance().
+O_T, O_X, O_Y, O_Z, O_S, O_V, O_A, O_J, O_SEG, O_CUT, O_DONE = range(11)  # O_DONE: finished after the tick
+N_OUT = 11
+
+KIND_LINE = 1
+KIND_ARC = 2
+
+BISECT_ITERS = 22
+TRACK_PERIODS = 3.0  # time constant of the final approach to a speed target, in periods
+SNAP_MM = 1e-6  # a mandatory stop closer than this (with the stop manoeuvre done) is snapped onto
+INF = 1e300
+
+
+@njit(cache=True, inline="always")
+def _peak(v: float, a: float, jerk: float) -> float:
+    """Highest speed reached if the acceleration is ramped to zero now at the full jerk."""
+    if a > 0.0:
+        return v + a * a / (2.0 * jerk)
+    return v
+
+
+@njit(cache=True, inline="always")
+def _valley(v: float, a: float, jerk: float) -> float:
+    """Lowest speed reached if the (negative) acceleration is ramped to zero now at the full jerk."""
+    if a < 0.0:
+        return v - a * a / (2.0 * jerk)
+    return v
+
+
+@njit(cache=True)
+def brake(v: float, a: float, w: float, acc: float, jerk: float) -> tuple[float, float]:
+    """(distance, time) of the time-optimal jerk-limited slow-down from (v, a) to speed ``w`` with a = 0.
+
+    Returns (0, 0) when the speed never exceeds ``w`` anyway. When even ramping the acceleration straight
+    back to zero undershoots ``w``, returns the distance to the instant the speed first reaches ``w``.
+    """
+    if _peak(v, a, jerk) <= w:
+        return 0.0, 0.0
+    if a < 0.0 and _valley(v, a, jerk) <= w:
+        # The immediate +J ramp crosses w: v + a t + J t^2 / 2 = w, first root.
+        disc = a * a - 2.0 * jerk * (v - w)
+        disc = max(disc, 0.0)
+        t = (-a - math.sqrt(disc)) / jerk
+        t = max(t, 0.0)
+        return v * t + 0.5 * a * t * t + jerk * t * t * t / 6.0, t
+    a1sq = 0.5 * a * a + jerk * (v - w)
+    a1 = -math.sqrt(max(a1sq, 0.0))
+    t2 = 0.0
+    if a1 < -acc:
+        a1 = -acc
+        dv1 = (acc * acc - a * a) / (2.0 * jerk) if a < -acc else (a * a - acc * acc) / (2.0 * jerk)
+        t2 = (v - w + dv1 - acc * acc / (2.0 * jerk)) / acc
+        t2 = max(t2, 0.0)
+    if a >= a1:
+        sign1 = -1.0
+        t1 = (a - a1) / jerk
+    else:
+        sign1 = 1.0
+        t1 = (a1 - a) / jerk
+    t3 = -a1 / jerk
+    d1 = v * t1 + 0.5 * a * t1 * t1 + sign1 * jerk * t1 * t1 * t1 / 6.0
+    v1 = v + a * t1 + 0.5 * sign1 * jerk * t1 * t1
+    d2 = v1 * t2 + 0.5 * a1 * t2 * t2
+    v2 = v1 + a1 * t2
+    d3 = v2 * t3 + 0.5 * a1 * t3 * t3 + jerk * t3 * t3 * t3 / 6.0
+    return d1 + d2 + d3, t1 + t2 + t3
+
+
+@njit(cache=True)
+def brake_step(v: float, a: float, w: float, acc: float, jerk: float,
+               dt: float) -> tuple[float, float, float]:  # fmt: skip
+    """(ds, v', a') after following the ``brake(v, a, w)`` manoeuvre exactly for ``dt``.
+
+    Its jerk may switch inside the period; after its end the speed holds. Used where no constant jerk can
+    stay in the safe set."""
+    if _peak(v, a, jerk) <= w:
+        # Nothing to brake for: ramp the acceleration to zero.
+        jj = min(max(-a / dt, -jerk), jerk)
+        return _step(v, a, jj, dt)
+    if a < 0.0 and _valley(v, a, jerk) <= w:
+        t1, sign1, t2, a1, t3 = 0.0, 1.0, 0.0, a, -a / jerk
+    else:
+        a1sq = 0.5 * a * a + jerk * (v - w)
+        a1 = -math.sqrt(max(a1sq, 0.0))
+        t2 = 0.0
+        if a1 < -acc:
+            a1 = -acc
+            dv1 = (acc * acc - a * a) / (2.0 * jerk) if a < -acc else (a * a - acc * acc) / (2.0 * jerk)
+            t2 = max((v - w + dv1 - acc * acc / (2.0 * jerk)) / acc, 0.0)
+        if a >= a1:
+            sign1 = -1.0
+            t1 = (a - a1) / jerk
+        else:
+            sign1 = 1.0
+            t1 = (a1 - a) / jerk
+        t3 = -a1 / jerk
+    left = dt
+    ds = 0.0
+    for phase in range(4):
+        if phase == 0:
+            h, jj = min(t1, left), sign1 * jerk
+        elif phase == 1:
+            h, jj = min(t2, left), 0.0
+        elif phase == 2:
+            h, jj = min(t3, left), jerk
+        else:
+            h, jj = left, 0.0
+            a = 0.0  # the manoeuvre has ended: hold the speed
+        if h > 0.0:
+            d, v, a = _step(v, a, jj, h)
+            ds += d
+            left -= h
+        if left <= 0.0:
+            break
+    return ds, v, a
+
+
+@njit(cache=True, inline="always")
+def _safe_now(s: float, v: float, a: float, acc_b: float, jerk_b: float, cap_now: float, pts: np.ndarray,
+              n_pts: int, col: int) -> bool:  # fmt: skip
+    """Is the current state itself safe (continuous-time test, no period applied)?"""
+    if _peak(v, a, jerk_b) > cap_now * (1.0 + 1e-12) + 1e-12:
+        return False
+    for i in range(n_pts):
+        dist, _ = brake(v, a, pts[i, col], acc_b, jerk_b)
+        if dist > (pts[i, 0] - s) * (1.0 + 1e-12) + 1e-12:
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _lowest(pts: np.ndarray, n_pts: int, col: int, cap_now: float) -> float:
+    w = cap_now
+    for i in range(n_pts):
+        w = min(w, pts[i, col])
+    return w
+
+
+@njit(cache=True)
+def reach_speed(v0: float, dist: float, acc: float, jerk: float) -> float:
+    """Highest speed reachable from ``v0`` (a = 0) over ``dist`` ending with a = 0 (jerk-limited).
+
+    Solves ``(v - v0)(v + v0)^2 = J L^2`` while ``v - v0 <= A^2/J`` and the trapezoidal-acceleration
+    quadratic beyond. The same number is the highest speed from which one can slow to ``v0`` in ``dist``.
+    """
+    if dist <= 0.0:
+        return v0
+    dv_tri = acc * acc / jerk
+    # Triangular acceleration profile: (v - v0)(v + v0)^2 = J L^2, monotone in v >= v0: Newton from above.
+    target = jerk * dist * dist
+    x = v0 + max(dv_tri, (target) ** (1.0 / 3.0)) + 1.0
+    for _ in range(60):
+        f = (x - v0) * (x + v0) ** 2 - target
+        df = (x + v0) ** 2 + 2.0 * (x - v0) * (x + v0)
+        step = f / df
+        x -= step
+        if abs(step) < 1e-12 * (1.0 + x):
+            break
+    if x - v0 <= dv_tri:
+        return x
+    # Trapezoidal: (v^2 - v0^2)/A + (v + v0) A / J = 2 L.
+    qa = 1.0 / acc
+    qb = acc / jerk
+    qc = -v0 * v0 / acc + v0 * acc / jerk - 2.0 * dist
+    return (-qb + math.sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa)
+
+
+@njit(cache=True, inline="always")
+def _target(seg_f: np.ndarray, seg_i: np.ndarray, k: int, mode: int, ov: float, rapid_ov: float,
+            cmd: float) -> float:  # fmt: skip
+    """The speed the operator asks for on motion segment k (soft), never above its hard cap."""
+    cap = seg_f[k, F_CAP]
+    if seg_i[k, I_RAPID] == 1:
+        want = seg_f[k, F_BASE] * rapid_ov
+    elif seg_i[k, I_LOCKED] == 1:
+        want = seg_f[k, F_BASE]
+    elif mode == 1:
+        want = cmd
+    else:
+        want = seg_f[k, F_BASE] * ov
+    return min(want, cap)
+
+
+@njit(cache=True, inline="always")
+def _accel_bound(seg_f: np.ndarray, pt_f: np.ndarray, k: int, s: float) -> float:
+    """Acceleration bound at arc length s inside motion segment k (falls linearly towards the next
+    segment's arrival bound so that the acceleration can follow it with the jerk limit)."""
+    s_end = seg_f[k, F_S0] + seg_f[k, F_LEN]
+    rest = max(s_end - s, 0.0)
+    return min(seg_f[k, F_ACC], pt_f[k + 1, P_AIN] + seg_f[k, F_JERK] * rest / seg_f[k, F_CAP])
+
+
+@njit(cache=True, inline="always")
+def _step(v: float, a: float, j: float, dt: float) -> tuple[float, float, float]:
+    """Exact integration of a constant jerk over one period: (ds, v', a')."""
+    ds = v * dt + 0.5 * a * dt * dt + j * dt * dt * dt / 6.0
+    return ds, v + a * dt + 0.5 * j * dt * dt, a + j * dt
+
+
+@njit(cache=True, inline="always")
+def _track_jerk(v: float, a: float, target: float, jerk: float, dt: float) -> float:
+    """Jerk that settles the speed on ``target`` without chattering.
+
+    Far from the target it asks for the full jerk (the safety and overshoot bounds then decide); near it,
+    the acceleration is steered to e/τ (e = target − v, τ = 3 periods), a critically damped approach that
+    a greedy bound alone would turn into a ±J limit cycle."""
+    e = target - v
+    a_des = math.sqrt(2.0 * jerk * abs(e))
+    a_des = min(a_des, abs(e) / (TRACK_PERIODS * dt))
+    if e < 0.0:
+        a_des = -a_des
+    return min(max((a_des - a) / dt, -jerk), jerk)
+
+
+@njit(cache=True, inline="always")
+def _tick_top(v: float, a: float, j: float, dt: float, v1: float) -> float:
+    """Highest speed within one period of constant jerk j from (v, a) ending at speed v1."""
+    if a > 0.0 and j < 0.0 and a + j * dt < 0.0:
+        return v - a * a / (2.0 * j)
+    return max(v, v1)
+
+
+@njit(cache=True)
+def _upper_ok(j: float, s: float, v: float, a: float, dt: float, acc_b: float, jerk_b: float,
+              cap_now: float, pts: np.ndarray, n_pts: int, col: int) -> bool:  # fmt: skip
+    """Is the end state of jerk j safe w.r.t. the current cap and the points in pts[:n_pts]?
+
+    pts columns: 0 arc length, 1 hard limit, 2 soft limit; ``col`` picks hard (1) or soft (2)."""
+    ds, v1, a1 = _step(v, a, j, dt)
+    # Highest speed during this period and after it (if the acceleration is ramped down next).
+    v_top = max(_peak(v1, a1, jerk_b), _tick_top(v, a, j, dt, v1))
+    if v_top > cap_now:
+        return False
+    for i in range(n_pts):
+        w = pts[i, col]
+        d = pts[i, 0] - s - ds
+        if d <= 0.0:
+            if v_top > w:
+                return False
+        else:
+            dist, _ = brake(v1, a1, w, acc_b, jerk_b)
+            if dist > d:
+                return False
+    return True
+
+
+@njit(cache=True)
+def _largest_upper(lo: float, hi: float, s: float, v: float, a: float, dt: float, acc_b: float,
+                   jerk_b: float, cap_now: float, pts: np.ndarray, n_pts: int,
+                   col: int) -> float:  # fmt: skip
+    """Largest j in [lo, hi] passing _upper_ok (caller checked lo passes and hi fails)."""
+    for _ in range(BISECT_ITERS):
+        mid = 0.5 * (lo + hi)
+        if _upper_ok(mid, s, v, a, dt, acc_b, jerk_b, cap_now, pts, n_pts, col):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def _smallest_valley(lo: float, hi: float, v: float, a: float, dt: float, jerk_b: float,
+                     floor: float) -> float:  # fmt: skip
+    """Smallest j in [lo, hi] whose end state does not dip below ``floor`` when its acceleration is
+    ramped back to zero (valley test, monotone increasing in j)."""
+    _, v1, a1 = _step(v, a, lo, dt)
+    if _valley(v1, a1, jerk_b) >= floor:
+        return lo
+    _, v1, a1 = _step(v, a, hi, dt)
+    if _valley(v1, a1, jerk_b) < floor:
+        return hi
+    for _ in range(BISECT_ITERS):
+        mid = 0.5 * (lo + hi)
+        _, v1, a1 = _step(v, a, mid, dt)
+        if _valley(v1, a1, jerk_b) >= floor:
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+@njit(cache=True)
+def _position(seg_f: np.ndarray, seg_i: np.ndarray, k: int, s: float, out: np.ndarray, row: int) -> None:
+    """Point at arc length s on motion segment k, written to out[row, O_X:O_Z+1]."""
+    length = seg_f[k, F_LEN]
+    local = min(max(s - seg_f[k, F_S0], 0.0), length)
+    frac = local / length if length > 0.0 else 0.0
+    if seg_i[k, I_KIND] == KIND_ARC:
+        iu, iv, iw = seg_i[k, I_PU], seg_i[k, I_PV], seg_i[k, I_PW]
+        theta = seg_f[k, F_ANG0] + seg_f[k, F_SWEEP] * frac
+        r = seg_f[k, F_RADIUS]
+        out[row, O_X + iu] = seg_f[k, F_CX + iu] + r * math.cos(theta)
+        out[row, O_X + iv] = seg_f[k, F_CX + iv] + r * math.sin(theta)
+        out[row, O_X + iw] = seg_f[k, F_SX + iw] + seg_f[k, F_RISE] * frac
+    else:
+        for ax in range(3):
+            p0 = seg_f[k, F_SX + ax]
+            out[row, O_X + ax] = p0 + (seg_f[k, F_EX + ax] - p0) * frac
+
+
+@njit(cache=True)
+def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
+                   dwell_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray,
+                   n_ticks: int, mode: int, knob: float, rapid_ov: float, cmd: float,
+                   pts: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Run ``n_ticks`` interpolation periods from the state (st_f, st_i); returns one row per tick.
+
+    cfg: [dt, window_blocks, override_slew_per_s, rest_x, rest_y, rest_z]. ``dwell_f`` rows: [seconds,
+    toolpath index, x, y, z]. ``pts`` is scratch space (window + 2 rows, 3 columns).
+    """
+    dt = cfg[0]
+    window = int(cfg[1])
+    slew_step = cfg[2] * dt
+    n_seg = seg_f.shape[0]
+    out = np.zeros((n_ticks, N_OUT))
+    for tick in range(n_ticks):
+        _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts, out, tick,
+              dt, window, slew_step, n_seg)
+        out[tick, O_DONE] = 1.0 if st_i[K_PHASE] == PHASE_DONE else 0.0
+    return out
+
+
+@njit(cache=True)
+def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, dwell_f: np.ndarray,
+          cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, mode: int, knob: float, rapid_ov: float,
+          cmd: float, pts: np.ndarray, out: np.ndarray, tick: int, dt: float, window: int, slew_step: float,
+          n_seg: int) -> None:  # fmt: skip
+    """One interpolation period (see the module docstring)."""
+    phase = st_i[K_PHASE]
+    k = st_i[K_SEG]
+    # The applied override follows the knob at a bounded rate.
+    ov = st_f[S_OV]
+    ov = min(knob, ov + slew_step) if knob > ov else max(knob, ov - slew_step)
+    st_f[S_OV] = ov
+    st_f[S_T] += dt
+    out[tick, O_T] = st_f[S_T]
+    if phase == PHASE_DWELL:
+        row = st_i[K_DWELL]
+        st_f[S_DWELL_LEFT] -= dt
+        out[tick, O_X] = dwell_f[row, 2]
+        out[tick, O_Y] = dwell_f[row, 3]
+        out[tick, O_Z] = dwell_f[row, 4]
+        out[tick, O_S] = st_f[S_S]
+        out[tick, O_SEG] = dwell_f[row, 1]
+        if st_f[S_DWELL_LEFT] <= 1e-12:
+            _after_dwell(pt_i, dwell_f, st_f, st_i, n_seg)
+        return
+    if phase == PHASE_DONE:
+        out[tick, O_S] = st_f[S_S]
+        if n_seg > 0:
+            _position(seg_f, seg_i, n_seg - 1, st_f[S_S], out, tick)
+            out[tick, O_SEG] = seg_i[n_seg - 1, I_TP]
+            out[tick, O_CUT] = 1.0 if seg_i[n_seg - 1, I_RAPID] == 0 else 0.0
+        else:
+            out[tick, O_X] = cfg[3]
+            out[tick, O_Y] = cfg[4]
+            out[tick, O_Z] = cfg[5]
+            out[tick, O_SEG] = -1.0
+        if st_i[K_DWELL] >= 0:
+            out[tick, O_SEG] = dwell_f[st_i[K_DWELL], 1]
+            out[tick, O_CUT] = 0.0
+        return
+
+    s = st_f[S_S]
+    v = st_f[S_V]
+    a = st_f[S_A]
+    # ---- look-ahead window: points k+1 .. q_end; q_end counts as a stop.
+    q_end = min(k + max(window, 1), pt_i[k + 1, Q_NEXT_STOP], n_seg)
+    acc_b = _accel_bound(seg_f, pt_f, k, s)
+    jerk_b = seg_f[k, F_JERK]
+    for q in range(k + 1, q_end + 1):
+        acc_b = min(acc_b, pt_f[q, P_AIN])
+        if q < n_seg:
+            jerk_b = min(jerk_b, seg_f[q, F_JERK])
+    # Acceleration bound over this tick's reach (conservative: the tick may cross junctions).
+    ds_far, _, _ = _step(v, a, jerk_b, dt)
+    s_far = s + max(ds_far, 0.0)
+    acc_tick = _accel_bound(seg_f, pt_f, k, s)
+    kk = k
+    while kk < n_seg - 1 and s_far > seg_f[kk, F_S0] + seg_f[kk, F_LEN]:
+        acc_tick = min(acc_tick, pt_f[kk + 1, P_AIN])
+        kk += 1
+    acc_tick = min(acc_tick, _accel_bound(seg_f, pt_f, kk, min(s_far, seg_f[kk, F_S0] + seg_f[kk, F_LEN])))
+    j_lo = max(-jerk_b, (-acc_tick - a) / dt)
+    j_hi = min(jerk_b, (acc_tick - a) / dt)
+    if j_lo > j_hi:  # |a| above the bound (limits changed): push it back at the full jerk
+        if a > 0.0:
+            j_lo = -jerk_b
+            j_hi = -jerk_b
+        else:
+            j_lo = jerk_b
+            j_hi = jerk_b
+
+    # ---- snap onto a mandatory stop reached within this tick.
+    q_stop = pt_i[k + 1, Q_NEXT_STOP]
+    d_stop = pt_f[q_stop, P_S] - s
+    if q_stop <= q_end:
+        d_brk, t_brk = brake(v, a, 0.0, acc_b, jerk_b)
+        if (t_brk <= dt * (1.0 + 1e-9) and d_stop <= d_brk + SNAP_MM) or (
+                d_stop <= SNAP_MM and v <= 1e-6 and abs(a) <= 1e-3):  # fmt: skip
+            j = -a / dt
+            st_f[S_S] = pt_f[q_stop, P_S]
+            st_f[S_V] = 0.0
+            st_f[S_A] = 0.0
+            st_f[S_J] = j
+            k_last = q_stop - 1
+            _position(seg_f, seg_i, k_last, st_f[S_S], out, tick)
+            out[tick, O_S] = st_f[S_S]
+            out[tick, O_J] = j
+            out[tick, O_SEG] = seg_i[k_last, I_TP]
+            out[tick, O_CUT] = 1.0 if seg_i[k_last, I_RAPID] == 0 else 0.0
+            _arrive_at_stop(pt_i, dwell_f, st_f, st_i, q_stop, n_seg)
+            return
+
+    # ---- relevant points: those that the most aggressive jerk would violate.
+    ds_hi, v_hi, a_hi = _step(v, a, j_hi, dt)
+    top_hi = max(_peak(v_hi, a_hi, jerk_b), _tick_top(v, a, j_hi, dt, v_hi))
+    # Beyond this distance no point can bind: any slow-down lasts at most as long as a full stop and runs
+    # no faster than the peak speed. (The distance itself is not monotone in the target speed.)
+    _, t_stop = brake(v_hi, a_hi, 0.0, acc_b, jerk_b)
+    reach_far = top_hi * t_stop
+    n_pts = 0
+    for q in range(k + 1, q_end + 1):
+        d_q = pt_f[q, P_S] - s
+        if d_q - ds_hi > reach_far:
+            break
+        if q == q_end:
+            w_hard = 0.0
+            w_soft = 0.0
+        else:
+            w_hard = pt_f[q, P_HARD]
+            w_soft = min(w_hard, _target(seg_f, seg_i, q, mode, ov, rapid_ov, cmd))
+        d = d_q - ds_hi
+        if w_soft >= top_hi:
+            bad = False
+        elif d <= 0.0:
+            bad = True
+        else:
+            dist, _ = brake(v_hi, a_hi, w_soft, acc_b, jerk_b)
+            bad = dist > d
+        if bad:
+            pts[n_pts, 0] = pt_f[q, P_S]
+            pts[n_pts, 1] = w_hard
+            pts[n_pts, 2] = w_soft
+            n_pts += 1
+
+    # Never plan a state that must reverse: restrict the jerk range to valley(v', a') >= 0.
+    j_lo = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, 0.0)
+    cap_hard = seg_f[k, F_CAP]
+    cap_soft = _target(seg_f, seg_i, k, mode, ov, rapid_ov, cmd)
+    manoeuvre = False
+    w_follow = 0.0
+    # Where the override is still slewing down, the speed must not dip below where it will settle.
+    cap_final = _target(seg_f, seg_i, k, mode, knob, rapid_ov, cmd)
+    j_track = max(_track_jerk(v, a, cap_soft, jerk_b, dt), j_lo)
+    if v >= cap_final:
+        j_track = max(j_track, _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, cap_final))
+    if _upper_ok(j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+        j = min(j_hi, j_track)
+    elif _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+        j = _largest_upper(j_lo, j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+        j = min(j, j_track)
+    elif _safe_now(s, v, a, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+        # Safe, but no constant jerk keeps it so (the braking switches inside this period): follow the
+        # braking manoeuvre to the lowest limit ahead exactly; it meets every other limit too.
+        manoeuvre = True
+        w_follow = _lowest(pts, n_pts, 2, cap_soft)
+        j = 0.0
+    else:
+        # The operator's target cannot be met any more (override turned down): slow down as fast as
+        # the jerk allows without undershooting the lowest violated target ...
+        floor = INF
+        ds_lo, v_lo, a_lo = _step(v, a, j_lo, dt)
+        top_lo = max(_peak(v_lo, a_lo, jerk_b), _tick_top(v, a, j_lo, dt, v_lo))
+        if top_lo > cap_soft:
+            floor = min(cap_soft, cap_final)
+        for i in range(n_pts):
+            d = pts[i, 0] - s - ds_lo
+            if d <= 0.0:
+                if top_lo > pts[i, 2]:
+                    floor = min(floor, pts[i, 2])
+            else:
+                dist, _ = brake(v_lo, a_lo, pts[i, 2], acc_b, jerk_b)
+                if dist > d:
+                    floor = min(floor, pts[i, 2])
+        if floor >= INF:
+            floor = min(cap_soft, cap_final)
+        j = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, floor)
+        j = max(j, min(_track_jerk(v, a, floor, jerk_b, dt), j_hi))
+        # ... but never faster than the hard (geometric) limits allow.
+        if not _upper_ok(j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
+            if _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
+                j = _largest_upper(j_lo, j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+            else:
+                manoeuvre = True
+                w_follow = _lowest(pts, n_pts, 1, cap_hard)
+                j = 0.0
+
+    if manoeuvre:
+        ds, v1, a1 = brake_step(v, a, w_follow, acc_b, jerk_b, dt)
+        j = (a1 - a) / dt
+    else:
+        ds, v1, a1 = _step(v, a, j, dt)
+    s1 = s + ds
+    if s1 > pt_f[q_stop, P_S]:
+        s1 = pt_f[q_stop, P_S]
+    if v1 < 0.0:
+        v1 = 0.0
+    st_f[S_S] = s1
+    st_f[S_V] = v1
+    st_f[S_A] = a1
+    st_f[S_J] = j
+    while k < n_seg - 1 and s1 >= seg_f[k + 1, F_S0] and k + 1 < q_stop:
+        k += 1
+    st_i[K_SEG] = k
+    _position(seg_f, seg_i, k, s1, out, tick)
+    out[tick, O_S] = s1
+    out[tick, O_V] = v1
+    out[tick, O_A] = a1
+    out[tick, O_J] = j
+    out[tick, O_SEG] = seg_i[k, I_TP]
+    out[tick, O_CUT] = 1.0 if seg_i[k, I_RAPID] == 0 else 0.0
+
+
+@njit(cache=True)
+def _arrive_at_stop(pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, q: int,
+                    n_seg: int) -> None:  # fmt: skip
+    """At rest on mandatory stop q: start its dwells, or go on with segment q, or finish."""
+    if pt_i[q, Q_DW1] > pt_i[q, Q_DW0]:
+        st_i[K_PHASE] = PHASE_DWELL
+        st_i[K_DWELL] = pt_i[q, Q_DW0]
+        st_f[S_DWELL_LEFT] = dwell_f[pt_i[q, Q_DW0], 0]
+        st_i[K_SEG] = q  # the segment that follows the dwells (or n_seg at the end)
+        return
+    _leave_point(st_i, q, n_seg)
+
+
+@njit(cache=True)
+def _leave_point(st_i: np.ndarray, q: int, n_seg: int) -> None:
+    if q >= n_seg:
+        st_i[K_PHASE] = PHASE_DONE
+        st_i[K_SEG] = max(n_seg - 1, 0)
+    else:
+        st_i[K_PHASE] = PHASE_MOVE
+        st_i[K_SEG] = q
+        st_i[K_DWELL] = -1
+
+
+@njit(cache=True)
+def _after_dwell(pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray,
+                 n_seg: int) -> None:  # fmt: skip
+    q = st_i[K_SEG]
+    row = st_i[K_DWELL] + 1
+    if row < pt_i[q, Q_DW1]:
+        st_i[K_DWELL] = row
+        st_f[S_DWELL_LEFT] += dwell_f[row, 0]
+        return
+    st_f[S_DWELL_LEFT] = 0.0
+    if q >= n_seg:
+        st_i[K_PHASE] = PHASE_DONE
+        st_i[K_SEG] = max(n_seg - 1, 0)
+        # keep K_DWELL: the finished state reports the last dwell as its segment
+    else:
+        _leave_point(st_i, q, n_seg)
+
+
+@njit(cache=True)
+def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, k: int,
+                     s: float, done: bool, horizon: float, n: int) -> tuple:  # fmt: skip
+    """Features of the path ahead in ``n`` equal bins of ``horizon / n`` mm starting at arc length s.
+
+    Per bin: the static speed limit (100 % override; minimum over the bin, junction limits inside
+    included, 0 at mandatory stops and beyond the end), the largest curvature, the largest junction
+    turning angle, the programmed feed at the bin's far end. Also the distance to the next mandatory stop.
+    """
+    n_seg = seg_f.shape[0]
+    limit = np.zeros(n)
+    curv = np.zeros(n)
+    turn = np.zeros(n)
+    feed = np.zeros(n)
+    if n_seg == 0 or done:
+        return limit, curv, turn, feed, 0.0
+    q_stop = pt_i[k + 1, Q_NEXT_STOP]
+    d_stop = max(pt_f[q_stop, P_S] - s, 0.0)
+    width = horizon / n
+    total = pt_f[n_seg, P_S]
+    kk = k
+    for b in range(n):
+        lo = s + b * width
+        hi = lo + width
+        if lo >= total:
+            break
+        # advance to the segment containing lo
+        while kk < n_seg - 1 and lo >= seg_f[kk, F_S0] + seg_f[kk, F_LEN]:
+            kk += 1
+        best = INF
+        kmax = 0.0
+        ang = 0.0
+        m = kk
+        while True:
+            best = min(best, seg_f[m, F_CAP], seg_f[m, F_BASE])
+            kmax = max(kmax, seg_f[m, F_CURV])
+            s_end = seg_f[m, F_S0] + seg_f[m, F_LEN]
+            if s_end > hi:
+                break
+            if s_end > lo:  # the junction at the end of m lies inside the bin
+                best = min(best, pt_f[m + 1, P_HARD])
+                ang = max(ang, pt_f[m + 1, P_TURN])
+            if m + 1 >= n_seg:
+                break
+            m += 1
+        limit[b] = 0.0 if hi >= total else best
+        curv[b] = kmax
+        turn[b] = ang
+        feed[b] = seg_f[m, F_FEED] if hi < total else 0.0
+    return limit, curv, turn, feed, d_stop

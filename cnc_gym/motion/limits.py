@@ -1,0 +1,272 @@
+"""Static speed, acceleration and jerk limits of a tool path on a machine, computed once (vectorised).
+
+The controller works on *motion segments*: the toolpath's rapids, lines and arcs with a length above
+:data:`MIN_LENGTH_MM` (shorter ones are absorbed: their modes still count, their geometry does not).
+Between consecutive motion segments lies a *limit point* (junction); point 0 is the program start and
+point n the program end. Dwells sit on points.
+
+Per motion segment (mm, s):
+
+* hard speed cap ``cap`` (independent of the override):
+  cutting: min(composite clamp P1224, per-axis clamp P1225_k / max|u_k|, curvature limits on arcs);
+  rapid: rapid rate min_k P1226_k / max|u_k|.
+  Curvature κ on arcs: centripetal acceleration √(a_n/κ) (a_n = min(P1442, in-plane axis accelerations)),
+  centripetal jerk (j_n/κ²)^(1/3), chord error at the interpolation period (2/T)·√(2ρδ − δ²) (δ = P1472),
+  never below the arc floor P1505 (unless the feed itself is lower).
+* ``base``: speed at 100 % override (programmed path feed, or the rapid rate).
+* tangential acceleration and jerk: min_k limit_k / max|u_k| (the per-axis limits projected on the path;
+  max|u_k| is the largest direction component over the segment, exact for arcs).
+
+Per point: the hard junction limit (corner step P1227: v ≤ min_k step_k/|Δu_k|, Δu the change of unit
+tangent; both neighbours' caps), 0 at mandatory stops (exact stop G09/G61, dwell, rapid ↔ cutting,
+after every rapid, tool or spindle change, program end, or every junction when look-ahead is off), and
+the acceleration bound on arrival ``a_in`` (a backward pass so that a lower acceleration limit ahead can
+always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k)).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cnc_gym.errors import ProgramError
+from cnc_gym.machine import MachineConfig
+from cnc_gym.motion import kernel as K
+from cnc_gym.toolpath import SegmentKind, SegmentMode, Toolpath
+from cnc_gym.toolpath.segments import PLANE_AXES, Plane
+
+#: Motion segments shorter than this are ignored (their modes still apply), mm.
+MIN_LENGTH_MM = 1e-6
+
+_PLANE_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class PathLimits:
+    """Packed arrays for the kernel (see the column constants in :mod:`cnc_gym.motion.kernel`)."""
+
+    seg_f: np.ndarray  # (n, N_SEG_F)
+    seg_i: np.ndarray  # (n, N_SEG_I)
+    pt_f: np.ndarray  # (n + 1, N_PT_F)
+    pt_i: np.ndarray  # (n + 1, N_PT_I)
+    dwell_f: np.ndarray  # (m, 5): seconds, toolpath index, x, y, z
+    rest_position: np.ndarray  # (3,) where the reference rests when there is no motion at all
+
+
+def _max_abs_trig(theta0: np.ndarray, sweep: np.ndarray, offset: float) -> np.ndarray:
+    """max |cos(θ − offset)| over θ in [θ0, θ0 + sweep] (offset = π/2 gives |sin|)."""
+    lo = np.minimum(theta0, theta0 + sweep) - offset
+    hi = np.maximum(theta0, theta0 + sweep) - offset
+    # |cos| peaks (= 1) at multiples of π.
+    n = np.ceil(lo / np.pi)
+    inside = n * np.pi <= hi
+    ends = np.maximum(np.abs(np.cos(lo)), np.abs(np.cos(hi)))
+    return np.where(inside, 1.0, ends)
+
+
+def _direction_extent(tp: Toolpath, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(max |u_k| over the segment (n,3), unit tangent at the start (n,3), at the end (n,3))."""
+    n = len(idx)
+    kind = tp.kind[idx]
+    length = tp.length[idx]
+    delta = tp.end[idx] - tp.start[idx]
+    safe = np.where(length > 0, length, 1.0)[:, None]
+    t_line = delta / safe
+    extent = np.abs(t_line)
+    t_start = t_line.copy()
+    t_end = t_line.copy()
+    arcs = np.flatnonzero(kind == SegmentKind.ARC)
+    if len(arcs):
+        i = idx[arcs]
+        axes = _PLANE_TABLE[tp.plane[i].astype(np.int64)]
+        u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
+        rows = np.arange(len(arcs))
+        r = tp.radius[i]
+        sweep = tp.sweep[i]
+        theta0 = tp.start_angle[i]
+        ln = length[arcs]
+        rise = tp.end[i, w] - tp.start[i, w]
+        planar = r * np.abs(sweep) / ln  # in-plane share of the unit tangent
+        ext = np.zeros((len(arcs), 3))
+        ext[rows, u] = planar * _max_abs_trig(theta0, sweep, math.pi / 2)  # |d/dθ cos| = |sin|
+        ext[rows, v] = planar * _max_abs_trig(theta0, sweep, 0.0)
+        ext[rows, w] = np.abs(rise) / ln
+        extent[arcs] = ext
+        for theta, target in ((theta0, t_start), (theta0 + sweep, t_end)):
+            d = np.zeros((len(arcs), 3))
+            d[rows, u] = -r * np.sin(theta) * sweep
+            d[rows, v] = r * np.cos(theta) * sweep
+            d[rows, w] = rise
+            target[arcs] = d / np.linalg.norm(d, axis=1)[:, None]
+    assert extent.shape == (n, 3)
+    return extent, t_start, t_end
+
+
+def _arc_curvature(tp: Toolpath, idx: np.ndarray) -> np.ndarray:
+    kind = tp.kind[idx]
+    r = tp.radius[idx]
+    sweep = np.abs(tp.sweep[idx])
+    w = _PLANE_TABLE[tp.plane[idx].astype(np.int64), 2]
+    rows = np.arange(len(idx))
+    rise = tp.end[idx, w] - tp.start[idx, w]
+    pitch = np.divide(rise, sweep, out=np.zeros_like(rise), where=sweep > 0)
+    kappa = np.divide(r, r * r + pitch * pitch, out=np.zeros_like(r), where=r > 0)
+    del rows
+    return np.where(kind == SegmentKind.ARC, kappa, 0.0)
+
+
+def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
+    """Compute every static limit of ``tp`` on ``machine`` (see the module docstring)."""
+    ctl = machine.controller
+    dt = float(ctl.interpolation_period_s)
+    axis = {name: np.array(machine.axis_array(name)) for name in (
+        "rapid_mm_min", "max_feed_mm_min", "max_accel_mm_s2", "max_jerk_mm_s3", "rapid_accel_mm_s2",
+        "rapid_jerk_mm_s3", "corner_step_mm_min")}  # fmt: skip
+    kind = tp.kind.astype(np.int64)
+    if np.any(kind == SegmentKind.NURBS):
+        i = int(np.flatnonzero(kind == SegmentKind.NURBS)[0])
+        file, line = tp.source(i)
+        raise ProgramError("NURBS segments are not supported by the controller yet", code="motion.nurbs",
+                           file=file, line=line)  # fmt: skip
+    moving = (kind == SegmentKind.RAPID) | (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC)
+    idx = np.flatnonzero(moving & (tp.length > MIN_LENGTH_MM))
+    n = len(idx)
+    cutting = tp.kind[idx] != SegmentKind.RAPID
+    feed = tp.path_feed[idx] / 60.0
+    bad = cutting & ~(np.isfinite(feed) & (feed > 0))
+    if np.any(bad):
+        i = int(idx[np.flatnonzero(bad)[0]])
+        file, line = tp.source(i)
+        raise ProgramError("cutting move without a positive feed", code="motion.no_feed", file=file,
+                           line=line)  # fmt: skip
+
+    extent, t_start, t_end = _direction_extent(tp, idx)
+    with np.errstate(divide="ignore"):
+        inv = np.where(extent > 1e-12, 1.0 / np.maximum(extent, 1e-300), np.inf)  # 1/|u_k|
+
+    def projected(limit_per_axis: np.ndarray) -> np.ndarray:
+        return np.min(limit_per_axis[None, :] * inv, axis=1)
+
+    rapid_rate = projected(axis["rapid_mm_min"] / 60.0)
+    cut_axis_cap = np.minimum(projected(axis["max_feed_mm_min"] / 60.0), ctl.max_feed_mm_min / 60.0)
+    kappa = _arc_curvature(tp, idx)
+    # Curvature limits use the in-plane axes' limits (the centripetal vector turns within the plane).
+    plane_axes = _PLANE_TABLE[tp.plane[idx].astype(np.int64)]
+    acc_ax = axis["max_accel_mm_s2"]
+    jerk_ax = axis["max_jerk_mm_s3"]
+    a_n = np.minimum(ctl.max_centripetal_accel_mm_s2,
+                     np.minimum(acc_ax[plane_axes[:, 0]], acc_ax[plane_axes[:, 1]]))  # fmt: skip
+    j_n = np.minimum(jerk_ax[plane_axes[:, 0]], jerk_ax[plane_axes[:, 1]])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rho = np.where(kappa > 0, 1.0 / np.maximum(kappa, 1e-300), np.inf)
+        v_centripetal = np.sqrt(a_n / kappa)
+        v_cjerk = np.cbrt(j_n / kappa**2)
+        delta = np.minimum(ctl.chord_tolerance_mm, rho)
+        v_chord = (2.0 / dt) * np.sqrt(np.maximum(2.0 * rho * delta - delta * delta, 0.0))
+    v_curv = np.where(kappa > 0, np.minimum(np.minimum(v_centripetal, v_cjerk), v_chord), np.inf)
+    v_curv = np.maximum(v_curv, ctl.min_arc_feed_mm_min / 60.0)  # P1505 floor (F itself may be lower)
+    cap = np.where(cutting, np.minimum(cut_axis_cap, v_curv), rapid_rate)
+    base = np.where(cutting, feed, rapid_rate)
+    acc = np.where(cutting, projected(acc_ax), projected(axis["rapid_accel_mm_s2"]))
+    jerk = np.where(cutting, projected(jerk_ax), projected(axis["rapid_jerk_mm_s3"]))
+
+    # ------------------------------------------------------------------ junctions
+    hard = np.zeros(n + 1)
+    stop = np.zeros(n + 1, dtype=bool)
+    turn = np.zeros(n + 1)
+    stop[n] = True
+    modes = tp.modes.astype(np.int64)
+    if n:
+        hard[0] = cap[0]
+        stop[0] = True
+    if n > 1:
+        prev, nxt = idx[:-1], idx[1:]
+        u_in, u_out = t_end[:-1], t_start[1:]
+        du = np.abs(u_out - u_in)
+        step = axis["corner_step_mm_min"] / 60.0
+        with np.errstate(divide="ignore"):
+            corner = np.min(np.where(du > 1e-12, step[None, :] / np.maximum(du, 1e-300), np.inf), axis=1)
+        hard[1:n] = np.minimum(corner, np.minimum(cap[:-1], cap[1:]))
+        turn[1:n] = np.arccos(np.clip(np.sum(u_in * u_out, axis=1), -1.0, 1.0))
+        # Everything between two motion segments (short moves, dwells) may carry a stop.
+        exact = (modes & SegmentMode.EXACT_STOP) != 0
+        exact_cum = np.concatenate(([0], np.cumsum(exact)))
+        dwell_cum = np.concatenate(([0], np.cumsum(kind == SegmentKind.DWELL)))
+        # stops from prev (inclusive) up to nxt (exclusive)
+        has_exact = exact_cum[nxt] - exact_cum[prev] > 0
+        has_dwell = dwell_cum[nxt] - dwell_cum[prev] > 0
+        rapid_prev = tp.kind[prev] == SegmentKind.RAPID
+        mode_change = rapid_prev | (tp.kind[nxt] == SegmentKind.RAPID)
+        aux_change = (tp.tool[prev] != tp.tool[nxt]) | (tp.spindle_rpm[prev] != tp.spindle_rpm[nxt])
+        no_lookahead = ctl.lookahead_blocks <= 1
+        stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead
+    hard[stop] = 0.0
+
+    # ------------------------------------------------------------------ dwells per point
+    # A dwell belongs to the first point after it: point q = number of motion segments before it.
+    dwell_rows = np.flatnonzero(kind == SegmentKind.DWELL)
+    dwell_point = np.searchsorted(idx, dwell_rows)
+    dw0 = np.searchsorted(dwell_point, np.arange(n + 1), side="left")
+    dw1 = np.searchsorted(dwell_point, np.arange(n + 1), side="right")
+    dwell_f = np.zeros((max(len(dwell_rows), 1), 5))
+    if len(dwell_rows):
+        dwell_f[: len(dwell_rows), 0] = tp.dwell_s[dwell_rows]
+        dwell_f[: len(dwell_rows), 1] = dwell_rows
+        dwell_f[: len(dwell_rows), 2:5] = tp.start[dwell_rows]
+
+    # next mandatory stop at or after each point
+    stop_idx = np.flatnonzero(stop)
+    next_stop = stop_idx[np.searchsorted(stop_idx, np.arange(n + 1), side="left")]
+
+    # ------------------------------------------------------------------ acceleration bound on arrival
+    a_in = np.full(n + 1, 1e300)
+    length = tp.length[idx]
+    for q in range(n - 1, -1, -1):  # O(n) once per program
+        a_in[q] = min(acc[q], a_in[q + 1] + jerk[q] * length[q] / cap[q])
+
+    seg_f = np.zeros((n, K.N_SEG_F))
+    seg_f[:, K.F_S0] = tp.s_start[idx]
+    seg_f[:, K.F_LEN] = length
+    seg_f[:, K.F_CAP] = cap
+    seg_f[:, K.F_BASE] = base
+    seg_f[:, K.F_ACC] = acc
+    seg_f[:, K.F_JERK] = jerk
+    seg_f[:, K.F_CURV] = kappa
+    seg_f[:, K.F_SX : K.F_SX + 3] = tp.start[idx]
+    seg_f[:, K.F_EX : K.F_EX + 3] = tp.end[idx]
+    seg_f[:, K.F_CX : K.F_CX + 3] = np.nan_to_num(tp.center[idx])
+    seg_f[:, K.F_RADIUS] = tp.radius[idx]
+    seg_f[:, K.F_ANG0] = tp.start_angle[idx]
+    seg_f[:, K.F_SWEEP] = tp.sweep[idx]
+    w = plane_axes[:, 2]
+    seg_f[:, K.F_RISE] = np.where(tp.kind[idx] == SegmentKind.ARC,
+                                  tp.end[idx, w] - tp.start[idx, w], 0.0)  # fmt: skip
+    seg_f[:, K.F_FEED] = base
+    seg_i = np.zeros((n, K.N_SEG_I), dtype=np.int64)
+    seg_i[:, K.I_KIND] = tp.kind[idx]
+    seg_i[:, K.I_PU : K.I_PW + 1] = plane_axes
+    seg_i[:, K.I_TP] = idx
+    seg_i[:, K.I_LOCKED] = (modes[idx] & SegmentMode.OVERRIDE_LOCKED) != 0
+    seg_i[:, K.I_RAPID] = ~cutting
+    pt_f = np.zeros((n + 1, K.N_PT_F))
+    pt_f[:, K.P_S] = np.concatenate((tp.s_start[idx], [tp.s_start[idx[-1]] + length[-1]])) if n else 0.0
+    pt_f[:, K.P_HARD] = hard
+    pt_f[:, K.P_AIN] = a_in
+    pt_f[:, K.P_TURN] = turn
+    pt_i = np.zeros((n + 1, K.N_PT_I), dtype=np.int64)
+    pt_i[:, K.Q_STOP] = stop
+    pt_i[:, K.Q_DW0] = dw0
+    pt_i[:, K.Q_DW1] = dw1
+    pt_i[:, K.Q_NEXT_STOP] = next_stop
+    if n:
+        rest = tp.end[idx[-1]].astype(float)
+    elif len(dwell_rows):
+        rest = tp.start[dwell_rows[-1]].astype(float)
+    else:
+        rest = np.zeros(3)
+    for arr in (seg_f, seg_i, pt_f, pt_i, dwell_f):
+        arr.flags.writeable = False
+    return PathLimits(seg_f=np.ascontiguousarray(seg_f), seg_i=seg_i, pt_f=pt_f, pt_i=pt_i,
+                      dwell_f=dwell_f, rest_position=rest)  # fmt: skip

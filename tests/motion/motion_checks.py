@@ -1,0 +1,176 @@
+"""Shared helpers for the controller tests: random programs and an independent limit checker.
+
+The checker recomputes what it needs from the toolpath and the machine (direction components, curvature,
+corner steps) instead of reading the controller's tables, so a wrong table is caught too. Only the
+``cap`` lookup per tick uses the controller's own segment list, and that list is checked separately in
+test_motion_limits.py against closed forms.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cnc_gym.machine import MachineConfig
+from cnc_gym.motion import Controller, MotionChunk
+from cnc_gym.toolpath import Plane, SegmentKind, SegmentMode, Toolpath, ToolpathBuilder
+
+REL_TOL = 1e-6
+
+
+def random_program(rng: np.random.Generator, n_blocks: int, *, arcs: bool = True,
+                   exact_stop_p: float = 0.1, dwell_p: float = 0.05, rapid_p: float = 0.05,
+                   step_mm: float = 3.0) -> Toolpath:  # fmt: skip
+    """A random 3-D program: lines of random length and direction, XY arcs, exact stops, dwells, rapids."""
+    b = ToolpathBuilder()
+    p = np.zeros(3)
+    for line in range(1, n_blocks + 1):
+        r = rng.random()
+        modes = SegmentMode.EXACT_STOP if rng.random() < exact_stop_p else SegmentMode.NONE
+        feed = float(rng.uniform(300.0, 12000.0))
+        if r < dwell_p:
+            b.dwell(tuple(p), float(rng.uniform(0.0, 0.02)), line=line)
+            continue
+        if r < dwell_p + rapid_p:
+            q = p + rng.normal(size=3) * step_mm * 3
+            b.rapid(tuple(p), tuple(q), line=line)
+        elif arcs and r < 0.45:
+            radius = float(rng.uniform(0.2, 3.0) * step_mm)
+            phi = rng.uniform(-np.pi, np.pi)
+            center = p - radius * np.array([np.cos(phi), np.sin(phi), 0.0])
+            sweep = float(rng.uniform(0.1, 1.5 * np.pi) * rng.choice([-1.0, 1.0]))
+            end_angle = phi + sweep
+            rise = float(rng.normal() * 0.3 * step_mm) if rng.random() < 0.3 else 0.0
+            q = np.array([center[0] + radius * np.cos(end_angle), center[1] + radius * np.sin(end_angle),
+                          p[2] + rise])  # fmt: skip
+            b.arc(tuple(p), tuple(q), tuple(center), Plane.XY, sweep, feed=feed, line=line, modes=modes)
+        else:
+            length = float(rng.exponential(step_mm)) + 1e-3
+            d = rng.normal(size=3)
+            if rng.random() < 0.5:
+                d[2] = 0.0
+            d /= np.linalg.norm(d)
+            q = p + d * length
+            b.line(tuple(p), tuple(q), feed=feed, line=line, modes=modes)
+        p = q
+    return b.build()
+
+
+def crossing_speeds(chunk: MotionChunk, s_points: np.ndarray, s0: float = 0.0, v0: float = 0.0,
+                    a0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Exact speed at which the profile crosses each arc length in ``s_points`` (within the run).
+
+    Re-integrates each period's constant jerk (the chunk reports it) from the previous tick's state, so this
+    checks the continuous profile between samples. Returns (speeds, mask of points crossed)."""
+    s_prev = np.concatenate(([s0], chunk.path_s[:-1]))
+    v_prev = np.concatenate(([v0], chunk.speed[:-1]))
+    a_prev = np.concatenate(([a0], chunk.accel[:-1]))
+    dt = np.diff(np.concatenate(([chunk.time_s[0] - (chunk.time_s[1] - chunk.time_s[0])], chunk.time_s)))
+    speeds = np.full(len(s_points), np.nan)
+    crossed = np.zeros(len(s_points), dtype=bool)
+    tick = np.searchsorted(chunk.path_s, s_points, side="left")
+    for i, (s_q, t_i) in enumerate(zip(s_points, tick, strict=True)):
+        if t_i >= len(chunk.path_s):
+            continue
+        crossed[i] = True
+        s_a, v_a, a_a, j, h = s_prev[t_i], v_prev[t_i], a_prev[t_i], chunk.jerk[t_i], dt[t_i]
+        if s_q <= s_a:
+            speeds[i] = v_a
+            continue
+        if abs(chunk.path_s[t_i] - s_q) <= 1e-12 * max(1.0, abs(s_q)):  # a tick ends on the point
+            speeds[i] = chunk.speed[t_i]
+            continue
+        lo, hi = 0.0, h
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if s_a + v_a * mid + a_a * mid**2 / 2 + j * mid**3 / 6 < s_q:
+                lo = mid
+            else:
+                hi = mid
+        speeds[i] = v_a + a_a * hi + j * hi**2 / 2
+    return speeds, crossed
+
+
+def unit_tangents(tp: Toolpath, i: int) -> tuple[np.ndarray, np.ndarray]:
+    """Unit tangent at the start and at the end of segment i (independent of the controller)."""
+    s0 = tp.s_start[i]
+    eps = 1e-9
+    _, t_start, _ = tp.evaluate(s0 + min(eps, tp.length[i] / 2))
+    _, t_end, _ = tp.evaluate(s0 + tp.length[i] - min(eps, tp.length[i] / 2))
+    return t_start[0], t_end[0]
+
+
+def expected_corner_limit(tp: Toolpath, machine: MachineConfig, i: int, j: int) -> float:
+    """GSK corner step: v <= min_k step_k / |u_out,k - u_in,k| between segments i and j (mm/s)."""
+    _, u_in = unit_tangents(tp, i)
+    u_out, _ = unit_tangents(tp, j)
+    du = np.abs(u_out - u_in)
+    step = np.array(machine.axis_array("corner_step_mm_min")) / 60.0
+    with np.errstate(divide="ignore"):
+        return float(np.min(np.where(du > 1e-9, step / np.maximum(du, 1e-300), np.inf)))
+
+
+def check_run(controller: Controller, chunk: MotionChunk, overrides: np.ndarray | None = None) -> None:
+    """Assert every limit on a run from reset: speed caps, tangential accel/jerk, per-axis speed,
+    corner speeds, exact stops, path following and the final stop. ``overrides``: the knob per tick
+    (None = constant 1.0); the feed target is only checked where the knob was constant."""
+    tp = controller.toolpath
+    machine = controller.machine
+    lim = controller.segment_limits()
+    junctions = controller.junction_limits()
+    tol_v = 1e-6 + REL_TOL * np.max(lim["cap_mm_s"], initial=1.0)
+    # --- speed, acceleration and jerk against the segment the reference is on
+    moving = np.isin(tp.kind[chunk.segment], (SegmentKind.LINE, SegmentKind.ARC, SegmentKind.RAPID))
+    row_of = {int(t): r for r, t in enumerate(lim["index"])}
+    rows = np.array([row_of.get(int(t), -1) for t in chunk.segment])
+    on = moving & (rows >= 0)
+    r = rows[on]
+    assert np.all(chunk.speed >= -1e-12), "reverse motion"
+    assert np.all(chunk.speed[on] <= lim["cap_mm_s"][r] + tol_v), "speed above the segment cap"
+    acc = np.maximum(lim["accel_mm_s2"][r], 0)
+    assert np.all(np.abs(chunk.accel[on]) <= acc * (1 + REL_TOL) + 1e-6), "acceleration above the limit"
+    jerk_ok = np.abs(chunk.jerk[on]) <= lim["jerk_mm_s3"][r] * (1 + REL_TOL) + 1e-6
+    assert np.all(jerk_ok), "jerk above the limit"
+    # --- per-axis speed from the positions (finite differences bound the mean axis speed per tick)
+    dt = controller.dt
+    axis_v = np.abs(np.diff(chunk.position, axis=0)) / dt
+    cutting_next = chunk.cutting[1:]
+    vmax_cut = np.array(machine.axis_array("max_feed_mm_min")) / 60.0
+    vmax_rapid = np.array(machine.axis_array("rapid_mm_min")) / 60.0
+    assert np.all(axis_v[cutting_next] <= vmax_cut * (1 + 1e-6) + 1e-6), "cutting axis speed above P1225"
+    assert np.all(axis_v <= vmax_rapid * (1 + 1e-6) + 1e-6), "axis speed above the rapid rate"
+    # --- the reference stays on the programmed path
+    point, _, _ = tp.evaluate(chunk.path_s)
+    on_path = chunk.segment >= 0
+    assert np.allclose(point[on_path], chunk.position[on_path], atol=1e-9), "reference off the path"
+    assert np.all(np.diff(chunk.path_s) >= -1e-12), "path position went backwards"
+    # --- speed through each junction (exact crossing speed) against the corner limit, and stops
+    s_pts = junctions["s"][1:-1]
+    if len(s_pts):
+        speeds, crossed = crossing_speeds(chunk, s_pts)
+        limits = junctions["limit_mm_s"][1:-1]
+        # Where the braking switches inside a period the chunk reports the period's mean jerk, so the
+        # re-integrated crossing speed can be off by at most J·T²/4 (the exact profile is not).
+        tol_cross = tol_v + np.max(lim["jerk_mm_s3"], initial=0.0) * dt**2 / 4
+        assert np.all(speeds[crossed] <= limits[crossed] + tol_cross), "junction crossed above its limit"
+        stops = junctions["stop"][1:-1] & crossed
+        assert np.all(np.abs(speeds[stops]) <= 1e-9), "no stop at a mandatory stop"
+        # the corner limit itself, recomputed independently for cutting junctions
+        idx = lim["index"]
+        for q in np.flatnonzero(crossed & ~junctions["stop"][1:-1])[:50]:
+            i, j = idx[q], idx[q + 1]
+            expected = min(expected_corner_limit(tp, machine, int(i), int(j)), lim["cap_mm_s"][q],
+                           lim["cap_mm_s"][q + 1])  # fmt: skip
+            assert math.isclose(limits[q], expected, rel_tol=1e-6, abs_tol=1e-9)
+            assert speeds[q] <= expected + tol_cross
+    # --- feed target at constant override
+    if overrides is None:
+        base = lim["base_mm_s"][r]
+        assert np.all(chunk.speed[on] <= np.minimum(base, lim["cap_mm_s"][r]) + tol_v), "speed above F"
+    # --- end of program
+    if controller.finished:
+        assert chunk.speed[-1] == 0.0 and chunk.accel[-1] == 0.0
+        if len(lim["index"]):
+            last = int(lim["index"][-1])
+            assert np.allclose(chunk.position[-1], tp.end[last], atol=1e-9)

@@ -1,0 +1,349 @@
+"""Controller behaviour against closed forms (expected values derived in the comments, not by the code)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from motion_checks import check_run, crossing_speeds
+
+from cnc_gym.errors import CncGymError, ProgramError
+from cnc_gym.machine import load_machine, machine_from_dict
+from cnc_gym.motion import ActionError, Controller
+from cnc_gym.toolpath import Plane, SegmentMode, ToolpathBuilder
+
+VMC = load_machine("vmc-small")  # A = 3000 mm/s², J = 30000 mm/s³ per axis, corner step 600 mm/min
+DT = 0.002
+
+
+def machine(**axis) -> object:
+    """vmc-small with some axis_defaults changed."""
+    defaults = {"rapid_mm_min": 30000, "max_feed_mm_min": 15000, "max_accel_mm_s2": 3000,
+                "max_jerk_mm_s3": 30000, "rapid_accel_mm_s2": 5000, "rapid_jerk_mm_s3": 70000,
+                "corner_step_mm_min": 600}  # fmt: skip
+    defaults.update(axis)
+    return machine_from_dict({"name": "test", "controller": {"max_centripetal_accel_mm_s2": 3000},
+                              "axis_defaults": defaults})  # fmt: skip
+
+
+def single_line(length: float, feed: float, direction=(1.0, 0.0, 0.0), **kw):
+    b = ToolpathBuilder()
+    end = tuple(length * np.asarray(direction) / np.linalg.norm(direction))
+    b.line((0, 0, 0), end, feed=feed, line=1, **kw)
+    return b.build()
+
+
+def finish_time(controller: Controller, **kw) -> tuple[float, object]:
+    chunk = controller.run_to_end(**kw)
+    return float(chunk.time_s[-1]), chunk
+
+
+# ---------------------------------------------------------------------------------------------- profiles
+def test_line_time_triangular_acceleration_matches_closed_form():
+    # V = 100 mm/s < A²/J = 300 mm/s: the acceleration never reaches A; each ramp is a triangle in a(t)
+    # lasting 2·√(V/J), covering V·√(V/J); total time L/V + 2·√(V/J), peak acceleration √(V·J).
+    V, J, L = 100.0, 30000.0, 100.0
+    c = Controller(single_line(L, V * 60), VMC)
+    t, chunk = finish_time(c)
+    expected = L / V + 2 * math.sqrt(V / J)
+    assert abs(t - expected) <= 2 * DT
+    # the peak falls between samples: the sampled maximum lies within one period's jerk of it
+    assert math.sqrt(V * J) - J * DT <= np.max(chunk.accel) <= math.sqrt(V * J) * (1 + 1e-9)
+    assert np.max(chunk.speed) == pytest.approx(V, rel=1e-9)
+    check_run(c, chunk)
+
+
+def test_line_time_trapezoidal_acceleration_matches_closed_form():
+    # J = 300000 mm/s³: A²/J = 30 mm/s < V = 200 mm/s, so the acceleration holds A. Each ramp takes
+    # V/A + A/J and covers V·(V/A + A/J)/2 (symmetric S-curve): total L/V + V/A + A/J.
+    m = machine(max_jerk_mm_s3=300000)
+    V, A, J, L = 200.0, 3000.0, 300000.0, 150.0
+    c = Controller(single_line(L, V * 60), m)
+    t, chunk = finish_time(c)
+    assert abs(t - (L / V + V / A + A / J)) <= 2 * DT
+    assert np.max(np.abs(chunk.accel)) == pytest.approx(A, rel=1e-6)
+    assert np.max(np.abs(chunk.jerk)) <= J * (1 + 1e-9)
+    check_run(c, chunk)
+
+
+def test_diagonal_line_uses_projected_axis_limits():
+    # Along (1,1,0)/√2 each axis sees u_k = 1/√2, so the path may accelerate at A·√2 and jerk at J·√2,
+    # and the per-axis feed clamp allows 250·√2 mm/s (capped by the 250 mm/s composite clamp P1224).
+    m = machine(max_jerk_mm_s3=300000)
+    c = Controller(single_line(200.0, 15000, direction=(1, 1, 0)), m)
+    lim = c.segment_limits()
+    assert lim["accel_mm_s2"][0] == pytest.approx(3000 * math.sqrt(2))
+    assert lim["jerk_mm_s3"][0] == pytest.approx(300000 * math.sqrt(2))
+    assert lim["cap_mm_s"][0] == pytest.approx(250.0)
+    chunk = c.run_to_end()
+    assert np.max(np.abs(chunk.accel)) == pytest.approx(3000 * math.sqrt(2), rel=1e-6)
+    axis_v = np.abs(np.diff(chunk.position, axis=0)) / DT
+    assert np.max(axis_v[:, 0]) == pytest.approx(250 / math.sqrt(2), rel=1e-3)
+
+
+def test_short_line_never_reaches_feed():
+    # L = 1 mm at F 12000 (200 mm/s): a rest-to-rest jerk-limited move with peak speed v covers
+    # 2·v·√(v/J) when v < A²/J, so the peak solves 2 v^1.5 / √J = L → v = (L·√J / 2)^(2/3).
+    c = Controller(single_line(1.0, 12000), VMC)
+    chunk = c.run_to_end()
+    v_peak = (1.0 * math.sqrt(30000.0) / 2) ** (2 / 3)
+    assert np.max(chunk.speed) == pytest.approx(v_peak, rel=0.02)
+    assert np.max(chunk.speed) <= v_peak * (1 + 1e-6)
+    check_run(c, chunk)
+
+
+# ---------------------------------------------------------------------------------------------- corners
+def test_right_angle_corner_speed_is_the_axis_step():
+    # X then Y: Δu = (-1, 1, 0), so v_corner = min_k step_k/|Δu_k| = 600 mm/min / 1 = 10 mm/s.
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (50, 0, 0), feed=6000, line=1)
+    b.line((50, 0, 0), (50, 50, 0), feed=6000, line=2)
+    c = Controller(b.build(), VMC)
+    assert c.junction_limits()["limit_mm_s"][1] == pytest.approx(10.0)
+    chunk = c.run_to_end()
+    speeds, crossed = crossing_speeds(chunk, np.array([50.0]))
+    assert crossed[0]
+    # the planner brakes exactly down to the corner limit (within the mean-jerk reporting slack)
+    assert speeds[0] == pytest.approx(10.0, abs=30000 * DT**2 / 4 + 1e-6)
+    check_run(c, chunk)
+
+
+def test_shallow_corner_is_faster_than_sharp_corner():
+    # A 10° turn in XY: Δu = (cos10° − 1, sin10°) → limit 10 / sin(10°) = 57.6 mm/s.
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (50, 0, 0), feed=6000, line=1)
+    ang = math.radians(10)
+    b.line((50, 0, 0), (50 + 50 * math.cos(ang), 50 * math.sin(ang), 0), feed=6000, line=2)
+    c = Controller(b.build(), VMC)
+    assert c.junction_limits()["limit_mm_s"][1] == pytest.approx(10.0 / math.sin(ang))
+    assert c.junction_limits()["turn_rad"][1] == pytest.approx(ang)
+
+
+def test_exact_stop_and_program_end_come_to_rest():
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (20, 0, 0), feed=6000, line=1, modes=SegmentMode.EXACT_STOP)  # G09
+    b.line((20, 0, 0), (40, 0, 0), feed=6000, line=2)
+    c = Controller(b.build(), VMC)
+    chunk = c.run_to_end()
+    at_stop = np.flatnonzero(np.abs(chunk.path_s - 20.0) <= 1e-12)
+    assert len(at_stop) and chunk.speed[at_stop[0]] == 0.0 and chunk.accel[at_stop[0]] == 0.0
+    # collinear blocks without G09 are not slowed at all
+    b2 = ToolpathBuilder()
+    b2.line((0, 0, 0), (20, 0, 0), feed=6000, line=1)
+    b2.line((20, 0, 0), (40, 0, 0), feed=6000, line=2)
+    c2 = Controller(b2.build(), VMC)
+    t2 = c2.run_to_end().time_s[-1]
+    assert t2 == pytest.approx(40 / 100 + 2 * math.sqrt(100 / 30000), abs=2 * DT)
+    assert chunk.time_s[-1] > t2 + 0.1
+    check_run(c, chunk)
+
+
+def test_arc_speed_limits_closed_form():
+    # R = 2 mm: centripetal √(a·R) = √(3000·2) = 77.46 mm/s; jerk (J·R²)^(1/3) = (30000·4)^(1/3) = 49.3 mm/s;
+    # chord (2/T)·√(2Rδ − δ²) with δ = 1 µm = 1000·√(0.004 − 1e-6) = 63.2 mm/s → the jerk limit binds.
+    b = ToolpathBuilder()
+    b.arc((2, 0, 0), (-2, 0, 0), (0, 0, 0), Plane.XY, math.pi, feed=12000, line=1)
+    c = Controller(b.build(), VMC)
+    cap = c.segment_limits()["cap_mm_s"][0]
+    expected = min(math.sqrt(3000 * 2), (30000 * 4) ** (1 / 3), 1000 * math.sqrt(0.004 - 1e-6))
+    assert cap == pytest.approx(expected)
+    chunk = c.run_to_end()
+    assert np.max(chunk.speed) == pytest.approx(cap, rel=1e-6)
+    # the reference stays on the circle
+    assert np.allclose(np.hypot(chunk.position[:, 0], chunk.position[:, 1]), 2.0, atol=1e-9)
+    check_run(c, chunk)
+
+
+def test_helix_feed_is_the_projected_speed():
+    # GSK: on a helix F is the speed of the projection: path speed = F · length / planar_length.
+    b = ToolpathBuilder()
+    r, rise = 20.0, 10.0
+    b.arc((r, 0, 0), (r, 0, rise), (0, 0, 0), Plane.XY, 2 * math.pi, feed=3000, line=1)
+    tp = b.build()
+    c = Controller(tp, VMC)
+    planar = 2 * math.pi * r
+    expected = 50.0 * math.hypot(planar, rise) / planar
+    assert c.segment_limits()["base_mm_s"][0] == pytest.approx(expected)
+
+
+# ---------------------------------------------------------------------------------------------- override
+def test_override_change_mid_block_is_jerk_limited():
+    # 200 mm at F 6000 (100 mm/s); after 0.5 s the knob drops to 50 %. The applied override slews at
+    # 10/s (0.05 s for 1.0 → 0.5) and the speed follows with |j| ≤ J; it settles at 50 mm/s.
+    c = Controller(single_line(200.0, 6000), VMC)
+    first = c.advance(250, override=1.0)
+    assert first.speed[-1] == pytest.approx(100.0)
+    second = c.advance(250, override=0.5)
+    assert c.override_applied == 0.5
+    assert second.speed[-1] == pytest.approx(50.0, abs=1e-6)
+    assert np.max(np.abs(second.jerk)) <= 30000 * (1 + 1e-9)
+    assert np.max(np.abs(second.accel)) <= 3000 * (1 + 1e-9)
+    # and it never undershoots the new target
+    assert np.min(second.speed) >= 50.0 - 1e-6
+    # the speed starts falling no later than the slew lets the target fall below it
+    assert second.speed[30] < 100.0
+
+
+def test_override_zero_holds_and_resumes():
+    c = Controller(single_line(100.0, 6000), VMC)
+    c.advance(200, override=1.0)
+    held = c.advance(300, override=0.0)
+    assert held.speed[-1] == 0.0 or held.speed[-1] < 1e-9
+    s_hold = c.path_s
+    again = c.advance(100, override=0.0)
+    assert np.allclose(again.path_s, s_hold, atol=1e-9)
+    rest = c.run_to_end()
+    assert c.finished and rest.path_s[-1] == pytest.approx(100.0, abs=1e-12)
+
+
+def test_override_is_clamped_by_the_maximum_cutting_feed():
+    # F 12000 × 200 % = 400 mm/s, clamped to P1224 = 15000 mm/min = 250 mm/s.
+    c = Controller(single_line(300.0, 12000), VMC)
+    chunk = c.advance(1000, override=2.0)
+    assert np.max(chunk.speed) == pytest.approx(250.0)
+
+
+def test_feed_mode_replaces_f_times_override():
+    c = Controller(single_line(200.0, 6000), VMC)
+    chunk = c.advance(500, feed_mm_min=3000.0)
+    assert chunk.speed[-1] == pytest.approx(50.0)
+    chunk = c.advance(300, feed_mm_min=30000.0)  # clamped at 250 mm/s
+    assert np.max(chunk.speed) <= 250.0 + 1e-9
+
+
+def test_override_lock_g63_ignores_the_knob():
+    c = Controller(single_line(100.0, 3000, modes=SegmentMode.OVERRIDE_LOCKED), VMC)
+    chunk = c.advance(500, override=2.0)
+    assert np.max(chunk.speed) == pytest.approx(50.0)
+
+
+def test_rapid_rate_and_rapid_override():
+    # X rapid: 30000 mm/min = 500 mm/s, rapid A 5000, J 70000 (A²/J = 357 < 500: trapezoidal).
+    b = ToolpathBuilder()
+    b.rapid((0, 0, 0), (400, 0, 0), line=1)
+    tp = b.build()
+    c = Controller(tp, VMC)
+    chunk = c.run_to_end()
+    assert np.max(chunk.speed) == pytest.approx(500.0)
+    assert chunk.time_s[-1] == pytest.approx(400 / 500 + 500 / 5000 + 5000 / 70000, abs=2 * DT)
+    assert not np.any(chunk.cutting)
+    c2 = Controller(tp, VMC)
+    half = c2.advance(2000, override=1.0, rapid_override=0.25)
+    assert np.max(half.speed) == pytest.approx(125.0)
+
+
+# ---------------------------------------------------------------------------------------------- dwells, end
+def test_dwell_holds_position_for_its_time():
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
+    b.dwell((10, 0, 0), 0.5, line=2)
+    b.line((10, 0, 0), (20, 0, 0), feed=6000, line=3)
+    tp = b.build()
+    with_dwell = Controller(tp, VMC).run_to_end()
+    b2 = ToolpathBuilder()
+    b2.line((0, 0, 0), (10, 0, 0), feed=6000, line=1, modes=SegmentMode.EXACT_STOP)
+    b2.line((10, 0, 0), (20, 0, 0), feed=6000, line=3)
+    without = Controller(b2.build(), VMC).run_to_end()
+    # the dwell adds its time (rounded to whole periods) to an exact-stop run
+    assert with_dwell.time_s[-1] - without.time_s[-1] == pytest.approx(0.5, abs=DT + 1e-9)
+    dwelling = with_dwell.segment == 1
+    assert dwelling.sum() == pytest.approx(0.5 / DT, abs=1)
+    assert np.allclose(with_dwell.position[dwelling], [10, 0, 0])
+    assert not np.any(with_dwell.cutting[dwelling])
+
+
+def test_finished_controller_stays_at_rest_and_reset_restarts():
+    c = Controller(single_line(10.0, 6000), VMC)
+    first = c.run_to_end()
+    assert c.finished
+    more = c.advance(5)
+    assert np.all(more.speed == 0) and np.allclose(more.position, [10, 0, 0])
+    assert np.all(np.diff(more.time_s) > 0)
+    c.reset()
+    assert not c.finished and c.time_s == 0 and c.path_s == 0
+    second = c.run_to_end()
+    assert np.array_equal(first.position, second.position)
+
+
+def test_empty_and_dwell_only_programs():
+    c = Controller(ToolpathBuilder().build(), VMC)
+    assert c.finished
+    assert c.advance(3).position.shape == (3, 3)
+    b = ToolpathBuilder()
+    b.dwell((1, 2, 3), 0.01, line=1)
+    c = Controller(b.build(), VMC)
+    chunk = c.run_to_end()
+    assert c.finished and len(chunk) == 5 and np.allclose(chunk.position, [1, 2, 3])
+
+
+def test_no_lookahead_stops_at_every_block_end():
+    m = machine_from_dict({"name": "nolook", "controller": {"lookahead_blocks": 1}})
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
+    b.line((10, 0, 0), (20, 0, 0), feed=6000, line=2)
+    c = Controller(b.build(), m)
+    assert c.junction_limits()["stop"][1]
+    chunk = c.run_to_end()
+    speeds, _ = crossing_speeds(chunk, np.array([10.0]))
+    assert speeds[0] == 0.0
+
+
+# ---------------------------------------------------------------------------------------------- lookahead
+def test_lookahead_features_of_a_corner():
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
+    b.line((10, 0, 0), (10, 10, 0), feed=3000, line=2, modes=SegmentMode.EXACT_STOP)
+    b.line((10, 10, 0), (0, 10, 0), feed=6000, line=3)
+    c = Controller(b.build(), VMC)
+    f = c.lookahead(40.0, 8)  # bins of 5 mm: [0,5) [5,10] (corner at 10) ... stop at 20, end at 30
+    assert f.distance_to_stop_mm == pytest.approx(20.0)
+    assert f.speed_limit_mm_s[0] == pytest.approx(100.0)
+    assert f.speed_limit_mm_s[1] == pytest.approx(10.0)  # the 90° corner at s = 10
+    assert f.turn_angle_rad[1] == pytest.approx(math.pi / 2)
+    assert f.turn_angle_rad[0] == 0.0
+    assert f.programmed_feed_mm_s[2] == pytest.approx(50.0)
+    assert f.speed_limit_mm_s[3] == 0.0  # exact stop at s = 20
+    assert np.all(f.speed_limit_mm_s[6:] == 0.0)  # past the end
+    assert np.all(f.curvature_1_mm == 0.0)
+
+
+# ---------------------------------------------------------------------------------------------- errors
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"override": float("nan")}, "finite"),
+    ({"override": -0.1}, "within"),
+    ({"override": 2.5}, "within"),
+    ({"feed_mm_min": -1.0}, "negative"),
+    ({"override": 1.0, "feed_mm_min": 100.0}, "either"),
+    ({"rapid_override": 1.5}, "within"),
+    ({"override": "fast"}, "number"),
+])  # fmt: skip
+def test_bad_actions_raise_action_error(kwargs, match):
+    c = Controller(single_line(10.0, 6000), VMC)
+    with pytest.raises(ActionError, match=match):
+        c.advance(5, **kwargs)
+    assert issubclass(ActionError, CncGymError) and issubclass(ActionError, ValueError)
+
+
+@pytest.mark.parametrize("n_ticks", [-1, 2.5, True, "5"])
+def test_bad_tick_count(n_ticks):
+    c = Controller(single_line(10.0, 6000), VMC)
+    with pytest.raises(ActionError):
+        c.advance(n_ticks)
+
+
+def test_bad_lookahead_arguments():
+    c = Controller(single_line(10.0, 6000), VMC)
+    with pytest.raises(ActionError):
+        c.lookahead(0.0, 4)
+    with pytest.raises(ActionError):
+        c.lookahead(10.0, 0)
+
+
+@pytest.mark.parametrize("feed", [0.0, float("nan")])
+def test_cutting_without_feed_is_a_program_error(feed):
+    b = ToolpathBuilder(files=("part.nc",))
+    b.line((0, 0, 0), (10, 0, 0), feed=6000, line=3)
+    b.line((10, 0, 0), (20, 0, 0), feed=feed, line=7)
+    with pytest.raises(ProgramError, match=r"part.nc:7: .*\[motion.no_feed\]"):
+        Controller(b.build(), VMC)
