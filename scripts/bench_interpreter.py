@@ -5,7 +5,8 @@
 The program is a zig-zag of G01 lines with G02 arcs (I/J and R forms alternating) between them: the
 typical shape of CAM output. The baseline, run on the same text in the same process, is the least any
 Python G-code reader must do: split lines, regex-tokenise each into (letter, number) words and convert
-the numbers to float. The report gives the median of the repeats for each, and the ratio.
+the numbers to float. The report gives the median of the repeats for each, in CPU time and in wall
+time, and the ratio.
 Goal: >= 100 000 lines/s (must: >= 30 000 lines/s).
 """
 
@@ -67,13 +68,19 @@ def baseline(text: str) -> int:
     return words
 
 
-def median_seconds(fn, repeats: int) -> float:
-    times = []
+def median_seconds(fn, repeats: int) -> tuple[float, float]:
+    """Median wall-clock and median CPU (process) time of ``repeats`` calls.
+
+    CPU time is what this process itself spent; on a machine shared with other jobs it is the fairer
+    figure, because wall time also counts the time the process waited for a core.
+    """
+    wall, cpu = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        w0, c0 = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        cpu.append(time.process_time() - c0)
+        wall.append(time.perf_counter() - w0)
+    return statistics.median(wall), statistics.median(cpu)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -84,17 +91,20 @@ def main(argv: list[str] | None = None) -> int:
     text = generate_program(args.lines)
     n_lines = text.count("\n")
     toolpath = interpret(text, file="bench.nc")  # warm-up, and a sanity check of the output
-    t_interp = median_seconds(lambda: interpret(text, file="bench.nc"), args.repeats)
-    t_base = median_seconds(lambda: baseline(text), args.repeats)
-    rate = n_lines / t_interp
-    base_rate = n_lines / t_base
-    print(f"program: {n_lines} lines, {len(toolpath)} segments, {toolpath.total_length:.1f} mm path")
-    print(f"interpreter : {rate:12,.0f} lines/s  (median of {args.repeats}: {t_interp * 1e3:.1f} ms)")
-    print(f"baseline    : {base_rate:12,.0f} lines/s  (regex tokenise + float, same text)")
-    print(f"ratio       : interpreter takes {t_interp / t_base:.2f}x the baseline's time")
+    wall, cpu = median_seconds(lambda: interpret(text, file="bench.nc"), args.repeats)
+    base_wall, base_cpu = median_seconds(lambda: baseline(text), args.repeats)
+    rate = n_lines / cpu
+    print(f"program     : {n_lines} lines, {len(toolpath)} segments, {toolpath.total_length:.1f} mm path")
+    print(f"              lines/s (CPU time)  lines/s (wall)   median of {args.repeats}")
+    print(f"interpreter : {n_lines / cpu:16,.0f}  {n_lines / wall:14,.0f}   {cpu * 1e3:.0f} ms CPU")
+    print(f"baseline    : {n_lines / base_cpu:16,.0f}  {n_lines / base_wall:14,.0f}   "
+          "(regex tokenise + float)")
+    print(f"ratio       : the interpreter takes {cpu / base_cpu:.1f}x the baseline's CPU time "
+          f"({wall / base_wall:.1f}x wall)")  # fmt: skip
     verdict = "goal met" if rate >= GOAL_LINES_PER_S else ("floor met" if rate >= FLOOR_LINES_PER_S else
                                                            "BELOW THE FLOOR")  # fmt: skip
-    print(f"target      : goal {GOAL_LINES_PER_S:,} lines/s, floor {FLOOR_LINES_PER_S:,}: {verdict}")
+    print(f"target      : goal {GOAL_LINES_PER_S:,} lines/s, floor {FLOOR_LINES_PER_S:,} (CPU time): "
+          f"{verdict}")
     return 0 if rate >= FLOOR_LINES_PER_S else 1
 
 

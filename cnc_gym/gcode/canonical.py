@@ -18,6 +18,8 @@ import math
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, ToolpathBuilder
 
 Vec = tuple[float, float, float]
+_PLANE_AXES = {int(p): axes for p, axes in PLANE_AXES.items()}
+_ARC = SegmentKind.ARC
 ZERO: Vec = (0.0, 0.0, 0.0)
 
 
@@ -75,12 +77,12 @@ class FastToolpathBuilder(ToolpathBuilder):
     """
 
     def arc(self, start, end, center, plane: Plane, sweep: float, feed: float, **kw) -> None:
-        u, v, w = PLANE_AXES[plane]
+        u, v, w = _PLANE_AXES[plane]
         c = list(center)
         c[w] = start[w]
         du = start[u] - c[u]
         dv = start[v] - c[v]
-        self._append(SegmentKind.ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
+        self._append(_ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
                      radius=math.hypot(du, dv), start_angle=math.atan2(dv, du), sweep=sweep,
                      **kw)  # fmt: skip
 
@@ -117,7 +119,9 @@ class CanonicalMachine:
 
     def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
         """Arc or helix (signed sweep in rad, + = CCW about the plane normal) to ``end``."""
-        self.builder.arc(self.position, end, center, plane, sweep, feed, **self._context())
+        self.builder.arc(self.position, end, center, plane, sweep, feed, line=self.line,
+                         file_index=self.file_index, modes=self.modes, tool=self.tool,
+                         spindle_rpm=self.spindle_rpm)  # fmt: skip
         self.position = end
 
     def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None:

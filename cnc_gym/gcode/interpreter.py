@@ -485,20 +485,21 @@ class Interpreter:
         """G02/G03 in the selected plane, I/J/K (incremental, L1025) or R (R wins, L510; R<0 > 180°)."""
         name = "G02" if motion == 2 else "G03"
         feed = self.feed
-        if feed is None:
-            raise self.error(f"{name} needs a feed: no F programmed yet", "missing-feed")
-        if feed == 0:
+        if not feed:
+            if feed is None:
+                raise self.error(f"{name} needs a feed: no F programmed yet", "missing-feed")
             raise self.error(f"{name} with F0: zero feed is not allowed on an arc", "zero-feed")
         plane = self.plane
         u, v, w = PLANE_AXES[plane]
         pos = self.out.position
         s = self.scale
-        xyz = (x, y, z)
         if self.incremental:
-            end = [pos[a] if xyz[a] is None else pos[a] + xyz[a] * s for a in range(3)]
+            end = [pos[0] if x is None else pos[0] + x * s, pos[1] if y is None else pos[1] + y * s,
+                   pos[2] if z is None else pos[2] + z * s]  # fmt: skip
         else:
             o = self.offsets.origin
-            end = [pos[a] if xyz[a] is None else xyz[a] * s + o[a] for a in range(3)]
+            end = [pos[0] if x is None else x * s + o[0], pos[1] if y is None else y * s + o[1],
+                   pos[2] if z is None else z * s + o[2]]  # fmt: skip
         du = end[u] - pos[u]
         dv = end[v] - pos[v]
         chord = math.hypot(du, dv)
