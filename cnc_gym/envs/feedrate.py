@@ -56,6 +56,28 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
     return max(cut_s + rapid_s + dwell_s, 1e-3)
 
 
+#: Contour windows are widened to multiples of this many segments (see _snapped_meter_class).
+WINDOW_SNAP_SEGMENTS = 16
+
+
+def _snapped_meter_class(meter_cls: type) -> type:
+    """The contour meter with its search window widened outwards to multiples of 16 segments.
+
+    The meter caches the geometry of each ``[first, last)`` window; on short-segment programs (0.5 mm
+    polylines) the exact window moves every control step and rebuilding it dominated the step time.
+    A snapped window is a superset of the exact one (so no error can be hidden that the exact window
+    would show, beyond what its own rule allows) and stays the same for 16 segments of progress.
+    """
+
+    class SnappedWindowMeter(meter_cls):
+        def _window_range(self, lo: int, hi: int) -> tuple[int, int]:
+            first, last = super()._window_range(lo, hi)
+            q = WINDOW_SNAP_SEGMENTS
+            return (first // q) * q, min(len(self.toolpath), -(-last // q) * q)
+
+    return SnappedWindowMeter
+
+
 class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     r"""Feed-rate control of a simulated CNC milling controller on real G-code.
 
@@ -178,7 +200,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         from cnc_gym.plant import ContourErrorMeter, ServoPlant
 
         self._controller_cls = Controller
-        self._meter_cls = ContourErrorMeter
+        self._meter_cls = _snapped_meter_class(ContourErrorMeter)
         if action_mode not in ACTION_MODES:
             raise ConfigError(f"action_mode must be one of {', '.join(ACTION_MODES)}, got {action_mode!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -247,8 +269,18 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         high = np.array([2, 2, 1, 1, 5, 5, 5, 1, 1] + [2] * n + [1] * n + [1] * n + [2] * n, dtype=np.float32)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
         self._obs = np.zeros(len(low), dtype=np.float32)
+        self._raw = np.zeros(len(low))
+        base = len(SCALAR_FEATURES)
+        self._la_blocks = [slice(base + i * n, base + (i + 1) * n) for i in range(len(LOOKAHEAD_FEATURES))]
+        scale = np.ones(len(low))
+        tol = self.tolerance_mm
+        scale[:9] = [1 / self._v_ref, 1 / self._a_ref, 1 / self.max_override, 1.0,
+                     1 / _FOLLOWING_ERROR_REF_MM, 1 / tol, 1 / tol, 1.0, 1 / self.lookahead_mm]  # fmt: skip
+        scale[self._la_blocks[0]] = 1 / self._v_ref
+        scale[self._la_blocks[2]] = 1 / math.pi
+        scale[self._la_blocks[3]] = 1 / self._v_ref
+        self._obs_scale = scale  # entry 7 (progress) is set per program: 1 / path length
         self._obs_low, self._obs_high = low, high
-        self._la = slice(len(SCALAR_FEATURES), len(low))
 
         # Per-tick buffers for the settle phase after the controller has finished.
         self._settle_reference = np.zeros((self.ticks_per_step, 3))
@@ -282,6 +314,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                 | (kind == SegmentKind.ARC)
                 | (kind == SegmentKind.NURBS),
                 "start": toolpath.start[0].copy() if len(toolpath) else np.zeros(3),
+                "lines": [int(x) for x in toolpath.line],
             }
             self._episode_cache[key] = objects
         return objects
@@ -308,6 +341,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._cutting_segments: np.ndarray = objects["cutting"]
         self._start = objects["start"]
         self._total_length = max(toolpath.total_length, 1e-9)
+        self._source_lines: list[int] = objects["lines"]
+        self._obs_scale[7] = 1.0 / self._total_length
         self._time_reward = self.reward_weights.time * self.control_period_s / self.nominal_time_s
 
     def _reset_stats(self) -> None:
@@ -389,11 +424,11 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._steps += 1
 
         e_max = float(error.max())
-        cutting = self._cutting_segments[segment]
-        n_cut = int(np.count_nonzero(cutting))
+        # The meter returns 0 where the reference is on a rapid or dwell, so the sum of squares over all
+        # samples is the sum over cutting samples; only the count needs the cutting mask.
+        n_cut = self._cutting_count(segment)
         if n_cut:
-            cut_error = error[cutting]
-            self._error_sq_sum += float(cut_error @ cut_error)
+            self._error_sq_sum += float(error @ error)
             self._error_samples += n_cut
         if e_max > self._error_max_mm:
             self._error_max_mm = e_max
@@ -401,51 +436,60 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._violations += violated
         self._last_error_step = e_max
         self._last_error_now = float(error[-1])
-        self._following_error_mm = float(np.linalg.norm(reference[-1] - actual[-1]))
+        lag = reference[-1] - actual[-1]
+        self._following_error_mm = math.sqrt(float(lag @ lag))
 
         w = self.reward_weights
         ratio = min(e_max / self.tolerance_mm, w.error_ratio_cap)
         reward = -self._time_reward - w.contour_error * ratio * ratio - (w.violation if violated else 0.0)
 
-        terminated = bool(controller.finished and self.plant.settled(self.in_position_mm))
+        terminated = controller.finished and bool(self.plant.settled(self.in_position_mm)[0])
         truncated = (not terminated) and self._steps >= self.max_episode_steps
         if self._renderer is not None:
             self._renderer.record(actual, error)
-        return self._observe(), float(reward), terminated, truncated, self._info(e_max, float(violated))
+        return self._observe(), reward, terminated, truncated, self._info(e_max, 1.0 if violated else 0.0)
+
+    def _cutting_count(self, segment: np.ndarray) -> int:
+        """Number of samples whose reference is on a cutting segment."""
+        cutting = self._cutting_segments
+        if cutting[segment[0]] and cutting[segment[-1]] and segment[0] == segment[-1]:
+            return len(segment)  # the common case: the whole step on one cutting segment
+        return int(np.count_nonzero(cutting[segment]))
 
     # ------------------------------------------------------------------------------------ observations
     def _observe(self) -> np.ndarray:
-        obs = self._obs
+        # Raw values into a preallocated float64 buffer, then one multiply by the per-entry scale, one clip.
+        raw = self._raw
         controller = self.controller
         features = controller.lookahead(self.lookahead_mm, self.lookahead_points)
-        tol = self.tolerance_mm
-        obs[0] = controller.speed / self._v_ref
-        obs[1] = controller.accel / self._a_ref
-        obs[2] = controller.override_applied / self.max_override
-        obs[3] = self._knob
-        obs[4] = self._following_error_mm / _FOLLOWING_ERROR_REF_MM
-        obs[5] = self._last_error_step / tol
-        obs[6] = self._last_error_now / tol
-        obs[7] = controller.path_s / self._total_length
-        obs[8] = float(np.min(features.distance_to_stop_mm)) / self.lookahead_mm
-        n = self.lookahead_points
-        base = len(SCALAR_FEATURES)
-        obs[base : base + n] = features.speed_limit_mm_s
-        obs[base : base + n] /= self._v_ref
-        kappa_l = np.asarray(features.curvature_1_mm) * _CURVATURE_LENGTH_MM
-        obs[base + n : base + 2 * n] = kappa_l / (1.0 + kappa_l)
-        obs[base + 2 * n : base + 3 * n] = features.turn_angle_rad
-        obs[base + 2 * n : base + 3 * n] /= math.pi
-        obs[base + 3 * n : base + 4 * n] = features.programmed_feed_mm_s
-        obs[base + 3 * n : base + 4 * n] /= self._v_ref
-        np.nan_to_num(obs, copy=False, nan=0.0, posinf=2.0, neginf=-2.0)
+        raw[0] = controller.speed
+        raw[1] = controller.accel
+        raw[2] = controller.override_applied
+        raw[3] = self._knob
+        raw[4] = self._following_error_mm
+        raw[5] = self._last_error_step
+        raw[6] = self._last_error_now
+        raw[7] = controller.path_s
+        raw[8] = features.distance_to_stop_mm
+        la = self._la_blocks
+        raw[la[0]] = features.speed_limit_mm_s
+        kappa_l = raw[la[1]]
+        np.multiply(features.curvature_1_mm, _CURVATURE_LENGTH_MM, out=kappa_l)
+        np.divide(kappa_l, kappa_l + 1.0, out=kappa_l)
+        raw[la[2]] = features.turn_angle_rad
+        raw[la[3]] = features.programmed_feed_mm_s
+        obs = self._obs
+        np.multiply(raw, self._obs_scale, out=obs, casting="same_kind")
         np.clip(obs, self._obs_low, self._obs_high, out=obs)
+        if not math.isfinite(float(obs.sum())):  # NaN from upstream would poison a policy: say 0
+            np.nan_to_num(obs, copy=False, nan=0.0)
         return obs.copy()  # callers (replay buffers) may keep it; the buffer is reused
 
     def _info(self, step_error_mm: float, cost: float) -> dict[str, Any]:
         controller = self.controller
-        segment = min(max(int(controller.segment_index), 0), max(len(self.toolpath) - 1, 0))
+        segment = min(max(controller.segment_index, 0), len(self._source_lines) - 1)
         rms = math.sqrt(self._error_sq_sum / self._error_samples) if self._error_samples else 0.0
+        path_s = controller.path_s
         return {
             "cycle_time_s": self._ticks * self.interpolation_period_s,
             "contour_error_mm": step_error_mm,
@@ -454,11 +498,11 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             "tolerance_mm": self.tolerance_mm,
             "violations": self._violations,
             "cost": cost,
-            "line": int(self.toolpath.line[segment]) if len(self.toolpath) else 0,
-            "override": float(controller.override_applied),
-            "feed_mm_min": float(controller.speed) * 60.0,
-            "path_s": float(controller.path_s),
-            "progress": min(float(controller.path_s) / self._total_length, 1.0),
+            "line": self._source_lines[segment] if self._source_lines else 0,
+            "override": controller.override_applied,
+            "feed_mm_min": controller.speed * 60.0,
+            "path_s": path_s,
+            "progress": min(path_s / self._total_length, 1.0),
             "program": self.program_name,
             "steps": self._steps,
         }

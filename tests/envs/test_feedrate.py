@@ -353,3 +353,30 @@ def test_render_rgb_array():
 def test_no_render_mode_builds_nothing(circle_env):
     assert circle_env.render_mode is None
     assert circle_env._renderer is None
+
+
+def test_snapped_contour_window_is_a_superset_and_measures_the_same():
+    # The env widens the meter's window to multiples of 16 segments for speed. That relies on the meter's
+    # _window_range hook; if it is renamed this test says so. On the freeform program (0.5 mm segments)
+    # the snapped meter must give the same errors as the plain one, sample by sample.
+    from cnc_gym.envs.feedrate import WINDOW_SNAP_SEGMENTS, _snapped_meter_class
+    from cnc_gym.plant import ContourErrorMeter
+
+    assert "_window_range" in vars(ContourErrorMeter), "ContourErrorMeter._window_range hook is gone"
+    env = FeedrateEnv(programs=["freeform"])
+    tp = env.toolpath
+    plain = ContourErrorMeter(tp, window_back_mm=env._max_lag_mm)
+    snapped = _snapped_meter_class(ContourErrorMeter)(tp, window_back_mm=env._max_lag_mm)
+    for lo, hi in [(0, 3), (17, 20), (250, 260), (len(tp) - 3, len(tp) - 1)]:
+        first, last = snapped._window_range(lo, hi)
+        exact_first, exact_last = plain._window_range(lo, hi)
+        assert first <= exact_first and last >= exact_last
+        assert first % WINDOW_SNAP_SEGMENTS == 0 and (last % WINDOW_SNAP_SEGMENTS == 0 or last == len(tp))
+    env.reset(seed=0)
+    controller, plant = env.controller, env.plant
+    for _ in range(300):
+        chunk = controller.advance(5, override=2.0)
+        actual = plant.step(chunk.position[None])[0]
+        np.testing.assert_allclose(
+            snapped.measure(actual, chunk.segment), plain.measure(actual, chunk.segment)
+        )
