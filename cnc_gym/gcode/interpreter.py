@@ -49,6 +49,13 @@ _WORD_SPECS = {
     "T": CodeSpec("T", -1, "tool", step="tool"),
 }
 _IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
+_ACTIONS = {
+    "motion": "_do_motion", "plane": "_do_plane", "distance": "_do_distance", "units": "_do_units",
+    "wcs": "_do_wcs", "path_mode": "_do_path_mode", "dwell": "_do_dwell", "g10": "_do_g10", "g52": "_do_g52",
+    "g92": "_do_g92", "g53": "_do_g53", "record": "_do_nothing", "feed": "_do_feed",
+    "spindle_speed": "_do_spindle_speed", "tool": "_do_tool", "tool_change": "_do_tool_change",
+    "spindle": "_do_spindle", "coolant": "_do_coolant", "stop": "_do_stop",
+}  # fmt: skip
 
 
 class Interpreter:
@@ -86,15 +93,9 @@ class Interpreter:
         self._axis_owner: CodeSpec | None = None
         self.stops: list[tuple[int, str]] = []  # (line, "program_stop" | "optional_stop" | "end")
         self._order = {name: i for i, name in enumerate(dialect.execution_order)}
-        self._actions = {
-            "motion": self._do_motion, "plane": self._do_plane, "distance": self._do_distance,
-            "units": self._do_units, "wcs": self._do_wcs, "path_mode": self._do_path_mode,
-            "dwell": self._do_dwell, "g10": self._do_g10, "g52": self._do_g52, "g92": self._do_g92,
-            "g53": self._do_g53, "record": self._do_nothing, "feed": self._do_feed,
-            "spindle_speed": self._do_spindle_speed, "tool": self._do_tool,
-            "tool_change": self._do_tool_change,
-            "spindle": self._do_spindle, "coolant": self._do_coolant, "stop": self._do_stop,
-        }  # fmt: skip
+        # Action name → method name (a table of names, not bound methods: no reference cycle keeps a run's
+        # 100 000 blocks alive after it returns).
+        self._actions = _ACTIONS
         missing = {s.action for s in (*dialect.gcodes.values(), *dialect.mcodes.values())
                    if s.implemented} - set(self._actions)  # fmt: skip
         if missing:
@@ -112,7 +113,7 @@ class Interpreter:
             spec = dialect.gcodes[key]
             self.modal[spec.group] = key
             if spec.action in ("motion", "plane", "distance", "units", "wcs", "path_mode"):
-                self._actions[spec.action](spec)
+                getattr(self, self._actions[spec.action])(spec)
         self._motion_key = next(k for k in dialect.power_on if dialect.gcodes[k].action == "motion")
         self._update_modes()
 
@@ -262,8 +263,9 @@ class Interpreter:
         self._g53 = g53
         self._axis_owner = axis_owner
         actions = self._actions
+        this = type(self)
         for spec in items:
-            actions[spec.action](spec, values)
+            getattr(this, actions[spec.action])(self, spec, values)
             if self.ended:
                 return
 
