@@ -419,14 +419,21 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             reference[:] = self._last_reference
             segment = np.full(n, self._last_segment)
         actual = self.plant.step(reference[None])[0]
-        error = self.meter.measure(actual, segment)
+        # The reference only moves forward, so equal first and last segments mean one segment for the whole
+        # step: the meter's scalar-hint path (same window, same result) skips the per-sample bookkeeping.
+        first_segment = int(segment[0])
+        one_segment = first_segment == int(segment[-1])
+        error = self.meter.measure(actual, first_segment if one_segment else segment)
         self._ticks += n
         self._steps += 1
 
         e_max = float(error.max())
         # The meter returns 0 where the reference is on a rapid or dwell, so the sum of squares over all
         # samples is the sum over cutting samples; only the count needs the cutting mask.
-        n_cut = self._cutting_count(segment)
+        if one_segment:
+            n_cut = n if self._cutting_segments[first_segment] else 0
+        else:
+            n_cut = int(np.count_nonzero(self._cutting_segments[segment]))
         if n_cut:
             self._error_sq_sum += float(error @ error)
             self._error_samples += n_cut
@@ -448,13 +455,6 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         if self._renderer is not None:
             self._renderer.record(actual, error)
         return self._observe(), reward, terminated, truncated, self._info(e_max, 1.0 if violated else 0.0)
-
-    def _cutting_count(self, segment: np.ndarray) -> int:
-        """Number of samples whose reference is on a cutting segment."""
-        cutting = self._cutting_segments
-        if cutting[segment[0]] and cutting[segment[-1]] and segment[0] == segment[-1]:
-            return len(segment)  # the common case: the whole step on one cutting segment
-        return int(np.count_nonzero(cutting[segment]))
 
     # ------------------------------------------------------------------------------------ observations
     def _observe(self) -> np.ndarray:
