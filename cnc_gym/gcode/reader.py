@@ -327,7 +327,7 @@ class Reader:
             if c == "/":
                 break  # a slash inside the block: the rest of the block is ignored (L533-L535)
             if c == "#":
-                if words:
+                if any(w[0] not in "ON" for w in words):
                     raise self.error("a macro assignment must be alone in its block", "bad-expression", line,
                                      pos + 1)  # fmt: skip
                 assign, pos = self._assignment(text, pos, line)

@@ -68,6 +68,10 @@ def test_variables_assign_read_and_indirect():
     assert x_of("#2", setup) == 7.5
 
 
+def test_assignment_blocks_may_carry_n_and_o():
+    assert x_of("#2", "O1 N10 #1=5\nN20 #2=[#1*2]\n") == 10.0
+
+
 def test_integer_literal_in_an_expression_is_a_plain_number():
     # "#1=133 gives 133.000" (L5142); a constant without a point is read as if it had one (L5517).
     assert x_of("#1", "#1=133\n") == 133.0
