@@ -5,6 +5,7 @@ Usage::
 
     .venv/bin/python scripts/make_programs.py            # rewrite the four programs
     .venv/bin/python scripts/make_programs.py --check    # exit 1 if a shipped file differs
+    .venv/bin/python scripts/make_programs.py --report   # contour error at 50/100/200 % on vmc-small
 
 Only G00/G01/G02/G03, G17, G21, G90/G91, G54, F, S, M03/M05, M30 and comments are used, every coordinate
 with a decimal point (on GSK 25i a number without one may mean least input increments). The machine
@@ -222,6 +223,25 @@ def pocket() -> str:
     return "\n".join(lines) + "\n"
 
 
+def report(overrides: tuple[float, ...] = (0.5, 1.0, 2.0)) -> None:
+    """Cycle time, max contour error and steps over tolerance of each program at constant overrides."""
+    from cnc_gym.envs.feedrate import FeedrateEnv
+
+    print("program   override  cycle_s  max_error_um  steps_over_tol  nominal_s")
+    for name in GENERATORS:
+        env = FeedrateEnv(programs=[name], max_episode_steps=100_000)
+        for override in overrides:
+            env.reset(seed=0)
+            action = np.array([2.0 * override / env.max_override - 1.0], dtype=np.float32)
+            while True:
+                _, _, terminated, truncated, info = env.step(action)
+                if terminated or truncated:
+                    break
+            print(f"{name:9s} {override:8.2f}  {info['cycle_time_s']:7.2f}  "
+                  f"{info['contour_error_max_mm'] * 1000:12.1f}  {info['violations']:14d}  "
+                  f"{env.nominal_time_s:9.2f}")  # fmt: skip
+
+
 GENERATORS = {"circle": circle, "star": star, "freeform": freeform, "pocket": pocket}
 
 
@@ -229,7 +249,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="only compare with the shipped files")
     parser.add_argument("--out", type=Path, default=OUT_DIR, help="output folder (default: the package)")
+    parser.add_argument("--report", action="store_true",
+                        help="run the programs at 50/100/200 %% override, print the errors")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.report:
+        report()
+        return 0
     stale = []
     for name, generate in GENERATORS.items():
         text = generate()

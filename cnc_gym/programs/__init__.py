@@ -4,12 +4,13 @@ Built-in programs ship as package data (``cnc_gym/programs/*.nc``, plain GSK 25i
 ``scripts/make_programs.py``):
 
 =========  ===========================================================================================
-circle     full circle R 30 mm (G03), the classic circular test: steady, speed-squared contour error
-star       pentagram (G01 only): ten sharp corners, +144° at the tips and -72° at the inner vertices
-freeform   a Lissajous curve sampled into ~1 mm G01 segments: many small turning angles, the case
-           where the feed (not a corner stop) sets the contour error
-pocket     a pocket-like part: rounded-rectangle passes with G02/G03 corner arcs, incremental (G91)
-           step-overs and a finishing pass
+circle     full circle R 30 mm (G03) at F3000: steady, speed-squared contour error
+star       pentagram (G01 only) at F4000: ten sharp corners, +144° at the tips, -72° inside; the
+           controller's corner-speed limit, not the override, sets their error
+freeform   a 3:2 Lissajous curve in 0.5 mm G01 segments at F2400: small turning angles, the case where
+           the feed (not a corner stop) sets the contour error
+pocket     a pocket-like spiral of rounded rectangles (G02) with tangent step-over arcs written in G91,
+           roughing F3000, finishing loop F2000
 =========  ===========================================================================================
 
 :func:`load_program` accepts a built-in name, a path to a program file, or G-code text, and caches the
