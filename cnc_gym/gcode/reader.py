@@ -106,6 +106,7 @@ class Reader:
         self._length_letters = frozenset(a for a, r in rules.items() if r.unit == "length")
         self._decimals = max(0, round(-_log10(dialect.least_increment_mm)))
         self._increment = dialect.least_increment_mm
+        self._max_words = dialect.max_words_per_block
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
@@ -197,6 +198,9 @@ class Reader:
         ``Block.words`` keeps the ``(letter, digits)`` pairs for decimal-point checks."""
         rules = self._fast_rules
         pairs = _PLAIN_WORD.findall(text)
+        if len(pairs) > self._max_words:
+            raise self.error(f"{len(pairs)} words in one block (at most {self._max_words})", "too-many-words",
+                             line)  # fmt: skip
         values: dict[str, float] = {}
         gs = ms = None
         for letter, digits in pairs:
@@ -347,6 +351,9 @@ class Reader:
             if text_digits is None:
                 has_expr = True
             words.append((letter, value, text_digits))
+        if len(words) > self._max_words:
+            raise self.error(f"{len(words)} words in one block (at most {self._max_words})", "too-many-words",
+                             line)  # fmt: skip
         number = None
         if words and words[0][0] in "ON":
             words, number = self._head(words, line)

@@ -72,10 +72,14 @@ def test_unknown_codes(text, named, alarm):
         ("G00 X1 A5\n", "unsupported-axis"),
         ("G00 X1 B5\n", "unsupported-axis"),
         ("M03 M08 M09 M05\n", "too-many-m-codes"),
+        ("G00 " + "X1 " * 33 + "\n", "too-many-words"),  # 34 words; the limit is 32 (alarm 12)
+        ("G00 X[1] " + "X1 " * 32 + "\n", "too-many-words"),
     ],
 )
 def test_words_without_a_meaning_are_rejected(text, code):
-    assert program_error(text).code == code
+    err = program_error(text)
+    assert err.code == code
+    assert err.alarm == {"unsupported-axis": 15, "too-many-words": 12, "too-many-m-codes": 201}.get(code)
 
 
 def test_error_string_is_file_line_message_code():

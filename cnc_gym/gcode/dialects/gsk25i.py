@@ -271,7 +271,6 @@ FUNCTIONS = {
 
 # --------------------------------------------------------------------------- alarms (Appendix B)
 ALARMS = {
-    "too-many-digits": 3,
     "missing-value": 5,
     "bad-sign": 6,
     "decimal-point-not-allowed": 7,
@@ -282,7 +281,7 @@ ALARMS = {
     "not-implemented": 10,
     "missing-feed": 11,
     "too-many-words": 12,
-    "too-many-axes": 15,
+    "unsupported-axis": 15,
     "bad-dwell": 18,
     "arc-radius-mismatch": 20,
     "arc-bad-offset": 21,
