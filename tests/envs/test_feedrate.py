@@ -380,3 +380,14 @@ def test_snapped_contour_window_is_a_superset_and_measures_the_same():
         np.testing.assert_allclose(
             snapped.measure(actual, chunk.segment), plain.measure(actual, chunk.segment)
         )
+
+
+def test_sync_vector_env():
+    envs = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="sync", programs=["star", "circle"])
+    obs, infos = envs.reset(seed=5)
+    assert obs.shape == (3, 41) and obs.dtype == np.float32
+    for _ in range(20):
+        obs, rewards, terminated, truncated, infos = envs.step(np.zeros((3, 1), dtype=np.float32))
+    assert rewards.shape == (3,) and np.all(rewards < 0)
+    assert set(infos["program"]) <= {"star", "circle"} and infos["cycle_time_s"][0] == pytest.approx(0.2)
+    envs.close()
