@@ -1,0 +1,65 @@
+"""Malformed input of any shape gives a ProgramError (never another exception, a hang or a NaN)."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from cnc_gym.errors import ProgramError
+from cnc_gym.gcode import interpret
+
+# Characters G-code is made of, plus a few that are not.
+ALPHABET = "GMXYZIJKRFPLNOST#[]/()=+-*.0123456789 ;%,ABCDHQ\nEIFWHILEGOTOSINQRTANDOR\t$é"
+WORDS = st.sampled_from([
+    "G00", "G01", "G02", "G03", "G04", "G17", "G18", "G19", "G20", "G21", "G90", "G91", "G92", "G52", "G53",
+    "G54", "G55", "G10", "L2", "P1", "P0", "M30", "M03", "X", "Y", "Z", "I", "J", "K", "R", "F", "#1", "=",
+    "[", "]", "SIN", "ATAN", "/", "(", ")", ";", "%", "-", ".", "0", "1", "2.5", "10", "-3", "N5", "\n",
+])  # fmt: skip
+
+
+def _check(text: str) -> None:
+    try:
+        tp = interpret(text)
+    except ProgramError as err:
+        assert err.code and "\n" not in str(err)
+        return
+    for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
+        assert np.all(np.isfinite(getattr(tp, name))), name
+    assert np.all(np.isfinite(tp.feed[tp.kind != 0]) | (tp.kind == 3))  # rapids and dwells carry NaN feed
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.text(alphabet=ALPHABET, max_size=80))
+def test_random_characters(text):
+    _check(text)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(WORDS, max_size=30).map(" ".join))
+def test_random_word_soup(text):
+    _check(text)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.sampled_from(["G17", "G18", "G19"]),
+    st.sampled_from(["G02", "G03"]),
+    st.lists(st.floats(-50, 50, allow_nan=False).map(lambda v: round(v, 3)), min_size=5, max_size=5),
+    st.booleans(),
+)
+def test_random_arcs_are_consistent_or_rejected(plane, code, numbers, use_r):
+    # Every accepted arc ends where its geometry says: center + radius at start_angle + sweep (in-plane).
+    a, b, c, d, r = numbers
+    words = {"G17": ("X", "Y", "I", "J"), "G18": ("Z", "X", "K", "I"), "G19": ("Y", "Z", "J", "K")}[plane]
+    tail = f"R{r}" if use_r else f"{words[2]}{c} {words[3]}{d}"
+    text = f"G00 X1 Y2 Z3\n{plane} {code} {words[0]}{a} {words[1]}{b} {tail} F100\n"
+    try:
+        tp = interpret(text)
+    except ProgramError as err:
+        assert err.code in {"arc-radius-mismatch", "arc-impossible", "arc-missing-center"}
+        return
+    if len(tp) < 2:
+        return  # a 0° R arc: no motion
+    point, _, _ = tp.evaluate(tp.s_start[2] - 1e-12)
+    assert np.allclose(point[0], tp.end[1], atol=1e-6)
