@@ -87,6 +87,16 @@ def test_missing_and_unreadable_files(tmp_path, capsys):
     assert status == 2 and out == "" and len(err.splitlines()) == 1
 
 
+def test_byte_order_mark_and_latin1_files(tmp_path, capsys):
+    bom = tmp_path / "bom.nc"
+    bom.write_bytes(b"\xef\xbb\xbfG00 X1\n")
+    latin = tmp_path / "latin.nc"
+    latin.write_bytes(b"(Werkst\xfcck)\nG00 X2\n")
+    for path, x in ((bom, 1.0), (latin, 2.0)):
+        status, out, err = run_main(["trace", str(path)], capsys)
+        assert status == 0 and err == "" and json.loads(out)["end"][0] == x
+
+
 def test_bad_dialect_and_machine_are_one_line_errors(tmp_path, capsys):
     program = write(tmp_path, "G00 X1\n")
     for argv in (["--dialect", "h4cm"], ["--dialect", "nonsense"], ["--machine", "no-such-machine"]):

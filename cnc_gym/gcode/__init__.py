@@ -85,7 +85,7 @@ def interpret_file(
     path = Path(path)
     raw = path.read_bytes()
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark, if any, is not part of the program
     except UnicodeDecodeError:
         text = raw.decode("latin-1")  # controller files are often 8-bit ISO text
     return interpret(text, dialect=dialect, file=str(path), machine=machine, block_skip=block_skip)

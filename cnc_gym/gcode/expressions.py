@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.variables import VariableStore
 
 Node = tuple
+MAX_OPERATORS = 200
 
 _MUL_WORDS = ("MOD", "AND")
 _ADD_WORDS = ("XOR", "OR")
@@ -40,6 +41,7 @@ class ExpressionParser:
         self.pos = pos
         self.dialect = dialect
         self.depth = 0
+        self.operators = 0
 
     # ------------------------------------------------------------------ helpers
     def _peek(self) -> str:
@@ -47,6 +49,12 @@ class ExpressionParser:
 
     def _fail(self, message: str, code: str = "bad-expression") -> ProgramError:
         return self.dialect.error(message, code, column=self.pos + 1)
+
+    def _count(self) -> None:
+        # Bounds the tree depth (the evaluator recurses over it): a real macro line has a few dozen.
+        self.operators += 1
+        if self.operators > MAX_OPERATORS:
+            raise self._fail(f"expression too long (more than {MAX_OPERATORS} operators)")
 
     def _open(self) -> None:
         self.depth += 1
@@ -84,6 +92,7 @@ class ExpressionParser:
             c = self._peek()
             if c in ("+", "-") and c:
                 self.pos += 1
+                self._count()
                 node = ("op", c, node, self.term())
                 continue
             word = self._word()
@@ -91,6 +100,7 @@ class ExpressionParser:
             if op is None:
                 return node
             self.pos += len(op)
+            self._count()
             node = ("op", op, node, self.term())
 
     def term(self) -> Node:
@@ -99,6 +109,7 @@ class ExpressionParser:
             c = self._peek()
             if c in ("*", "/") and c:
                 self.pos += 1
+                self._count()
                 node = ("op", c, node, self.unary())
                 continue
             word = self._word()
@@ -106,17 +117,17 @@ class ExpressionParser:
             if op is None:
                 return node
             self.pos += len(op)
+            self._count()
             node = ("op", op, node, self.unary())
 
     def unary(self) -> Node:
-        c = self._peek()
-        if c == "-":
+        signs = 0
+        while self._peek() in ("-", "+") and self._peek():
+            if self.text[self.pos] == "-":
+                signs += 1
             self.pos += 1
-            return ("neg", self.unary())
-        if c == "+":
-            self.pos += 1
-            return self.unary()
-        return self.primary()
+        node = self.primary()
+        return ("neg", node) if signs % 2 else node
 
     def number(self) -> float:
         text = self.text

@@ -141,6 +141,13 @@ def test_expression_errors(text, code, alarm):
     assert err.line == text.count("\n")
 
 
+def test_pathological_expressions_are_errors_not_crashes():
+    # Thousands of operators or signs must not reach Python's recursion limit.
+    assert x_of("[" + "-" * 5001 + "3]") == -3.0
+    assert x_of("[" + "+".join(["1"] * 150) + "]") == 150.0
+    assert program_error("G00 X[" + "+".join(["1"] * 5000) + "]\n").code == "bad-expression"
+
+
 def test_deep_but_legal_nesting():
     # Five levels, counting function brackets (L5593-L5597): SIN[[[[x]]]] is 5.
     assert math.isclose(x_of("[SIN[[[[90]]]]]"), 1.0)
