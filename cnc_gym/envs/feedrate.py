@@ -386,6 +386,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     # --------------------------------------------------------------------------------------------- step
     def _parse_action(self, action: Any) -> float:
+        if type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f":  # usual case
+            knob = float(action[0])
+            if math.isfinite(knob):
+                return min(max(knob, -1.0), 1.0)
         try:
             value = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError):
@@ -480,7 +484,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         raw[la[3]] = features.programmed_feed_mm_s
         obs = self._obs
         np.multiply(raw, self._obs_scale, out=obs, casting="same_kind")
-        np.clip(obs, self._obs_low, self._obs_high, out=obs)
+        np.minimum(obs, self._obs_high, out=obs)  # two ufuncs: cheaper than np.clip on small arrays
+        np.maximum(obs, self._obs_low, out=obs)
         if not math.isfinite(float(obs.sum())):  # NaN from upstream would poison a policy: say 0
             np.nan_to_num(obs, copy=False, nan=0.0)
         return obs.copy()  # callers (replay buffers) may keep it; the buffer is reused
