@@ -108,7 +108,7 @@ class Controller:
     def reset(self) -> None:
         """Back to the program start: t = 0, at rest, override 100 %."""
         self._st_f[:] = 0.0
-        self._st_f[K.S_OV] = 1.0
+        self._st_f[K.S_OV] = -1.0  # unset: the first advance() takes the knob as it is
         st_i = self._st_i
         st_i[:] = 0
         st_i[K.K_DWELL] = -1
@@ -154,8 +154,10 @@ class Controller:
 
     @property
     def override_applied(self) -> float:
-        """The override in force (it follows the knob at ``override_slew_per_s``)."""
-        return float(self._st_f[K.S_OV])
+        """The override in force. It starts at the first knob value after reset (1.0 before any advance)
+        and then follows the knob at ``override_slew_per_s``."""
+        ov = float(self._st_f[K.S_OV])
+        return 1.0 if ov < 0 else ov
 
     @property
     def segment_index(self) -> int:

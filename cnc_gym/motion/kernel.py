@@ -59,7 +59,9 @@ P_S = 0  # arc length, mm
 P_HARD = 1  # hard speed limit at the point (corner, caps of both sides; 0 = mandatory stop), mm/s
 P_AIN = 2  # acceleration bound on arrival (backward-smoothed, see limits.py), mm/s^2
 P_TURN = 3  # turning angle of the junction, rad
-N_PT_F = 4
+P_SPAN_A = 4  # lowest arrival acceleration bound from this point up to the next mandatory stop, mm/s^2
+P_SPAN_J = 5  # lowest jerk limit of the segments from this point up to the next mandatory stop, mm/s^3
+N_PT_F = 6
 
 # Per limit point, int columns.
 Q_STOP = 0  # 1 = mandatory stop (exact stop, dwell, mode change, program end)
@@ -338,22 +340,29 @@ def _largest_upper(lo: float, hi: float, s: float, v: float, a: float, dt: float
 @njit(cache=True)
 def _smallest_valley(lo: float, hi: float, v: float, a: float, dt: float, jerk_b: float,
                      floor: float) -> float:  # fmt: skip
-    """Smallest j in [lo, hi] whose end state does not dip below ``floor`` when its acceleration is
-    ramped back to zero (valley test, monotone increasing in j)."""
-    _, v1, a1 = _step(v, a, lo, dt)
-    if _valley(v1, a1, jerk_b) >= floor:
+    """Smallest j in [lo, hi] whose speed stays at or above ``floor`` during the period and after it
+    when the acceleration is then ramped back to zero (monotone increasing in j)."""
+    if _bottom(v, a, lo, dt, jerk_b) >= floor:
         return lo
-    _, v1, a1 = _step(v, a, hi, dt)
-    if _valley(v1, a1, jerk_b) < floor:
+    if _bottom(v, a, hi, dt, jerk_b) < floor:
         return hi
     for _ in range(BISECT_ITERS):
         mid = 0.5 * (lo + hi)
-        _, v1, a1 = _step(v, a, mid, dt)
-        if _valley(v1, a1, jerk_b) >= floor:
+        if _bottom(v, a, mid, dt, jerk_b) >= floor:
             hi = mid
         else:
             lo = mid
     return hi
+
+
+@njit(cache=True, inline="always")
+def _bottom(v: float, a: float, j: float, dt: float, jerk_b: float) -> float:
+    """Lowest speed within a period of constant jerk j and after it (valley of the end state)."""
+    _, v1, a1 = _step(v, a, j, dt)
+    low = min(v1, _valley(v1, a1, jerk_b))
+    if a < 0.0 and j > 0.0 and a + j * dt > 0.0:
+        low = min(low, v - a * a / (2.0 * j))
+    return low
 
 
 @njit(cache=True)
@@ -407,6 +416,8 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     k = st_i[K_SEG]
     # The applied override follows the knob at a bounded rate.
     ov = st_f[S_OV]
+    if ov < 0.0:  # first period after reset: the knob is wherever the operator left it
+        ov = knob
     ov = min(knob, ov + slew_step) if knob > ov else max(knob, ov - slew_step)
     st_f[S_OV] = ov
     st_f[S_T] += dt
@@ -443,12 +454,10 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     a = st_f[S_A]
     # ---- look-ahead window: points k+1 .. q_end; q_end counts as a stop.
     q_end = min(k + max(window, 1), pt_i[k + 1, Q_NEXT_STOP], n_seg)
-    acc_b = _accel_bound(seg_f, pt_f, k, s)
-    jerk_b = seg_f[k, F_JERK]
-    for q in range(k + 1, q_end + 1):
-        acc_b = min(acc_b, pt_f[q, P_AIN])
-        if q < n_seg:
-            jerk_b = min(jerk_b, seg_f[q, F_JERK])
+    # Braking (certificate) limits: the lowest from here to the next mandatory stop. They can only grow
+    # as the reference advances, so a state found safe stays provably safe when the window slides.
+    acc_b = min(_accel_bound(seg_f, pt_f, k, s), pt_f[k + 1, P_SPAN_A])
+    jerk_b = min(seg_f[k, F_JERK], pt_f[k + 1, P_SPAN_J])
     # Acceleration bound over this tick's reach (conservative: the tick may cross junctions).
     ds_far, _, _ = _step(v, a, jerk_b, dt)
     s_far = s + max(ds_far, 0.0)

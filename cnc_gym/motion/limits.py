@@ -224,7 +224,22 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     a_in = np.full(n + 1, 1e300)
     length = tp.length[idx]
     for q in range(n - 1, -1, -1):  # O(n) once per program
-        a_in[q] = min(acc[q], a_in[q + 1] + jerk[q] * length[q] / cap[q])
+        # A mandatory stop is reached at rest: no bound is carried back across it.
+        after = 1e300 if stop[q + 1] else a_in[q + 1]
+        a_in[q] = min(acc[q], after + jerk[q] * length[q] / cap[q])
+    a_in[stop] = 1e300
+
+    # Lowest acceleration / jerk from each point to the next mandatory stop (suffix minima per span).
+    span_a = np.full(n + 1, 1e300)
+    span_j = np.full(n + 1, 1e300)
+    for q in range(n - 1, -1, -1):
+        after_a = 1e300 if stop[q + 1] else span_a[q + 1]
+        after_j = 1e300 if stop[q + 1] else span_j[q + 1]
+        span_a[q] = min(a_in[q], a_in[q + 1], after_a)
+        span_j[q] = min(jerk[q], after_j)
+    # Read at point k+1 while on segment k: a stop there ends every braking manoeuvre.
+    span_a[stop] = 1e300
+    span_j[stop] = 1e300
 
     seg_f = np.zeros((n, K.N_SEG_F))
     seg_f[:, K.F_S0] = tp.s_start[idx]
@@ -255,6 +270,8 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     pt_f[:, K.P_HARD] = hard
     pt_f[:, K.P_AIN] = a_in
     pt_f[:, K.P_TURN] = turn
+    pt_f[:, K.P_SPAN_A] = span_a
+    pt_f[:, K.P_SPAN_J] = span_j
     pt_i = np.zeros((n + 1, K.N_PT_I), dtype=np.int64)
     pt_i[:, K.Q_STOP] = stop
     pt_i[:, K.Q_DW0] = dw0

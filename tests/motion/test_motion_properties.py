@@ -1,0 +1,128 @@
+"""Property tests: for random programs and random override sequences no limit is ever exceeded.
+
+Each example builds a random program (lines in 3-D, XY arcs and helices, G09 exact stops, dwells, rapids),
+drives the controller with a random knob schedule (override or feed mode, rapid override), then runs it to
+the end, and checks the whole reference with :func:`motion_checks.check_run`: speed ≤ segment cap, |a| ≤
+projected A, |j| ≤ projected J, per-axis speeds from the positions, exact crossing speed at every junction ≤
+the corner limit (recomputed independently from the tangents), v = 0 at exact stops and at the end,
+reference on the programmed path, path position never decreasing.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from motion_checks import check_run, random_program
+
+from cnc_gym.machine import load_machine, machine_from_dict
+from cnc_gym.motion import Controller, MotionChunk
+from cnc_gym.toolpath import ToolpathBuilder
+
+MACHINES = {
+    "vmc-small": load_machine("vmc-small"),
+    "p-loop-30": load_machine("p-loop-30"),
+    # short window, stiff jerk, different limits per axis, arc floor
+    "odd": machine_from_dict({
+        "name": "odd",
+        "controller": {"lookahead_blocks": 3, "max_centripetal_accel_mm_s2": 1500, "min_arc_feed_mm_min": 200,
+                       "override_slew_per_s": 50.0},
+        "axis_defaults": {"max_jerk_mm_s3": 200000, "rapid_jerk_mm_s3": 200000},
+        "axes": {"x": {"max_accel_mm_s2": 2000}, "y": {"max_accel_mm_s2": 4000, "corner_step_mm_min": 300},
+                 "z": {"max_accel_mm_s2": 1000, "max_feed_mm_min": 5000, "max_jerk_mm_s3": 20000}},
+    }),
+}
+PROPERTY_SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def concat(chunks: list[MotionChunk]) -> MotionChunk:
+    return MotionChunk(*(np.concatenate([getattr(c, f) for c in chunks]) for f in (
+        "time_s", "position", "path_s", "speed", "accel", "jerk", "segment", "cutting")))  # fmt: skip
+
+
+schedules = st.lists(
+    st.tuples(st.integers(1, 120), st.floats(0.0, 2.0), st.sampled_from([1.0, 0.5, 0.25, 0.0])),
+    min_size=1, max_size=25,
+)  # fmt: skip
+
+
+@PROPERTY_SETTINGS
+@given(seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(1, 30), machine=st.sampled_from(sorted(MACHINES)),
+       schedule=schedules)  # fmt: skip
+def test_no_limit_is_exceeded_under_random_override(seed, n_blocks, machine, schedule):
+    tp = random_program(np.random.default_rng(seed), n_blocks)
+    controller = Controller(tp, MACHINES[machine])
+    chunks, knobs = [], []
+    for n_ticks, override, rapid in schedule:
+        chunks.append(controller.advance(n_ticks, override=override, rapid_override=rapid))
+        knobs.append(np.full(n_ticks, override))
+    chunks.append(controller.run_to_end(override=1.0))
+    assert controller.finished
+    check_run(controller, concat(chunks), overrides=np.concatenate(knobs))
+
+
+@PROPERTY_SETTINGS
+@given(seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(1, 30),
+       feeds=st.lists(st.tuples(st.integers(1, 150), st.floats(0.0, 30000.0)), min_size=1, max_size=15))
+def test_no_limit_is_exceeded_in_feed_mode(seed, n_blocks, feeds):
+    tp = random_program(np.random.default_rng(seed), n_blocks)
+    controller = Controller(tp, MACHINES["vmc-small"])
+    chunks = [controller.advance(n, feed_mm_min=f) for n, f in feeds]
+    chunks.append(controller.run_to_end(override=1.0))
+    check_run(controller, concat(chunks), overrides=np.zeros(1))
+
+
+@PROPERTY_SETTINGS
+@given(seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(1, 40), override=st.floats(0.05, 2.0))
+def test_constant_override_respects_the_feed_and_finishes(seed, n_blocks, override):
+    # At a constant knob the speed never exceeds F × override (clamped), and the program ends at rest.
+    tp = random_program(np.random.default_rng(seed), n_blocks, dwell_p=0.0)
+    controller = Controller(tp, MACHINES["vmc-small"])
+    chunk = controller.run_to_end(override=override)
+    check_run(controller, chunk, overrides=np.zeros(1))
+    lim = controller.segment_limits()
+    rows = np.searchsorted(lim["index"], chunk.segment)
+    rows = np.clip(rows, 0, len(lim["index"]) - 1)
+    moving = lim["index"][rows] == chunk.segment
+    rapid = ~chunk.cutting
+    target = np.where(rapid, lim["base_mm_s"][rows], np.minimum(lim["base_mm_s"][rows] * override,
+                                                                 lim["cap_mm_s"][rows]))  # fmt: skip
+    assert np.all(chunk.speed[moving] <= target[moving] * (1 + 1e-9) + 1e-9)
+
+
+def test_look_ahead_window_end_counts_as_a_stop():
+    # 200 collinear 0.5 mm blocks at F 12000 with a 2-block window: the controller must always be able
+    # to stop within the window, which ends at most 1 mm ahead. A stop from v (a = 0) at J = 30000 mm/s³
+    # (v < A²/J) needs v·√(v/J) mm, so v ≤ J^(1/3)·(1 mm)^(2/3) = 31.07 mm/s — far below F.
+    m = machine_from_dict({"name": "w2", "controller": {"lookahead_blocks": 2}})
+    b = ToolpathBuilder()
+    for i in range(200):
+        b.line((0.5 * i, 0, 0), (0.5 * (i + 1), 0, 0), feed=12000, line=i + 1)
+    controller = Controller(b.build(), m)
+    chunk = controller.run_to_end()
+    bound = 50000.0 ** (1 / 3)  # default AxisConfig jerk 50000 mm/s³ (no preset): (J·1²)^(1/3)
+    assert np.max(chunk.speed) <= bound * (1 + 1e-6)
+    # and it is not needlessly slow: at least 80 % of the bound for a window of ≥ 0.5 mm
+    assert np.max(chunk.speed) >= 0.8 * (50000.0 * 0.25) ** (1 / 3)
+    check_run(controller, chunk)
+    # with the full 32-block window (16 mm) the same path runs much faster
+    fast = Controller(b.build(), machine_from_dict({"name": "w32", "controller": {"lookahead_blocks": 32}}))
+    assert fast.run_to_end().time_s[-1] < 0.6 * chunk.time_s[-1]
+
+
+def test_override_ramp_jerk_and_settling_closed_form():
+    # Knob 1.0 → 2.0 on a long X line at F 3000 (50 → 100 mm/s); vmc-small slews 10/s, so the target rises
+    # 50 mm/s over 0.1 s; the speed must settle at 100 mm/s and the whole transition respects |j| ≤ J.
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (300, 0, 0), feed=3000, line=1)
+    controller = Controller(b.build(), MACHINES["vmc-small"])
+    controller.advance(200, override=1.0)
+    chunk = controller.advance(200, override=2.0)
+    assert math.isclose(chunk.speed[-1], 100.0, rel_tol=1e-6)
+    assert np.max(np.abs(chunk.jerk)) <= 30000 * (1 + 1e-9)
+    assert np.max(chunk.speed) <= 100.0 * (1 + 1e-9)
+    # the speed cannot rise faster than the applied override: v(t) ≤ 50·(1 + 10·t) at every tick
+    t = np.arange(1, 201) * 0.002
+    assert np.all(chunk.speed <= 50.0 * np.minimum(1 + 10 * t, 2.0) + 1e-6)
