@@ -210,7 +210,10 @@ def test_faster_override_finishes_sooner_with_more_error():
     _, slow, *_ = run_constant(env, -0.5)  # 50 %
     _, fast, *_ = run_constant(env, 1.0)  # 200 %
     assert fast[-1]["cycle_time_s"] < 0.6 * slow[-1]["cycle_time_s"]
-    assert fast[-1]["contour_error_max_mm"] > 2 * slow[-1]["contour_error_max_mm"]
+    # Circle error grows roughly with v² (radial) plus v (gain mismatch): 4× the speed, well over 3× the
+    # RMS error (the max is dominated by the approach, the RMS by the circle itself).
+    assert fast[-1]["contour_error_rms_mm"] > 3 * slow[-1]["contour_error_rms_mm"]
+    assert fast[-1]["contour_error_max_mm"] > slow[-1]["contour_error_max_mm"]
 
 
 @pytest.mark.parametrize(
