@@ -390,7 +390,7 @@ def test_sync_vector_env():
     obs, infos = envs.reset(seed=5)
     assert obs.shape == (3, 41) and obs.dtype == np.float32
     for _ in range(20):
-        obs, rewards, terminated, truncated, infos = envs.step(np.zeros((3, 1), dtype=np.float32))
+        obs, rewards, _, _, infos = envs.step(np.zeros((3, 1), dtype=np.float32))
     assert rewards.shape == (3,) and np.all(rewards < 0)
     assert set(infos["program"]) <= {"star", "circle"} and infos["cycle_time_s"][0] == pytest.approx(0.2)
     envs.close()
