@@ -90,7 +90,6 @@ class Interpreter:
         self.ended = False
         self._g53 = False
         self._block_words: tuple = ()
-        self._axis_owner: CodeSpec | None = None
         self.stops: list[tuple[int, str]] = []  # (line, "program_stop" | "optional_stop" | "end")
         self._order = {name: i for i, name in enumerate(dialect.execution_order)}
         # Action name → method name (a table of names, not bound methods: no reference cycle keeps a run's
@@ -261,7 +260,6 @@ class Interpreter:
         items.sort(key=lambda s: order[s.step])
         self._block_words = block.words
         self._g53 = g53
-        self._axis_owner = axis_owner
         actions = self._actions
         this = type(self)
         for spec in items:
