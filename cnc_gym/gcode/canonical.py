@@ -69,7 +69,7 @@ class OffsetStack:
 
 
 class FastToolpathBuilder(ToolpathBuilder):
-    """ToolpathBuilder with a scalar-math ``arc``: the same rows, about 4x cheaper per arc.
+    """ToolpathBuilder with a scalar-math ``arc``: the same rows, nearly half the cost per arc.
 
     The base class computes radius and start angle with numpy scalar functions (several µs per call on
     the interpreter's hot path). This override computes the same two values with :mod:`math`; the test
