@@ -24,7 +24,7 @@ class ActionError(CncGymError, ValueError):
     """A bad argument to the controller (NaN or out-of-range override or feed, negative tick count)."""
 
 
-@dataclass
+@dataclass(slots=True)
 class MotionChunk:
     """Reference output of one :meth:`Controller.advance` call: one row per interpolation period.
 
@@ -53,7 +53,7 @@ class MotionChunk:
         return len(self.time_s)
 
 
-@dataclass
+@dataclass(slots=True)
 class LookaheadFeatures:
     """The path ahead in ``n`` equal arc-length bins of ``horizon / n`` mm from the current position.
 
@@ -186,6 +186,10 @@ class Controller:
         """Run ``n_ticks`` interpolation periods with the override knob at ``override`` (0..max_override)
         or, in 'feed' action mode, with ``feed_mm_min`` commanded instead of F × override (still clamped by
         every limit). ``rapid_override`` (0..1) scales rapids. Returns the reference of these periods."""
+        # Fast path for the common call (plain int and floats in range); anything else is validated below.
+        if (type(n_ticks) is int and n_ticks >= 0 and feed_mm_min is None and type(override) is float
+                and 0.0 <= override <= self.max_override and rapid_override == 1.0):  # fmt: skip
+            return _chunk(self._advance_raw(n_ticks, override))
         if isinstance(n_ticks, bool) or not isinstance(n_ticks, int | np.integer) or n_ticks < 0:
             raise ActionError(f"n_ticks must be a non-negative integer, got {n_ticks!r}")
         if feed_mm_min is not None:
@@ -246,10 +250,9 @@ class Controller:
         done = self._st_i[K.K_PHASE] == K.PHASE_DONE
         if self._n_seg and k >= self._n_seg:
             k = self._n_seg - 1
-        limit, curv, turn, feed, d_stop = K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, k,
-                                                             float(self._st_f[K.S_S]), bool(done), horizon,
-                                                             int(n_points))  # fmt: skip
-        return LookaheadFeatures(limit, curv, turn, feed, float(d_stop))
+        out = K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, k, float(self._st_f[K.S_S]),
+                                 bool(done), horizon, int(n_points))  # fmt: skip
+        return LookaheadFeatures(out[0], out[1], out[2], out[3], float(out[4, 0]))
 
     # ------------------------------------------------------------------ introspection (tests, planners)
     def segment_limits(self) -> dict[str, np.ndarray]:

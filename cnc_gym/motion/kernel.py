@@ -541,7 +541,9 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     j_track = max(_track_jerk(v, a, cap_soft, jerk_b, dt), j_lo)
     if v >= cap_final:
         j_track = max(j_track, _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, cap_final))
-    if _upper_ok(j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+    if j_track < j_hi and _upper_ok(j_track, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+        j = j_track  # the largest safe jerk is at least this: no search needed (cruise, settling)
+    elif _upper_ok(j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
         j = min(j_hi, j_track)
     elif _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
         j = _largest_upper(j_lo, j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
@@ -652,7 +654,7 @@ def _after_dwell(pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: 
 
 @njit(cache=True)
 def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, k: int,
-                     s: float, done: bool, horizon: float, n: int) -> tuple:  # fmt: skip
+                     s: float, done: bool, horizon: float, n: int) -> np.ndarray:  # fmt: skip
     """Features of the path ahead in ``n`` equal bins of ``horizon / n`` mm starting at arc length s.
 
     Per bin: the static speed limit (100 % override; minimum over the bin, junction limits inside
@@ -660,12 +662,13 @@ def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_
     turning angle, the programmed feed at the bin's far end. Also the distance to the next mandatory stop.
     """
     n_seg = seg_f.shape[0]
-    limit = np.zeros(n)
-    curv = np.zeros(n)
-    turn = np.zeros(n)
-    feed = np.zeros(n)
+    out = np.zeros((5, n))  # rows: limit, curvature, turn, feed; out[4, 0] = distance to the next stop
+    limit = out[0]
+    curv = out[1]
+    turn = out[2]
+    feed = out[3]
     if n_seg == 0 or done:
-        return limit, curv, turn, feed, 0.0
+        return out
     q_stop = pt_i[k + 1, Q_NEXT_STOP]
     d_stop = max(pt_f[q_stop, P_S] - s, 0.0)
     width = horizon / n
@@ -699,4 +702,5 @@ def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_
         curv[b] = kmax
         turn[b] = ang
         feed[b] = seg_f[m, F_FEED] if hi < total else 0.0
-    return limit, curv, turn, feed, d_stop
+    out[4, 0] = d_stop
+    return out

@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.machine import MachineConfig
@@ -115,6 +116,35 @@ def _arc_curvature(tp: Toolpath, idx: np.ndarray) -> np.ndarray:
     kappa = np.divide(r, r * r + pitch * pitch, out=np.zeros_like(r), where=r > 0)
     del rows
     return np.where(kind == SegmentKind.ARC, kappa, 0.0)
+
+
+@njit(cache=True)
+def _backward_bounds(acc: np.ndarray, jerk: np.ndarray, length: np.ndarray, cap: np.ndarray,
+                     stop: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Backward passes (O(n), compiled): the arrival acceleration bound per point, and the lowest
+    acceleration bound / jerk limit from each point to the next mandatory stop (braking limits)."""
+    n = len(acc)
+    a_in = np.full(n + 1, 1e300)
+    span_a = np.full(n + 1, 1e300)
+    span_j = np.full(n + 1, 1e300)
+    for q in range(n - 1, -1, -1):
+        # A mandatory stop is reached at rest: no bound is carried back across it.
+        after = 1e300 if stop[q + 1] else a_in[q + 1]
+        a_in[q] = min(acc[q], after + jerk[q] * length[q] / cap[q])
+    for q in range(n + 1):
+        if stop[q]:
+            a_in[q] = 1e300
+    for q in range(n - 1, -1, -1):
+        after_a = 1e300 if stop[q + 1] else span_a[q + 1]
+        after_j = 1e300 if stop[q + 1] else span_j[q + 1]
+        span_a[q] = min(a_in[q], a_in[q + 1], after_a)
+        span_j[q] = min(jerk[q], after_j)
+    # Read at point k+1 while on segment k: a stop there ends every braking manoeuvre.
+    for q in range(n + 1):
+        if stop[q]:
+            span_a[q] = 1e300
+            span_j[q] = 1e300
+    return a_in, span_a, span_j
 
 
 def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
@@ -221,25 +251,8 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     next_stop = stop_idx[np.searchsorted(stop_idx, np.arange(n + 1), side="left")]
 
     # ------------------------------------------------------------------ acceleration bound on arrival
-    a_in = np.full(n + 1, 1e300)
     length = tp.length[idx]
-    for q in range(n - 1, -1, -1):  # O(n) once per program
-        # A mandatory stop is reached at rest: no bound is carried back across it.
-        after = 1e300 if stop[q + 1] else a_in[q + 1]
-        a_in[q] = min(acc[q], after + jerk[q] * length[q] / cap[q])
-    a_in[stop] = 1e300
-
-    # Lowest acceleration / jerk from each point to the next mandatory stop (suffix minima per span).
-    span_a = np.full(n + 1, 1e300)
-    span_j = np.full(n + 1, 1e300)
-    for q in range(n - 1, -1, -1):
-        after_a = 1e300 if stop[q + 1] else span_a[q + 1]
-        after_j = 1e300 if stop[q + 1] else span_j[q + 1]
-        span_a[q] = min(a_in[q], a_in[q + 1], after_a)
-        span_j[q] = min(jerk[q], after_j)
-    # Read at point k+1 while on segment k: a stop there ends every braking manoeuvre.
-    span_a[stop] = 1e300
-    span_j[stop] = 1e300
+    a_in, span_a, span_j = _backward_bounds(acc, jerk, length, cap, stop)
 
     seg_f = np.zeros((n, K.N_SEG_F))
     seg_f[:, K.F_S0] = tp.s_start[idx]
