@@ -3,7 +3,7 @@
 Everything here works on flat arrays packed by :mod:`cnc_gym.motion.limits` (column indices below) and
 on a small state vector, so that a call from Python costs a handful of argument conversions.
 
-The planner is a *safe-set* jerk-limited tracker (see ``docs/motion.md``):
+The planner is a *safe-set* jerk-limited tracker (details and guarantees: ``docs/motion.md``):
 
 * ``brake(v, a, w, A, J)`` is the distance and time of the time-optimal jerk-limited manoeuvre that
   takes the path speed from ``v`` (with tangential acceleration ``a``) down to ``w`` and ends with zero
@@ -12,12 +12,14 @@ The planner is a *safe-set* jerk-limited tracker (see ``docs/motion.md``):
   segment speed caps, mandatory stops, and a stop at the end of the window), ``brake(v, a, w_p) <= d_p``.
   Because the manoeuvres to lower targets decelerate at least as hard at every instant, the single
   manoeuvre that stops at the window end then meets every point: the test is necessary *and* sufficient.
-* Each tick applies one constant jerk: the largest jerk whose end state is still safe and does not
-  overshoot the speed target (bisection; both tests are monotone in the jerk), bounded below by the
-  acceleration limit and by "no reverse motion". If the feed target itself cannot be met any more (the
-  override was turned down), the jerk is the smallest one that does not undershoot it, still capped by
-  the hard (geometric) safety test, so the override moves the speed with jerk-limited transitions while
-  every downstream geometric limit is kept.
+  The braking A and J are the lowest up to the next mandatory stop, so they never shrink as the window
+  slides and a safe state stays safe.
+* Each period applies one constant jerk: the largest whose end state is still safe and whose speed stays
+  under the target (bisection; the tests are monotone in the jerk), bounded below by the acceleration
+  limit and by "no reverse motion", and eased near the target by a settling law. Where the optimal braking
+  switches inside a period (no constant jerk stays safe), the period follows the braking manoeuvre
+  exactly. Where the operator's target cannot be met any more (override turned down), the speed falls as
+  fast as the jerk allows without undershooting it, still capped by the hard (geometric) safety test.
 """
 
 from __future__ import annotations

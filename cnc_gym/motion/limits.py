@@ -21,7 +21,8 @@ Per point: the hard junction limit (corner step P1227: v ≤ min_k step_k/|Δu_k
 tangent; both neighbours' caps), 0 at mandatory stops (exact stop G09/G61, dwell, rapid ↔ cutting,
 after every rapid, tool or spindle change, program end, or every junction when look-ahead is off), and
 the acceleration bound on arrival ``a_in`` (a backward pass so that a lower acceleration limit ahead can
-always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k)).
+always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k), restarted at every mandatory stop), and the
+lowest acceleration bound and jerk from each point to the next mandatory stop (the braking limits).
 """
 
 from __future__ import annotations
