@@ -110,6 +110,16 @@ def test_machine_travel_limits_are_checked(tmp_path, capsys):
     program = write(tmp_path, "G00 X50\nG00 X150\n")
     status, out, err = run_main(["trace", program, "--machine", str(machine)], capsys)
     assert status == 2 and out == "" and err.startswith(f"{program}:2: ") and "[travel-limit]" in err
+    # A circle whose ends are inside but whose far side is not: centre (60, 0), radius 50 reaches X 110.
+    circle = write(tmp_path, "G00 X10\nG01 Z0 F100\nG02 I50\n", "circle.nc")
+    status, out, err = run_main(["trace", circle, "--machine", str(machine)], capsys)
+    assert status == 2 and out == "" and err.startswith(f"{circle}:3: X110.0000")
+    # ... a CW quarter arc from 180° to 90° about (60, 0) stays inside (the CCW way round would not).
+    inside_arc = write(tmp_path, "G00 X10\nG02 X60 Y50 I50 F100\n", "arc.nc")
+    assert run_main(["trace", inside_arc, "--machine", str(machine)], capsys)[0] == 0
+    outside_arc = write(tmp_path, "G00 X10\nG03 X60 Y50 I50 F100\n", "arc3.nc")
+    status, _, err = run_main(["trace", outside_arc, "--machine", str(machine)], capsys)
+    assert status == 2 and "X110.0000" in err
     inside = write(tmp_path, "G00 X50\n", "ok.nc")
     status, out, _ = run_main(["trace", inside, "--machine", str(machine)], capsys)
     assert status == 0 and out

@@ -20,6 +20,7 @@ from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.reader import Program, Reader
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
@@ -92,16 +93,43 @@ def interpret_file(
 
 
 def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
-    """Stored stroke check: segment end points within each axis's [min, max] travel (GSK alarms 170-181)."""
-    if not len(toolpath):
+    """Stored stroke check: every point of the path within each axis's [min, max] travel.
+
+    Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
+    270° in the plane). The first offending segment is reported (GSK alarms 170-181 have no fixed axis
+    order in the manual, so no alarm number is given).
+    """
+    n = len(toolpath)
+    if not n:
         return
     low = np.array(machine.axis_array("min_position_mm"))
     high = np.array(machine.axis_array("max_position_mm"))
-    outside = (toolpath.end < low) | (toolpath.end > high)
-    if outside.any():
-        row, axis = np.argwhere(outside)[0]
-        value = toolpath.end[row, axis]
-        file, line = toolpath.source(int(row))
+    candidates = [(np.arange(n), toolpath.end)]
+    arcs = np.flatnonzero(toolpath.kind == SegmentKind.ARC)
+    if len(arcs):
+        axes = np.array([PLANE_AXES[Plane(p)] for p in Plane])[toolpath.plane[arcs].astype(np.int64)]
+        rows = np.arange(len(arcs))
+        start_angle, sweep = toolpath.start_angle[arcs], toolpath.sweep[arcs]
+        radius, center = toolpath.radius[arcs], toolpath.center[arcs]
+        for theta in (0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi):
+            ccw_turn = (theta - start_angle) % (2 * np.pi)
+            turned = np.where(sweep >= 0, ccw_turn, (2 * np.pi - ccw_turn) % (2 * np.pi))
+            passed = turned <= np.abs(sweep) + 1e-12
+            point = toolpath.start[arcs].copy()
+            point[rows, axes[:, 0]] = center[rows, axes[:, 0]] + radius * np.cos(theta)
+            point[rows, axes[:, 1]] = center[rows, axes[:, 1]] + radius * np.sin(theta)
+            candidates.append((arcs[passed], point[passed]))
+    first = None
+    for index, points in candidates:
+        outside = (points < low) | (points > high)
+        if outside.any():
+            k, axis = np.argwhere(outside)[0]
+            row = int(index[k])
+            if first is None or row < first[0]:
+                first = (row, int(axis), float(points[k, axis]))
+    if first is not None:
+        row, axis, value = first
+        file, line = toolpath.source(row)
         name = "XYZ"[axis]
         raise ProgramError(f"{name}{value:.4f} (machine) is beyond the travel limit {low[axis]:g} .. "
                            f"{high[axis]:g} of machine {machine.name}", code="travel-limit", file=file,
