@@ -54,7 +54,7 @@ def interpret(
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
-    ``machine``: when given, every segment end must lie within the axes' travel limits.
+    ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
