@@ -284,6 +284,8 @@ class Reader:
         number = None
         rest = list(words)
         if rest and rest[0][0] == "O":
+            if not isinstance(rest[0][1], float):
+                raise self.error("O cannot be a variable (L5158)", "variable-not-allowed", line)
             rest = rest[1:]
             if rest and rest[0][0] == "O":
                 raise self.error("two program numbers O in one block", "duplicate-word", line)

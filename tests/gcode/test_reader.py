@@ -83,6 +83,7 @@ def test_o_and_n_must_lead_the_block():
     assert program_error("G00 N10 X1\n").code == "misplaced-word"
     assert program_error("G00 X1 O12\n").code == "misplaced-word"
     assert program_error("N#3 Y200.0\n").code == "variable-not-allowed"  # L5160
+    assert program_error("O#1\n").code == "variable-not-allowed"  # L5158
 
 
 @pytest.mark.parametrize(
