@@ -697,7 +697,7 @@ def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_
             if s_end > lo:  # the junction at the end of m lies inside the bin
                 best = min(best, pt_f[m + 1, P_HARD])
                 ang = max(ang, pt_f[m + 1, P_TURN])
-            if m + 1 >= n_seg:
+            if s_end >= hi or m + 1 >= n_seg:  # bins are (lo, hi]: a block starting at hi is not in it
                 break
             m += 1
         limit[b] = 0.0 if hi >= total else best

@@ -14,7 +14,7 @@ import numpy as np
 
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion import Controller, MotionChunk
-from cnc_gym.toolpath import Plane, SegmentKind, SegmentMode, Toolpath, ToolpathBuilder
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, Toolpath, ToolpathBuilder
 
 REL_TOL = 1e-6
 
@@ -22,7 +22,8 @@ REL_TOL = 1e-6
 def random_program(rng: np.random.Generator, n_blocks: int, *, arcs: bool = True,
                    exact_stop_p: float = 0.1, dwell_p: float = 0.05, rapid_p: float = 0.05,
                    step_mm: float = 3.0) -> Toolpath:  # fmt: skip
-    """A random 3-D program: lines of random length and direction, XY arcs, exact stops, dwells, rapids."""
+    """A random 3-D program: lines of random length and direction, arcs and helices in all three planes
+    (some full circles), exact stops, dwells, rapids."""
     b = ToolpathBuilder()
     p = np.zeros(3)
     for line in range(1, n_blocks + 1):
@@ -36,15 +37,22 @@ def random_program(rng: np.random.Generator, n_blocks: int, *, arcs: bool = True
             q = p + rng.normal(size=3) * step_mm * 3
             b.rapid(tuple(p), tuple(q), line=line)
         elif arcs and r < 0.45:
+            plane = Plane(int(rng.integers(0, 3))) if rng.random() < 0.4 else Plane.XY
+            u, v, w = PLANE_AXES[plane]
             radius = float(rng.uniform(0.2, 3.0) * step_mm)
             phi = rng.uniform(-np.pi, np.pi)
-            center = p - radius * np.array([np.cos(phi), np.sin(phi), 0.0])
+            center = p.copy()
+            center[u] -= radius * np.cos(phi)
+            center[v] -= radius * np.sin(phi)
             sweep = float(rng.uniform(0.1, 1.5 * np.pi) * rng.choice([-1.0, 1.0]))
-            end_angle = phi + sweep
+            if rng.random() < 0.05:
+                sweep = float(np.sign(sweep) * 2 * np.pi)  # full circle
             rise = float(rng.normal() * 0.3 * step_mm) if rng.random() < 0.3 else 0.0
-            q = np.array([center[0] + radius * np.cos(end_angle), center[1] + radius * np.sin(end_angle),
-                          p[2] + rise])  # fmt: skip
-            b.arc(tuple(p), tuple(q), tuple(center), Plane.XY, sweep, feed=feed, line=line, modes=modes)
+            q = p.copy()
+            q[u] = center[u] + radius * np.cos(phi + sweep)
+            q[v] = center[v] + radius * np.sin(phi + sweep)
+            q[w] = p[w] + rise
+            b.arc(tuple(p), tuple(q), tuple(center), plane, sweep, feed=feed, line=line, modes=modes)
         else:
             length = float(rng.exponential(step_mm)) + 1e-3
             d = rng.normal(size=3)
@@ -145,6 +153,9 @@ def check_run(controller: Controller, chunk: MotionChunk, overrides: np.ndarray 
     on_path = chunk.segment >= 0
     assert np.allclose(point[on_path], chunk.position[on_path], atol=1e-9), "reference off the path"
     assert np.all(np.diff(chunk.path_s) >= -1e-12), "path position went backwards"
+    # no jumps: a chord is never longer than the arc travelled (dropped sub-nm blocks aside)
+    step = np.linalg.norm(np.diff(chunk.position, axis=0), axis=1)
+    assert np.all(step <= np.diff(chunk.path_s) + 2e-6), "the reference jumped"
     # --- speed through each junction (exact crossing speed) against the corner limit, and stops
     s_pts = junctions["s"][1:-1]
     if len(s_pts):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -347,3 +348,52 @@ def test_cutting_without_feed_is_a_program_error(feed):
     b.line((10, 0, 0), (20, 0, 0), feed=feed, line=7)
     with pytest.raises(ProgramError, match=r"part.nc:7: .*\[motion.no_feed\]"):
         Controller(b.build(), VMC)
+
+
+def test_lookahead_features_of_an_arc_and_after_the_end():
+    # Line 0..10 then a quarter circle R 5 (κ = 0.2/mm) tangent to it: no turn, curvature in bins 2..3.
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
+    b.arc((10, 0, 0), (15, 5, 0), (10, 5, 0), Plane.XY, math.pi / 2, feed=6000, line=2)
+    c = Controller(b.build(), VMC)
+    f = c.lookahead(20.0, 4)  # bins of 5 mm; the arc spans s = 10 .. 17.85
+    assert list(f.curvature_1_mm) == pytest.approx([0.0, 0.0, 0.2, 0.2])
+    assert np.all(f.turn_angle_rad < 1e-9)  # tangent continuous
+    arc_cap = c.segment_limits()["cap_mm_s"][1]
+    assert f.speed_limit_mm_s[2] == pytest.approx(min(arc_cap, 100.0))
+    assert f.speed_limit_mm_s[3] == 0.0  # the program ends inside the last bin
+    assert f.distance_to_stop_mm == pytest.approx(10 + 2.5 * math.pi)
+    c.run_to_end()
+    done = c.lookahead(20.0, 4)
+    assert np.all(done.speed_limit_mm_s == 0.0) and done.distance_to_stop_mm == 0.0
+
+
+def test_lookahead_distance_to_stop_tracks_the_motion():
+    # The distance to the next mandatory stop shrinks by exactly the distance travelled, and the speed is
+    # within what the static limit of the bin allows (bin limits only fall towards junctions ahead).
+    b = ToolpathBuilder()
+    pts = [(0, 0, 0), (10, 0, 0), (12, 3, 0), (20, 3, 1), (20, 10, 1)]
+    for i, (p, q) in enumerate(itertools.pairwise(pts)):
+        b.line(p, q, feed=4000 + 1000 * i, line=i + 1)
+    c = Controller(b.build(), VMC)
+    last = c.lookahead(5.0, 5).distance_to_stop_mm
+    s_prev = 0.0
+    while not c.finished:
+        chunk = c.advance(5, override=1.0)
+        f = c.lookahead(5.0, 5)
+        if not c.finished:
+            assert c.speed <= max(f.speed_limit_mm_s[0], 100.0 * (1 + 1e-9))
+            assert f.distance_to_stop_mm == pytest.approx(last - (chunk.path_s[-1] - s_prev), abs=1e-9)
+        last, s_prev = f.distance_to_stop_mm, chunk.path_s[-1]
+
+
+def test_tiny_block_with_exact_stop_still_stops():
+    # A 0.1 nm G09 block between two lines is dropped as geometry but its exact stop still applies.
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
+    b.line((10, 0, 0), (10 + 1e-7, 0, 0), feed=6000, line=2, modes=SegmentMode.EXACT_STOP)
+    b.line((10 + 1e-7, 0, 0), (20, 0, 0), feed=6000, line=3)
+    c = Controller(b.build(), VMC)
+    assert len(c.segment_limits()["index"]) == 2
+    assert c.junction_limits()["stop"][1]
+    check_run(c, c.run_to_end())
