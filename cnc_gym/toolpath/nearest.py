@@ -3,7 +3,8 @@
 Distances are computed for every (point, segment) pair in a window, vectorised with numpy, and the
 minimum is kept. Lines use the clamped projection. Flat arcs use the angular projection onto the
 circle, clamped to the swept range, compared with both end points. Helices start from the best point
-of a grid (16 points per turn) and take a few Newton steps on the squared distance.
+of a grid (16 points per turn) and take a few Newton steps on the squared distance. NURBS segments use
+their curve's own exact search (:meth:`cnc_gym.toolpath.nurbs.NurbsCurve.nearest`).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ def nearest_on_segments(
     for seg, dist, local in (
         _nearest_lines(tp, points, window[np.isin(kind, straight_kinds)]),
         _nearest_arcs(tp, points, window[kind == SegmentKind.ARC]),
+        _nearest_nurbs(tp, points, window[kind == SegmentKind.NURBS]),
     ):
         if seg.size == 0:
             continue
@@ -46,8 +48,6 @@ def nearest_on_segments(
         best_d = np.where(better, d, best_d)
         best_i = np.where(better, seg[col], best_i)
         best_s = np.where(better, tp.s_start[seg[col]] + local[rows, col], best_s)
-    if np.any(kind == SegmentKind.NURBS):
-        raise NotImplementedError("nearest point on NURBS segments is not built yet")
     return best_d, best_i, best_s
 
 
@@ -64,6 +64,17 @@ def _nearest_lines(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
     diff = rel - t[:, :, None] * d[None, :, :]
     dist = np.sqrt(np.einsum("mkj,mkj->mk", diff, diff))
     return seg, dist, t * np.sqrt(ln2)[None, :]
+
+
+def _nearest_nurbs(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
+    """(segments, distance (m, k), local arc length (m, k)) for NURBS segments (cutting moves)."""
+    if seg.size == 0:
+        return seg, None, None
+    dist = np.empty((len(points), len(seg)))
+    local = np.empty((len(points), len(seg)))
+    for col, i in enumerate(seg):
+        dist[:, col], _, local[:, col] = tp.nurbs[int(i)].nearest(points)
+    return seg, dist, local
 
 
 def _nearest_arcs(tp: Toolpath, points: np.ndarray, seg: np.ndarray):

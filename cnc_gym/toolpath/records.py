@@ -20,6 +20,12 @@ def _r(x: float) -> float:
     return 0.0 if y == 0 else y  # no "-0.0" in the output
 
 
+def _g(x: float) -> float:
+    """Dimensionless numbers (NURBS weights, knots): 12 significant digits, stable across platforms."""
+    y = float(f"{float(x):.12g}")
+    return 0.0 if y == 0 else y
+
+
 def toolpath_records(tp: Toolpath) -> list[dict]:
     records = []
     for i in range(len(tp)):
@@ -39,6 +45,12 @@ def toolpath_records(tp: Toolpath) -> list[dict]:
             rec["plane"] = _PLANE_NAMES[Plane(int(tp.plane[i]))]
             rec["sweep_deg"] = _r(math.degrees(tp.sweep[i]))
             rec["radius"] = _r(tp.radius[i])
+        if kind == SegmentKind.NURBS:
+            curve = tp.nurbs[i]
+            rec["order"] = int(curve.order)
+            rec["control_points"] = [[_r(x) for x in p] for p in curve.control_points]
+            rec["weights"] = [_g(w) for w in curve.weights]
+            rec["knots"] = [_g(k) for k in curve.knots]
         if tp.modes[i]:
             rec["modes"] = [m.name.lower() for m in type_modes(int(tp.modes[i]))]
         records.append(rec)

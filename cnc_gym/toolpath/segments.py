@@ -12,10 +12,14 @@ clockwise (G02). The centre's normal coordinate is the start's; a helix rises li
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import IntEnum, IntFlag
+from types import MappingProxyType
 
 import numpy as np
+
+from cnc_gym.toolpath.nurbs import NurbsCurve
 
 
 class SegmentKind(IntEnum):
@@ -81,6 +85,10 @@ class Toolpath:
     tool            int32 (n)    active tool number (T)
     spindle_rpm     float (n)    commanded spindle speed (S), signed by direction (M03 +, M04 -, M05 0)
     ==============  ===========  ====================================================================
+
+    ``nurbs`` maps the index of every NURBS row to its exact :class:`NurbsCurve` (read-only mapping); the
+    row's ``start``/``end`` are the curve's first/last control points and its ``length`` the curve's arc
+    length. A NURBS row is evaluated by arc length like every other row.
     """
 
     kind: np.ndarray
@@ -99,8 +107,8 @@ class Toolpath:
     tool: np.ndarray
     spindle_rpm: np.ndarray
     files: tuple[str, ...] = ("<program>",)
-    #: exact NURBS curves by segment index (kind == NURBS); room for the GSK G06.2 issue.
-    nurbs: dict[int, object] = field(default_factory=dict)
+    #: exact NURBS curves by segment index (exactly the rows with kind == NURBS).
+    nurbs: Mapping[int, NurbsCurve] = field(default_factory=dict)
     # Derived geometry, filled in __post_init__.
     length: np.ndarray = field(init=False, repr=False)
     planar_length: np.ndarray = field(init=False, repr=False)
@@ -119,6 +127,16 @@ class Toolpath:
         rise = self._rise()
         helix = np.hypot(arc_planar, rise)
         length = np.where(is_arc, helix, np.where(self.kind == SegmentKind.DWELL, 0.0, chord))
+        nurbs_rows = np.flatnonzero(self.kind == SegmentKind.NURBS)
+        if set(self.nurbs) != set(nurbs_rows.tolist()):
+            raise ValueError(f"toolpath NURBS curves are given for rows {sorted(self.nurbs)}, but the NURBS "
+                             f"rows are {nurbs_rows.tolist()}")  # fmt: skip
+        for row, curve in self.nurbs.items():
+            if not isinstance(curve, NurbsCurve):
+                raise ValueError(f"toolpath row {row}: a NURBS row needs a NurbsCurve, "
+                                 f"got {type(curve).__name__}")  # fmt: skip
+            length[row] = curve.length
+        object.__setattr__(self, "nurbs", MappingProxyType(dict(self.nurbs)))
         planar = np.where(is_arc, arc_planar, length)
         s_start = np.concatenate(([0.0], np.cumsum(length)))
         object.__setattr__(self, "length", length)
@@ -209,8 +227,12 @@ class Toolpath:
             p, t, k = self._arc_geometry(i, frac)
             point[arcs], tangent[arcs], curvature[arcs] = p, t, k
 
-        if np.any(kind == SegmentKind.NURBS):
-            raise NotImplementedError("NURBS segments are evaluated by the NURBS module (not yet built)")
+        nurbs = kind == SegmentKind.NURBS
+        if np.any(nurbs):
+            rows = np.flatnonzero(nurbs)
+            for segment in np.unique(idx[rows]):  # usually one curve per call
+                sel = rows[idx[rows] == segment]
+                point[sel], tangent[sel], curvature[sel] = self.nurbs[int(segment)].at_length(local[sel])
         return point, tangent, curvature
 
     def _arc_geometry(self, i: np.ndarray, frac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -282,7 +304,7 @@ class ToolpathBuilder:
     def __init__(self, files: tuple[str, ...] = ("<program>",)) -> None:
         self.files = list(files)
         self._rows: dict[str, list] = {name: [] for name in _FIELDS}
-        self.nurbs: dict[int, object] = {}
+        self.nurbs_curves: dict[int, NurbsCurve] = {}
 
     def __len__(self) -> int:
         return len(self._rows["kind"])
@@ -344,6 +366,15 @@ class ToolpathBuilder:
         self._append(SegmentKind.ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
                      radius=radius, start_angle=start_angle, sweep=sweep, **kw)  # fmt: skip
 
+    def nurbs(self, curve: NurbsCurve, feed: float, **kw) -> None:
+        """Append an exact NURBS segment from the curve's first to its last control point."""
+        if not isinstance(curve, NurbsCurve):
+            raise TypeError(f"ToolpathBuilder.nurbs needs a NurbsCurve, got {type(curve).__name__}")
+        self.nurbs_curves[len(self)] = curve
+        start = tuple(float(x) for x in curve.control_points[0])
+        end = tuple(float(x) for x in curve.control_points[-1])
+        self._append(SegmentKind.NURBS, start, end, feed=feed, **kw)
+
     def dwell(self, position, seconds: float, **kw) -> None:
         self._append(SegmentKind.DWELL, tuple(position), tuple(position), dwell_s=seconds, **kw)
 
@@ -360,4 +391,4 @@ class ToolpathBuilder:
             if name in ("start", "end", "center"):
                 arr = arr.reshape(-1, 3)
             arrays[name] = arr
-        return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs))
+        return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves))
