@@ -155,9 +155,10 @@ def brake_step(v: float, a: float, w: float, acc: float, jerk: float,
     Its jerk may switch inside the period; after its end the speed holds. Used where no constant jerk can
     stay in the safe set."""
     if _peak(v, a, jerk) <= w:
-        # Nothing to brake for: ramp the acceleration to zero.
-        jj = min(max(-a / dt, -jerk), jerk)
-        return _step(v, a, jj, dt)
+        # Nothing to brake for: ramp the acceleration to zero at the full jerk, then hold the speed.
+        h = min(abs(a) / jerk, dt)
+        ds, v, a = _step(v, a, -jerk if a > 0.0 else jerk, h)
+        return ds + v * (dt - h), v, 0.0 if h < dt else a
     if a < 0.0 and _valley(v, a, jerk) <= w:
         t1, sign1, t2, a1, t3 = 0.0, 1.0, 0.0, a, -a / jerk
     else:
@@ -207,6 +208,37 @@ def _safe_now(s: float, v: float, a: float, acc_b: float, jerk_b: float, cap_now
         if dist > (pts[i, 0] - s) * (1.0 + 1e-12) + 1e-12:
             return False
     return True
+
+
+@njit(cache=True)
+def _pick_manoeuvre(s: float, v: float, a: float, dt: float, acc_b: float, jerk_b: float, cap_now: float,
+                    pts: np.ndarray, n_pts: int, col: int) -> float:  # fmt: skip
+    """Target speed of the braking manoeuvre to follow for one period from a safe state.
+
+    The manoeuvre to the lowest limit ahead always keeps every limit (the safe-set argument), but it may
+    brake for a stop far away. Higher targets are tried first (least braking) and taken if the state one
+    period along them is still safe and no point crossed inside the period is passed too fast."""
+    w_low = _lowest(pts, n_pts, col, cap_now)
+    best = w_low
+    for i in range(-1, n_pts):
+        w = cap_now if i < 0 else pts[i, col]
+        if w <= best:
+            continue
+        ds, v1, a1 = brake_step(v, a, w, acc_b, jerk_b, dt)
+        top = max(v, v1, _peak(v, a, jerk_b))
+        ok = _peak(v1, a1, jerk_b) <= cap_now * (1.0 + 1e-12) + 1e-12
+        for m in range(n_pts):
+            if not ok:
+                break
+            d = pts[m, 0] - s - ds
+            if d <= 0.0:
+                ok = top <= pts[m, col]
+            else:
+                dist, _ = brake(v1, a1, pts[m, col], acc_b, jerk_b)
+                ok = dist <= d * (1.0 + 1e-12) + 1e-12
+        if ok:
+            best = w
+    return best
 
 
 @njit(cache=True, inline="always")
@@ -268,7 +300,8 @@ def _accel_bound(seg_f: np.ndarray, pt_f: np.ndarray, k: int, s: float) -> float
     segment's arrival bound so that the acceleration can follow it with the jerk limit)."""
     s_end = seg_f[k, F_S0] + seg_f[k, F_LEN]
     rest = max(s_end - s, 0.0)
-    return min(seg_f[k, F_ACC], pt_f[k + 1, P_AIN] + seg_f[k, F_JERK] * rest / seg_f[k, F_CAP])
+    jerk = min(seg_f[k, F_JERK], pt_f[k + 1, P_SPAN_J])  # the jerk the planner uses on k
+    return min(seg_f[k, F_ACC], pt_f[k + 1, P_AIN] + jerk * rest / seg_f[k, F_CAP])
 
 
 @njit(cache=True, inline="always")
@@ -551,10 +584,10 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         j = _largest_upper(j_lo, j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
         j = min(j, j_track)
     elif _safe_now(s, v, a, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
-        # Safe, but no constant jerk keeps it so (the braking switches inside this period): follow the
-        # braking manoeuvre to the lowest limit ahead exactly; it meets every other limit too.
+        # Safe, but no constant jerk keeps it so (the braking switches inside this period): follow a
+        # braking manoeuvre exactly for one period (see _pick_manoeuvre).
         manoeuvre = True
-        w_follow = _lowest(pts, n_pts, 2, cap_soft)
+        w_follow = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
         j = 0.0
     else:
         # The operator's target cannot be met any more (override turned down): slow down as fast as
@@ -583,7 +616,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
                 j = _largest_upper(j_lo, j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
             else:
                 manoeuvre = True
-                w_follow = _lowest(pts, n_pts, 1, cap_hard)
+                w_follow = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
                 j = 0.0
 
     if manoeuvre:

@@ -129,17 +129,20 @@ def _backward_bounds(acc: np.ndarray, jerk: np.ndarray, length: np.ndarray, cap:
     span_a = np.full(n + 1, 1e300)
     span_j = np.full(n + 1, 1e300)
     for q in range(n - 1, -1, -1):
-        # A mandatory stop is reached at rest: no bound is carried back across it.
+        after_j = 1e300 if stop[q + 1] else span_j[q + 1]
+        span_j[q] = min(jerk[q], after_j)
+    for q in range(n - 1, -1, -1):
+        # A mandatory stop is reached at rest: no bound is carried back across it. The bound may fall
+        # along segment q only as fast as the jerk the planner uses there (the braking jerk).
         after = 1e300 if stop[q + 1] else a_in[q + 1]
-        a_in[q] = min(acc[q], after + jerk[q] * length[q] / cap[q])
+        jerk_q = jerk[q] if stop[q + 1] else min(jerk[q], span_j[q + 1])
+        a_in[q] = min(acc[q], after + jerk_q * length[q] / cap[q])
     for q in range(n + 1):
         if stop[q]:
             a_in[q] = 1e300
     for q in range(n - 1, -1, -1):
         after_a = 1e300 if stop[q + 1] else span_a[q + 1]
-        after_j = 1e300 if stop[q + 1] else span_j[q + 1]
         span_a[q] = min(a_in[q], a_in[q + 1], after_a)
-        span_j[q] = min(jerk[q], after_j)
     # Read at point k+1 while on segment k: a stop there ends every braking manoeuvre.
     for q in range(n + 1):
         if stop[q]:

@@ -147,7 +147,7 @@ def check_run(controller: Controller, chunk: MotionChunk, overrides: np.ndarray 
     vmax_cut = np.array(machine.axis_array("max_feed_mm_min")) / 60.0
     vmax_rapid = np.array(machine.axis_array("rapid_mm_min")) / 60.0
     assert np.all(axis_v[cutting_next] <= vmax_cut * (1 + 1e-6) + 1e-6), "cutting axis speed above P1225"
-    assert np.all(axis_v <= vmax_rapid * (1 + 1e-6) + 1e-6), "axis speed above the rapid rate"
+    assert np.all(axis_v[~cutting_next] <= vmax_rapid * (1 + 1e-6) + 1e-6), "axis speed above the rapid rate"
     # --- the reference stays on the programmed path
     point, _, _ = tp.evaluate(chunk.path_s)
     on_path = chunk.segment >= 0

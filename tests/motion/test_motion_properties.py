@@ -126,3 +126,42 @@ def test_override_ramp_jerk_and_settling_closed_form():
     # the speed cannot rise faster than the applied override: v(t) ≤ 50·(1 + 10·t) at every tick
     t = np.arange(1, 201) * 0.002
     assert np.all(chunk.speed <= 50.0 * np.minimum(1 + 10 * t, 2.0) + 1e-6)
+
+
+@st.composite
+def random_machines(draw):
+    """Any machine the config loader accepts, within sane physical ranges (per-axis A, J, steps differ)."""
+    axes = {}
+    for name in "xyz":
+        acc = draw(st.floats(200.0, 20000.0))
+        jerk = acc * draw(st.floats(2.0, 200.0))
+        axes[name] = {"max_accel_mm_s2": acc, "max_jerk_mm_s3": jerk,
+                      "rapid_accel_mm_s2": acc * draw(st.floats(0.5, 3.0)),
+                      "rapid_jerk_mm_s3": jerk * draw(st.floats(0.5, 3.0)),
+                      "corner_step_mm_min": draw(st.floats(10.0, 3000.0)),
+                      "max_feed_mm_min": draw(st.floats(1000.0, 40000.0)),
+                      "rapid_mm_min": draw(st.floats(2000.0, 60000.0))}  # fmt: skip
+    controller = {
+        "interpolation_period_s": draw(st.sampled_from([0.0005, 0.001, 0.002, 0.004])),
+        "lookahead_blocks": draw(st.integers(1, 60)),
+        "max_feed_mm_min": draw(st.floats(1000.0, 40000.0)),
+        "max_override": draw(st.floats(1.0, 3.0)),
+        "override_slew_per_s": draw(st.floats(0.5, 100.0)),
+        "max_centripetal_accel_mm_s2": draw(st.floats(100.0, 20000.0)),
+        "chord_tolerance_mm": draw(st.floats(1e-4, 0.05)),
+        "min_arc_feed_mm_min": draw(st.floats(0.0, 500.0)),
+    }
+    return machine_from_dict({"name": "random", "controller": controller, "axes": axes})
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(machine=random_machines(), seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(1, 25),
+       step_mm=st.sampled_from([0.02, 0.3, 3.0, 30.0]),
+       knobs=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=12))
+def test_no_limit_is_exceeded_on_random_machines(machine, seed, n_blocks, step_mm, knobs):
+    # Unequal axes, coarse and fine interpolation periods, windows of 1..60 blocks, tiny and long blocks.
+    tp = random_program(np.random.default_rng(seed), n_blocks, step_mm=step_mm)
+    controller = Controller(tp, machine)
+    chunks = [controller.advance(150, override=k * machine.controller.max_override) for k in knobs]
+    chunks.append(controller.run_to_end(override=1.0))
+    check_run(controller, concat(chunks), overrides=np.zeros(1))
