@@ -1,37 +1,169 @@
 """The canonical output boundary: program coordinates → machine coordinates → :class:`ToolpathBuilder`.
 
-Everything the interpreter emits passes through here. :class:`OffsetStack` holds the chain that turns a
-program coordinate into a machine coordinate (GSK 25i, seed notes §3.9-§3.12):
+Everything the interpreter emits passes through here. A program point (work coordinates, mm, after
+G20 conversion and G16 polar conversion) becomes a machine point through the stages, in the manual's
+order (L2046: "the scaling is applied firstly and then the coordinates are rotated"):
 
-    machine = program + local (G52) + work origin,
-    work origin = G92 floating origin while one is set, else external offset (G10 L2 P0) + G54..G59 offset.
+    program ─▶ mirror G51.1 ─▶ scaling/mirror G51 ─▶ rotation G68 ─▶ + origin ─▶ machine
+    origin = local (G52) + work origin + tool length vector (G43/G44, owned by compensation),
+    work origin = G92 floating origin while one is set, else external (G10 L2 P0) + G54..G59 / G54.1 Pn.
 
-:class:`CanonicalMachine` keeps the current machine position and appends segments. Later transforms
-(G51 scaling, G68 rotation, cutter compensation, tool length offset) plug in between the interpreter's
-program-coordinate targets and :meth:`CanonicalMachine.straight_feed` & co.
+:class:`TransformChain` holds the program-side stages (each a small :class:`AffineStage`) and composes
+them into one affine map ``work = A·p + t``; with no stage active it is the identity and the interpreter
+skips it altogether (the plain-G-code hot path does ``program + origin`` only). :class:`OffsetStack`
+holds the translations. :class:`CanonicalMachine` keeps the current machine position and appends
+segments.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, ToolpathBuilder
 
 Vec = tuple[float, float, float]
+Mat = tuple[Vec, Vec, Vec]
+IDENTITY: Mat = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 _PLANE_AXES = {int(p): axes for p, axes in PLANE_AXES.items()}
 _ARC = SegmentKind.ARC
 ZERO: Vec = (0.0, 0.0, 0.0)
 
 
-class OffsetStack:
-    """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them)."""
+def mat_mul(a: Mat, b: Mat) -> Mat:
+    """3×3 product a·b."""
+    return tuple(tuple(sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3))
+                 for i in range(3))  # type: ignore[return-value]  # fmt: skip
 
-    def __init__(self, n_wcs: int = 6) -> None:
+
+def mat_vec(a: Mat, v) -> Vec:
+    return (a[0][0] * v[0] + a[0][1] * v[1] + a[0][2] * v[2],
+            a[1][0] * v[0] + a[1][1] * v[1] + a[1][2] * v[2],
+            a[2][0] * v[0] + a[2][1] * v[1] + a[2][2] * v[2])  # fmt: skip
+
+
+def mat_inverse(a: Mat) -> Mat:
+    """Inverse of a non-singular 3×3 matrix (cofactors; the stages never give a singular one)."""
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+    c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    inv = 1.0 / det
+    return ((c00 * inv, (a02 * a21 - a01 * a22) * inv, (a01 * a12 - a02 * a11) * inv),
+            (c01 * inv, (a00 * a22 - a02 * a20) * inv, (a02 * a10 - a00 * a12) * inv),
+            (c02 * inv, (a01 * a20 - a00 * a21) * inv, (a00 * a11 - a01 * a10) * inv))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class AffineStage:
+    """One program-side stage: ``p' = centre + linear·(p - centre)``.
+
+    ``centre`` is the program point the stage was commanded about; the chain carries it through the
+    stages before this one (the G68 centre "will also be scaled", L2046).
+    """
+
+    name: str
+    linear: Mat
+    centre: Vec
+
+
+def scaling_stage(name: str, centre: Vec, factors: Vec) -> AffineStage:
+    """G51 (or G51.1 with factors ±1): per-axis factors about ``centre``; a negative factor mirrors."""
+    fx, fy, fz = factors
+    return AffineStage(name, ((fx, 0.0, 0.0), (0.0, fy, 0.0), (0.0, 0.0, fz)), centre)
+
+
+def rotation_stage(plane: Plane, centre: Vec, angle_deg: float) -> AffineStage:
+    """G68: rotation by ``angle_deg`` (CCW seen from the + end of the plane normal) about ``centre``."""
+    u, v, _ = _PLANE_AXES[int(plane)]
+    c, s = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
+    rows = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    rows[u][u], rows[u][v], rows[v][u], rows[v][v] = c, -s, s, c
+    return AffineStage("G68", tuple(tuple(r) for r in rows), centre)  # type: ignore[arg-type]
+
+
+#: Slots of the program-side stages, in the order they apply to a program point.
+STAGE_ORDER = ("mirror", "scaling", "rotation")
+
+
+class TransformChain:
+    """The program-side stages (mirror G51.1, scaling G51, rotation G68) composed into ``A·p + t``.
+
+    ``active`` is False when no stage is set: the map is then the identity and callers skip it.
+    """
+
+    def __init__(self) -> None:
+        self.stages: dict[str, AffineStage | None] = dict.fromkeys(STAGE_ORDER)
+        self.active = False
+        self.linear: Mat = IDENTITY
+        self.shift: Vec = ZERO
+        self.inverse_linear: Mat = IDENTITY
+        self.det_sign = 1.0
+
+    def set(self, slot: str, stage: AffineStage | None) -> None:
+        """Install (or, with None, remove) the stage of ``slot`` and recompose."""
+        self.stages[slot] = stage
+        self._compose()
+
+    def _compose(self) -> None:
+        linear, shift = IDENTITY, ZERO
+        for slot in STAGE_ORDER:
+            stage = self.stages[slot]
+            if stage is None:
+                continue
+            # This stage's centre, carried through the stages before it.
+            cm = mat_vec(linear, stage.centre)
+            centre = (cm[0] + shift[0], cm[1] + shift[1], cm[2] + shift[2])
+            # p'' = c + L (A p + t - c) = (L A) p + L (t - c) + c
+            lt = mat_vec(stage.linear, (shift[0] - centre[0], shift[1] - centre[1], shift[2] - centre[2]))
+            linear = mat_mul(stage.linear, linear)
+            shift = (lt[0] + centre[0], lt[1] + centre[1], lt[2] + centre[2])
+        self.active = any(stage is not None for stage in self.stages.values())
+        self.linear, self.shift = linear, shift
+        self.inverse_linear = mat_inverse(linear)
+        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = linear
+        det = a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20)
+        self.det_sign = 1.0 if det > 0 else -1.0
+
+    def apply(self, p) -> Vec:
+        """Program point → work point (before the origin translation)."""
+        q = mat_vec(self.linear, p)
+        t = self.shift
+        return (q[0] + t[0], q[1] + t[1], q[2] + t[2])
+
+    def invert(self, w) -> Vec:
+        """Work point → program point."""
+        t = self.shift
+        return mat_vec(self.inverse_linear, (w[0] - t[0], w[1] - t[1], w[2] - t[2]))
+
+    def plane_map(self, plane: Plane) -> tuple[float, float, float, float, float, bool] | None:
+        """The in-plane 2×2 block (a, b, c, d) and the normal factor of the map for an arc in ``plane``,
+        plus whether the in-plane block is a similarity (maps circles to circles); None when the map
+        mixes the plane with its normal axis (a G68 of another plane; the interpreter forbids that)."""
+        u, v, w = _PLANE_AXES[int(plane)]
+        m = self.linear
+        if abs(m[u][w]) > 1e-12 or abs(m[v][w]) > 1e-12 or abs(m[w][u]) > 1e-12 or abs(m[w][v]) > 1e-12:
+            return None
+        a, b, c, d = m[u][u], m[u][v], m[v][u], m[v][v]
+        similar = abs(a * a + c * c - b * b - d * d) < 1e-12 and abs(a * b + c * d) < 1e-12
+        return a, b, c, d, m[w][w], similar
+
+
+class OffsetStack:
+    """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them).
+
+    ``tool_length`` is the tool length offset vector (G43/G44; owned by the compensation module): it is
+    added to the origin by :meth:`update`, after the program-side transforms (L2045).
+    """
+
+    def __init__(self, n_wcs: int = 6, n_extra_wcs: int = 48) -> None:
         self.external: list[float] = [0.0, 0.0, 0.0]  # G10 L2 P0
-        self.wcs: list[list[float]] = [[0.0, 0.0, 0.0] for _ in range(n_wcs)]  # G54..G59 (index 0..5)
+        # G54..G59 (index 0..5), then G54.1 P1..P48 (index 6..53).
+        self.wcs: list[list[float]] = [[0.0, 0.0, 0.0] for _ in range(n_wcs + n_extra_wcs)]
+        self.n_standard_wcs = n_wcs
         self.active_wcs = 0
         self.local: list[float] = [0.0, 0.0, 0.0]  # G52
         self.floating: list[float] | None = None  # G92 origin in machine coordinates, or None
+        self.tool_length: list[float] = [0.0, 0.0, 0.0]  # G43/G44 vector (compensation module)
         self.origin: Vec = ZERO
         self.update()
 
@@ -44,10 +176,13 @@ class OffsetStack:
     def update(self) -> None:
         """Recompute the program→machine translation after any change."""
         work = self.work_origin()
-        self.origin = (work[0] + self.local[0], work[1] + self.local[1], work[2] + self.local[2])
+        local, length = self.local, self.tool_length
+        self.origin = (work[0] + local[0] + length[0], work[1] + local[1] + length[1],
+                       work[2] + local[2] + length[2])  # fmt: skip
 
     def select_wcs(self, index: int) -> None:
-        """G54..G59. GSK: selecting any work coordinate system drops a G92 floating system (L1707-L1712)."""
+        """G54..G59 (0..5), G54.1 P1..P48 (6..53). GSK: selecting any work coordinate system drops a G92
+        floating system (L1707-L1712)."""
         self.active_wcs = index
         self.floating = None
         self.update()
@@ -56,7 +191,8 @@ class OffsetStack:
         """G92 on one axis: the current machine position gets ``program_value``; clears that axis's G52."""
         if self.floating is None:
             self.floating = self.work_origin()
-        self.floating[axis] = machine_pos - program_value
+        # The tool length vector stays in the origin, so the position reads ``program_value`` right after.
+        self.floating[axis] = machine_pos - program_value - self.tool_length[axis]
         self.local[axis] = 0.0
 
     def to_machine(self, program: Vec) -> Vec:

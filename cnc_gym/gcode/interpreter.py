@@ -19,10 +19,11 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.canonical import CanonicalMachine, FastToolpathBuilder, OffsetStack
+from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder, OffsetStack, TransformChain
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
 from cnc_gym.gcode.reader import split_words
+from cnc_gym.gcode.transforms import map_arc
 from cnc_gym.gcode.variables import VariableStore
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath
 
@@ -71,6 +72,14 @@ class Interpreter:
         self.builder = FastToolpathBuilder(files=(program.file,))
         self.out = CanonicalMachine(self.builder, start)
         self.offsets = OffsetStack()
+        # Program-side transforms (G51.1, G51, G68; canonical.py) and G16 polar input (transforms.py).
+        # ``_transformed`` is False while none is active: targets are then ``program + origin`` and the
+        # program position is ``machine - origin`` (the hot path). While True, ``_program`` holds the
+        # program position explicitly (mm, work coordinates) and every target goes through the chain.
+        self.chain = TransformChain()
+        self.polar = None
+        self._transformed = False
+        self._program: tuple[float, float, float] = ZERO
         # Modal state. ``modal`` is the raw table (group → code key, for #4001-style reads later); the
         # attributes below are what the actions read.
         self.modal: dict[int, int] = {}
@@ -453,6 +462,9 @@ class Interpreter:
             return self._arc(motion, x, y, z, values)
         if x is None and y is None and z is None:
             return  # a motion code with no axis words only sets the mode (L938)
+        if self._transformed:
+            self.move_linear(motion == 0, self.resolve_target(x, y, z))
+            return
         pos = self.out.position
         s = self.scale
         if self.incremental:
@@ -480,6 +492,7 @@ class Interpreter:
         target = tuple(pos[a] if letter not in values else values[letter] * s
                        for a, letter in enumerate(self.dialect.axes))  # fmt: skip
         self.out.straight_traverse(target)  # type: ignore[arg-type]
+        self.resync_program_position()
 
     def _arc(self, motion: int, x, y, z, values: dict) -> None:
         """G02/G03 in the selected plane, I/J/K (incremental, L1025) or R (R wins, L510; R<0 > 180°)."""
@@ -491,12 +504,20 @@ class Interpreter:
             raise self.error(f"{name} with F0: zero feed is not allowed on an arc", "zero-feed")
         plane = self.plane
         u, v, w = PLANE_AXES[plane]
-        pos = self.out.position
         s = self.scale
-        if self.incremental:
+        transformed = self._transformed
+        if transformed:
+            # Geometry in program coordinates; move_arc maps it through the chain.
+            if self.polar is not None and "R" not in values:
+                raise self.error(f"{name} in polar mode (G16) needs R (L1849)", "polar-arc-needs-r")
+            pos = self._program
+            end = [pos[a] if t is None else t for a, t in enumerate(self.resolve_target(x, y, z))]
+        elif self.incremental:
+            pos = self.out.position
             end = [pos[0] if x is None else pos[0] + x * s, pos[1] if y is None else pos[1] + y * s,
                    pos[2] if z is None else pos[2] + z * s]  # fmt: skip
         else:
+            pos = self.out.position
             o = self.offsets.origin
             end = [pos[0] if x is None else x * s + o[0], pos[1] if y is None else y * s + o[1],
                    pos[2] if z is None else z * s + o[2]]  # fmt: skip
@@ -574,4 +595,100 @@ class Interpreter:
             if "R" in values and h == 0.0:
                 sweep = math.pi if ccw else -math.pi
         del r_start
-        self.out.arc_feed((end[0], end[1], end[2]), (center[0], center[1], center[2]), plane, sweep, feed)
+        if transformed:
+            self.move_arc((end[0], end[1], end[2]), (center[0], center[1], center[2]), plane, sweep, feed)
+        else:
+            self.out.arc_feed((end[0], end[1], end[2]), (center[0], center[1], center[2]), plane, sweep, feed)
+
+    # ------------------------------------------------------------------ the coordinate seam
+    # Everything that moves the tool (blocks, cycles, G28, chamfers …) goes through move_linear/move_arc
+    # with targets in program coordinates: mm, work coordinates, after G20 conversion and G16 polar
+    # conversion, before G51.1/G51/G68 and the offsets. docs/gcode.md "The coordinate seam".
+
+    @property
+    def program_position(self) -> tuple[float, float, float]:
+        """The current position in program coordinates (mm): the inverse of the transforms."""
+        if self._transformed:
+            return self._program
+        m, o = self.out.position, self.offsets.origin
+        return (m[0] - o[0], m[1] - o[1], m[2] - o[2])
+
+    def to_machine(self, program) -> tuple[float, float, float]:
+        """A program point (mm) → machine coordinates through the active chain and the offsets."""
+        w = self.chain.apply(program) if self.chain.active else program
+        o = self.offsets.origin
+        return (w[0] + o[0], w[1] + o[1], w[2] + o[2])
+
+    def resolve_target(self, x: float | None, y: float | None, z: float | None,
+                       ) -> tuple[float | None, float | None, float | None]:  # fmt: skip
+        """A block's axis words (program units, G90/G91, G16 polar) → program target in mm, None where
+        the axis is not commanded. Incremental words add to :attr:`program_position`."""
+        s = self.scale
+        words = (x, y, z)
+        if self.polar is not None:
+            return self.polar.resolve(self, words)
+        if self.incremental:
+            p = self.program_position
+            return tuple(None if t is None else p[a] + t * s for a, t in enumerate(words))  # type: ignore
+        return tuple(None if t is None else t * s for t in words)  # type: ignore[return-value]
+
+    def move_linear(self, rapid: bool, target_program, *, feed: float | None = None) -> None:
+        """Rapid (``rapid``) or feed move to ``target_program`` (mm; None = the axis does not move).
+
+        ``feed`` (mm/min) defaults to the modal F; a feed move with no F or F0 is ``missing-feed``.
+        Without an active transform an omitted axis keeps its *machine* position (L1550); with one, it
+        keeps its *program* coordinate (the rotated/scaled axes are coupled).
+        """
+        if not rapid:
+            if feed is None:
+                feed = self.feed
+            if not feed:
+                raise self.error("G01 needs a feed: no F programmed yet" if feed is None else
+                                 "G01 with F0: the feed is zero", "missing-feed")  # fmt: skip
+        tx, ty, tz = target_program
+        if self._transformed:
+            p = self._program
+            full = (p[0] if tx is None else tx, p[1] if ty is None else ty, p[2] if tz is None else tz)
+            self._program = full
+            target = self.to_machine(full)
+        else:
+            m, o = self.out.position, self.offsets.origin
+            target = (m[0] if tx is None else tx + o[0], m[1] if ty is None else ty + o[1],
+                      m[2] if tz is None else tz + o[2])  # fmt: skip
+        if rapid:
+            self.out.straight_traverse(target)
+        else:
+            self.out.straight_feed(target, feed)
+
+    def move_arc(self, end_program, center_program, plane: Plane, sweep: float, feed: float) -> None:
+        """Arc from :attr:`program_position` to ``end_program`` about ``center_program`` (mm, program
+        coordinates; the centre's normal coordinate is ignored), signed ``sweep`` in rad (+ = CCW about the
+        plane normal), at ``feed`` mm/min. The chain maps it (transforms.map_arc): a mirror reverses the
+        direction; unequal scaling gives no ellipse (L1936)."""
+        if not self._transformed:
+            o = self.offsets.origin
+            self.out.arc_feed((end_program[0] + o[0], end_program[1] + o[1], end_program[2] + o[2]),
+                              (center_program[0] + o[0], center_program[1] + o[1], center_program[2] + o[2]),
+                              plane, sweep, feed)  # fmt: skip
+            return
+        start = self._program
+        end, center, sweep = map_arc(self, start, tuple(end_program), tuple(center_program), plane, sweep)
+        self._program = tuple(end_program)  # type: ignore[assignment]
+        self.out.arc_feed(end, center, plane, sweep, feed)
+
+    def set_transform_state(self) -> None:
+        """Call after changing ``chain`` or ``polar``: switches between the plain and the transformed
+        path. Entering keeps the program position; leaving makes the tool's position the start of the
+        next move (L1932, L1843)."""
+        transformed = self.chain.active or self.polar is not None
+        if transformed and not self._transformed:
+            self._program = self.program_position
+        self._transformed = transformed
+
+    def resync_program_position(self) -> None:
+        """After a move in machine coordinates (G53) or an origin change while transformed: the program
+        position becomes the inverse image of the tool's machine position."""
+        if self._transformed:
+            m, o = self.out.position, self.offsets.origin
+            w = (m[0] - o[0], m[1] - o[1], m[2] - o[2])
+            self._program = self.chain.invert(w) if self.chain.active else w
