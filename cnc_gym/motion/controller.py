@@ -210,29 +210,29 @@ class Controller:
         return _chunk(self._advance_raw(int(n_ticks), knob, rapid, mode, cmd))
 
     def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
-                     cmd: float = 0.0) -> np.ndarray:  # fmt: skip
+                     cmd: float = 0.0, stop_when_done: bool = False) -> np.ndarray:  # fmt: skip
         lim = self.limits
         out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, self._cfg, self._st_f,
-                               self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch)  # fmt: skip
-        if n_ticks:
+                               self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch,
+                               stop_when_done)  # fmt: skip
+        if len(out):
             self._last_position = out[-1, K.O_X : K.O_Z + 1].copy()
         return out
 
     def run_to_end(
         self, override: float = 1.0, max_ticks: int = 50_000_000, chunk: int = 4096
     ) -> MotionChunk:
-        """Advance at a constant override until the program is finished; the result ends with the tick at
-        which the controller finished (for tests, scripts and baselines)."""
+        """Advance at a constant override until the program is finished; the run (and the controller's
+        clock) stops on the period at which it finished (for tests, scripts and baselines)."""
+        knob = _finite(override, "override")
+        if not 0.0 <= knob <= self.max_override:
+            raise ActionError(f"override must be within 0..{self.max_override:g}, got {override!r}")
         parts = []
         done = 0
         while not self.finished:
             if done >= max_ticks:
                 raise CncGymError(f"program did not finish within {max_ticks} interpolation periods")
-            part = self._advance_raw(chunk, override)
-            finished_rows = np.flatnonzero(part[:, K.O_DONE] > 0.5)
-            if len(finished_rows):
-                part = part[: finished_rows[0] + 1]
-            parts.append(part)
+            parts.append(self._advance_raw(chunk, knob, stop_when_done=True))
             done += chunk
         out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
         return _chunk(out)

@@ -423,11 +423,12 @@ def _position(seg_f: np.ndarray, seg_i: np.ndarray, k: int, s: float, out: np.nd
 def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
                    dwell_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray,
                    n_ticks: int, mode: int, knob: float, rapid_ov: float, cmd: float,
-                   pts: np.ndarray) -> np.ndarray:  # fmt: skip
+                   pts: np.ndarray, stop_when_done: bool = False) -> np.ndarray:  # fmt: skip
     """Run ``n_ticks`` interpolation periods from the state (st_f, st_i); returns one row per tick.
 
     cfg: [dt, window_blocks, override_slew_per_s, rest_x, rest_y, rest_z]. ``dwell_f`` rows: [seconds,
-    toolpath index, x, y, z]. ``pts`` is scratch space (window + 2 rows, 3 columns).
+    toolpath index, x, y, z]. ``pts`` is scratch space (window + 2 rows, 3 columns). With
+    ``stop_when_done`` the run ends on the period that finishes the program (fewer rows).
     """
     dt = cfg[0]
     window = int(cfg[1])
@@ -437,7 +438,10 @@ def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i:
     for tick in range(n_ticks):
         _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts, out, tick,
               dt, window, slew_step, n_seg)
-        out[tick, O_DONE] = 1.0 if st_i[K_PHASE] == PHASE_DONE else 0.0
+        if st_i[K_PHASE] == PHASE_DONE:
+            out[tick, O_DONE] = 1.0
+            if stop_when_done:
+                return out[: tick + 1]
     return out
 
 

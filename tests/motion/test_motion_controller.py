@@ -397,3 +397,34 @@ def test_tiny_block_with_exact_stop_still_stops():
     assert len(c.segment_limits()["index"]) == 2
     assert c.junction_limits()["stop"][1]
     check_run(c, c.run_to_end())
+
+
+def test_state_properties_through_a_dwell():
+    b = ToolpathBuilder()
+    b.dwell((0, 0, 0), 0.01, line=1)
+    b.line((0, 0, 0), (5, 0, 0), feed=6000, line=2)
+    b.dwell((5, 0, 0), 0.01, line=3)
+    c = Controller(b.build(), VMC)
+    assert c.override_applied == 1.0 and c.segment_index == 0  # dwelling at the start
+    c.advance(2, override=0.5)
+    assert c.override_applied == 0.5  # the first call takes the knob as it is
+    assert c.segment_index == 0 and c.speed == 0.0 and np.allclose(c.position, 0.0)
+    c.advance(4, override=0.5)
+    assert c.segment_index == 1 and c.speed > 0.0
+    c.run_to_end(override=0.5)
+    assert c.finished and c.segment_index == 2 and np.allclose(c.position, [5, 0, 0])
+    assert c.time_s == pytest.approx(0.01 + 0.01 + 5 / 50 + 2 * math.sqrt(50 / 30000), abs=3 * DT)
+
+
+def test_feed_mode_keeps_g63_and_rapids_at_their_own_speed():
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (0, 0, -30), feed=1200, line=1, modes=SegmentMode.OVERRIDE_LOCKED)  # G63 tapping
+    b.rapid((0, 0, -30), (0, 0, 100), line=2)
+    c = Controller(b.build(), VMC)
+    parts = []
+    while not c.finished:
+        parts.append(c.advance(500, feed_mm_min=9000.0))
+    tapping = np.concatenate([p.speed[p.segment == 0] for p in parts])
+    rapid = np.concatenate([p.speed[p.segment == 1] for p in parts])
+    assert np.max(tapping) == pytest.approx(20.0)  # F 1200 mm/min, not the commanded 9000
+    assert np.max(rapid) == pytest.approx(500.0)  # the rapid rate
