@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.gcode.cycles import CycleParameters
 
 
 def gkey(number: float) -> int:
@@ -110,6 +111,8 @@ class Dialect:
     #: Variables that exist, as (first, last) ranges; the rest of ``system_variables`` is rejected by name.
     variables: tuple[tuple[int, int], ...] = ((1, 33), (100, 199), (500, 999))
     system_variables: tuple[tuple[int, int], ...] = ()
+    #: Canned-cycle machine parameters (G73/G83 d, G76/G87 shift direction, rigid tapping limits).
+    cycle_params: CycleParameters = field(default_factory=CycleParameters)
     #: Whether a dialect that is listed but not built yet (raises on use).
     implemented: bool = True
 

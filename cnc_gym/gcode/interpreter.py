@@ -19,6 +19,7 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode import cycles
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder, OffsetStack, TransformChain
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
@@ -50,12 +51,15 @@ _WORD_SPECS = {
     "T": CodeSpec("T", -1, "tool", step="tool"),
 }
 _IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
+_IMPLICIT_CYCLE = CodeSpec("(modal canned cycle)", -1, "cycle", None, step="motion")
 _ACTIONS = {
     "motion": "_do_motion", "plane": "_do_plane", "distance": "_do_distance", "units": "_do_units",
     "wcs": "_do_wcs", "path_mode": "_do_path_mode", "dwell": "_do_dwell", "g10": "_do_g10", "g52": "_do_g52",
     "g92": "_do_g92", "g53": "_do_g53", "record": "_do_nothing", "feed": "_do_feed",
     "spindle_speed": "_do_spindle_speed", "tool": "_do_tool", "tool_change": "_do_tool_change",
     "spindle": "_do_spindle", "coolant": "_do_coolant", "stop": "_do_stop",
+    "cycle": "_do_cycle", "cycle_cancel": "_do_cycle_cancel", "pattern": "_do_pattern",
+    "rigid_tap": "_do_rigid_tap",
 }  # fmt: skip
 
 
@@ -100,6 +104,11 @@ class Interpreter:
         self._g53 = False
         self._block_words: tuple = ()
         self.stops: list[tuple[int, str]] = []  # (line, "program_stop" | "optional_stop" | "end")
+        # Canned cycles (group 09, cycles.py): modal hole data, the machine's cycle parameters.
+        self.cycle = cycles.CycleState()
+        self.cycle_params = dialect.cycle_params
+        self.spindle_orients = 0
+        self._block_cycle: int | None = None
         self._order = {name: i for i, name in enumerate(dialect.execution_order)}
         # Action name → method name (a table of names, not bound methods: no reference cycle keeps a run's
         # 100 000 blocks alive after it returns).
@@ -161,7 +170,9 @@ class Interpreter:
             gs, ms, values = block.gs, block.ms, block.values
         self.out.line = block.line
 
-        if ms is None and (gs is None or (len(gs) == 1 and round(gs[0] * 10) in self._motion_specs)):
+        cycle = self.cycle
+        if ms is None and not cycle.code and not cycle.rigid_pending and (
+                gs is None or (len(gs) == 1 and round(gs[0] * 10) in self._motion_specs)):  # fmt: skip
             # Hot path: no code, or one group-01 motion code; the other words are axis words, arc words,
             # F, S, T, O. Same checks and order as the general path, without building a plan.
             if gs is not None:
@@ -235,6 +246,8 @@ class Interpreter:
 
         # Who owns the axis words: a one-shot code that uses them (G04 X, G10, G52, G92) or the motion.
         has_axes = not self._axis_letters.isdisjoint(values)
+        if 9 in by_group or self.cycle.code or self.cycle.rigid_pending or axis_owner is not None:
+            axis_owner = cycles.check_block(self, by_group, motion_spec, axis_owner, items, values)
         if axis_owner is not None and motion_spec is not None and has_axes:
             raise self.error(f"{axis_owner.name} and {motion_spec.name} both use the axis words of the block",
                              "axis-word-conflict")  # fmt: skip
@@ -246,6 +259,8 @@ class Interpreter:
             allowed = base | self._axis_letters | frozenset(axis_owner.words)
         elif g53:
             allowed = base | self._axis_letters
+        elif motion_spec is None and self.cycle.code:
+            allowed = base | self._axis_letters | frozenset(cycles.CYCLE_WORDS[self.cycle.code])
         else:
             allowed = self._allowed_with_motion[keys[1] if motion_spec is not None else self._motion_key]
         for spec in items:
@@ -264,7 +279,7 @@ class Interpreter:
             if letter in values:
                 items.append(_WORD_SPECS[letter])
         if motion_spec is None and axis_owner is None and not g53:
-            items.append(_IMPLICIT_MOTION)
+            items.append(_IMPLICIT_CYCLE if self.cycle.code else _IMPLICIT_MOTION)
         order = self._order
         items.sort(key=lambda s: order[s.step])
         self._block_words = block.words
@@ -443,6 +458,19 @@ class Interpreter:
             if letter in values:
                 self.offsets.set_floating(axis, position[axis], values[letter] * self.scale)
         self.offsets.update()
+
+    # ------------------------------------------------------------------ canned cycles (cycles.py)
+    def _do_cycle(self, spec: CodeSpec, values: dict) -> None:
+        cycles.cycle_block(self, None if spec is _IMPLICIT_CYCLE else spec.value, values)
+
+    def _do_cycle_cancel(self, spec: CodeSpec, values: dict) -> None:
+        cycles.cancel(self)
+
+    def _do_pattern(self, spec: CodeSpec, values: dict) -> None:
+        cycles.pattern_block(self, spec.value, values, self._block_cycle)
+
+    def _do_rigid_tap(self, spec: CodeSpec, values: dict) -> None:
+        cycles.rigid_tap(self)
 
     # ------------------------------------------------------------------ motion
     def _do_motion(self, spec: CodeSpec | None = None, values: dict | None = None) -> None:

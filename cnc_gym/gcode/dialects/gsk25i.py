@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+from cnc_gym.gcode.cycles import CYCLE_WORDS, PATTERN_WORDS, CycleParameters
 from cnc_gym.gcode.dialect import AddressRule, CodeSpec, Dialect, gkey
 from cnc_gym.toolpath import Plane
 
@@ -73,7 +74,8 @@ _G_LIST = [
     _todo(60, 0, "single-direction positioning G60", uses_axes=True),
     _todo(65, 0, "macro call G65"),
     _g(92, 0, "g92", step="setting", uses_axes=True),
-    *[_todo(n, 0, f"hole-pattern/face-milling cycle G{n}", uses_axes=True) for n in range(120, 128)],
+    # Hole patterns G120-G125 and face milling G126/G127 (L4863-L5077; cycles.py).
+    *[_g(n, 0, "pattern", n, step="motion", uses_axes=True, words=PATTERN_WORDS[n]) for n in range(120, 128)],
     # Group 02: plane (L1755-L1773).
     _g(17, 2, "plane", Plane.XY, step="plane"),
     _g(18, 2, "plane", Plane.ZX, step="plane"),
@@ -100,12 +102,9 @@ _G_LIST = [
     _todo(43.4, 8, "tool centre point control G43.4"),
     _g(49, 8, "record", step="length_comp"),
     # Group 09: canned cycles (L2338-L3830). G80 = no cycle.
-    _todo(73, 9, "canned cycle G73", uses_axes=True),
-    _todo(74, 9, "canned cycle G74", uses_axes=True),
-    _todo(76, 9, "canned cycle G76", uses_axes=True),
-    _g(80, 9, "record", step="motion"),
-    *[_todo(n, 9, f"canned cycle G{n}", uses_axes=True) for n in range(81, 90)],
-    *[_todo(n, 9, f"pocket/boss cycle G{n}", uses_axes=True) for n in (*range(110, 118), *range(130, 138))],
+    # The axis words of a cycle block are the hole position and bottom (cycles.py).
+    *[_g(n, 9, "cycle", n, step="motion", uses_axes=True, words=CYCLE_WORDS[n]) for n in sorted(CYCLE_WORDS)],
+    _g(80, 9, "cycle_cancel", step="motion"),
     # Group 10: canned-cycle return level; recorded for the cycles to come.
     _g(98, 10, "record", step="modes"),
     _g(99, 10, "record", step="modes"),
@@ -161,7 +160,7 @@ _M_LIST = [
     _m(8, "coolant", True, step="coolant"),
     _m(9, "coolant", False, step="coolant"),
     _m(19, "not_implemented", step="spindle", implemented=False, note="spindle orientation M19"),
-    _m(29, "not_implemented", step="spindle", implemented=False, note="rigid tapping M29"),
+    _m(29, "rigid_tap", step="spindle"),
     _m(96, "not_implemented", step="stop", implemented=False, note="macro interrupt M96"),
     _m(97, "not_implemented", step="stop", implemented=False, note="macro interrupt M97"),
     _m(98, "not_implemented", step="stop", implemented=False, note="subprogram call M98"),
@@ -297,6 +296,16 @@ ALARMS = {
     "overflow": 102,
     "variable-not-allowed": 205,
     "too-many-m-codes": 201,
+    # Canned cycles (notes §9.4; the special-cycle checks pass their own 210-228 numbers).
+    "cycle-group01": 61,
+    "cycle-conflict": 61,
+    "cycle-missing-data": 61,
+    "cycle-levels": 61,
+    "cycle-argument": 61,
+    "bad-cycle": 61,
+    "rigid-tap": 61,
+    "cycle-missing-q": 45,
+    "cycle-not-allowed": 44,
 }
 
 DIALECT = Dialect(
@@ -316,6 +325,7 @@ DIALECT = Dialect(
     least_increment_mm=0.0001,  # L2101-L2104
     least_increment_inch=0.0001,
     arc_radius_tolerance_mm=0.01,  # P1810
+    cycle_params=CycleParameters(),  # P2010/P2011 = 0.5 mm, P2000 = 0, P2141/2142 = 1000 r/min
     max_words_per_block=32,  # alarm 12
     max_m_per_block=3,  # 1803#6 M3B standard 1
     m_groups=M_GROUPS,
