@@ -568,10 +568,10 @@ def _tool_radius(interp: Interpreter, values: dict, stored: dict) -> float:
     number = stored["D"]
     if number == 0:
         return 0.0
-    reader = getattr(interp, "cutter_radius", None)
-    if reader is None:
+    comp = getattr(interp, "comp", None)  # compensation.py's offset memory (G10 L12/L13, #2001...)
+    if comp is None:
         raise interp.error(f"D{number}: tool radius offsets are not available yet", "not-implemented")
-    return abs(reader(number))
+    return abs(comp.offsets.radius(number))
 
 
 def cycle_block(interp: Interpreter, code: int | None, values: dict,
