@@ -66,7 +66,7 @@ def interpret(
     gc.disable()
     try:
         program = Reader(spec).read(text, file)
-        toolpath = Interpreter(program, spec, block_skip=switches).run()
+        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine).run()
     finally:
         if collecting:
             gc.enable()

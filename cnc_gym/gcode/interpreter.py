@@ -24,13 +24,21 @@ from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder,
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
 from cnc_gym.gcode.reader import split_words
-from cnc_gym.gcode.transforms import map_arc
+from cnc_gym.gcode.transforms import (
+    TRANSFORM_ACTIONS,
+    Parameters,
+    check_coordinate_command,
+    check_plane_change,
+    map_arc,
+    parameter_block,
+)
 from cnc_gym.gcode.variables import VariableStore
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
     from cnc_gym.gcode.reader import Block, Program
+    from cnc_gym.machine import MachineConfig
 
 INCH_MM = 25.4
 TWO_PI = 2.0 * math.pi
@@ -54,10 +62,11 @@ _IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
 _IMPLICIT_CYCLE = CodeSpec("(modal canned cycle)", -1, "cycle", None, step="motion")
 _ACTIONS = {
     "motion": "_do_motion", "plane": "_do_plane", "distance": "_do_distance", "units": "_do_units",
-    "wcs": "_do_wcs", "path_mode": "_do_path_mode", "dwell": "_do_dwell", "g10": "_do_g10", "g52": "_do_g52",
+    "wcs": "_do_wcs", "path_mode": "_do_path_mode", "dwell": "_do_dwell", "g52": "_do_g52",
     "g92": "_do_g92", "g53": "_do_g53", "record": "_do_nothing", "feed": "_do_feed",
     "spindle_speed": "_do_spindle_speed", "tool": "_do_tool", "tool_change": "_do_tool_change",
     "spindle": "_do_spindle", "coolant": "_do_coolant", "stop": "_do_stop",
+    **dict.fromkeys(TRANSFORM_ACTIONS, "_do_transform"), "g09": "_do_g09",
     "cycle": "_do_cycle", "cycle_cancel": "_do_cycle_cancel", "pattern": "_do_pattern",
     "rigid_tap": "_do_rigid_tap",
 }  # fmt: skip
@@ -67,7 +76,9 @@ class Interpreter:
     """Runs one :class:`Program` for one dialect into a :class:`ToolpathBuilder`."""
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
-                 start: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:  # fmt: skip
+                 start: tuple[float, float, float] = (0.0, 0.0, 0.0), machine: MachineConfig | None = None,
+                 ) -> None:  # fmt: skip
+        self.machine = machine  # reference positions (G27-G30)
         self.program = program
         self.dialect = dialect
         self.file = program.file
@@ -84,6 +95,15 @@ class Interpreter:
         self.polar = None
         self._transformed = False
         self._program: tuple[float, float, float] = ZERO
+        self.rotation_deg = 0.0  # G68 angle in force (for G91 R)
+        self.mirror_axes: dict[int, float] = {}  # G51.1: axis → mirror coordinate (mm)
+        self.after_g69 = False  # the first move after G69 must be absolute (L2044)
+        self.extra_wcs = 0  # G54.1 P number in force (0 = none; #4130)
+        self._restore_modes = False  # G09 one-shot exact stop
+        self.parameters = Parameters()  # G10 L50 writes; P1051-P1053, P1860-P1862, P1880
+        self.parameter_input = False  # between G10 L50 and G11
+        self.g28_intermediate: list[float | None] = [None, None, None]  # G28/G30 point, work coordinates, mm
+        self.skip_position: tuple[float, float, float] | None = None  # G31 end (#5061-#5063), mm
         # Modal state. ``modal`` is the raw table (group → code key, for #4001-style reads later); the
         # attributes below are what the actions read.
         self.modal: dict[int, int] = {}
@@ -159,6 +179,8 @@ class Interpreter:
 
     # ------------------------------------------------------------------ one block
     def execute(self, block: Block) -> None:
+        if self.parameter_input:  # inside G10 L50 … G11 (transforms.py)
+            return parameter_block(self, block)
         if block.assign is not None:
             target, value = block.assign
             self.variables.write(evaluate(target, self.variables, self.dialect),
@@ -290,6 +312,9 @@ class Interpreter:
             getattr(this, actions[spec.action])(self, spec, values)
             if self.ended:
                 return
+        if self._restore_modes:  # G09 lasts one block
+            self._restore_modes = False
+            self._update_modes()
 
     def _reject_words(self, values: dict[str, float], allowed: frozenset, owner: CodeSpec | None) -> None:
         for letter in values:
@@ -334,6 +359,8 @@ class Interpreter:
         pass
 
     def _do_plane(self, spec: CodeSpec, values: dict | None = None) -> None:
+        if self.chain.active:
+            check_plane_change(self, spec.value)
         self.plane = spec.value
 
     def _do_distance(self, spec: CodeSpec, values: dict | None = None) -> None:
@@ -346,7 +373,19 @@ class Interpreter:
         self._update_modes()
 
     def _do_wcs(self, spec: CodeSpec, values: dict | None = None) -> None:
+        if self.chain.active:
+            check_coordinate_command(self, spec.name)
         self.offsets.select_wcs(spec.value - 1)
+        self.extra_wcs = 0
+        self.resync_program_position()
+
+    def _do_transform(self, spec: CodeSpec, values: dict) -> None:
+        TRANSFORM_ACTIONS[spec.action](self, spec, values)  # transforms.py
+
+    def _do_g09(self, spec: CodeSpec, values: dict) -> None:
+        """G09: exact stop at the end of this block's move only (one-shot)."""
+        self.out.modes = self.out.modes | SegmentMode.EXACT_STOP
+        self._restore_modes = True
 
     def _do_path_mode(self, spec: CodeSpec, values: dict | None = None) -> None:
         self.path_mode = _PATH_MODES[spec.value]
@@ -415,49 +454,27 @@ class Interpreter:
             raise self.error(f"G04 dwell time {raw:g} is negative", "bad-dwell")
         self.out.dwell(seconds)
 
-    def _do_g10(self, spec: CodeSpec, values: dict) -> None:
-        """G10 L2 Pp IP_: work offset p (0 = external, 1..6 = G54..G59); G90 sets, G91 adds (L1567-L1573)."""
-        if "L" not in values:
-            raise self.error("G10 needs an L word (L2: work offsets)", "missing-value")
-        kind = int(values["L"])
-        if kind != 2:
-            names = {10: "tool length geometry offsets", 11: "tool length wear offsets",
-                     12: "cutter radius geometry offsets", 13: "cutter radius wear offsets",
-                     20: "additional work coordinate systems", 50: "parameter input"}  # fmt: skip
-            if kind in names:
-                raise self.error(f"G10 L{kind} ({names[kind]}) is not implemented yet", "not-implemented")
-            raise self.error(f"G10 L{kind} does not exist", "bad-g10")
-        if "R" in values:
-            raise self.error("address R has no meaning with G10 L2", "unused-word")
-        if "P" not in values:
-            raise self.error("G10 L2 needs P0..P6 (0 = external offset, 1..6 = G54..G59)", "bad-g10")
-        text = self._word_text("P")
-        p = values["P"]
-        if (text is not None and "." in text) or p != int(p) or not 0 <= p <= 6:
-            raise self.error(f"G10 L2 P{text or p:}: P must be 0..6 (0 = external offset, 1..6 = G54..G59)",
-                             "bad-g10")  # fmt: skip
-        target = self.offsets.external if p == 0 else self.offsets.wcs[int(p) - 1]
-        for axis, letter in enumerate(self.dialect.axes):
-            if letter in values:
-                mm = values[letter] * self.scale
-                target[axis] = target[axis] + mm if self.incremental else mm
-        self.offsets.update()
-
     def _do_g52(self, spec: CodeSpec, values: dict) -> None:
         """G52 IP_: local origin at IP in the current work system; IP0 cancels per axis (L1718-L1753).
         The values are a setting, absolute whatever G90/G91 (docs/gcode.md)."""
+        if self.chain.active:
+            check_coordinate_command(self, "G52", local=True)
         for axis, letter in enumerate(self.dialect.axes):
             if letter in values:
                 self.offsets.local[axis] = values[letter] * self.scale
         self.offsets.update()
+        self.resync_program_position()
 
     def _do_g92(self, spec: CodeSpec, values: dict) -> None:
         """G92 IP_: the current position gets coordinates IP in a floating system (L1670-L1716)."""
+        if self.chain.active:
+            check_coordinate_command(self, "G92")
         position = self.out.position
         for axis, letter in enumerate(self.dialect.axes):
             if letter in values:
                 self.offsets.set_floating(axis, position[axis], values[letter] * self.scale)
         self.offsets.update()
+        self.resync_program_position()
 
     # ------------------------------------------------------------------ canned cycles (cycles.py)
     def _do_cycle(self, spec: CodeSpec, values: dict) -> None:
@@ -653,6 +670,9 @@ class Interpreter:
         the axis is not commanded. Incremental words add to :attr:`program_position`."""
         s = self.scale
         words = (x, y, z)
+        if self.after_g69 and self.incremental and words != (None, None, None):
+            raise self.error("the first move after G69 must be absolute (L2044: an incremental one does not "
+                             "move correctly)", "incremental-after-g69")  # fmt: skip
         if self.polar is not None:
             return self.polar.resolve(self, words)
         if self.incremental:
@@ -679,6 +699,9 @@ class Interpreter:
             full = (p[0] if tx is None else tx, p[1] if ty is None else ty, p[2] if tz is None else tz)
             self._program = full
             target = self.to_machine(full)
+            if self.after_g69:
+                self.after_g69 = False
+                self.set_transform_state()
         else:
             m, o = self.out.position, self.offsets.origin
             target = (m[0] if tx is None else tx + o[0], m[1] if ty is None else ty + o[1],
@@ -702,13 +725,16 @@ class Interpreter:
         start = self._program
         end, center, sweep = map_arc(self, start, tuple(end_program), tuple(center_program), plane, sweep)
         self._program = tuple(end_program)  # type: ignore[assignment]
+        if self.after_g69:
+            self.after_g69 = False
+            self.set_transform_state()
         self.out.arc_feed(end, center, plane, sweep, feed)
 
     def set_transform_state(self) -> None:
         """Call after changing ``chain`` or ``polar``: switches between the plain and the transformed
         path. Entering keeps the program position; leaving makes the tool's position the start of the
         next move (L1932, L1843)."""
-        transformed = self.chain.active or self.polar is not None
+        transformed = self.chain.active or self.polar is not None or self.after_g69
         if transformed and not self._transformed:
             self._program = self.program_position
         self._transformed = transformed

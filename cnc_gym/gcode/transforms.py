@@ -107,3 +107,471 @@ def map_arc(interp: Interpreter, start, end, center, plane: Plane, sweep: float)
     a1 = math.atan2(end_m[v] - centre_m[v], end_m[u] - centre_m[u])
     turned = (a1 - a0) % TWO_PI if ccw else -((a0 - a1) % TWO_PI)
     return tuple(end_m), tuple(centre_m), turned
+
+
+# --------------------------------------------------------------------------- modal restrictions
+def check_coordinate_command(interp: Interpreter, name: str, *, reference: bool = False,
+                             local: bool = False) -> None:  # fmt: skip
+    """Codes the transform modes forbid: G27-G30 (``reference``), G52 (``local``, G68 only), G54-G59,
+    G54.1, G92 in G51 mode (alarm 109, L1935) and in G68 mode (L2041)."""
+    if interp.chain.stages["scaling"] is not None and not local:
+        raise interp.error(f"{name} is not allowed in scaling mode G51: cancel it with G50 first (L1935)",
+                           "forbidden-in-scaling")  # fmt: skip
+    if interp.chain.stages["rotation"] is not None:
+        raise interp.error(f"{name} is not allowed in rotation mode G68: cancel it with G69 first (L2041)",
+                           "forbidden-in-rotation")  # fmt: skip
+    del reference
+
+
+def check_plane_change(interp: Interpreter, plane: Plane) -> None:
+    """G17/G18/G19 in G68 mode: alarm (L2039) unless it selects the plane already in use."""
+    rotation = interp.chain.stages["rotation"]
+    if rotation is not None and plane != interp.plane:
+        raise interp.error(f"plane change to {plane.name} in rotation mode G68 (L2039)",
+                           "plane-change-in-rotation")  # fmt: skip
+
+
+# --------------------------------------------------------------------------- G68 / G69
+def _centre(interp: Interpreter, values: dict, axes) -> tuple[float, float, float]:
+    """A centre given by absolute axis words whatever G90/G91 (L1905, L2036), Cartesian even in G16;
+    an omitted axis takes the current program position."""
+    p = interp.program_position
+    s = interp.scale
+    letters = interp.dialect.axes
+    return tuple(values[letters[a]] * s if a in axes and letters[a] in values else p[a]
+                 for a in range(3))  # type: ignore[return-value]  # fmt: skip
+
+
+def do_g68(interp: Interpreter, spec, values: dict) -> None:
+    """``G68 α_ β_ R_`` (L2018-L2098): rotate the program about the centre (α, β in the plane, absolute;
+    omitted = current position) by R degrees CCW. In G91, R adds to the angle in force (explanation 3,
+    L2036: parameter 1850#0 RIN = 1). A G68 in G68 mode replaces the rotation (example 3 re-issues it)."""
+    u, v, w = _PLANE_AXES[int(interp.plane)]
+    letters = interp.dialect.axes
+    if letters[w] in values:
+        raise interp.error(f"G68 in the {interp.plane.name} plane takes the centre in "
+                           f"{letters[u]}/{letters[v]}; {letters[w]} has no meaning",
+                           "unused-word")  # fmt: skip
+    centre = _centre(interp, values, (u, v))
+    if "R" in values:
+        angle = values["R"]
+        if not -360.0 <= angle <= 360.0:
+            raise interp.error(f"G68 R{angle:g}: the angle is -360..360 degrees", "bad-rotation-angle")
+        if interp.incremental:
+            angle += interp.rotation_deg
+    else:
+        angle = interp.parameters.rotation_deg()  # P1860
+    angle = round(angle * 1000.0) / 1000.0  # least increment 0.001° (L2031)
+    from cnc_gym.gcode.canonical import rotation_stage
+
+    interp.rotation_deg = angle
+    interp.chain.set("rotation", rotation_stage(interp.plane, centre, angle))
+    interp.set_transform_state()
+
+
+def do_g69(interp: Interpreter, spec, values: dict) -> None:
+    """G69: rotation off. The tool's position is the start of the next move, which must be absolute
+    (L2044: an incremental one "will not perform correctly": we make it an error)."""
+    if interp.chain.stages["rotation"] is None:
+        return
+    interp.chain.set("rotation", None)
+    interp.rotation_deg = 0.0
+    interp.resync_program_position()
+    interp.after_g69 = True  # cleared by the next move (resolve_target checks it)
+    interp.set_transform_state()
+
+
+# --------------------------------------------------------------------------- G51 / G50, G51.1 / G50.1
+SCALE_RANGE = (0.001, 99.999)  # L1892
+
+
+def _factor(interp: Interpreter, letter: str, value: float) -> float:
+    if not SCALE_RANGE[0] <= abs(value) <= SCALE_RANGE[1]:
+        raise interp.error(f"G51 {letter}{value:g}: the magnification is "
+                           f"{SCALE_RANGE[0]:g}..{SCALE_RANGE[1]:g} (negative = mirror)",
+                           "bad-scale-factor")  # fmt: skip
+    return value
+
+
+def do_g51(interp: Interpreter, spec, values: dict) -> None:
+    """``G51 X_Y_Z_ P_`` or ``G51 X_Y_Z_ I_J_K_`` (L1866-L2016): scale about the centre (absolute;
+    omitted = current position); a negative factor mirrors that axis. Alone in its block (L1898)."""
+    letters = [w[0] for w in interp._block_words]
+    if letters.count("G") > 1 or any(letter in "MFSTHD" for letter in letters):
+        raise interp.error("G51 must be alone in its block (L1898): no other G, M, F, S, T, H or D word",
+                           "g51-not-alone")  # fmt: skip
+    if "P" in values and any(k in values for k in "IJK"):
+        raise interp.error("G51 takes either P (all axes) or I/J/K (per axis), not both", "bad-combination")
+    centre = _centre(interp, values, (0, 1, 2))
+    if "P" in values:
+        factors = (_factor(interp, "P", values["P"]),) * 3
+    elif any(k in values for k in "IJK"):
+        factors = tuple(_factor(interp, k, values[k]) if k in values else interp.parameters.scale(a)
+                        for a, k in enumerate("IJK"))  # fmt: skip
+    else:
+        factors = (interp.parameters.scale(None),) * 3  # P1861, latched now (L1954)
+    from cnc_gym.gcode.canonical import scaling_stage
+
+    interp.chain.set("scaling", scaling_stage("G51", centre, factors))  # type: ignore[arg-type]
+    interp.set_transform_state()
+
+
+def do_g50(interp: Interpreter, spec, values: dict) -> None:
+    """G50: scaling off; the tool's position is the start of the next move (L1932)."""
+    if interp.chain.stages["scaling"] is None:
+        return
+    interp.chain.set("scaling", None)
+    interp.resync_program_position()
+    interp.set_transform_state()
+
+
+def do_g51_1(interp: Interpreter, spec, values: dict) -> None:
+    """``G51.1 X_Y_Z_``: programmable mirror of the commanded axes about the given coordinates (absolute);
+    mirrors already set on other axes stay. (GSK lists G50.1/G51.1 in #4022 only; Fanuc semantics.)"""
+    letters = interp.dialect.axes
+    if not any(letter in values for letter in letters):
+        raise interp.error("G51.1 needs the mirror axis coordinates (e.g. G51.1 X50)", "missing-value")
+    s = interp.scale
+    for a, letter in enumerate(letters):
+        if letter in values:
+            interp.mirror_axes[a] = values[letter] * s
+    _install_mirror(interp)
+
+
+def do_g50_1(interp: Interpreter, spec, values: dict) -> None:
+    """``G50.1 X_Y_Z_``: cancel the mirror of the commanded axes (the values are not used); alone = all."""
+    letters = interp.dialect.axes
+    named = [a for a, letter in enumerate(letters) if letter in values]
+    for a in named or list(interp.mirror_axes):
+        interp.mirror_axes.pop(a, None)
+    interp.resync_program_position()
+    _install_mirror(interp)
+
+
+def _install_mirror(interp: Interpreter) -> None:
+    from cnc_gym.gcode.canonical import scaling_stage
+
+    if interp.mirror_axes:
+        centre = tuple(interp.mirror_axes.get(a, 0.0) for a in range(3))
+        factors = tuple(-1.0 if a in interp.mirror_axes else 1.0 for a in range(3))
+        interp.chain.set("mirror", scaling_stage("G51.1", centre, factors))  # type: ignore[arg-type]
+    else:
+        interp.chain.set("mirror", None)
+        interp.resync_program_position()
+    interp.set_transform_state()
+
+
+# --------------------------------------------------------------------------- G16 / G15
+def do_g16(interp: Interpreter, spec, values: dict) -> None:
+    """G16: polar coordinate input on (L1775-L1865)."""
+    if interp.polar is None:
+        interp.polar = PolarState(interp.program_position, interp.plane)
+        interp.set_transform_state()
+
+
+def do_g15(interp: Interpreter, spec, values: dict) -> None:
+    """G15: polar input off; the next move starts from the current tool position (L1843)."""
+    if interp.polar is not None:
+        interp.polar = None
+        interp.resync_program_position()
+        interp.set_transform_state()
+
+
+# --------------------------------------------------------------------------- G54.1, G10 L20
+EXTRA_WCS = 48  # G54.1 P1..P48 (L2131-L2187)
+
+
+def do_g54_1(interp: Interpreter, spec, values: dict) -> None:
+    """``G54.1 Pn``: additional work coordinate system n = 1..48; no P = P1 (L2131-L2187). A P in the
+    block belongs to G54.1 alone (L2185: ``G54.1 G04 P1000`` is an error)."""
+    check_coordinate_command(interp, "G54.1")
+    for word in interp._block_words:  # (letter, digits) or (letter, value, text); text None = expression
+        text = word[-1]
+        if word[0] == "G" and text is not None and round(float(text) * 10) in (40, 100, 650, 300):
+            raise interp.error(f"in a G54.1 block P is the work offset number; G{text} cannot use it "
+                               "(L2185)", "bad-combination")  # fmt: skip
+    number = values.get("P", 1.0)
+    if number != int(number) or not 1 <= number <= EXTRA_WCS:
+        raise interp.error(f"G54.1 P{number:g}: additional work coordinate systems are P1..P{EXTRA_WCS}",
+                           "bad-offset-number", alarm=30)  # fmt: skip
+    interp.offsets.select_wcs(interp.offsets.n_standard_wcs + int(number) - 1)
+    interp.extra_wcs = int(number)
+
+
+
+# --------------------------------------------------------------------------- G10 data input
+def do_g10(interp: Interpreter, spec, values: dict) -> None:
+    """``G10 L2 Pp IP_`` (p = 0 external, 1..6 G54..G59), ``G10 L20 Pn IP_`` (G54.1 P1..P48), ``G10
+    L10..L13 Pn R_`` (tool offsets, offsets.py), ``G10 L50`` (parameter input mode until G11). For L2 and
+    L20 G90 sets and G91 adds (L1567-L1573, L2162)."""
+    if "L" not in values:
+        raise interp.error("G10 needs an L word (L2/L20 work offsets, L10-L13 tool offsets, L50 parameters)",
+                           "missing-value")  # fmt: skip
+    kind = int(values["L"])
+    if kind in (10, 11, 12, 13):
+        return _g10_tool_offset(interp, kind, values)
+    if kind == 50:
+        return _g10_parameter_mode(interp, values)
+    if kind not in (2, 20):
+        raise interp.error(f"G10 L{kind} does not exist (L2, L10-L13, L20, L50)", "bad-g10")
+    if "R" in values:
+        raise interp.error(f"address R has no meaning with G10 L{kind}", "unused-word")
+    top = 6 if kind == 2 else EXTRA_WCS
+    what = "0..6 (0 = external offset, 1..6 = G54..G59)" if kind == 2 else f"1..{EXTRA_WCS} (G54.1 P1..P48)"
+    if "P" not in values:
+        raise interp.error(f"G10 L{kind} needs P{what}", "bad-g10")
+    text = interp._word_text("P")
+    p = values["P"]
+    low = 0 if kind == 2 else 1
+    if (text is not None and "." in text) or p != int(p) or not low <= p <= top:
+        raise interp.error(f"G10 L{kind} P{text or p:}: P must be {what}", "bad-g10")
+    offsets = interp.offsets
+    if kind == 2:
+        target = offsets.external if p == 0 else offsets.wcs[int(p) - 1]
+    else:
+        target = offsets.wcs[offsets.n_standard_wcs + int(p) - 1]
+    for axis, letter in enumerate(interp.dialect.axes):
+        if letter in values:
+            mm = values[letter] * interp.scale
+            target[axis] = target[axis] + mm if interp.incremental else mm
+    offsets.update()
+    interp.resync_program_position()
+
+
+def _g10_tool_offset(interp: Interpreter, kind: int, values: dict) -> None:
+    """G10 L10-L13 P R: written through the compensation module's table (offsets.apply_g10)."""
+    table = getattr(interp, "tool_offsets", None)
+    if table is None:
+        raise interp.error(f"G10 L{kind}: the tool offset table is not available", "not-implemented")
+    for letter in interp.dialect.axes:
+        if letter in values:
+            raise interp.error(f"address {letter} has no meaning with G10 L{kind} (P number, R value)",
+                               "unused-word")  # fmt: skip
+    from cnc_gym.gcode.offsets import apply_g10
+
+    value = values.get("R")
+    apply_g10(table, kind, values.get("P"), None if value is None else value * interp.scale,
+              incremental=interp.incremental, error=interp.error)  # fmt: skip
+
+
+# --------------------------------------------------------------------------- controller parameters
+#: Axis parameters among those the interpreter reads, and the raw ranges it checks.
+AXIS_PARAMETERS = frozenset({1051, 1052, 1053, 1862, 1880})
+PARAMETER_RANGES = {1051: 99999999, 1052: 99999999, 1053: 99999999, 1880: 9999999, 1860: 360000, 1861: 99999,
+                    1862: 99999}  # fmt: skip
+
+
+class Parameters:
+    """The controller parameters the interpreter reads, as G10 L50 writes them (L1466-L1517).
+
+    R takes no decimal point, so values are integers in the parameter's unit: lengths in 0.0001 mm (the
+    least increment, L2101; P1051-P1053, P1880), the rotation angle in 0.001° (P1860), magnifications in
+    0.001× (P1861, P1862; 1850#7 SCR = 0). Axis parameters take P1..P5 (display order: X, Y, Z, 4th,
+    5th). Every write is kept in ``raw``; only the numbers below change what the interpreter does.
+    """
+
+    def __init__(self) -> None:
+        self.raw: dict[tuple[int, int], int] = {}
+
+    def write(self, interp: Interpreter, number: int, axis: int, value: int) -> None:
+        if number in AXIS_PARAMETERS and not 1 <= axis <= 5:
+            raise interp.error(f"parameter {number} is an axis parameter: give P1..P5", "bad-g10")
+        if number not in AXIS_PARAMETERS and axis:
+            raise interp.error(f"parameter {number} is not an axis parameter: P has no meaning",
+                               "unused-word")  # fmt: skip
+        limit = PARAMETER_RANGES.get(number)
+        if limit is not None and abs(value) > limit:
+            raise interp.error(f"parameter {number} value {value} is out of range ±{limit}", "bad-parameter")
+        if number in (1861, 1862) and value == 0:
+            raise interp.error(f"parameter {number}: a magnification of 0 is not allowed", "bad-parameter")
+        self.raw[(number, axis)] = value
+
+    def axis_mm(self, number: int, axis: int) -> float:
+        return self.raw.get((number, axis + 1), 0) * 0.0001
+
+    def rotation_deg(self) -> float:
+        return self.raw.get((1860, 0), 0) * 0.001
+
+    def scale(self, axis: int | None) -> float:
+        """P1861 (uniform, ``axis`` None) or P1862 (per axis); standard 1."""
+        raw = self.raw.get((1861, 0)) if axis is None else self.raw.get((1862, axis + 1))
+        return 1.0 if raw is None else raw * 0.001
+
+
+def _g10_parameter_mode(interp: Interpreter, values: dict) -> None:
+    """``G10 L50;`` opens parameter input; it must be alone in its block (L1496)."""
+    others = [w[0] for w in interp._block_words if w[0] not in "GLNO"]
+    gs = [w for w in interp._block_words if w[0] == "G"]
+    if others or len(gs) > 1:
+        raise interp.error("G10 L50 must be alone in its block (L1496)", "bad-g10")
+    if interp.modal.get(9, 800) != 800:
+        raise interp.error("G10 L50 in a canned cycle: cancel it with G80 first (L1500)", "bad-g10")
+    interp.parameter_input = True
+
+
+def parameter_block(interp: Interpreter, block) -> None:
+    """A block inside G10 L50 mode: ``N_ R_`` or ``N_ P_ R_``, or ``G11`` (L1466-L1517)."""
+    # (letter, digits) or (letter, value, text), text None = an expression; a plain block keeps its N word.
+    words = [w for w in block.words if w[0] not in "NO"]
+    letters = [w[0] for w in words]
+    if letters == ["G"] and words[0][-1] is not None and round(float(words[0][-1]) * 10) == 110:
+        interp.parameter_input = False
+        return
+    if block.number is None or not set(letters) <= {"P", "R"} or "R" not in letters:
+        raise interp.error("inside G10 L50 only parameter blocks N_ R_ / N_ P_ R_ and G11 are allowed "
+                           "(L1466-L1517)", "bad-g10")  # fmt: skip
+    fields = {}
+    for word in words:
+        letter, text = word[0], word[-1]
+        if text is None:
+            raise interp.error(f"{letter} of a parameter block takes a plain number (no variable: R has no "
+                               "decimal point even from a variable, L1512)", "bad-g10")  # fmt: skip
+        if "." in text:
+            raise interp.error(f"{letter}{text}: no decimal point in a parameter block (L1512)",
+                               "decimal-point-not-allowed")  # fmt: skip
+        fields[letter] = int(float(text))
+    interp.parameters.write(interp, int(block.number), fields.get("P", 0), fields["R"])
+
+
+# --------------------------------------------------------------------------- G27 / G28 / G29 / G30
+def reference_point(interp: Interpreter, n: int) -> tuple[float, float, float]:
+    """Reference position n (1..4) in machine coordinates: the machine preset's ``reference_<n>_mm`` per
+    axis (default the machine origin); P1051-P1053 written by G10 L50 override points 2-4."""
+    machine = interp.machine
+    base = [0.0, 0.0, 0.0]
+    if machine is not None:
+        base = [float(getattr(axis, f"reference_{n}_mm", 0.0)) for axis in machine.axes]
+    if n >= 2:
+        for a in range(3):
+            if (1049 + n, a + 1) in interp.parameters.raw:
+                base[a] = interp.parameters.axis_mm(1049 + n, a)
+    return (base[0], base[1], base[2])
+
+
+def _commanded(interp: Interpreter, values: dict) -> list[int]:
+    return [a for a, letter in enumerate(interp.dialect.axes) if letter in values]
+
+
+def _return_via(interp: Interpreter, name: str, values: dict, n: int) -> None:
+    """G28/G30: rapid to the intermediate point (commanded axes), then to reference n (same axes)."""
+    check_coordinate_command(interp, name, reference=True)
+    axes = _commanded(interp, values)
+    letters = interp.dialect.axes
+    target = interp.resolve_target(*(values.get(letter) for letter in letters))
+    for a in axes:
+        interp.g28_intermediate[a] = target[a]  # stored in work coordinates, per axis (L2256)
+    interp.move_linear(True, target)
+    reference = reference_point(interp, n)
+    m = interp.out.position
+    machine_target = tuple(reference[a] if a in axes else m[a] for a in range(3))
+    interp.out.straight_traverse(machine_target)  # type: ignore[arg-type]
+    interp.resync_program_position()
+
+
+def do_g28(interp: Interpreter, spec, values: dict) -> None:
+    """``G28 IP_`` (L2215-L2260): via the intermediate point IP to reference position 1, commanded axes
+    only, both legs at rapid."""
+    _return_via(interp, "G28", values, 1)
+
+
+def do_g30(interp: Interpreter, spec, values: dict) -> None:
+    """``G30 [P2|P3|P4] IP_`` (L2296-L2336): like G28 to reference position 2 (default), 3 or 4."""
+    p = values.get("P", 2.0)
+    if p not in (2.0, 3.0, 4.0):
+        raise interp.error(f"G30 P{p:g}: the reference position is P2, P3 or P4", "bad-reference")
+    _return_via(interp, "G30", values, int(p))
+
+
+def do_g29(interp: Interpreter, spec, values: dict) -> None:
+    """``G29 IP_`` (L2262-L2294): commanded axes rapid to the stored intermediate point, then to IP; in
+    G91, IP is relative to the intermediate point. Other axes stay (L2270)."""
+    check_coordinate_command(interp, "G29", reference=True)
+    axes = _commanded(interp, values)
+    letters = interp.dialect.axes
+    missing = [letters[a] for a in axes if interp.g28_intermediate[a] is None]
+    if missing:
+        raise interp.error(f"G29 {''.join(missing)}: no intermediate point stored for that axis (G28/G30 "
+                           "first)", "bad-reference", alarm=46)  # fmt: skip
+    middle = tuple(interp.g28_intermediate[a] if a in axes else None for a in range(3))
+    interp.move_linear(True, middle)
+    s = interp.scale
+    if interp.polar is None:
+        base = middle if interp.incremental else (0.0, 0.0, 0.0)
+        target = tuple(None if a not in axes else values[letters[a]] * s + base[a] for a in range(3))
+    else:
+        target = interp.resolve_target(*(values.get(letter) for letter in letters))
+    interp.move_linear(True, target)
+
+
+#: Largest distance from the reference position that still counts as on it for G27 (mm).
+REFERENCE_CHECK_MM = 0.0001
+
+
+def do_g27(interp: Interpreter, spec, values: dict) -> None:
+    """``G27 IP_`` (L2193-L2213): rapid to IP, then check that the commanded axes are on reference
+    position 1; if not, alarm (46, the list's "ILLEGAL REFER. RETURN COMMAND")."""
+    check_coordinate_command(interp, "G27", reference=True)
+    axes = _commanded(interp, values)
+    letters = interp.dialect.axes
+    interp.move_linear(True, interp.resolve_target(*(values.get(letter) for letter in letters)))
+    reference = reference_point(interp, 1)
+    m = interp.out.position
+    off = [letters[a] for a in axes if abs(m[a] - reference[a]) > REFERENCE_CHECK_MM]
+    if off:
+        where = ", ".join(f"{letters[a]} machine {m[a]:.4f} vs {reference[a]:.4f}" for a in axes)
+        raise interp.error(f"G27: not on the reference position ({where})", "reference-check-failed",
+                           alarm=46)  # fmt: skip
+
+
+# --------------------------------------------------------------------------- G31, G60
+def do_g31(interp: Interpreter, spec, values: dict) -> None:
+    """``G31 IP_`` (L1383-L1455): a feed move like G01 that stops on the skip signal. The simulation has
+    no skip signal, so the move completes; #5061-#5063 get the block end point (L5486), in work
+    coordinates (``Interpreter.skip_position``, mm). Not allowed with cutter compensation (alarm 36)."""
+    if interp.modal.get(7, 400) != 400:
+        raise interp.error("G31 in cutter compensation mode (cancel it with G40 first, L1395)",
+                           "g31-in-cutter-compensation", alarm=36)  # fmt: skip
+    letters = interp.dialect.axes
+    target = interp.resolve_target(*(values.get(letter) for letter in letters))
+    if target != (None, None, None):
+        interp.move_linear(False, target)
+    interp.skip_position = interp.program_position
+
+
+#: Dwell at the overshoot point of G60 (L1350: "the defaulted dwell time is 1s").
+G60_DWELL_S = 1.0
+
+
+def do_g60(interp: Interpreter, spec, values: dict) -> None:
+    """``G60 IP_`` (L1340-L1381): rapid to the end point less the overrun (P1880, per axis, in machine
+    coordinates, not mirrored), dwell 1 s, then rapid in the approach direction to the end point. Axes
+    with no overrun or no movement get none; with none at all it is a plain rapid."""
+    letters = interp.dialect.axes
+    target = interp.resolve_target(*(values.get(letter) for letter in letters))
+    if target == (None, None, None):
+        return
+    p = interp.program_position
+    full = tuple(p[a] if t is None else t for a, t in enumerate(target))
+    start = interp.out.position
+    end = list(interp.to_machine(full))
+    if not interp._transformed:  # an omitted axis keeps its machine position (as in move_linear)
+        end = [start[a] if target[a] is None else end[a] for a in range(3)]
+    overshoot = list(end)
+    used = False
+    for a in range(3):
+        overrun = interp.parameters.axis_mm(1880, a)
+        if overrun and abs(end[a] - start[a]) > 1e-9:
+            overshoot[a] = end[a] - overrun
+            used = True
+    if used:
+        interp.out.straight_traverse(tuple(overshoot))  # type: ignore[arg-type]
+        interp.out.dwell(G60_DWELL_S)
+    interp.move_linear(True, target)
+
+
+#: Dialect action name → function(interp, spec, values); the interpreter routes them via _do_transform.
+TRANSFORM_ACTIONS = {
+    "g68": do_g68, "g69": do_g69, "g51": do_g51, "g50": do_g50, "g51_1": do_g51_1, "g50_1": do_g50_1,
+    "g16": do_g16, "g15": do_g15, "g54_1": do_g54_1, "g10": do_g10, "g27": do_g27, "g28": do_g28,
+    "g29": do_g29, "g30": do_g30, "g31": do_g31, "g60": do_g60,
+}  # fmt: skip

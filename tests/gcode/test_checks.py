@@ -39,10 +39,10 @@ def test_codes_of_different_groups_share_a_block():
 @pytest.mark.parametrize(
     ("text", "named"),
     [
-        ("G41 D1 X1\n", "G41"), ("G42 X1\n", "G42"), ("G43 Z1 H1\n", "G43"), ("G68 X0 Y0 R30\n", "G68"),
-        ("G28 X0\n", "G28"),
-        ("G51 X0 Y0 P2\n", "G51"), ("G16\n", "G16"), ("G65 P9000\n", "G65"), ("G95\n", "G95"),
-        ("G06.2 X1\n", "G06.2"), ("G54.1 P1\n", "G54.1"), ("M98 P1000\n", "M98"), ("M99\n", "M99"),
+        ("G41 D1 X1\n", "G41"), ("G42 X1\n", "G42"), ("G43 Z1 H1\n", "G43"), ("G68.2\n", "G68.2"),
+        ("G07.1\n", "G07.1"),
+        ("G22\n", "G22"), ("G33 Z-1\n", "G33"), ("G65 P9000\n", "G65"), ("G95\n", "G95"),
+        ("G06.2 X1\n", "G06.2"), ("G53.1\n", "G53.1"), ("M98 P1000\n", "M98"), ("M99\n", "M99"),
         ("G01 X1 H1 F100\n", "H"), ("G01 X1 D1 F100\n", "D"),
     ],
 )  # fmt: skip
@@ -52,7 +52,7 @@ def test_not_yet_implemented_codes_are_rejected_by_name(text, named):
 
 
 @pytest.mark.parametrize(("text", "named", "alarm"),
-                         [("G12 X1\n", "G12", 10), ("G09 X1\n", "G09", 10), ("G04.5\n", "G04.5", 10),
+                         [("G12 X1\n", "G12", 10), ("G08 X1\n", "G08", 10), ("G04.5\n", "G04.5", 10),
                           ("M77\n", "M77", 201), ("G1000\n", None, 10)])  # fmt: skip
 def test_unknown_codes(text, named, alarm):
     err = program_error(text)

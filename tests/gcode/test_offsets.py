@@ -109,11 +109,11 @@ def test_offsets_and_positions_in_inches():
         ("G10 L2 P1.5 X1\n", "bad-g10", 31),
         ("G10 L2 P1 R5\n", "unused-word", None),
         ("G10 L10 P1 R5\n", "not-implemented", 10),
-        ("G10 L20 P1 X1\n", "not-implemented", 10),
+        ("G10 L20 P49 X1\n", "bad-g10", 31),
         ("G92 G01 X1 F100\n", "axis-word-conflict", None),
         ("G04 G00 X1\n", "axis-word-conflict", None),
         ("G53 G02 X1 I1 F100\n", "bad-combination", None),
-        ("G54.1 P1\n", "not-implemented", 10),
+        ("G54.1 P49\n", "bad-offset-number", 30),
     ],
 )
 def test_offset_errors(text, code, alarm):

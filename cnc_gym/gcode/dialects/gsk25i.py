@@ -52,16 +52,18 @@ _G_LIST = [
     _todo(33, 1, "thread cutting G33"),
     # Group 00: one-shot.
     _g(4, 0, "dwell", step="dwell", uses_axes=True, words="P"),
+    # G09 (one-shot exact stop) is missing from GSK's table (notes §3.5); Fanuc-standard, kept.
+    _g(9, 0, "g09", step="path_mode"),
     _todo(5, 0, "high-precision contour control G05"),
     _todo(7.1, 0, "cylindrical interpolation G07.1"),
     _todo(107, 0, "cylindrical interpolation G107"),
     _g(10, 0, "g10", step="setting", uses_axes=True, words="LPR"),
     _g(11, 0, "record", step="setting", note="G10 L50 parameter-input mode off (the power-on state)"),
-    _todo(27, 0, "reference position check G27", uses_axes=True),
-    _todo(28, 0, "reference position return G28", uses_axes=True),
-    _todo(29, 0, "return from reference position G29", uses_axes=True),
-    _todo(30, 0, "2nd/3rd/4th reference return G30", uses_axes=True),
-    _todo(31, 0, "skip function G31", uses_axes=True),
+    _g(27, 0, "g27", step="motion", uses_axes=True),
+    _g(28, 0, "g28", step="motion", uses_axes=True),
+    _g(29, 0, "g29", step="motion", uses_axes=True),
+    _g(30, 0, "g30", step="motion", uses_axes=True, words="P"),
+    _g(31, 0, "g31", step="motion", uses_axes=True),
     _todo(37, 0, "automatic tool length measurement G37", uses_axes=True),
     _todo(39, 0, "corner offset arc G39"),
     _todo(45, 0, "tool position offset G45", uses_axes=True),
@@ -71,7 +73,7 @@ _G_LIST = [
     _g(52, 0, "g52", step="setting", uses_axes=True),
     _g(53, 0, "g53", step="motion"),
     _todo(53.1, 0, "tool axis direction control G53.1"),
-    _todo(60, 0, "single-direction positioning G60", uses_axes=True),
+    _g(60, 0, "g60", step="motion", uses_axes=True),
     _todo(65, 0, "macro call G65"),
     _g(92, 0, "g92", step="setting", uses_axes=True),
     # Hole patterns G120-G125 and face milling G126/G127 (L4863-L5077; cycles.py).
@@ -109,8 +111,8 @@ _G_LIST = [
     _g(98, 10, "record", step="modes"),
     _g(99, 10, "record", step="modes"),
     # Group 11: scaling (L1866-L2016).
-    _g(50, 11, "record", step="modes"),
-    _todo(51, 11, "scaling/mirror G51"),
+    _g(50, 11, "g50", step="modes"),
+    _g(51, 11, "g51", step="setting", uses_axes=True, words="PIJK"),
     # Group 12: modal macro call.
     _todo(66, 12, "modal macro call G66"),
     _g(67, 12, "record", step="modes"),
@@ -119,28 +121,28 @@ _G_LIST = [
     _g(97, 13, "record", step="modes"),
     # Group 14: work coordinate systems (L1519-L1595).
     *[_g(n, 14, "wcs", n - 53, step="wcs") for n in range(54, 60)],
-    _todo(54.1, 14, "additional work coordinate systems G54.1"),
+    _g(54.1, 14, "g54_1", step="wcs", words="P"),
     # Group 15: path mode (L6417-L6470): flags on the segments for the controller.
     _g(61, 15, "path_mode", "exact_stop", step="path_mode"),
     _g(62, 15, "path_mode", "auto_corner", step="path_mode"),
     _g(63, 15, "path_mode", "tapping", step="path_mode"),
     _g(64, 15, "path_mode", "cutting", step="path_mode"),
     # Group 16: rotation (L2018-L2098).
-    _todo(68, 16, "coordinate rotation G68"),
+    _g(68, 16, "g68", step="setting", uses_axes=True, words="R"),
     _todo(68.2, 16, "tilted working plane G68.2"),
-    _g(69, 16, "record", step="modes"),
+    _g(69, 16, "g69", step="modes"),
     # Group 17: polar coordinates (L1775-L1865).
-    _g(15, 17, "record", step="modes"),
-    _todo(16, 17, "polar coordinates G16"),
+    _g(15, 17, "g15", step="modes"),
+    _g(16, 17, "g16", step="modes"),
     # Group 22: programmable mirror (listed in #4022 only).
-    _todo(50.1, 22, "programmable mirror G50.1"),
-    _todo(51.1, 22, "programmable mirror G51.1"),
+    _g(50.1, 22, "g50_1", step="setting", uses_axes=True),
+    _g(51.1, 22, "g51_1", step="setting", uses_axes=True),
 ]
 GCODES = {gkey(float(s.name[1:])): s for s in _G_LIST}
 
 # Power-on modal state (Appendix A; 1801 standard setting 1000 0000): G00 G17 G90 G23 G94 G21 G40 G49 G80
 # G98 G50 G67 G97 G54 G64 G69 G15.
-POWER_ON = tuple(gkey(n) for n in (0, 17, 90, 23, 94, 21, 40, 49, 80, 98, 50, 67, 97, 54, 64, 69, 15))
+POWER_ON = tuple(gkey(n) for n in (0, 17, 90, 23, 94, 21, 40, 49, 80, 98, 50, 67, 97, 54, 64, 69, 15, 50.1))
 
 # --------------------------------------------------------------------------- M codes (§8.1)
 def _m(number: int, action: str, value: object = None, *, step: str, implemented: bool = True,
@@ -288,6 +290,11 @@ ALARMS = {
     "arc-missing-center": 22,
     "zero-feed": 25,
     "bad-g10": 31,
+    # Coordinates and transforms (notes §9.2 M14-M20, Appendix B).
+    "forbidden-in-scaling": 109,
+    "bad-scale-factor": 110,
+    "reference-check-failed": 46,
+    "bad-reference": 46,
     "division-by-zero": 208,
     "bad-expression": 206,
     "missing-operand": 207,
