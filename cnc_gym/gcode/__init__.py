@@ -17,7 +17,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
-from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
+from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS, FlowOptions
+from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, MacroCalls, get_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.reader import Program, Reader
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
@@ -50,8 +51,20 @@ def interpret(
     file: str = "<program>",
     machine: MachineConfig | None = None,
     block_skip: frozenset[int] = frozenset(),
+    max_blocks: int = DEFAULT_MAX_BLOCKS,
+    program_dir: str | Path | None = None,
+    macro_calls: MacroCalls | dict | None = None,
+    main_m99: str = "end",
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
+
+    ``max_blocks``: bound on executed blocks (a runaway macro loop raises ``too-many-blocks``).
+    ``program_dir``: where M98/G65 look for programs not in the text (files ``O1002``, ``O1002.nc``,
+    ``1002.nc``); default the folder of ``file`` when that is a real file.
+    ``macro_calls``: G/M/T codes that call programs (GSK parameters 6050-6089, 6001#0), as a
+    :class:`~cnc_gym.gcode.dialect.MacroCalls` or ``{"g_macro": {12: 9010}, "m_macro": {…},
+    "m_sub": {6: 9001}, "t_sub": 9000}``; default the dialect's (GSK: none, the parameters' standard setting).
+    ``main_m99``: ``"end"`` (M99 in the main program ends the run after one pass) or ``"restart"``.
 
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
@@ -65,8 +78,15 @@ def interpret(
     collecting = gc.isenabled()
     gc.disable()
     try:
-        program = Reader(spec).read(text, file)
-        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine).run()
+        calls = _macro_calls(macro_calls, spec)
+        if main_m99 not in ("end", "restart"):
+            raise ConfigError(f"main_m99 must be 'end' or 'restart', got {main_m99!r}")
+        if isinstance(max_blocks, bool) or not isinstance(max_blocks, int) or max_blocks < 1:
+            raise ConfigError(f"max_blocks must be a positive integer, got {max_blocks!r}")
+        folder = None if program_dir is None else str(program_dir)
+        options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
+        program = Reader(spec, calls).read(text, file)
+        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine).run(options)
     finally:
         if collecting:
             gc.enable()
@@ -81,15 +101,61 @@ def interpret_file(
     dialect: str | Dialect = "gsk25i",
     machine: MachineConfig | None = None,
     block_skip: frozenset[int] = frozenset(),
+    **options,
 ) -> Toolpath:
-    """Interpret a program file (errors name the path). An unreadable file raises OSError."""
+    """Interpret a program file (errors name the path). An unreadable file raises OSError.
+
+    ``options``: as :func:`interpret` (``max_blocks``, ``program_dir`` — default the file's folder —,
+    ``macro_calls``, ``main_m99``).
+    """
     path = Path(path)
     raw = path.read_bytes()
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark, if any, is not part of the program
     except UnicodeDecodeError:
         text = raw.decode("latin-1")  # controller files are often 8-bit ISO text
-    return interpret(text, dialect=dialect, file=str(path), machine=machine, block_skip=block_skip)
+    return interpret(text, **options, dialect=dialect, file=str(path), machine=machine, block_skip=block_skip)
+
+
+def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCalls:
+    """``macro_calls=`` → MacroCalls, checked (ConfigError): G 1-255 but not G00/G65/G66/G67, M 1-255 but
+    not the stop/call codes, at most 10 of each kind (L6232, L6281, L6301), programs 1-9999."""
+    if value is None:
+        return dialect.macro_calls
+    if isinstance(value, MacroCalls):
+        calls = value
+    elif isinstance(value, dict):
+        unknown = set(value) - {"g_macro", "m_macro", "m_sub", "t_sub"}
+        if unknown:
+            raise ConfigError(f"macro_calls: unknown keys {sorted(unknown)} (g_macro, m_macro, m_sub, t_sub)")
+        try:
+            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"macro_calls: {exc}") from None
+    else:
+        raise ConfigError(f"macro_calls must be a MacroCalls or a dict, got {type(value).__name__}")
+
+    def program(number, what):
+        if isinstance(number, bool) or not isinstance(number, int) or not 1 <= number <= 9999:
+            raise ConfigError(f"macro_calls[{what}]: program number {number!r} is not 1..9999")
+
+    reserved = {"g_macro": {0, 65, 66, 67}, "m_macro": {0, 1, 2, 30, 98, 99}, "m_sub": {0, 1, 2, 30, 98, 99}}
+    for kind in ("g_macro", "m_macro", "m_sub"):
+        table = getattr(calls, kind)
+        if len(table) > 10:
+            raise ConfigError(f"macro_calls[{kind}]: at most 10 codes (parameters 6050-6059 / 6071-6089)")
+        for code, number in table.items():
+            bad = isinstance(code, bool) or not isinstance(code, int) or not 1 <= code <= 255
+            if bad or code in reserved[kind]:
+                raise ConfigError(f"macro_calls[{kind}]: code {code!r} cannot call a program (1..255, not "
+                                  f"{sorted(reserved[kind])})")  # fmt: skip
+            program(number, kind)
+    both = set(calls.m_macro) & set(calls.m_sub)
+    if both:
+        raise ConfigError(f"macro_calls: M{sorted(both)[0]} is both a macro and a subprogram call")
+    if calls.t_sub is not None:
+        program(calls.t_sub, "t_sub")
+    return calls
 
 
 def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:

@@ -71,6 +71,23 @@ class AddressRule:
 
 
 @dataclass(frozen=True)
+class MacroCalls:
+    """Which codes call macros and subprograms (GSK parameters 6001#0, 6050-6059, 6071-6089).
+
+    ``g_macro``: G code → program, called like G65 with arguments (6050-6059 → O9010-O9019).
+    ``m_macro``: M code → program, called like G65 with arguments (6080-6089 → O9020-O9029).
+    ``m_sub``: M code → program, called like M98 after the block's other commands (6071-6079 → O9001-O9009).
+    ``t_sub``: with a program number (6001#0 TCS = 1: O9000), ``Tt`` is ``#149=t`` then ``M98 P9000``.
+    Inside a program called by one of these codes, the codes are ordinary (L6265, L6331).
+    """
+
+    g_macro: Mapping[int, int] = field(default_factory=dict)
+    m_macro: Mapping[int, int] = field(default_factory=dict)
+    m_sub: Mapping[int, int] = field(default_factory=dict)
+    t_sub: int | None = None
+
+
+@dataclass(frozen=True)
 class Dialect:
     """Everything controller-specific the interpreter core needs. See the module docstring."""
 
@@ -111,6 +128,13 @@ class Dialect:
     #: Variables that exist, as (first, last) ranges; the rest of ``system_variables`` is rejected by name.
     variables: tuple[tuple[int, int], ...] = ((1, 33), (100, 199), (500, 999))
     system_variables: tuple[tuple[int, int], ...] = ()
+    #: Macro and subprogram calls by G, M and T codes (the controller's parameter settings).
+    macro_calls: MacroCalls = field(default_factory=MacroCalls)
+    #: Nesting limits: subprogram (M98) levels and macro (G65/G66/G-M code) levels below the main program.
+    max_subprogram_nesting: int = 4
+    max_macro_nesting: int = 4
+    #: DO-END nesting per program level (L5792).
+    max_loop_nesting: int = 3
     #: Canned-cycle machine parameters (G73/G83 d, G76/G87 shift direction, rigid tapping limits).
     cycle_params: CycleParameters = field(default_factory=CycleParameters)
     #: Whether a dialect that is listed but not built yet (raises on use).

@@ -8,11 +8,15 @@ Nodes are plain tuples (cheap to build, easy to test):
 ``("neg", node)``            unary minus
 ``("op", name, a, b)``       ``+ - * / MOD AND OR XOR``
 ``("fn", name, args)``       ``SIN[x]``, ``ATAN[y]/[x]`` (→ ``ATAN2``), ``POW[x,y]``
+``("cmp", name, a, b)``      a condition of IF/WHILE: ``EQ NE GT GE LT LE``
 ===========================  =======================================================
 
 Null ("vacant") semantics follow GSK L5162-L5211: reading a null variable gives ``None``; ``#2=#1`` keeps
 null; arithmetic treats null as 0 (``#1*5`` and ``#1+#1`` give 0). A unary sign on a bare null keeps it
-null (so ``X-#1`` with #1 vacant drops the word, as ``X#1`` does).
+null (so ``X-#1`` with #1 vacant drops the word, as ``X#1`` does). In conditions, EQ and NE tell null from 0
+while GT GE LT LE read null as 0 (L5195-L5211). Comparisons allow a relative difference of 1e-9 (the
+controller computes with 8 significant digits, L5604-L5660, so a loop counter summed from 0.1 steps must
+still reach its bound).
 """
 
 from __future__ import annotations
@@ -31,6 +35,9 @@ MAX_OPERATORS = 200
 
 _MUL_WORDS = ("MOD", "AND")
 _ADD_WORDS = ("XOR", "OR")
+COMPARISONS = ("EQ", "NE", "GT", "GE", "LT", "LE")
+#: Relative tolerance of EQ/NE/GT/GE/LT/LE (module docstring).
+COMPARE_TOLERANCE = 1e-9
 
 
 class ExpressionParser:
@@ -129,6 +136,20 @@ class ExpressionParser:
         node = self.primary()
         return ("neg", node) if signs % 2 else node
 
+    def condition(self) -> Node:
+        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (L5663-L5720)."""
+        self._open()
+        left = self.expression()
+        word = self._word()[:2]
+        if word not in COMPARISONS:
+            got = self.text[self.pos : self.pos + 4] or "end of block"
+            raise self._fail(f"a condition needs EQ, NE, GT, GE, LT or LE, got {got!r}")
+        self.pos += 2
+        self._count()
+        right = self.expression()
+        self._close()
+        return ("cmp", word, left, right)
+
     def number(self) -> float:
         text = self.text
         start = self.pos
@@ -202,8 +223,10 @@ def evaluate(node: Node, variables: VariableStore, dialect: Dialect, round_step:
     if kind == "num":
         return node[1]
     if kind == "var":
-        index = evaluate(node[1], variables, dialect, round_step)
-        return variables.read(index)
+        index = node[1]
+        if index[0] == "num":
+            return variables.read(index[1])
+        return variables.read(evaluate(index, variables, dialect, round_step))
     if kind == "neg":
         value = evaluate(node[1], variables, dialect, round_step)
         return None if value is None else -value
@@ -224,6 +247,29 @@ def evaluate(node: Node, variables: VariableStore, dialect: Dialect, round_step:
             raise dialect.error(f"{name}[{_fmt(args)}] is undefined", "math-domain") from None
         return _finite(result, dialect, name)
     raise AssertionError(f"bad expression node {node!r}")
+
+
+def evaluate_condition(node: Node, variables: VariableStore, dialect: Dialect) -> bool:
+    """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring)."""
+    _, op, left, right = node
+    a = evaluate(left, variables, dialect)
+    b = evaluate(right, variables, dialect)
+    if op in ("EQ", "NE"):
+        if a is None or b is None:
+            same = a is None and b is None  # null equals only null (L5195-L5203)
+        else:
+            same = abs(a - b) <= COMPARE_TOLERANCE * max(1.0, abs(a), abs(b))
+        return same if op == "EQ" else not same
+    a = a or 0.0
+    b = b or 0.0
+    margin = COMPARE_TOLERANCE * max(1.0, abs(a), abs(b))
+    if op == "GT":
+        return a - b > margin
+    if op == "GE":
+        return a - b >= -margin
+    if op == "LT":
+        return b - a > margin
+    return b - a >= -margin  # LE
 
 
 def _binary(op: str, a: float, b: float, dialect: Dialect) -> float:

@@ -20,10 +20,12 @@ from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import cycles
+from cnc_gym.gcode.calls import FlowOptions, FlowRunner
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder, OffsetStack, TransformChain
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
 from cnc_gym.gcode.reader import split_words
+from cnc_gym.gcode.sysvars import SystemVariables
 from cnc_gym.gcode.transforms import (
     TRANSFORM_ACTIONS,
     Parameters,
@@ -66,6 +68,8 @@ _ACTIONS = {
     "g92": "_do_g92", "g53": "_do_g53", "record": "_do_nothing", "feed": "_do_feed",
     "spindle_speed": "_do_spindle_speed", "tool": "_do_tool", "tool_change": "_do_tool_change",
     "spindle": "_do_spindle", "coolant": "_do_coolant", "stop": "_do_stop",
+    "subprogram_call": "_do_subprogram_call", "subprogram_return": "_do_subprogram_return",
+    "macro_call": "_do_macro_call", "modal_call_cancel": "_do_modal_call_cancel",
     **dict.fromkeys(TRANSFORM_ACTIONS, "_do_transform"), "g09": "_do_g09",
     "cycle": "_do_cycle", "cycle_cancel": "_do_cycle_cancel", "pattern": "_do_pattern",
     "rigid_tap": "_do_rigid_tap",
@@ -155,23 +159,16 @@ class Interpreter:
         self._update_modes()
 
     # ------------------------------------------------------------------ core loop
-    def run(self) -> Toolpath:
-        blocks = self.program.blocks
-        skip_mask = self.skip_mask
-        pc = 0
-        n = len(blocks)
-        execute = self.execute
-        while pc < n:
-            block = blocks[pc]
-            pc += 1
-            if block.skip & skip_mask:
-                continue
-            try:
-                execute(block)
-            except ProgramError as err:
-                raise err.located(self.file, block.line) from None
-            if self.ended:
-                break
+    def run(self, options: FlowOptions | None = None) -> Toolpath:
+        """Run the program (the program-counter loop, Macro B flow and calls: calls.FlowRunner)."""
+        self.variables.system = SystemVariables(self)
+        try:
+            FlowRunner(self, options).run()
+        finally:
+            # The runner and the system table point back here: drop them so no reference cycle keeps a
+            # run's blocks alive after it returns.
+            self.macro = None
+            self.variables.system = None
         return self.builder.build()
 
     def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
@@ -392,7 +389,24 @@ class Interpreter:
         self._update_modes()
 
     def _update_modes(self) -> None:
-        self.out.modes = self.path_mode | (SegmentMode.INCH_PROGRAM if self.inch else SegmentMode.NONE)
+        modes = self.path_mode | (SegmentMode.INCH_PROGRAM if self.inch else SegmentMode.NONE)
+        system = getattr(self, "_sys_modes", None)  # #3004 (sysvars.py): (flags added, flags removed)
+        if system is not None:
+            modes = (modes | system[0]) & ~system[1]
+        self.out.modes = modes
+
+    # ------------------------------------------------------------------ macro hooks (calls.py)
+    def _do_subprogram_call(self, spec: CodeSpec, values: dict) -> None:
+        self.macro.subprogram_call(values)
+
+    def _do_subprogram_return(self, spec: CodeSpec, values: dict) -> None:
+        self.macro.subprogram_return(values)
+
+    def _do_macro_call(self, spec: CodeSpec, values: dict) -> None:
+        self.macro.macro_call_from_variable(spec)
+
+    def _do_modal_call_cancel(self, spec: CodeSpec, values: dict) -> None:
+        self.macro.cancel_modal_call()
 
     # ------------------------------------------------------------------ word actions
     def _do_feed(self, spec: CodeSpec | None, values: dict) -> None:

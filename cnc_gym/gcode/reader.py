@@ -14,6 +14,12 @@ Lexical rules (GSK 25i, seed notes §1; the dialect supplies the number formats)
 
 Plain blocks (no ``#``, ``[``, ``/`` or keywords) go through one regex match and one ``findall``; the rest
 through a small hand-written scanner that gives precise errors.
+
+Macro statements (``IF[…]GOTOn``, ``IF[…]THEN #i=…``, ``GOTOn``, ``WHILE[…]DOm``, ``DOm``, ``ENDm``) become
+blocks of kind ``"stmt"``; blocks that may call a macro (G65, G66, and the G/M/T codes the dialect's
+:class:`~cnc_gym.gcode.dialect.MacroCalls` maps) are of kind ``"call"`` and keep their words in order
+(argument specification II repeats I/J/K). A file may hold several programs, each starting at an ``O``
+block; the first is the main program (:attr:`Program.units`).
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.expressions import ExpressionParser
 
 if TYPE_CHECKING:
-    from cnc_gym.gcode.dialect import Dialect
+    from cnc_gym.gcode.dialect import Dialect, MacroCalls
 
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 # Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".".
@@ -34,6 +40,9 @@ _PLAIN_BLOCK = re.compile(r"(?:[A-Z][-+]?[0-9.]+)+")
 _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 _SPACES = re.compile(r"[ \t\r\f\v]+")
 _NUMBER_AT = re.compile(_NUMBER)
+_CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
+#: Addresses of a call block that keep their own rules (the rest are arguments: any sign, decimal point).
+_CALL_CONTROL = "GMNOPL"
 
 
 class Block:
@@ -47,25 +56,38 @@ class Block:
     ``skip``: bit mask of the block-skip switches (bit n for ``/n``) that suppress the block.
     ``gs``, ``ms``, ``values``: for a block without expressions, the words split once at read time (G
     numbers, M numbers, other addresses → value); None when the block has expressions.
+    ``kind``: None (an ordinary block), ``"assign"`` (a macro assignment, in ``assign``), ``"stmt"`` (a macro
+    statement, in ``stmt``) or ``"call"`` (may call a macro; words kept in order, arguments read without the
+    addresses' own rules, evaluated at run time; ``stmt`` is then ``("strict", block or ProgramError)``,
+    the block as an ordinary one, for where the code does not call).
+    ``stmt``: ``("goto", target)``, ``("if_goto", cond, target)``, ``("if_then", cond, (target, value))``,
+    ``("while", cond or None, m)`` (``DOm`` alone has no condition), ``("end", m)``.
+    ``message``: the comment of an assignment block (``#3000=1 (TOOL NOT FOUND)``), else None.
     """
 
-    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
+    __slots__ = ("assign", "gs", "has_expr", "kind", "line", "message", "ms", "number", "skip", "stmt",
+                 "values", "words")  # fmt: skip
 
     def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
-                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
+                 assign: tuple | None = None, number: int | None = None, kind: str | None = None,
+                 stmt: tuple | None = None) -> None:  # fmt: skip
         self.line = line
         self.words = words
         self.skip = skip
         self.has_expr = has_expr
         self.assign = assign
         self.number = number
+        self.kind = kind
+        self.stmt = stmt
+        self.message = None
         if has_expr:
             self.gs = self.ms = self.values = None
         else:
             self.gs, self.ms, self.values = split_words(words)
 
     def __repr__(self) -> str:
-        return f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r})"
+        return (f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r}, "
+                f"kind={self.kind!r}, stmt={self.stmt!r})")
 
 
 def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
@@ -88,19 +110,32 @@ def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
 
 @dataclass
 class Program:
-    """A read program: blocks in order, with sequence numbers indexed for a later GOTO."""
+    """A read program: blocks in order, with sequence numbers indexed for a later GOTO.
+
+    ``units``: program number → ``(start, end)`` block indices of each ``O`` program in the text (start is
+    the ``O`` block; end is the next ``O`` block or the end). ``main``: the extent of the first program
+    (from block 0, whether or not it has an ``O`` number).
+    """
 
     blocks: list[Block]
     file: str = "<program>"
     program_number: int | None = None
     sequence_index: dict[int, list[int]] = field(default_factory=dict)
+    units: dict[int, tuple[int, int]] = field(default_factory=dict)
+    main: tuple[int, int] = (0, 0)
 
 
 class Reader:
     """Turns program text into a :class:`Program` for one dialect."""
 
-    def __init__(self, dialect: Dialect) -> None:
+    def __init__(self, dialect: Dialect, macro_calls: MacroCalls | None = None) -> None:
         self.dialect = dialect
+        calls = macro_calls if macro_calls is not None else dialect.macro_calls
+        # Codes that make a block a possible macro call (kind "call"): G65/G66 and the configured ones.
+        self._call_g = frozenset({65.0, 66.0, *(float(g) for g in calls.g_macro)})
+        self._call_m = frozenset(float(m) for m in (*calls.m_macro, *calls.m_sub))
+        self._call_t = calls.t_sub is not None
+        self._last_comment: str | None = None
         rules = dialect.addresses
         self._rules = rules
         self._length_letters = frozenset(a for a, r in rules.items() if r.unit == "length")
@@ -110,6 +145,10 @@ class Reader:
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
+        # Macro arguments (G65 A1.0 D5.0 …, L5892): every sign and a decimal point; lengths still follow
+        # the increment and decimal-point mode.
+        self._arg_rules = {a: (rule if a in _CALL_CONTROL else (-1e9, 1e9, True, rule[3]))
+                           for a, rule in self._fast_rules.items()}  # fmt: skip
 
     def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):
         err = self.dialect.error(message, code, column=column, alarm=alarm)
@@ -146,27 +185,51 @@ class Reader:
             except ProgramError as exc:
                 raise exc.located(file, line_no) from None
         program = Program(blocks, file=file)
+        heads: list[tuple[int, int]] = []
         for index, block in enumerate(blocks):
             if block.number is not None:
                 program.sequence_index.setdefault(block.number, []).append(index)
-            if program_number is None and block.words and block.words[0][0] == "O":
-                program_number = int(block.words[0][1])
+            if block.words and block.words[0][0] == "O":
+                number = int(float(block.words[0][1]))
+                if program_number is None:
+                    program_number = number
+                heads.append((index, number))
         program.program_number = program_number
+        for k, (index, number) in enumerate(heads):
+            end = heads[k + 1][0] if k + 1 < len(heads) else len(blocks)
+            if number in program.units:
+                err = self.error(f"program O{number:04d} is defined twice in this file", "duplicate-program",
+                                 blocks[index].line)  # fmt: skip
+                raise err.located(file, blocks[index].line)
+            program.units[number] = (index, end)
+        # The main program runs from the first block to the next O block after its own head.
+        first_o = heads[0][0] if heads else len(blocks)
+        later = [i for i, _ in heads if i > 0] if first_o == 0 else [first_o]
+        program.main = (0, later[0] if later else len(blocks))
         return program
 
     def read_line(self, text: str, line: int) -> list[Block]:
         """Blocks of one source line (usually one; ``;`` separates several)."""
+        self._last_comment = None
         if "(" in text or ")" in text:
             text = self._strip_comments(text, line)
         text = _SPACES.sub("", text).upper()
         if "%" in text:
             raise self.error("'%' must stand alone on its line (tape start/end mark)", "bad-character", line)
         if ";" in text:
-            return [b for part in text.split(";") if part and (b := self.read_block(part, line)) is not None]
-        if not text:
+            blocks = [b for part in text.split(";")
+                      if part and (b := self.read_block(part, line)) is not None]  # fmt: skip
+        elif not text:
             return []
-        block = self.read_block(text, line)
-        return [block] if block is not None else []
+        else:
+            block = self.read_block(text, line)
+            blocks = [block] if block is not None else []
+        if self._last_comment is not None:
+            # The message of #3000=n (…) / #3006=1 (…) (L5286, L5380): the comment of an assignment line.
+            for block in blocks:
+                if block.assign is not None:
+                    block.message = self._last_comment
+        return blocks
 
     def _strip_comments(self, text: str, line: int) -> str:
         out = []
@@ -174,6 +237,8 @@ class Reader:
         for i, c in enumerate(text):
             if depth_start >= 0:
                 if c == ")":
+                    if self._last_comment is None:
+                        self._last_comment = text[depth_start + 1 : i].strip()
                     depth_start = -1
                 continue
             if c == "(":
@@ -231,9 +296,14 @@ class Reader:
                 else:
                     ms.append(value)
             elif letter in values:
+                if letter in "IJK":
+                    return self._scan_block(text, line)  # argument specification II, if a call block
                 raise self.error(f"address {letter} appears twice in the block", "duplicate-word", line)
             else:
                 values[letter] = value
+        if ((gs is not None and not self._call_g.isdisjoint(gs))
+                or (ms is not None and not self._call_m.isdisjoint(ms)) or (self._call_t and "T" in values)):
+            return self._scan_block(text, line)  # a possible macro call: words kept in order
         number = None
         if "N" in values or "O" in values:
             head = pairs[0][0]
@@ -250,6 +320,9 @@ class Reader:
         block.has_expr = False
         block.assign = None
         block.number = number
+        block.kind = None
+        block.stmt = None
+        block.message = None
         block.gs = gs
         block.ms = ms
         block.values = values
@@ -302,7 +375,34 @@ class Reader:
         return head + rest, number
 
     def _scan_block(self, text: str, line: int) -> Block | None:
-        """Everything that is not plain: block skip, expressions, variables, assignments, keywords."""
+        """Everything that is not plain: block skip, expressions, variables, assignments, keywords, calls."""
+        if not self._mentions_call(text):
+            return self._scan(text, line, False)
+        try:
+            strict: Block | ProgramError | None = self._scan(text, line, False)
+        except ProgramError as exc:
+            strict = exc
+        block = self._scan(text, line, True)
+        if block is None or block.kind != "call":
+            if isinstance(strict, ProgramError):
+                raise strict
+            return strict
+        block.stmt = ("strict", strict)
+        return block
+
+    def _mentions_call(self, text: str) -> bool:
+        for letter, digits in _CODE_WORD.findall(text):
+            try:
+                value = float(digits)
+            except ValueError:
+                continue
+            if (letter == "G" and value in self._call_g) or (letter == "M" and value in self._call_m):
+                return True
+            if letter == "T" and self._call_t:
+                return True
+        return False
+
+    def _scan(self, text: str, line: int, relaxed: bool) -> Block | None:
         pos = 0
         skip = 0
         # Optional block skip: /, /n, /1/3 at the head (L520-L524).
@@ -327,7 +427,8 @@ class Reader:
         words: list = []
         has_expr = False
         assign = None
-        rules = self._fast_rules
+        stmt = None
+        rules = self._arg_rules if relaxed else self._fast_rules
         while pos < len(text):
             c = text[pos]
             if c == "/":
@@ -345,8 +446,11 @@ class Reader:
                 raise self.error(f"illegal character {c!r}", "bad-character", line, pos + 1)
             keyword = self._keyword(text, pos)
             if keyword:
-                raise self.error(f"macro statement {keyword} is not implemented yet (macro control flow "
-                                 "comes in a later issue)", "not-implemented", line, pos + 1)  # fmt: skip
+                if any(w[0] not in "ON" for w in words):
+                    raise self.error(f"macro statement {keyword} must be alone in its block (after O/N)",
+                                     "bad-expression", line, pos + 1)  # fmt: skip
+                stmt, pos = self._statement(keyword, text, pos, line)
+                break
             letter = c
             pos += 1
             value, text_digits, pos = self._value(letter, text, pos, line, rules[letter])
@@ -361,9 +465,102 @@ class Reader:
             words, number = self._head(words, line)
         elif any(w[0] in "ON" for w in words):
             self._head(words, line)  # raises misplaced-word
-        if not words and assign is None and not skip and number is None:
+        if not words and assign is None and stmt is None and not skip and number is None:
             return None
+        if stmt is not None:
+            return Block(line, tuple(words), skip=skip, has_expr=True, number=number, kind="stmt", stmt=stmt)
+        if assign is not None:
+            return Block(line, tuple(words), skip=skip, has_expr=True, assign=assign, number=number,
+                         kind="assign")  # fmt: skip
+        if relaxed and self._is_call(words):
+            # Words stay in order for the arguments; split at run time if the block turns out ordinary.
+            return Block(line, tuple(words), skip=skip, has_expr=True, number=number, kind="call")
         return Block(line, tuple(words), skip=skip, has_expr=has_expr, assign=assign, number=number)
+
+    def _is_call(self, words: list) -> bool:
+        for letter, value, digits in words:
+            if digits is None:
+                continue  # a code from a variable is an ordinary code (docs/gcode.md)
+            if (letter == "G" and value in self._call_g) or (letter == "M" and value in self._call_m):
+                return True
+            if letter == "T" and self._call_t:
+                return True
+        return False
+
+    # ------------------------------------------------------------------ macro statements
+    def _statement(self, keyword: str, text: str, pos: int, line: int) -> tuple[tuple, int]:
+        """``IF[c]GOTOn``, ``IF[c]THEN #i=e``, ``GOTOn``, ``WHILE[c]DOm``, ``DOm``, ``ENDm`` (L5663-L5850)."""
+        parser = ExpressionParser(text, pos + len(keyword), self.dialect)
+        if keyword == "IF":
+            if parser._peek() != "[":
+                raise self.error("IF needs a condition in brackets: IF[<condition>]GOTOn", "bad-expression",
+                                 line, parser.pos + 1)  # fmt: skip
+            condition = parser.condition()
+            word = parser._word()
+            if word.startswith("GOTO"):
+                parser.pos += 4
+                stmt: tuple = ("if_goto", condition, self._goto_target(parser, line))
+            elif word.startswith("THEN"):
+                parser.pos += 4
+                if parser._peek() != "#":
+                    raise self.error("THEN must be followed by an assignment #i=<expression>",
+                                     "bad-expression", line, parser.pos + 1)  # fmt: skip
+                assign, end = self._assignment(text, parser.pos, line)
+                return ("if_then", condition, assign), end
+            else:
+                raise self.error("IF[<condition>] must be followed by GOTOn or THEN #i=<expression>",
+                                 "bad-expression", line, parser.pos + 1)  # fmt: skip
+        elif keyword == "GOTO":
+            stmt = ("goto", self._goto_target(parser, line))
+        elif keyword == "WHILE":
+            if parser._peek() != "[":
+                raise self.error("WHILE needs a condition in brackets: WHILE[<condition>]DOm",
+                                 "bad-expression", line, parser.pos + 1)  # fmt: skip
+            condition = parser.condition()
+            if not parser._word().startswith("DO"):
+                raise self.error("WHILE[<condition>] must be followed by DOm", "bad-expression", line,
+                                 parser.pos + 1)  # fmt: skip
+            parser.pos += 2
+            stmt = ("while", condition, self._loop_number(parser, "DO", line))
+        elif keyword == "DO":
+            stmt = ("while", None, self._loop_number(parser, "DO", line))
+        elif keyword == "END":
+            stmt = ("end", self._loop_number(parser, "END", line))
+        else:
+            raise self.error(f"{keyword} without IF", "bad-expression", line, pos + 1)
+        if parser.pos < len(text) and text[parser.pos] != "/":
+            raise self.error(f"unexpected {text[parser.pos:]!r} after {keyword}", "bad-expression", line,
+                             parser.pos + 1)  # fmt: skip
+        return stmt, len(text)
+
+    def _goto_target(self, parser: ExpressionParser, line: int) -> tuple:
+        c = parser._peek()
+        if c.isdigit():
+            start = parser.pos
+            while parser._peek().isdigit():
+                parser.pos += 1
+            if parser._peek() == ".":
+                raise self.error("a GOTO sequence number is an integer", "bad-number", line, parser.pos + 1)
+            return ("num", float(parser.text[start : parser.pos]))
+        if c == "#":
+            return parser.variable()
+        if c == "[":
+            return parser.bracketed()
+        raise self.error("GOTO needs a sequence number: GOTOn, GOTO#i or GOTO[<expression>]",
+                         "missing-operand", line, parser.pos + 1)  # fmt: skip
+
+    def _loop_number(self, parser: ExpressionParser, word: str, line: int) -> int:
+        start = parser.pos
+        while parser._peek().isdigit():
+            parser.pos += 1
+        digits = parser.text[start : parser.pos]
+        if not digits:
+            raise self.error(f"{word} needs its identifier 1, 2 or 3 ({word}1)", "do-end", line, start + 1)
+        m = int(digits)
+        if not 1 <= m <= 3:
+            raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (L5712)", "do-end", line,
+                             start + 1)  # fmt: skip
+        return m
 
     def _keyword(self, text: str, pos: int) -> str | None:
         end = pos

@@ -1,27 +1,49 @@
-"""The macro variable store: #0 (always null), locals #1-#33, commons #100-#199 and #500-#999.
+"""The macro variable store: #0 (always null), locals #1-#33, commons #100-#199 and #500-#999, and the
+system variables (#1000 and up) through :class:`~cnc_gym.gcode.sysvars.SystemVariables`.
 
-One level of locals for now; G65/G66 calls (a later issue) push and pop levels with :meth:`push_locals` /
-:meth:`pop_locals`. System variables (#1000 and up) are recognised by the dialect's ranges and rejected
-by name until they are built, never read as 0.
+Locals are one set per macro call level (L6364-L6379): G65, G66 and G/M-code macro calls push a fresh set
+(:meth:`VariableStore.push_locals`), M99 pops it; M98 and M/T-code subprogram calls share the caller's set.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
 
 
-class VariableStore:
-    """Numbered macro variables. A missing key is null (``None``)."""
+class SystemVariableSource(Protocol):
+    """What the store needs from the system-variable table (cnc_gym.gcode.sysvars)."""
 
-    def __init__(self, dialect: Dialect) -> None:
+    def read(self, index: int) -> float | None: ...
+
+    def write(self, index: int, value: float | None) -> None: ...
+
+
+class VariableStore:
+    """Numbered macro variables. A missing key is null (``None``).
+
+    ``system``: the system-variable table; without one (the store alone, in tests) system variables are
+    rejected by name, never read as 0.
+    """
+
+    def __init__(self, dialect: Dialect, system: SystemVariableSource | None = None) -> None:
         self.dialect = dialect
+        self.system = system
         self.locals: dict[int, float] = {}
         self.commons: dict[int, float] = {}
         self._local_stack: list[dict[int, float]] = []
+        # Exact (first, last) ranges of locals and commons, for the fast path of read/write.
+        ranges = dialect.variables
+        self._local_range = next(((lo, hi) for lo, hi in ranges if hi <= 33), (1, 0))
+        self._common_ranges = tuple((lo, hi) for lo, hi in ranges if hi > 33)
+
+    @property
+    def level(self) -> int:
+        """The local-variable level: 0 in the main program, +1 per macro call (L6364)."""
+        return len(self._local_stack)
 
     def _index(self, value: float | None) -> int:
         if value is None:
@@ -43,6 +65,14 @@ class VariableStore:
         raise self.dialect.error(f"variable #{index} does not exist", "bad-variable")
 
     def read(self, number: float | None) -> float | None:
+        # Fast path: an exact local or common number (dict keys are ints; 5.0 finds key 5).
+        if number is not None:
+            lo, hi = self._local_range
+            if lo <= number <= hi and number == int(number):
+                return self.locals.get(number)  # type: ignore[call-overload]
+            for lo, hi in self._common_ranges:
+                if lo <= number <= hi and number == int(number):
+                    return self.commons.get(number)  # type: ignore[call-overload]
         index = self._index(number)
         kind = self._kind(index)
         if kind == "local":
@@ -51,24 +81,30 @@ class VariableStore:
             return self.commons.get(index)
         if kind == "null":
             return None
-        raise self.dialect.error(f"system variable #{index} is not implemented yet", "not-implemented")
+        if self.system is None:
+            raise self.dialect.error(f"system variable #{index} is not available here", "not-implemented")
+        return self.system.read(index)
 
     def write(self, number: float | None, value: float | None) -> None:
         index = self._index(number)
         kind = self._kind(index)
         if kind == "null":
             raise self.dialect.error("#0 is always null and cannot be assigned", "bad-variable")
+        if value is not None and not math.isfinite(value):
+            raise self.dialect.error(f"#{index}: value out of range", "overflow")
         if kind == "system":
-            raise self.dialect.error(f"system variable #{index} is not implemented yet", "not-implemented")
+            if self.system is None:
+                raise self.dialect.error(f"system variable #{index} is not available here", "not-implemented")
+            self.system.write(index, value)
+            return
         store = self.locals if kind == "local" else self.commons
         if value is None:
             store.pop(index, None)
         else:
-            if not math.isfinite(value):
-                raise self.dialect.error(f"#{index}: value out of range", "overflow")
             store[index] = float(value)
 
     def push_locals(self, values: dict[int, float]) -> None:
+        """A new local level holding ``values`` (the call's arguments); the rest is null."""
         self._local_stack.append(self.locals)
         self.locals = dict(values)
 

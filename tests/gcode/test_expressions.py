@@ -128,9 +128,9 @@ def test_g_code_from_a_variable():
         ("#0=1\n", "bad-variable", 107),  # #0 is read-only (L5164)
         ("#34=1\n", "bad-variable", 107),  # no such variable
         ("#1=2 X1\n", "bad-expression", 206),  # an assignment is alone in its block
-        ("G00 X#5001\n", "not-implemented", 10),  # system variables come later, never read as 0
-        ("IF[#1GT0]GOTO10\n", "not-implemented", 10),
-        ("WHILE[#1LT3]DO1\n", "not-implemented", 10),
+        ("#4001=1\n", "read-only-variable", 107),  # system variables #4001-#5105 cannot be assigned (L5441)
+        ("#1=1\nIF[#1GT0]GOTO10\n", "sequence-not-found", 60),
+        ("WHILE[#1LT3]DO1\n", "do-end", 96),  # DO1 without END1
         ("G01 X10 ,R5 F100\n", "not-implemented", 10),
         ("G00 X[1.5AND1]\n", "math-domain", None),
     ],

@@ -74,7 +74,7 @@ _G_LIST = [
     _g(53, 0, "g53", step="motion"),
     _todo(53.1, 0, "tool axis direction control G53.1"),
     _g(60, 0, "g60", step="motion", uses_axes=True),
-    _todo(65, 0, "macro call G65"),
+    _g(65, 0, "macro_call", step="stop", note="one-shot macro call (calls.py)"),
     _g(92, 0, "g92", step="setting", uses_axes=True),
     # Hole patterns G120-G125 and face milling G126/G127 (L4863-L5077; cycles.py).
     *[_g(n, 0, "pattern", n, step="motion", uses_axes=True, words=PATTERN_WORDS[n]) for n in range(120, 128)],
@@ -114,8 +114,8 @@ _G_LIST = [
     _g(50, 11, "g50", step="modes"),
     _g(51, 11, "g51", step="setting", uses_axes=True, words="PIJK"),
     # Group 12: modal macro call.
-    _todo(66, 12, "modal macro call G66"),
-    _g(67, 12, "record", step="modes"),
+    _g(66, 12, "macro_call", step="stop", note="modal macro call (calls.py)"),
+    _g(67, 12, "modal_call_cancel", step="modes"),
     # Group 13: constant surface speed.
     _todo(96, 13, "constant surface speed G96"),
     _g(97, 13, "record", step="modes"),
@@ -165,8 +165,8 @@ _M_LIST = [
     _m(29, "rigid_tap", step="spindle"),
     _m(96, "not_implemented", step="stop", implemented=False, note="macro interrupt M96"),
     _m(97, "not_implemented", step="stop", implemented=False, note="macro interrupt M97"),
-    _m(98, "not_implemented", step="stop", implemented=False, note="subprogram call M98"),
-    _m(99, "not_implemented", step="stop", implemented=False, note="subprogram return M99"),
+    _m(98, "subprogram_call", step="stop", words="PL"),
+    _m(99, "subprogram_return", step="stop", words="P"),
 ]
 MCODES = {gkey(int(s.name[1:])): s for s in _M_LIST}
 M_GROUPS = {
@@ -303,6 +303,16 @@ ALARMS = {
     "overflow": 102,
     "variable-not-allowed": 205,
     "too-many-m-codes": 201,
+    # Macros and subprograms (notes §9.6, Appendix B).
+    "bad-call": 17,  # illegal macro program number / beyond the maximum repeat count
+    "program-not-found": 59,
+    "sequence-not-found": 60,
+    "duplicate-program": 73,
+    "missing-program-number": 76,  # ADDRESS P NOT DEFINED
+    "nesting": 77,  # SUBPROGRAM NESTING ERROR (subprograms and macro calls)
+    "do-end": 96,  # NO CORRESPONDING OF DO-END
+    "read-only-variable": 107,
+    "bad-macro-command": 205,
     # Canned cycles (notes §9.4; the special-cycle checks pass their own 210-228 numbers).
     "cycle-group01": 61,
     "cycle-conflict": 61,

@@ -1,0 +1,348 @@
+"""GSK 25i system variables (#1000 and up), read and written through the running interpreter.
+
+Seed notes §6.3; manual L5241-L5508. Lengths are in the program's input unit (mm, or inch in G20),
+like every value a program sees; the interpreter stores mm.
+
+======================  =====  ================================================================
+#1000-#1035             R      PLC inputs: no PLC in simulation, so 0
+#1100-#1135             R/W    PLC outputs: stored (bits 0/1 for #1100-#1131)
+#2001-#2200 / #2201-…   R/W    H wear / geometry 1-200 (compatibility range)
+#10001-#13400           R/W    H wear, H geometry, D wear, D geometry 1-400 (offsets.ToolOffsets)
+#2500-#2906             R/W    work offsets: #2500 + 100·(axis-1) + k, k = 0 external, 1-6 G54-G59
+#3000                   W      0-200: user alarm 3000+n with the block's comment as its message
+#3001 / #3002           R/W    ms / hour clocks: the nominal time of the path so far (see below)
+#3003                   R/W    0-3 single-block / FIN wait (recorded; 0 at power-on)
+#3004                   R/W    0-7: bit 1 locks the feed override (segments OVERRIDE_LOCKED), bit 2
+                               disables exact stop (G61's EXACT_STOP flag dropped); bit 0 recorded
+#3006                   W      1: message stop (a 0 s exact-stop dwell, like M00)
+#3011 / #3012           R      date YYYYMMDD / time HHMMSS when interpretation started
+#3901 / #3902           R/W    parts done (M02/M30 add 1) / parts required
+#4001-#4022             R      modal G code of group 1-22 (the state before the block: assignments
+                               are blocks of their own)
+#4107 … #4130           R      last D F H M N O S T and G54.1 P
+#5001-#5005             R      block end point, work coordinates, without tool offsets
+#5021-#5025             R      machine position (with offsets)
+#5041-#5045             R      work position with offsets (machine − work origin)
+#5061-#5065             R      G31 skip position (work coordinates), null before any G31
+#5081-#5083             R      tool length offset vector in use
+#5101-#5105             R      servo position deviation: 0 (the interpreter runs before the servo)
+======================  =====  ================================================================
+
+The clocks: the interpreter runs before any motion, so #3001/#3002 give the *nominal* time of the path
+emitted so far — feed moves at their programmed F, rapids at :data:`NOMINAL_RAPID_MM_MIN`, dwells —
+plus whatever the program wrote to them. The 4th and 5th axes (#2800-#2906, #5004, #5005 …) read null:
+the machine model is XYZ.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import TYPE_CHECKING
+
+from cnc_gym.errors import ProgramError
+from cnc_gym.toolpath import SegmentKind, SegmentMode
+
+if TYPE_CHECKING:
+    from cnc_gym.gcode.interpreter import Interpreter
+
+#: Rapid rate for the nominal clock (#3001/#3002), mm/min: the manual's example rate (L8946).
+NOMINAL_RAPID_MM_MIN = 6000.0
+_RAPID = int(SegmentKind.RAPID)
+_LINE = int(SegmentKind.LINE)
+_ARC = int(SegmentKind.ARC)
+_DWELL = int(SegmentKind.DWELL)
+_MS_WRAP = 2147483648.0
+_HOURS_WRAP = 9544.371767
+#: (first, last, table letter, wear?, number offset)
+_TOOL_RANGES = (
+    (2001, 2200, "H", True, 2000),
+    (2201, 2400, "H", False, 2200),
+    (10001, 10400, "H", True, 10000),
+    (11001, 11400, "H", False, 11000),
+    (12001, 12400, "D", True, 12000),
+    (13001, 13400, "D", False, 13000),
+)
+_LAST_VALUE = {
+    4107: "D",
+    4109: "F",
+    4111: "H",
+    4113: "M",
+    4114: "N",
+    4115: "O",
+    4119: "S",
+    4120: "T",
+    4130: "P",
+}
+
+
+class SystemVariables:
+    """The system-variable table of one run (module docstring)."""
+
+    def __init__(self, interp: Interpreter) -> None:
+        self.interp = interp
+        self.dialect = interp.dialect
+        self.outputs: dict[int, float] = {}
+        self.single_block = 0.0  # #3003
+        self.run_control = 0  # #3004
+        self.parts_done = 0.0
+        self.parts_required = 0.0
+        self._clock_rows = 0
+        self._clock_s = 0.0
+        self._ms_offset = 0.0
+        self._hours_offset = 0.0
+        now = time.localtime()
+        self.date = float(now.tm_year * 10000 + now.tm_mon * 100 + now.tm_mday)
+        self.time_of_day = float(now.tm_hour * 10000 + now.tm_min * 100 + now.tm_sec)
+
+    def _error(self, message: str, code: str, alarm: int | None = None) -> ProgramError:
+        return self.dialect.error(message, code, alarm=alarm)
+
+    @property
+    def _scale(self) -> float:
+        return self.interp.scale
+
+    # ------------------------------------------------------------------ read
+    def read(self, index: int) -> float | None:
+        interp = self.interp
+        if 1000 <= index <= 1035:
+            return 0.0
+        if 1100 <= index <= 1135:
+            return self.outputs.get(index, 0.0)
+        for low, high, letter, wear, base in _TOOL_RANGES:
+            if low <= index <= high:
+                number = self._offset_number(index - base)
+                return self._tool_offsets().get(letter, number, wear=wear) / self._scale
+        if 2500 <= index <= 2906:
+            axis, k = self._work_offset(index)
+            if axis >= 3:
+                return None
+            offsets = interp.offsets
+            table = offsets.external if k == 0 else offsets.wcs[k - 1]
+            return table[axis] / self._scale
+        if index == 3000 or index == 3006:
+            raise self._error(f"#{index} can only be written", "read-only-variable")
+        if index in (3001, 3002):
+            seconds = self._nominal_seconds()
+            if index == 3001:
+                return math.fmod(seconds * 1000.0 + self._ms_offset, _MS_WRAP)
+            return math.fmod(seconds / 3600.0 + self._hours_offset, _HOURS_WRAP)
+        if index == 3003:
+            return self.single_block
+        if index == 3004:
+            return float(self.run_control)
+        if index == 3011:
+            return self.date
+        if index == 3012:
+            return self.time_of_day
+        if index == 3901:
+            return self.parts_done
+        if index == 3902:
+            return self.parts_required
+        if 4001 <= index <= 4022:
+            key = interp.modal.get(index - 4000)
+            return None if key is None else key / 10.0
+        if index in _LAST_VALUE:
+            return self._last_value(_LAST_VALUE[index])
+        if 5001 <= index <= 5105:
+            return self._position(index)
+        raise self._error(f"system variable #{index} does not exist", "bad-variable")
+
+    def _offset_number(self, number: int) -> int:
+        count = self._tool_offsets().count
+        if number > count:
+            raise self._error(f"tool offset {number} does not exist (offsets 1..{count})", "bad-variable")
+        return number
+
+    def _tool_offsets(self):
+        offsets = getattr(self.interp, "tool_offsets", None)
+        if offsets is None:
+            from cnc_gym.gcode.offsets import ToolOffsets
+
+            offsets = ToolOffsets()
+            self.interp.tool_offsets = offsets
+        return offsets
+
+    def _work_offset(self, index: int) -> tuple[int, int]:
+        axis, k = divmod(index - 2500, 100)
+        if k > 6:
+            raise self._error(
+                f"system variable #{index} does not exist (#25k0-#25k6 per axis)", "bad-variable"
+            )
+        return axis, k
+
+    def _nominal_seconds(self) -> float:
+        rows = self.interp.builder._rows
+        kinds = rows["kind"]
+        total = self._clock_s
+        for i in range(self._clock_rows, len(kinds)):
+            kind = kinds[i]
+            if kind == _DWELL:
+                total += rows["dwell_s"][i]
+                continue
+            start, end = rows["start"][i], rows["end"][i]
+            if kind == _ARC:
+                plane_length = abs(rows["sweep"][i]) * rows["radius"][i]
+                chord = math.dist(start, end)
+                length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
+            else:
+                length = math.dist(start, end)
+            speed = NOMINAL_RAPID_MM_MIN if kind == _RAPID else rows["feed"][i]
+            if speed and math.isfinite(speed):
+                total += 60.0 * length / speed
+        self._clock_rows = len(kinds)
+        self._clock_s = total
+        return total
+
+    def _last_value(self, letter: str) -> float | None:
+        interp = self.interp
+        if letter == "F":
+            return None if interp.feed is None else interp.feed / self._scale
+        if letter == "S":
+            return interp.spindle_speed
+        if letter == "T":
+            return float(interp.tool)
+        if letter == "O":
+            unit = interp.macro.frames[-1].unit
+            return None if unit.number is None else float(unit.number)
+        if letter in "HD":
+            for name in (f"{letter.lower()}_number", f"active_{letter.lower()}"):
+                value = getattr(interp, name, None)
+                if value is not None:
+                    return float(value)
+            return None
+        if letter == "P":
+            value = getattr(interp.offsets, "extra_wcs_number", None)
+            return None if value is None else float(value)
+        # N and M: the last one in program order up to this block (a scan back through the running unit).
+        runner = interp.macro
+        unit = runner.frames[-1].unit
+        for i in range(runner.pc - 1, unit.start - 1, -1):
+            block = unit.blocks[i]
+            if letter == "N" and block.number is not None:
+                return float(block.number)
+            if letter == "M":
+                for word in reversed(block.words):
+                    if word[0] == "M" and isinstance(word[1], float):
+                        return word[1]
+        return None
+
+    def _position(self, index: int) -> float | None:
+        group, axis = divmod(index - 5001, 20)
+        interp = self.interp
+        if index >= 5101:
+            return 0.0 if index <= 5105 else self._missing(index)
+        if axis >= 5:
+            return self._missing(index)
+        if group == 4:  # #5081-#5085: tool length offset vector
+            return interp.offsets.tool_length[axis] / self._scale if axis < 3 else None
+        if axis >= 3:
+            return None
+        scale = self._scale
+        if group == 0:
+            return interp.program_position[axis] / scale
+        machine = interp.out.position
+        if group == 1:
+            return machine[axis] / scale
+        if group == 2:
+            return (machine[axis] - self._work_origin()[axis]) / scale
+        if group == 3:
+            skip = getattr(interp, "skip_position", None)
+            return None if skip is None else skip[axis] / scale
+        return self._missing(index)
+
+    def _work_origin(self) -> list[float]:
+        offsets = self.interp.offsets
+        work = offsets.work_origin()
+        return [work[a] + offsets.local[a] for a in range(3)]
+
+    def _missing(self, index: int) -> None:
+        raise self._error(f"system variable #{index} does not exist", "bad-variable")
+
+    # ------------------------------------------------------------------ write
+    def write(self, index: int, value: float | None) -> None:
+        interp = self.interp
+        if index == 3000:
+            self._user_alarm(value)
+        if 1100 <= index <= 1135:
+            value = 0.0 if value is None else value
+            if index <= 1131 and value not in (0.0, 1.0):
+                raise self._error(f"#{index} is an output bit: 0 or 1, not {value:g}", "bad-variable")
+            self.outputs[index] = value
+            return
+        for low, high, letter, wear, base in _TOOL_RANGES:
+            if low <= index <= high:
+                number = self._offset_number(index - base)
+                self._tool_offsets().set(
+                    letter,
+                    number,
+                    (value or 0.0) * self._scale,
+                    wear=wear,
+                    error=lambda message, code: self._error(message, code),
+                )
+                return
+        if 2500 <= index <= 2906:
+            axis, k = self._work_offset(index)
+            if axis >= 3:
+                raise self._error(f"#{index}: the machine has no axis {axis + 1} (XYZ)", "unsupported-axis")
+            offsets = interp.offsets
+            table = offsets.external if k == 0 else offsets.wcs[k - 1]
+            table[axis] = (value or 0.0) * self._scale
+            offsets.update()
+            resync = getattr(interp, "resync_program_position", None)
+            if resync is not None:
+                resync()
+            return
+        if index in (3001, 3002):
+            seconds = self._nominal_seconds()
+            if index == 3001:
+                self._ms_offset = (value or 0.0) - seconds * 1000.0
+            else:
+                self._hours_offset = (value or 0.0) - seconds / 3600.0
+            return
+        if index == 3003:
+            self.single_block = self._small_int(index, value, 3)
+            return
+        if index == 3004:
+            self.run_control = int(self._small_int(index, value, 7))
+            add = SegmentMode.OVERRIDE_LOCKED if self.run_control & 2 else SegmentMode.NONE
+            drop = SegmentMode.EXACT_STOP if self.run_control & 4 else SegmentMode.NONE
+            interp._sys_modes = (add, drop)
+            interp._update_modes()
+            return
+        if index == 3006:
+            if value is None or value == 0:
+                return
+            interp.out.dwell(0.0, SegmentMode.EXACT_STOP)
+            interp.stops.append((interp.out.line, "message_stop"))
+            return
+        if index in (3901, 3902):
+            value = value or 0.0
+            if value < 0:
+                raise self._error(f"#{index} cannot be negative", "bad-variable")
+            if index == 3901:
+                self.parts_done = value
+            else:
+                self.parts_required = value
+            return
+        if index in (3011, 3012) or 1000 <= index <= 1035 or 4001 <= index <= 5105:
+            raise self._error(f"system variable #{index} is read-only (L5441, L5450)", "read-only-variable")
+        raise self._error(f"system variable #{index} does not exist", "bad-variable")
+
+    def _small_int(self, index: int, value: float | None, high: int) -> float:
+        value = value or 0.0
+        if value != int(value) or not 0 <= value <= high:
+            raise self._error(f"#{index} takes 0..{high}, not {value:g}", "bad-variable")
+        return float(value)
+
+    def _user_alarm(self, value: float | None) -> None:
+        number = value or 0.0
+        if number != int(number) or not 0 <= number <= 200:
+            raise self._error(f"#3000={number:g}: the user alarm number is 0..200 (L5286)", "bad-variable")
+        runner = getattr(self.interp, "macro", None)
+        message = getattr(runner, "message", None) or f"user alarm {int(number)}"
+        raise self._error(message[:26], "user-alarm", alarm=3000 + int(number))
+
+    def count_part(self) -> None:
+        """M02/M30: one more part done (L6757)."""
+        self.parts_done += 1.0
