@@ -55,6 +55,7 @@ def interpret(
     program_dir: str | Path | None = None,
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
+    tool_offsets=None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -65,6 +66,9 @@ def interpret(
     :class:`~cnc_gym.gcode.dialect.MacroCalls` or ``{"g_macro": {12: 9010}, "m_macro": {…},
     "m_sub": {6: 9001}, "t_sub": 9000}``; default the dialect's (GSK: none, the parameters' standard setting).
     ``main_m99``: ``"end"`` (M99 in the main program ends the run after one pass) or ``"restart"``.
+    ``tool_offsets``: initial tool offset memory (mm), ``{"H": {1: 20.0}, "D": {7: 5.0}, "H_wear": {…},
+    "D_wear": {…}}`` or a :class:`~cnc_gym.gcode.offsets.ToolOffsets`; default all zero (G10 L10-L13 and
+    #2001…/#10001… set them from the program).
 
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
@@ -86,7 +90,8 @@ def interpret(
         folder = None if program_dir is None else str(program_dir)
         options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
         program = Reader(spec, calls).read(text, file)
-        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine).run(options)
+        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine,
+                               tool_offsets=tool_offsets).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()
@@ -106,7 +111,7 @@ def interpret_file(
     """Interpret a program file (errors name the path). An unreadable file raises OSError.
 
     ``options``: as :func:`interpret` (``max_blocks``, ``program_dir`` — default the file's folder —,
-    ``macro_calls``, ``main_m99``).
+    ``macro_calls``, ``main_m99``, ``tool_offsets``).
     """
     path = Path(path)
     raw = path.read_bytes()
@@ -114,7 +119,7 @@ def interpret_file(
         text = raw.decode("utf-8-sig")  # a byte-order mark, if any, is not part of the program
     except UnicodeDecodeError:
         text = raw.decode("latin-1")  # controller files are often 8-bit ISO text
-    return interpret(text, **options, dialect=dialect, file=str(path), machine=machine, block_skip=block_skip)
+    return interpret(text, dialect=dialect, file=str(path), machine=machine, block_skip=block_skip, **options)
 
 
 def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCalls:

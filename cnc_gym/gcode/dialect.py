@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.cycles import CycleParameters
+from cnc_gym.gcode.offsets import CompensationSettings
 
 
 def gkey(number: float) -> int:
@@ -128,6 +129,8 @@ class Dialect:
     #: Variables that exist, as (first, last) ranges; the rest of ``system_variables`` is rejected by name.
     variables: tuple[tuple[int, int], ...] = ((1, 33), (100, 199), (500, 999))
     system_variables: tuple[tuple[int, int], ...] = ()
+    #: Canned-cycle machine parameters (G73/G83 d, G76/G87 shift direction, rigid tapping limits).
+    cycle_params: CycleParameters = field(default_factory=CycleParameters)
     #: Macro and subprogram calls by G, M and T codes (the controller's parameter settings).
     macro_calls: MacroCalls = field(default_factory=MacroCalls)
     #: Nesting limits: subprogram (M98) levels and macro (G65/G66/G-M code) levels below the main program.
@@ -135,8 +138,8 @@ class Dialect:
     max_macro_nesting: int = 4
     #: DO-END nesting per program level (L5792).
     max_loop_nesting: int = 3
-    #: Canned-cycle machine parameters (G73/G83 d, G76/G87 shift direction, rigid tapping limits).
-    cycle_params: CycleParameters = field(default_factory=CycleParameters)
+    #: Tool compensation parameters: tool length type A/B, start-up type A/B, D radius/diameter (offsets.py).
+    compensation: CompensationSettings = field(default_factory=CompensationSettings)
     #: Whether a dialect that is listed but not built yet (raises on use).
     implemented: bool = True
 

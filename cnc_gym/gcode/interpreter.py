@@ -22,6 +22,7 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import cycles
 from cnc_gym.gcode.calls import FlowOptions, FlowRunner
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder, OffsetStack, TransformChain
+from cnc_gym.gcode.compensation import ToolCompensation
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
 from cnc_gym.gcode.reader import split_words
@@ -59,6 +60,9 @@ _WORD_SPECS = {
     "F": CodeSpec("F", -1, "feed", step="feed"),
     "S": CodeSpec("S", -1, "spindle_speed", step="spindle_speed"),
     "T": CodeSpec("T", -1, "tool", step="tool"),
+    # D and H select offset numbers before anything of the block uses them (compensation.py).
+    "D": CodeSpec("D", -1, "offset_words", step="tool"),
+    "H": CodeSpec("H", -1, "offset_words", step="tool"),
 }
 _IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
 _IMPLICIT_CYCLE = CodeSpec("(modal canned cycle)", -1, "cycle", None, step="motion")
@@ -68,9 +72,12 @@ _ACTIONS = {
     "g92": "_do_g92", "g53": "_do_g53", "record": "_do_nothing", "feed": "_do_feed",
     "spindle_speed": "_do_spindle_speed", "tool": "_do_tool", "tool_change": "_do_tool_change",
     "spindle": "_do_spindle", "coolant": "_do_coolant", "stop": "_do_stop",
+    "cutter_comp": "_do_cutter_comp", "length_comp": "_do_length_comp",
+    "position_offset": "_do_position_offset",
+    "corner_arc": "_do_corner_arc", "offset_words": "_do_offset_words",
+    **dict.fromkeys(TRANSFORM_ACTIONS, "_do_transform"), "g09": "_do_g09",
     "subprogram_call": "_do_subprogram_call", "subprogram_return": "_do_subprogram_return",
     "macro_call": "_do_macro_call", "modal_call_cancel": "_do_modal_call_cancel",
-    **dict.fromkeys(TRANSFORM_ACTIONS, "_do_transform"), "g09": "_do_g09",
     "cycle": "_do_cycle", "cycle_cancel": "_do_cycle_cancel", "pattern": "_do_pattern",
     "rigid_tap": "_do_rigid_tap",
 }  # fmt: skip
@@ -81,7 +88,7 @@ class Interpreter:
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
                  start: tuple[float, float, float] = (0.0, 0.0, 0.0), machine: MachineConfig | None = None,
-                 ) -> None:  # fmt: skip
+                 tool_offsets=None) -> None:  # fmt: skip
         self.machine = machine  # reference positions (G27-G30)
         self.program = program
         self.dialect = dialect
@@ -91,6 +98,9 @@ class Interpreter:
         self.builder = FastToolpathBuilder(files=(program.file,))
         self.out = CanonicalMachine(self.builder, start)
         self.offsets = OffsetStack()
+        # Tool compensation (compensation.py): D/H tables (offsets.py), G40-G42, G43/G44/G49, G45-G48.
+        self.comp = ToolCompensation(dialect, tool_offsets)
+        self.tool_offsets = self.comp.offsets
         # Program-side transforms (G51.1, G51, G68; canonical.py) and G16 polar input (transforms.py).
         # ``_transformed`` is False while none is active: targets are then ``program + origin`` and the
         # program position is ``machine - origin`` (the hot path). While True, ``_program`` holds the
@@ -142,7 +152,7 @@ class Interpreter:
         if missing:
             raise ValueError(f"dialect {dialect.name} names unknown actions {sorted(missing)}")
         axes = dialect.axes
-        base = frozenset("FSTO")
+        base = frozenset("FSTODH")
         self._allowed_with_motion = {
             key: base | frozenset(axes) | frozenset(spec.words) for key, spec in dialect.gcodes.items()
             if spec.action == "motion"
@@ -169,6 +179,7 @@ class Interpreter:
             # run's blocks alive after it returns.
             self.macro = None
             self.variables.system = None
+        self.comp.finish(self.file)  # what the compensation look-ahead still holds
         return self.builder.build()
 
     def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
@@ -190,7 +201,8 @@ class Interpreter:
         self.out.line = block.line
 
         cycle = self.cycle
-        if ms is None and not cycle.code and not cycle.rigid_pending and (
+        if ms is None and not cycle.code and not cycle.rigid_pending and "D" not in values \
+                and "H" not in values and (
                 gs is None or (len(gs) == 1 and round(gs[0] * 10) in self._motion_specs)):  # fmt: skip
             # Hot path: no code, or one group-01 motion code; the other words are axis words, arc words,
             # F, S, T, O. Same checks and order as the general path, without building a plan.
@@ -273,7 +285,7 @@ class Interpreter:
         if g53 and motion_spec is not None and motion_spec.value not in (0, 1):
             raise self.error(f"G53 positions at rapid; it cannot be combined with {motion_spec.name}",
                              "bad-combination")  # fmt: skip
-        base = frozenset("FSTO")
+        base = frozenset("FSTODH")
         if axis_owner is not None:
             allowed = base | self._axis_letters | frozenset(axis_owner.words)
         elif g53:
@@ -294,7 +306,7 @@ class Interpreter:
                 self.modal[group] = key
         if motion_spec is not None:
             self._motion_key = keys[motion_spec.group]
-        for letter in ("F", "S", "T"):
+        for letter in ("F", "S", "T", "D", "H"):
             if letter in values:
                 items.append(_WORD_SPECS[letter])
         if motion_spec is None and axis_owner is None and not g53:
@@ -320,9 +332,6 @@ class Interpreter:
             if letter in self.dialect.other_axes:
                 raise self.error(f"axis {letter} is not on this machine (axes: {self.dialect.axes})",
                                  "unsupported-axis")  # fmt: skip
-            if letter in "HD":
-                raise self.error(f"{letter} (tool offset number) is not implemented yet: tool length and "
-                                 "cutter compensation come in a later issue", "not-implemented")  # fmt: skip
             context = f"with {owner.name}" if owner is not None else "in this block"
             raise self.error(f"address {letter} has no meaning {context}", "unused-word")
 
@@ -355,9 +364,28 @@ class Interpreter:
     def _do_nothing(self, spec: CodeSpec, values: dict | None = None) -> None:
         pass
 
+    # Tool compensation (compensation.py).
+    def _do_offset_words(self, spec: CodeSpec, values: dict) -> None:
+        if spec.name == "D" or "D" not in values:  # D and H are one item when both are in the block
+            self.comp.words(self, values)
+
+    def _do_cutter_comp(self, spec: CodeSpec, values: dict) -> None:
+        self.comp.cutter(self, spec, values)
+
+    def _do_length_comp(self, spec: CodeSpec, values: dict) -> None:
+        self.comp.length(self, spec, values)
+
+    def _do_position_offset(self, spec: CodeSpec, values: dict) -> None:
+        self.comp.position_offset(self, spec, values)
+
+    def _do_corner_arc(self, spec: CodeSpec, values: dict) -> None:
+        self.comp.corner_arc(self, spec, values)
+
     def _do_plane(self, spec: CodeSpec, values: dict | None = None) -> None:
         if self.chain.active:
             check_plane_change(self, spec.value)
+        if self.comp.side:
+            self.comp.check_plane(self, spec.value)
         self.plane = spec.value
 
     def _do_distance(self, spec: CodeSpec, values: dict | None = None) -> None:
@@ -546,6 +574,7 @@ class Interpreter:
         """G53 IP_: rapid to machine coordinates; one-shot; ignored in G91 (L1656)."""
         if self.incremental:
             return
+        self.comp.before_machine_move()
         pos = self.out.position
         s = self.scale
         target = tuple(pos[a] if letter not in values else values[letter] * s

@@ -108,7 +108,7 @@ def test_offsets_and_positions_in_inches():
         ("G10 L2 P7 X1\n", "bad-g10", 31),
         ("G10 L2 P1.5 X1\n", "bad-g10", 31),
         ("G10 L2 P1 R5\n", "unused-word", None),
-        ("G10 L10 P1 R5\n", "not-implemented", 10),
+        ("G10 L10 P0 R5\n", "bad-offset-number", 30),  # H00 is always 0 (compensation's offsets.py)
         ("G10 L20 P49 X1\n", "bad-g10", 31),
         ("G92 G01 X1 F100\n", "axis-word-conflict", None),
         ("G04 G00 X1\n", "axis-word-conflict", None),

@@ -65,11 +65,12 @@ _G_LIST = [
     _g(30, 0, "g30", step="motion", uses_axes=True, words="P"),
     _g(31, 0, "g31", step="motion", uses_axes=True),
     _todo(37, 0, "automatic tool length measurement G37", uses_axes=True),
-    _todo(39, 0, "corner offset arc G39"),
-    _todo(45, 0, "tool position offset G45", uses_axes=True),
-    _todo(46, 0, "tool position offset G46", uses_axes=True),
-    _todo(47, 0, "tool position offset G47", uses_axes=True),
-    _todo(48, 0, "tool position offset G48", uses_axes=True),
+    # G39 corner arc in cutter compensation (L4646-L4666; compensation.py).
+    _g(39, 0, "corner_arc", step="cutter_comp", words="IJK"),
+    _g(45, 0, "position_offset", 1, step="cutter_comp"),
+    _g(46, 0, "position_offset", -1, step="cutter_comp"),
+    _g(47, 0, "position_offset", 2, step="cutter_comp"),
+    _g(48, 0, "position_offset", -2, step="cutter_comp"),
     _g(52, 0, "g52", step="setting", uses_axes=True),
     _g(53, 0, "g53", step="motion"),
     _todo(53.1, 0, "tool axis direction control G53.1"),
@@ -94,15 +95,15 @@ _G_LIST = [
     # Group 06: units (L2100-L2129).
     _g(20, 6, "units", True, step="units"),
     _g(21, 6, "units", False, step="units"),
-    # Group 07: cutter radius compensation (L3921-L4646). G40 = off, the only state there is for now.
-    _g(40, 7, "record", step="cutter_comp"),
-    _todo(41, 7, "cutter radius compensation G41"),
-    _todo(42, 7, "cutter radius compensation G42"),
+    # Group 07: cutter radius compensation C (L3921-L4646; compensation.py).
+    _g(40, 7, "cutter_comp", 0, step="cutter_comp", words="IJK"),  # I/J/K: the cancel direction (L4420)
+    _g(41, 7, "cutter_comp", 1, step="cutter_comp"),
+    _g(42, 7, "cutter_comp", -1, step="cutter_comp"),
     # Group 08: tool length offset (L3845-L3919).
-    _todo(43, 8, "tool length offset G43"),
-    _todo(44, 8, "tool length offset G44"),
+    _g(43, 8, "length_comp", 1, step="length_comp"),
+    _g(44, 8, "length_comp", -1, step="length_comp"),
     _todo(43.4, 8, "tool centre point control G43.4"),
-    _g(49, 8, "record", step="length_comp"),
+    _g(49, 8, "length_comp", 0, step="length_comp"),
     # Group 09: canned cycles (L2338-L3830). G80 = no cycle.
     # The axis words of a cycle block are the hole position and bottom (cycles.py).
     *[_g(n, 9, "cycle", n, step="motion", uses_axes=True, words=CYCLE_WORDS[n]) for n in sorted(CYCLE_WORDS)],
@@ -303,16 +304,15 @@ ALARMS = {
     "overflow": 102,
     "variable-not-allowed": 205,
     "too-many-m-codes": 201,
-    # Macros and subprograms (notes §9.6, Appendix B).
-    "bad-call": 17,  # illegal macro program number / beyond the maximum repeat count
-    "program-not-found": 59,
-    "sequence-not-found": 60,
-    "duplicate-program": 73,
-    "missing-program-number": 76,  # ADDRESS P NOT DEFINED
-    "nesting": 77,  # SUBPROGRAM NESTING ERROR (subprograms and macro calls)
-    "do-end": 96,  # NO CORRESPONDING OF DO-END
-    "read-only-variable": 107,
-    "bad-macro-command": 205,
+    # Tool compensation (notes §5, §9.5; compensation.py, offsets.py).
+    "length-no-axis": 27,
+    "bad-offset-number": 30,
+    "bad-offset-value": 32,
+    "comp-no-intersection": 33,
+    "comp-arc-startup": 34,
+    "comp-plane-change": 37,
+    "comp-arc-centre": 38,
+    "comp-interference": 41,
     # Canned cycles (notes §9.4; the special-cycle checks pass their own 210-228 numbers).
     "cycle-group01": 61,
     "cycle-conflict": 61,
@@ -323,6 +323,16 @@ ALARMS = {
     "rigid-tap": 61,
     "cycle-missing-q": 45,
     "cycle-not-allowed": 44,
+    # Macros and subprograms (notes §9.6, Appendix B).
+    "bad-call": 17,  # illegal macro program number / beyond the maximum repeat count
+    "program-not-found": 59,
+    "sequence-not-found": 60,
+    "duplicate-program": 73,
+    "missing-program-number": 76,  # ADDRESS P NOT DEFINED
+    "nesting": 77,  # SUBPROGRAM NESTING ERROR (subprograms and macro calls)
+    "do-end": 96,  # NO CORRESPONDING OF DO-END
+    "read-only-variable": 107,
+    "bad-macro-command": 205,
 }
 
 DIALECT = Dialect(

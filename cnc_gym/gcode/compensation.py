@@ -1,0 +1,1019 @@
+"""Tool compensation: cutter radius compensation C (G40/G41/G42, G39), tool length and position offsets.
+
+Two layers:
+
+* **Plane geometry** (pure functions): a programmed move projected on the compensation plane is a
+  :class:`PlaneElement` (line or arc). :func:`offset_curve` gives its offset line/circle,
+  :func:`corner` the tool-centre points at the junction of two elements (GSK/Fanuc type C, seed notes
+  §5.2, manual L4107-L4237): intersection points at inner corners and outer corners of 90° or more,
+  extension points (two or three extra points) at outer corners under 90°, start-up and cancel of type A
+  or B. :func:`compensate` runs a whole sequence (start-up line, offset-mode moves, cancel line).
+* **The stage** (:class:`OffsetStage`): sits between the interpreter and the
+  :class:`~cnc_gym.gcode.canonical.CanonicalMachine` with the same interface (``straight_traverse``,
+  ``straight_feed``, ``arc_feed``, ``dwell``, ``position``, context attributes). It receives programmed
+  moves in machine coordinates (after the work offsets), keeps the look-ahead the corners need (the
+  manual's three-block buffer: a corner is resolved with the next move in the plane if it comes within
+  the next two blocks, else the vector is perpendicular to the block, L4119, L4515-L4555), and emits
+  compensated moves, with the tool length vector added at the machine end. ``position`` reports the
+  *programmed* position, so the interpreter's incremental and arc arithmetic stays in programmed
+  coordinates.
+
+Conventions: ``d`` is the signed offset, positive to the left of the direction of travel (G41 with a
+positive D), negative to the right (G42, or G41 with a negative D: the manual's swap, L4005). Arcs are
+signed sweeps in radians, positive counter-clockwise in the plane (u, v).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.offsets import ToolOffsets, apply_g10
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
+
+Point = tuple[float, float]
+Vec = tuple[float, float, float]
+TWO_PI = 2.0 * math.pi
+#: Tangent directions closer than this (|cross| of unit vectors) count as a smooth junction.
+SMOOTH = 1e-9
+#: Points closer than this (mm) are one point (no zero-length connecting moves).
+SAME_POINT = 1e-9
+#: An outer-corner intersection farther than this many offsets from the corner is not used (extension
+#: points instead); line-line corners of 90° or more have theirs within sqrt(2) offsets.
+OUTER_REACH = 2.0
+#: Blocks the stage reads past a block to find the next move in the plane (executing + 2 buffered).
+LOOKAHEAD_BLOCKS = 2
+
+
+class CompensationError(ProgramError):
+    """A compensation alarm raised by the geometry (the interpreter adds the dialect's alarm number)."""
+
+    def __init__(self, message: str, code: str, line: int = 0) -> None:
+        super().__init__(message, code=code, line=line)
+
+
+# ====================================================================== plane geometry
+@dataclass(frozen=True, slots=True)
+class PlaneElement:
+    """One programmed move in the compensation plane: a line, or an arc about ``center``."""
+
+    start: Point
+    end: Point
+    center: Point | None = None
+    sweep: float = 0.0  # signed rad, + = counter-clockwise; arcs only
+
+    @property
+    def is_arc(self) -> bool:
+        return self.center is not None
+
+    @property
+    def radius(self) -> float:
+        c = self.center
+        return math.hypot(self.start[0] - c[0], self.start[1] - c[1])
+
+    def tangent(self, at_end: bool) -> Point:
+        """Unit direction of travel at the start or the end."""
+        if self.center is None:
+            return _unit(self.end[0] - self.start[0], self.end[1] - self.start[1])
+        p = self.end if at_end else self.start
+        ru, rv = _unit(p[0] - self.center[0], p[1] - self.center[1])
+        return (-rv, ru) if self.sweep > 0 else (rv, -ru)
+
+    def offset_point(self, at_end: bool, d: float) -> Point:
+        """The point at offset ``d`` (left +) from the start or end, perpendicular to the travel there."""
+        tu, tv = self.tangent(at_end)
+        p = self.end if at_end else self.start
+        return (p[0] - d * tv, p[1] + d * tu)
+
+
+def _unit(du: float, dv: float) -> Point:
+    n = math.hypot(du, dv)
+    if n == 0.0:
+        raise ValueError("zero-length direction")
+    return (du / n, dv / n)
+
+
+def _dist(a: Point, b: Point) -> float:
+    return math.hypot(a[0] - b[0], a[1] - b[1])
+
+
+def offset_radius(element: PlaneElement, d: float) -> float:
+    """Radius of an arc's offset circle: smaller by d on the left of a CCW arc (the centre side)."""
+    return element.radius - d if element.sweep > 0 else element.radius + d
+
+
+def offset_curve(element: PlaneElement, d: float) -> tuple:
+    """``("line", point, unit direction)`` or ``("circle", centre, radius)`` of the element offset by d."""
+    if element.center is None:
+        t = element.tangent(False)
+        return ("line", element.offset_point(False, d), t)
+    return ("circle", element.center, offset_radius(element, d))
+
+
+def intersections(a: tuple, b: tuple) -> list[Point]:
+    """Intersection points of two offset curves (infinite lines, full circles)."""
+    if a[0] == "circle" and b[0] == "line":
+        a, b = b, a
+    if a[0] == "line" and b[0] == "line":
+        (pu, pv), (tu, tv) = a[1], a[2]
+        (qu, qv), (su, sv) = b[1], b[2]
+        cross = tu * sv - tv * su
+        if abs(cross) < SMOOTH:
+            return []
+        s = ((qu - pu) * sv - (qv - pv) * su) / cross
+        return [(pu + s * tu, pv + s * tv)]
+    if a[0] == "line":
+        (pu, pv), (tu, tv) = a[1], a[2]
+        (cu, cv), r = b[1], b[2]
+        # |p + s t - c|^2 = r^2 with |t| = 1: s^2 + 2 s (t.(p-c)) + |p-c|^2 - r^2 = 0
+        wu, wv = pu - cu, pv - cv
+        half_b = tu * wu + tv * wv
+        disc = half_b * half_b - (wu * wu + wv * wv - r * r)
+        if disc < 0.0:
+            if disc > -1e-12 * max(1.0, r * r):
+                disc = 0.0
+            else:
+                return []
+        root = math.sqrt(disc)
+        return [(pu + s * tu, pv + s * tv) for s in (-half_b - root, -half_b + root)]
+    (au, av), ra = a[1], a[2]
+    (bu, bv), rb = b[1], b[2]
+    dist = math.hypot(bu - au, bv - av)
+    if dist < SAME_POINT:
+        return []  # concentric: no point, or the whole circle (then the corner is smooth)
+    x = (dist * dist + ra * ra - rb * rb) / (2.0 * dist)
+    h2 = ra * ra - x * x
+    if h2 < 0.0:
+        if h2 > -1e-12 * max(1.0, ra * ra):
+            h2 = 0.0
+        else:
+            return []
+    h = math.sqrt(h2)
+    eu, ev = (bu - au) / dist, (bv - av) / dist
+    mu, mv = au + x * eu, av + x * ev
+    return [(mu - h * ev, mv + h * eu), (mu + h * ev, mv - h * eu)]
+
+
+def _nearest(points: list[Point], to: Point) -> Point | None:
+    return min(points, key=lambda p: _dist(p, to)) if points else None
+
+
+@dataclass(slots=True)
+class Corner:
+    """Tool-centre points at the junction P of blocks a and b.
+
+    ``end_a``: where a's compensated move ends. ``lead_b``: straight moves that belong to block b (its feed
+    or rapid) before its own compensated element. ``start_b``: where b's element starts (for an arc: on
+    its offset circle); for a line it is the last point of the lead (or ``end_a``).
+    """
+
+    end_a: Point
+    lead_b: list[Point] = field(default_factory=list)
+    start_b: Point | None = None
+    kind: str = ""  # smooth | inner | outer-intersection | outer-extension | perpendicular | switch
+
+    def __post_init__(self) -> None:
+        if self.start_b is None:
+            self.start_b = self.lead_b[-1] if self.lead_b else self.end_a
+
+
+def _dedupe(points: list[Point], after: Point) -> list[Point]:
+    out: list[Point] = []
+    last = after
+    for p in points:
+        if _dist(p, last) > SAME_POINT:
+            out.append(p)
+            last = p
+    return out
+
+
+def corner(a: PlaneElement, b: PlaneElement | None, d_a: float, d_b: float | None = None, *,
+           role: str = "offset", startup_type: str = "B") -> Corner:  # fmt: skip
+    """Tool-centre points at the end of ``a`` / start of ``b`` (type C, seed notes §5.2).
+
+    ``role``: ``offset`` (both blocks compensated), ``startup`` (``a`` is the start-up line: its start
+    has no vector), ``cancel`` (``b`` is the cancel line: it ends without a vector). ``b`` None: no next
+    move in the plane within the look-ahead (end of program, G40 without a move): the vector is
+    perpendicular to ``a`` at its end. ``d_b``: b's offset (G41/G42 switch, or a D change, L4471).
+    ``startup_type``: ``A`` or ``B`` for outer corners of start-up and cancel (parameter 2602#2 TPH).
+
+    Raises :class:`CompensationError` ``comp-no-intersection`` (alarm 33) when an inner corner's offset
+    curves do not meet.
+    """
+    p = a.end
+    if b is None:
+        end = a.offset_point(True, d_a)
+        return Corner(end, [], end, "perpendicular")
+    if d_b is None:
+        d_b = d_a
+    switch = d_a * d_b < 0.0
+    # A D change applies from the end vector of the block that carries it (L4471): a line starts with
+    # the previous offset (a taper), an arc runs on its new offset circle (a connecting move).
+    if not switch and not b.is_arc:
+        d_b = d_a
+    ta, tb = a.tangent(True), b.tangent(False)
+    cross = ta[0] * tb[1] - ta[1] * tb[0]
+    dot = ta[0] * tb[0] + ta[1] * tb[1]
+    va = a.offset_point(True, d_a)
+    vb = b.offset_point(False, d_b)
+    curve_a = offset_curve(a, d_a)
+    curve_b = offset_curve(b, d_b)
+
+    def perpendicular(kind: str) -> Corner:
+        lead = _dedupe([vb], va)
+        return Corner(va, lead, vb, kind)
+
+    if switch:
+        # G41 <-> G42 (L4335-L4349): no inside/outside; the intersection if the offset paths meet, else a
+        # vector perpendicular to b at its start.
+        point = _nearest(intersections(curve_a, curve_b), p)
+        if point is None:
+            return perpendicular("switch")
+        return Corner(point, [], point, "switch")
+    if abs(cross) < SMOOTH and dot > 0.0:
+        return perpendicular("smooth")
+    r = abs(d_a)
+    inner = d_a * cross > 0.0
+    if inner:
+        point = _nearest(intersections(curve_a, curve_b), p)
+        if point is None:
+            raise CompensationError("cutter compensation: the offset paths of an inner corner do not intersect "
+                                    f"(offset {r:g} mm is too large for the corner at ({p[0]:g}, {p[1]:g}))",
+                                    "comp-no-intersection")  # fmt: skip
+        return Corner(point, [], point, "inner")
+    if role in ("startup", "cancel") and startup_type == "A":
+        if role == "startup":
+            return Corner(vb, [], vb, "type-a")  # straight to the vector perpendicular to b (L3980)
+        return Corner(va, [], va, "type-a")  # cancel: perpendicular to a, then straight to the end
+    obtuse = dot >= -1e-12  # alpha >= 90 deg on the workpiece side
+    if obtuse:
+        point = _nearest(intersections(curve_a, curve_b), p)
+        if point is not None and _dist(point, p) <= OUTER_REACH * r + SAME_POINT and _forward(point, va, ta) \
+                and _forward(vb, point, tb):  # fmt: skip
+            return Corner(point, [], point, "outer-intersection")
+    # Acute outer corner (or an obtuse one whose curves do not meet nearby): extension points r beyond
+    # the end of a and r before the start of b along their tangents (two or three extra points, L4452).
+    q1 = (va[0] + r * ta[0], va[1] + r * ta[1])
+    q2 = (vb[0] - abs(d_b) * tb[0], vb[1] - abs(d_b) * tb[1])
+    if a.is_arc:
+        end_a, lead = va, [q1, q2]
+    else:
+        end_a, lead = q1, [q2]  # a line simply runs on to q1
+    if b.is_arc:
+        lead.append(vb)
+    return Corner(end_a, _dedupe(lead, end_a), vb, "outer-extension")
+
+
+def _forward(point: Point, origin: Point, direction: Point) -> bool:
+    """``point`` lies ahead of ``origin`` along ``direction`` (or on it)."""
+    return (point[0] - origin[0]) * direction[0] + (point[1] - origin[1]) * direction[1] >= -1e-9
+
+
+def arc_sweep_between(center: Point, start: Point, end: Point, programmed_sweep: float) -> float:
+    """Sweep from ``start`` to ``end`` about ``center`` nearest the programmed one (same 2π class)."""
+    a0 = math.atan2(start[1] - center[1], start[0] - center[0])
+    a1 = math.atan2(end[1] - center[1], end[0] - center[0])
+    raw = a1 - a0
+    return programmed_sweep + math.remainder(raw - programmed_sweep, TWO_PI)
+
+
+def check_line(element: PlaneElement, start: Point, end: Point, line: int = 0) -> None:
+    """Interference check (a) on a compensated line: its direction within 90° of the programmed one."""
+    pu, pv = element.end[0] - element.start[0], element.end[1] - element.start[1]
+    cu, cv = end[0] - start[0], end[1] - start[1]
+    if pu * cu + pv * cv < -1e-12 * max(1.0, math.hypot(pu, pv) * math.hypot(cu, cv)):
+        raise CompensationError("cutter compensation interference: the compensated path of this block runs "
+                                "against the programmed direction (a groove or step narrower than the tool)",
+                                "comp-interference", line)  # fmt: skip
+
+
+def check_arc(
+    element: PlaneElement, d: float, start: Point, end: Point, line: int = 0
+) -> tuple[float, float]:
+    """Interference checks on a compensated arc; returns (offset radius, compensated sweep)."""
+    radius = offset_radius(element, d)
+    if abs(radius) <= 1e-9:
+        raise CompensationError("cutter compensation: the arc's radius equals the offset, so the tool centre "
+                                "arc has its centre on its start and end", "comp-arc-centre", line)  # fmt: skip
+    if radius < 0.0:
+        raise CompensationError(f"cutter compensation interference: inner arc radius {element.radius:g} mm is "
+                                f"smaller than the offset {abs(d):g} mm", "comp-interference", line)  # fmt: skip
+    sweep = arc_sweep_between(element.center, start, end, element.sweep)
+    if sweep * element.sweep <= 0.0 and abs(element.sweep) > 1e-12:
+        raise CompensationError("cutter compensation interference: the tool centre arc would run the other "
+                                "way round (check (b): sweep differs from the programmed one)",
+                                "comp-interference", line)  # fmt: skip
+    return radius, sweep
+
+
+@dataclass(slots=True)
+class OutputMove:
+    """One compensated move in the plane: a line to ``end``, or an arc to ``end`` about ``center``."""
+
+    end: Point
+    center: Point | None = None
+    sweep: float = 0.0
+    block: int = 0  # index of the programmed element it belongs to
+
+
+def compensate(elements: list[PlaneElement], d: float, *, startup_type: str = "B",
+               cancel_direction: Point | None = None) -> list[OutputMove]:  # fmt: skip
+    """Tool-centre path of a whole sequence: ``elements[0]`` is the start-up line (from a tool with no
+    vector), the rest are compensated by ``d``; the last one is a cancel line unless it is an arc
+    (then the program ends in offset mode with the vector perpendicular to it). Pure; used by tests and
+    the same corner rules as the stage.
+    """
+    if not elements:
+        return []
+    if elements[0].is_arc:
+        raise CompensationError("cutter compensation start-up with an arc", "comp-arc-startup")
+    out: list[OutputMove] = []
+    cancel_last = len(elements) > 1 and not elements[-1].is_arc
+    body = elements if not cancel_last else elements[:-1]
+    tool: Point = elements[0].start
+    lead: list[Point] = []
+    start_b: Point = tool
+    for i, element in enumerate(body):
+        nxt = body[i + 1] if i + 1 < len(body) else (elements[-1] if cancel_last else None)
+        role = "startup" if i == 0 else "offset"
+        if nxt is not None and cancel_last and i + 1 == len(body):
+            role = "cancel" if i > 0 else "startup"
+        if i == 0 and nxt is not None and cancel_last and len(body) == 1:
+            raise CompensationError("start-up followed directly by the cancel block", "comp-bad-sequence")
+        if role == "cancel" and cancel_direction is not None:
+            virtual = PlaneElement(element.end, (element.end[0] + cancel_direction[0],
+                                                 element.end[1] + cancel_direction[1]))  # fmt: skip
+            c = _cancel_with_direction(element, virtual, d)
+        else:
+            c = corner(element, nxt, d, role=role, startup_type=startup_type)
+        for q in lead:
+            out.append(OutputMove(q, block=i))
+        if element.is_arc:
+            if _dist(tool if not lead else lead[-1], start_b) > SAME_POINT:
+                out.append(OutputMove(start_b, block=i))
+            radius, sweep = check_arc(element, d, start_b, c.end_a)
+            del radius
+            out.append(OutputMove(c.end_a, element.center, sweep, block=i))
+        else:
+            begin = lead[-1] if lead else tool
+            if i > 0:
+                check_line(element, begin, c.end_a)
+            out.append(OutputMove(c.end_a, block=i))
+        tool = c.end_a
+        lead = c.lead_b
+        start_b = c.start_b
+    if cancel_last:
+        for q in lead:
+            out.append(OutputMove(q, block=len(elements) - 1))
+        out.append(OutputMove(elements[-1].end, block=len(elements) - 1))
+    return out
+
+
+def _cancel_with_direction(a: PlaneElement, virtual: PlaneElement, d: float) -> Corner:
+    """``G40 X_ Y_ I_ J_`` (L4420-L4436): a ends where its offset path meets the offset of the (I, J)
+    direction from its end; if they do not meet, perpendicular to a at its end."""
+    point = _nearest(intersections(offset_curve(a, d), offset_curve(virtual, d)), a.end)
+    if point is None:
+        end = a.offset_point(True, d)
+        return Corner(end, [], end, "perpendicular")
+    return Corner(point, [], point, "cancel-ij")
+
+
+# ====================================================================== the stage
+@dataclass(slots=True)
+class _Item:
+    """A programmed move or dwell waiting in the look-ahead buffer, with its block's context."""
+
+    kind: str  # "rapid" | "line" | "arc" | "dwell"
+    target: Vec  # programmed machine-coordinate end (dwell: the position)
+    feed: float | None
+    context: tuple  # (line, file_index, modes, tool, spindle_rpm)
+    vector: Vec  # tool length vector at enqueue time
+    element: PlaneElement | None = None  # in-plane moves only
+    d: float = 0.0
+    seconds: float = 0.0
+    dwell_modes: SegmentMode = SegmentMode.NONE
+    helix_w: float = 0.0
+    lead: list[Point] = field(default_factory=list)
+    start_b: Point | None = None
+    role: str = "offset"
+
+
+class OffsetStage:
+    """Compensation stage with the :class:`CanonicalMachine` interface (see the module docstring).
+
+    The interpreter installs it in place of its canonical machine the first time a program uses G41/G42,
+    G43/G44 or G45-G48, and drives it through :meth:`set_cutter`, :meth:`set_length_vector`,
+    :meth:`set_position_offset`, :meth:`corner_arc` and :meth:`flush`.
+    """
+
+    def __init__(self, machine, *, startup_type: str = "A", alarms=None) -> None:
+        self.machine = machine
+        self.alarms = alarms or {}
+        self.startup_type = startup_type
+        self._position: Vec = machine.position  # programmed (uncompensated) position
+        self.file_index = machine.file_index
+        self.modes = machine.modes
+        self.tool = machine.tool
+        self.spindle_rpm = machine.spindle_rpm
+        self._line = machine.line
+        # Cutter compensation state.
+        self.d = 0.0  # signed offset of the blocks to come (left +)
+        self.plane = Plane.XY
+        self.active = False  # a vector is (or is about to be) applied
+        self.pending: _Item | None = None  # the last in-plane block, waiting for its end corner
+        self.deferred: list[_Item] = []  # moves without plane motion and dwells after it
+        self.blocks_since = 0
+        self.cancel_requested = False
+        self.cancel_direction: Point | None = None
+        self.corner_arc_pending = False
+        self.corner_arc_direction: Point | None = None
+        self.corner_arc_feed: float | None = None
+        # The tool length vector lives in OffsetStack.tool_length (it is in every target already); the
+        # stage only keeps it zero here. ``length_pending``: the change of that vector an incremental move of
+        # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, L3869).
+        self.vector: Vec = (0.0, 0.0, 0.0)
+        self.length_pending: Vec | None = None
+        self._raw_next = False
+        self._position_offset: tuple[int, float, frozenset[int], bool] | None = None
+
+    # ------------------------------------------------------------------ context
+    @property
+    def position(self) -> Vec:
+        """The programmed position (machine coordinates without the cutter compensation vector)."""
+        pending = self.length_pending
+        if pending is None:
+            return self._position
+        p = self._position
+        return (p[0] + pending[0], p[1] + pending[1], p[2] + pending[2])
+
+    @property
+    def line(self) -> int:
+        return self._line
+
+    @line.setter
+    def line(self, value: int) -> None:
+        self._guard(self._new_block, value)
+
+    def _guard(self, fn, *args):
+        """Run ``fn``; a compensation error gets the dialect's alarm number."""
+        try:
+            return fn(*args)
+        except CompensationError as err:
+            if err.alarm is None:
+                err.alarm = self.alarms.get(err.code)
+            raise
+
+    def _new_block(self, value: int) -> None:
+        # The interpreter sets the line at the start of every block: the look-ahead counts blocks here.
+        self._line = value
+        self.length_pending = None
+        self._raw_next = False
+        self._position_offset = None
+        if self.cancel_requested and self.pending is not None:
+            # G40 in a block without a move in the plane: the vector stays perpendicular to the last
+            # block and is cancelled on the next move (L4418).
+            self._resolve(None)
+            self.active = False
+        elif self.pending is not None:
+            self.blocks_since += 1
+            if self.blocks_since > LOOKAHEAD_BLOCKS:
+                # The two blocks after the pending one have no move in the plane: the next block cannot
+                # be seen, so its end vector is perpendicular to it (the overcut of L4535-L4545).
+                self._resolve(None)
+        if self.cancel_requested and self.pending is None:
+            self.cancel_requested = False
+            self.active = False
+
+    def _context(self) -> tuple:
+        return (self._line, self.file_index, self.modes, self.tool, self.spindle_rpm)
+
+    # ------------------------------------------------------------------ controls
+    def set_cutter(self, d: float, plane: Plane, *, cancel_direction: Point | None = None) -> None:
+        """G41/G42 (``d`` signed, left +) or G40 (``d`` 0, optional I/J direction). The change applies to
+        the blocks to come; a cancel happens on the next move in the plane (or at the next block)."""
+        if d == 0.0:
+            if self.active:
+                self.cancel_requested = True
+                self.cancel_direction = cancel_direction
+            self.d = 0.0
+            return
+        self.cancel_requested = False
+        self.d = d
+        self.plane = plane
+
+    def set_position_offset(
+        self, factor: int, amount: float, axes: frozenset[int], incremental: bool
+    ) -> None:
+        """G45 (+1), G46 (-1), G47 (+2), G48 (-2) for the move of this block on ``axes``."""
+        self._position_offset = (factor, amount, axes, incremental)
+
+    def corner_arc(self, direction: Point | None, feed: float | None) -> None:
+        """G39 [I J]: a corner arc of radius |d| at the end of the pending block (L4646-L4666)."""
+        self.corner_arc_pending = True
+        self.corner_arc_direction = direction
+        self.corner_arc_feed = feed
+
+    def __getattr__(self, name: str):
+        # Canonical operations the stage does not compensate (added by other stages, e.g. NURBS): emit
+        # what is buffered, then pass through; the programmed position follows the machine.
+        if name.startswith("_") or name == "machine":
+            raise AttributeError(name)
+        attribute = getattr(self.machine, name)
+        if not callable(attribute):
+            return attribute
+
+        def passthrough(*args, **kwargs):
+            self.flush()
+            self._set_machine_context(self._context())
+            result = attribute(*args, **kwargs)
+            self._position = self.machine.position
+            self.active = False
+            return result
+
+        return passthrough
+
+    def flush(self) -> None:
+        """End of program (or a move that must see the true position): resolve and emit everything."""
+        self._guard(self._flush)
+
+    def _flush(self) -> None:
+        if self.pending is not None:
+            self._resolve(None)
+        self._emit_deferred()
+        self.cancel_requested = False
+        if self.d == 0.0:
+            self.active = False
+
+    # ------------------------------------------------------------------ CanonicalMachine interface
+    def straight_traverse(self, target: Vec) -> None:
+        self._guard(self._straight_traverse, target)
+
+    def straight_feed(self, target: Vec, feed: float) -> None:
+        self._guard(self._move, "line", self._adjust(target), feed)
+
+    def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
+        self._guard(self._arc_feed, end, center, plane, sweep, feed)
+
+    def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None:
+        self._guard(self._dwell, seconds, modes)
+
+    def _straight_traverse(self, target: Vec) -> None:
+        if self._raw_next:
+            self._raw_next = False
+            self._set_machine_context(self._context())
+            self.machine.straight_traverse(target)
+            self._position = target
+            if self.active:
+                self.active = False
+            return
+        self._move("rapid", self._adjust(target), None)
+
+    def _arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
+        if self._position_offset is not None:
+            end, center = self._adjust_arc(end, center, plane, sweep)
+        u, v, _w = PLANE_AXES[plane]
+        start = self._position
+        if (self.active or self.d != 0.0) and plane != self.plane:
+            raise CompensationError(f"arc in the {Plane(plane).name} plane while cutter compensation works in "
+                                    f"the {Plane(self.plane).name} plane", "comp-plane-change")  # fmt: skip
+        if not self.active and self.d == 0.0:
+            self.machine.arc_feed(self._shift(end), self._shift(center), plane, sweep, feed)
+            self._position = end
+            return
+        element = PlaneElement((start[u], start[v]), (end[u], end[v]), (center[u], center[v]), sweep)
+        item = _Item("arc", end, feed, self._context(), self.vector, element, self.d)
+        self._plane_move(item)
+
+    def _dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None:
+        item = _Item(
+            "dwell", self._position, None, self._context(), self.vector, seconds=seconds, dwell_modes=modes
+        )
+        if self.pending is not None:
+            self.deferred.append(item)
+        else:
+            self._emit_dwell(item)
+
+    def begin_machine_move(self) -> None:
+        """G53 comes next: everything buffered is emitted first and the G53 rapid goes to the machine
+        position as given; cutter compensation restarts (a new start-up) after it (L1664, L3897)."""
+        self.flush()
+        self._raw_next = True
+
+    # ------------------------------------------------------------------ internals
+    def _adjust(self, target: Vec) -> Vec:
+        """G45-G48 on a straight move: each commanded axis's travel grows/shrinks by factor x D (L4785)."""
+        request = self._position_offset
+        if request is None:
+            return target
+        self._position_offset = None
+        factor, amount, axes, incremental = request
+        pos = self._position
+        out = list(target)
+        for a in axes:
+            delta = target[a] - pos[a]
+            if delta != 0.0:
+                delta += math.copysign(factor * amount, delta)
+            elif incremental:
+                delta = factor * amount  # a zero move in G91 moves by the offset (L4806, N9/N11)
+            out[a] = pos[a] + delta
+        return (out[0], out[1], out[2])
+
+    def _adjust_arc(self, end: Vec, center: Vec, plane: Plane, sweep: float) -> tuple[Vec, Vec]:
+        """G45-G48 on a quarter or three-quarter I/J/K circle: the radius changes by factor x D (L4831)."""
+        factor, amount, _axes, _incremental = self._position_offset
+        self._position_offset = None
+        u, v, _w = PLANE_AXES[plane]
+        pos = self._position
+        du, dv = end[u] - pos[u], end[v] - pos[v]
+        iu, iv = center[u] - pos[u], center[v] - pos[v]
+        radius = math.hypot(iu, iv)
+        quarter = (
+            abs(abs(du) - radius) < 1e-6 and abs(abs(dv) - radius) < 1e-6 and min(abs(iu), abs(iv)) < 1e-6
+        )
+        if not quarter or abs(abs(sweep) - math.pi) < 1e-6:
+            raise CompensationError("G45-G48 on an arc: only quarter and three-quarter circles with the "
+                                    "centre on an axis direction can be offset (L4831)",
+                                    "position-offset-arc")  # fmt: skip
+        change = factor * amount
+        new_end, new_center = list(end), list(center)
+        new_end[u] = pos[u] + du + math.copysign(change, du)
+        new_end[v] = pos[v] + dv + math.copysign(change, dv)
+        new_center[u] = pos[u] + (iu + math.copysign(change, iu) if abs(iu) > 1e-6 else 0.0)
+        new_center[v] = pos[v] + (iv + math.copysign(change, iv) if abs(iv) > 1e-6 else 0.0)
+        if radius + change <= 0.0:
+            raise CompensationError("G45-G48: the offset makes the arc radius zero or negative",
+                                    "position-offset-arc")  # fmt: skip
+        return (new_end[0], new_end[1], new_end[2]), (new_center[0], new_center[1], new_center[2])
+
+    def _shift(self, p: Vec) -> Vec:
+        v = self.vector
+        return (p[0] + v[0], p[1] + v[1], p[2] + v[2])
+
+    def _set_machine_context(self, context: tuple) -> None:
+        m = self.machine
+        m.line, m.file_index, m.modes, m.tool, m.spindle_rpm = context
+
+    def _move(self, kind: str, target: Vec, feed: float | None) -> None:
+        u, v, _w = PLANE_AXES[self.plane]
+        start = self._position
+        in_plane = abs(target[u] - start[u]) > SAME_POINT or abs(target[v] - start[v]) > SAME_POINT
+        if not self.active and (self.d == 0.0 or not in_plane):
+            # Cancel mode (or G41/G42 waiting for its start-up block): straight through, length vector added.
+            if self.pending is None and not self.deferred:
+                self._set_machine_context(self._context())
+                self._emit_straight(kind, self._shift(target), feed)
+                self._position = target
+                return
+        item = _Item(kind, target, feed, self._context(), self.vector)
+        if in_plane:
+            item.element = PlaneElement((start[u], start[v]), (target[u], target[v]))
+            item.d = self.d
+            self._plane_move(item)
+        else:
+            self.deferred.append(item)
+            self._position = target
+
+    def _emit_straight(self, kind: str, target: Vec, feed: float | None) -> None:
+        if kind == "rapid":
+            self.machine.straight_traverse(target)
+        else:
+            self.machine.straight_feed(target, feed)
+
+    def _plane_move(self, item: _Item) -> None:
+        element = item.element
+        line = self._line
+        if not self.active:
+            if item.kind == "arc":
+                raise CompensationError("cutter compensation start-up in an arc block: the start-up block "
+                                        "must be G00 or G01", "comp-arc-startup", line)  # fmt: skip
+            item.role = "startup"
+            item.start_b = element.start
+            self.active = True
+            self.pending = item
+            self.blocks_since = 0
+            self._position = item.target
+            return
+        if self.cancel_requested or item.d == 0.0:
+            if item.kind == "arc":
+                raise CompensationError("cutter compensation cancel in an arc block: the cancel block must be "
+                                        "G00 or G01", "comp-arc-startup", line)  # fmt: skip
+            item.role = "cancel"
+            self._resolve(item)
+            self._emit_deferred()
+            # The cancel line: from the last compensated point straight to the programmed end.
+            self._set_machine_context(item.context)
+            for q in item.lead:
+                self._emit_plane_point(q, item)
+            self._emit_straight(item.kind, self._with_plane(item.target, None, item.vector), item.feed)
+            self.active = False
+            self.cancel_requested = False
+            self._position = item.target
+            return
+        if self.pending is None:
+            # The previous block was resolved without seeing this one (look-ahead starved, L4535): the tool
+            # sits on the old vector and runs straight to this block's end vector (an arc: to its start).
+            item.start_b = element.offset_point(False, item.d)
+        else:
+            self._resolve(item)
+        self.pending = item
+        self.blocks_since = 0
+        self._position = item.target
+
+    def _resolve(self, nxt: _Item | None) -> None:
+        """Compute the corner at the end of the pending block with the next move ``nxt`` and emit it."""
+        a = self.pending
+        if a is None:
+            return
+        line = a.context[0]
+        if self.corner_arc_pending and nxt is not None and nxt.role != "cancel":
+            self._corner_arc_resolve(a, nxt)
+            return
+        b_el = nxt.element if nxt is not None else None
+        try:
+            if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:
+                virtual = PlaneElement(a.element.end, (a.element.end[0] + self.cancel_direction[0],
+                                                       a.element.end[1] + self.cancel_direction[1]))  # fmt: skip
+                c = _cancel_with_direction(a.element, virtual, a.d)
+            else:
+                role = "startup" if a.role == "startup" else ("cancel" if nxt is not None and nxt.role == "cancel"
+                                                             else "offset")  # fmt: skip
+                d_b = None if nxt is None or nxt.role == "cancel" else nxt.d
+                c = corner(a.element, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
+        except CompensationError as err:
+            err.line = err.line or line
+            raise
+        self._emit_block(a, c.end_a)
+        if nxt is not None:
+            nxt.lead = c.lead_b
+            nxt.start_b = c.start_b
+        self.pending = None
+        self._emit_deferred()
+
+    def _corner_arc_resolve(self, a: _Item, nxt: _Item) -> None:
+        """G39: a ends with the vector perpendicular to its end; an arc of radius |d| about the corner
+        takes the tool to the vector perpendicular to the next block's start (or to the I/J direction)."""
+        self.corner_arc_pending = False
+        p = a.element.end
+        end_a = a.element.offset_point(True, a.d)
+        if self.corner_arc_direction is not None:
+            virtual = PlaneElement(
+                p, (p[0] + self.corner_arc_direction[0], p[1] + self.corner_arc_direction[1])
+            )
+            target = virtual.offset_point(False, a.d)
+        else:
+            target = nxt.element.offset_point(False, nxt.d)
+        self._emit_block(a, end_a)
+        sweep = arc_sweep_between(p, end_a, target, 0.0)
+        if abs(sweep) > SMOOTH:
+            # The corner arc turns the same way as the path around the corner: CCW for G42 (d < 0) going
+            # round an outer corner to the left... take the short way round the corner point.
+            self._set_machine_context(a.context)
+            u, v, w = PLANE_AXES[self.plane]
+            pos = self.machine.position
+            end3 = [0.0, 0.0, 0.0]
+            end3[u], end3[v], end3[w] = target[0] + a.vector[u], target[1] + a.vector[v], pos[w]
+            center3 = [0.0, 0.0, 0.0]
+            center3[u], center3[v], center3[w] = p[0] + a.vector[u], p[1] + a.vector[v], pos[w]
+            feed = self.corner_arc_feed or a.feed or nxt.feed
+            if not feed:
+                raise CompensationError("G39 needs a feed: no F programmed yet", "missing-feed", a.context[0])
+            self.machine.arc_feed(tuple(end3), tuple(center3), self.plane, sweep, feed)
+        nxt.lead = []
+        nxt.start_b = target
+        self.pending = None
+        self._emit_deferred()
+
+    def _with_plane(self, target: Vec, point: Point | None, vector: Vec) -> Vec:
+        """Machine target: programmed ``target`` with its plane coordinates replaced by ``point``, plus
+        the length vector."""
+        out = list(target)
+        if point is not None:
+            u, v, _w = PLANE_AXES[self.plane]
+            out[u], out[v] = point
+        return (out[0] + vector[0], out[1] + vector[1], out[2] + vector[2])
+
+    def _emit_plane_point(self, point: Point, item: _Item) -> None:
+        """A straight connecting move in the plane (the normal axis stays) with the item's feed/rapid."""
+        u, v, _w = PLANE_AXES[self.plane]
+        target = list(self.machine.position)
+        target[u], target[v] = point[0] + item.vector[u], point[1] + item.vector[v]
+        self._emit_straight("rapid" if item.kind == "rapid" else "line", (target[0], target[1], target[2]),
+                            item.feed)  # fmt: skip
+
+    def _emit_block(self, item: _Item, end: Point) -> None:
+        """Emit a resolved in-plane block: its lead moves, then its element to ``end``."""
+        self._set_machine_context(item.context)
+        element = item.element
+        line = item.context[0]
+        u, v, _w = PLANE_AXES[self.plane]
+        for q in item.lead:
+            self._emit_plane_point(q, item)
+        pos = self.machine.position
+        here = (pos[u] - item.vector[u], pos[v] - item.vector[v])
+        if item.kind == "arc":
+            start = item.start_b if item.start_b is not None else here
+            if _dist(here, start) > 1e-7:
+                self._emit_plane_point(start, item)
+            radius, sweep = check_arc(element, item.d, start, end, line)
+            del radius
+            target = self._with_plane(item.target, end, item.vector)
+            center = list(target)
+            center[u], center[v] = element.center[0] + item.vector[u], element.center[1] + item.vector[v]
+            self.machine.arc_feed(target, (center[0], center[1], center[2]), self.plane, sweep, item.feed)
+            return
+        if item.role != "startup":
+            check_line(element, here, end, line)
+        self._emit_straight(item.kind, self._with_plane(item.target, end, item.vector), item.feed)
+
+    def _emit_deferred(self) -> None:
+        items, self.deferred = self.deferred, []
+        u, v, _w = PLANE_AXES[self.plane]
+        for item in items:
+            if item.kind == "dwell":
+                self._emit_dwell(item)
+                continue
+            pos = self.machine.position
+            here = (pos[u] - item.vector[u], pos[v] - item.vector[v])
+            self._set_machine_context(item.context)
+            self._emit_straight(item.kind, self._with_plane(item.target, here, item.vector), item.feed)
+
+    def _emit_dwell(self, item: _Item) -> None:
+        self._set_machine_context(item.context)
+        self.machine.dwell(item.seconds, item.dwell_modes)
+
+
+# ====================================================================== interpreter glue
+_LETTERS = "XYZ"
+_IJK = "IJK"
+
+
+class ToolCompensation:
+    """The interpreter's tool compensation state and actions (called from a few hooks in interpreter.py).
+
+    Holds the offset memory (:class:`~cnc_gym.gcode.offsets.ToolOffsets`), the selected D and H
+    numbers, the G40/G41/G42 and G43/G44/G49 modes, and installs the :class:`OffsetStage` in place of the
+    interpreter's canonical machine the first time a program needs it (plain programs keep the direct
+    path). Holds no reference to the interpreter (it is passed in), so no reference cycle.
+    """
+
+    def __init__(self, dialect, tool_offsets=None) -> None:
+        self.settings = dialect.compensation
+        self.offsets: ToolOffsets = self.settings.new_offsets(tool_offsets)
+        self.d_number = 0
+        self.h_number = 0
+        self.side = 0  # +1 G41, -1 G42, 0 G40
+        self.plane = Plane.XY  # plane of the G41/G42 in force
+        self.length_sign = 0  # +1 G43, -1 G44, 0 G49
+        self.length_axis = 2
+        self.stage: OffsetStage | None = None
+
+    # ------------------------------------------------------------------ helpers
+    def install(self, interp) -> OffsetStage:
+        if self.stage is None:
+            self.stage = OffsetStage(interp.out, startup_type=self.settings.startup_type,
+                                     alarms=interp.dialect.alarms)  # fmt: skip
+            interp.out = self.stage
+        return self.stage
+
+    def signed_offset(self) -> float:
+        """The signed compensation offset (left +) for the D and G41/G42 in force."""
+        return self.side * self.offsets.radius(self.d_number) if self.side else 0.0
+
+    def _direction(self, interp, values: dict) -> Point | None:
+        u, v, _w = PLANE_AXES[interp.plane]
+        iu, iv = values.get(_IJK[u]), values.get(_IJK[v])
+        if iu is None and iv is None:
+            return None
+        du, dv = (iu or 0.0) * interp.scale, (iv or 0.0) * interp.scale
+        if du == 0.0 and dv == 0.0:
+            raise interp.error("the I/J/K direction is zero", "comp-bad-direction")
+        return (du, dv)
+
+    # ------------------------------------------------------------------ words
+    def words(self, interp, values: dict) -> None:
+        """D and H words: select the offset numbers (D and H are modal, L4468, L3887)."""
+        if "D" in values:
+            self.d_number = int(values["D"])
+            if self.side and self.stage is not None:
+                # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
+                self.stage.set_cutter(self.signed_offset(), self.plane)
+        if "H" in values:
+            self.h_number = int(values["H"])
+            if self.length_sign:
+                self._apply_length(interp, values)
+
+    # ------------------------------------------------------------------ G40 / G41 / G42
+    def cutter(self, interp, spec, values: dict) -> None:
+        side = int(spec.value)
+        if side:
+            if self.side and interp.plane != self.plane:
+                raise interp.error(
+                    "G41/G42: the plane changed in cutter compensation mode", "comp-plane-change"
+                )
+            self.side = side
+            self.plane = interp.plane
+            stage = self.install(interp)
+            stage.set_cutter(self.signed_offset(), self.plane)
+            return
+        self.side = 0
+        direction = self._direction(interp, values)
+        if self.stage is not None:
+            self.stage.set_cutter(0.0, self.plane, cancel_direction=direction)
+
+    def check_plane(self, interp, plane) -> None:
+        """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (L4175)."""
+        if self.side and plane != self.plane:
+            raise interp.error(f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with "
+                               "G40 first)", "comp-plane-change")  # fmt: skip
+
+    def corner_arc(self, interp, spec, values: dict) -> None:
+        """G39 [I_J_]: corner arc of the compensation radius (L4646-L4666); only in offset mode."""
+        if not self.side or self.stage is None or not self.stage.active:
+            raise interp.error("G39 is only allowed in cutter compensation mode (G41/G42 after start-up)",
+                               "g39-without-comp")  # fmt: skip
+        self.stage.corner_arc(self._direction(interp, values), interp.feed)
+
+    # ------------------------------------------------------------------ G43 / G44 / G49
+    def length(self, interp, spec, values: dict) -> None:
+        sign = int(spec.value)
+        if sign and not any(letter in values for letter in _LETTERS):
+            raise interp.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
+        motion_key = interp.modal.get(1)
+        if motion_key in (20, 30) and any(letter in values for letter in _LETTERS + "IJKR"):
+            _u, _v, w = PLANE_AXES[interp.plane]
+            if _LETTERS[w] in values:
+                raise interp.error(
+                    f"{spec.name} cannot be given in a helical block (L1103)", "length-helical"
+                )
+        self.length_sign = sign
+        if sign:
+            self.length_axis = 2 if self.settings.tool_length_type == "A" else PLANE_AXES[interp.plane][2]
+        self._apply_length(interp, values)
+
+    def _apply_length(self, interp, values: dict) -> None:
+        """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the
+        next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (L3913)."""
+        new = [0.0, 0.0, 0.0]
+        if self.length_sign:
+            new[self.length_axis] = self.length_sign * self.offsets.length(self.h_number)
+        old = interp.offsets.tool_length
+        if new == list(old):
+            return
+        delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
+        interp.offsets.tool_length = new
+        interp.offsets.update()
+        if interp.incremental and not interp._transformed and any(
+                _LETTERS[a] in values and delta[a] != 0.0 for a in range(3)):  # fmt: skip
+            # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
+            # transformed path does this by itself (its program position ignores the machine's).
+            stage = self.install(interp)
+            stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
+
+    @property
+    def length_vector(self) -> tuple[float, float, float]:
+        """The selected tool length vector (for #5081-#5083): sign x H value on the offset axis."""
+        out = [0.0, 0.0, 0.0]
+        if self.length_sign:
+            out[self.length_axis] = self.length_sign * self.offsets.length(self.h_number)
+        return (out[0], out[1], out[2])
+
+    # ------------------------------------------------------------------ G45-G48
+    def position_offset(self, interp, spec, values: dict) -> None:
+        """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
+        value (L4785-L4862). Not in G41/G42 mode (L4825); ignored in canned-cycle mode (L4839)."""
+        if self.side:
+            raise interp.error(f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
+                               "position-offset-in-comp")  # fmt: skip
+        cycle = getattr(interp, "cycle", None)
+        if cycle is not None and getattr(cycle, "code", None):
+            return
+        axes = frozenset(a for a in range(3) if _LETTERS[a] in values)
+        amount = self.offsets.position_offset(self.d_number)
+        self.install(interp).set_position_offset(int(spec.value), amount, axes, interp.incremental)
+
+    # ------------------------------------------------------------------ G10 L10-L13, G53, end
+    def g10(self, interp, kind: int, values: dict) -> None:
+        """``G10 L10..L13 P_ R_`` (the G10 action calls this for L10-L13)."""
+        number = values.get("P")
+        value = values.get("R")
+        if number is not None and number != int(number):
+            raise interp.error(f"G10 L{kind} P{number:g}: P is an offset number", "bad-g10")
+        apply_g10(self.offsets, kind, number, None if value is None else value * interp.scale,
+                  incremental=interp.incremental, error=interp.error)  # fmt: skip
+        if self.length_sign and kind in (10, 11) and number == self.h_number:
+            self._apply_length(interp, {})
+
+    def before_machine_move(self) -> None:
+        """G53 is about to move in machine coordinates."""
+        if self.stage is not None:
+            self.stage.begin_machine_move()
+
+    def finish(self, file: str = "<program>") -> None:
+        """End of the program: emit what the look-ahead still holds (the vector stays, L4112)."""
+        if self.stage is not None:
+            try:
+                self.stage.flush()
+            except ProgramError as err:
+                raise err.located(file, self.stage.line) from None
