@@ -47,6 +47,11 @@ class AxisConfig:
     velocity_loop_damping: float = 0.7
     min_position_mm: float = -1e6  # travel limits (stored stroke check 1); generous by default
     max_position_mm: float = 1e6
+    # Reference positions in machine coordinates: 1 for G28/G27, 2-4 for G30 P2-P4 (GSK P1051-P1053).
+    reference_1_mm: float = 0.0
+    reference_2_mm: float = 0.0
+    reference_3_mm: float = 0.0
+    reference_4_mm: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -154,7 +159,7 @@ def _build(cls, data: Any, source: str, where: str):
         value = want(raw)
         if not math.isfinite(value):
             raise ConfigError(f"{source}: {where}.{key} must be finite")
-        if value < 0 and not key.startswith(("min_position", "max_position")):
+        if value < 0 and not key.startswith(("min_position", "max_position", "reference_")):
             raise ConfigError(f"{source}: {where}.{key} must not be negative, got {raw!r}")
         values[key] = value
     obj = cls(**values)
