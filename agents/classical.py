@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -264,9 +265,10 @@ class ClassicalPlanner:
         self.schedule = schedule
         if env is None or self.refine_iterations <= 0:
             return schedule
-        # Offending places of the previous round: (path position, error, speed). A place whose error did
-        # not drop although the speed there did does not depend on the feed (e.g. the servo still
-        # settling from a rapid when the cut begins); lowering the cap there would only cost time.
+        # Offending places of the previous round: (path position, error, speed). Every round lowers the
+        # cap below the speed actually run at an offending place, so a place whose error did not drop
+        # does not depend on the feed (e.g. the servo still settling from a rapid when the cut begins);
+        # lowering the cap there again would only cost time.
         floor = np.where(cutting, self.min_override * feed_mm_s, 0.0)
         previous: list[tuple[float, float, float]] = []
         unresponsive: list[float] = []
@@ -282,11 +284,7 @@ class ClassicalPlanner:
                 if any(abs(where - u) < 0.5 for u in unresponsive):
                     continue
                 before = [(e, v) for (w, e, v) in previous if abs(w - where) < 0.5]
-                if (
-                    before
-                    and speed[k] < 0.9 * max(v for _, v in before)
-                    and err > 0.99 * max(e for e, _ in before)
-                ):
+                if before and err > 0.99 * max(e for e, _ in before):
                     unresponsive.append(where)
                     continue
                 offending.append((k, where, err))
@@ -308,7 +306,7 @@ class ClassicalPlanner:
                 back = max(2.0, 4.0 * float(speed[k]) * float(np.max(1.0 / model.kv)))
                 window = (s >= where - back) & (s <= where + 1.0)
                 ratio[window] = np.minimum(ratio[window], max(0.3, 0.95 * target / err))
-            lowered = ratio < 1.0
+            lowered = (ratio < 1.0) & cutting
             new_cap = np.maximum(np.minimum(run_speed, schedule.speed_mm_s) * ratio, floor)
             cap[lowered] = np.minimum(cap[lowered], new_cap[lowered])
             schedule = self._schedule(s, cap, cutting, feed_mm_s, accel_eff, jerk)
@@ -351,9 +349,16 @@ class ClassicalPlanner:
 
         Returns per control step: path position (mm), contour error (mm) and path speed (mm/s).
         """
+        # Tool paths are immutable and may be large: share them instead of copying.
+        memo: dict[int, Any] = {}
+        for toolpath in [getattr(env, "toolpath", None), *(tp for _, tp in getattr(env, "_programs", []))]:
+            if toolpath is not None:
+                memo[id(toolpath)] = toolpath
         try:
-            sim = copy.deepcopy(env)
-        except Exception:  # an env that cannot be copied: fall back to the model-only schedule
+            sim = copy.deepcopy(env, memo)
+        except Exception as exc:  # an env that cannot be copied: fall back to the model-only schedule
+            warnings.warn(f"classical planner: cannot copy the env to refine the schedule ({exc}); "
+                          "using the servo model alone", RuntimeWarning, stacklevel=3)  # fmt: skip
             return None, None, None
         info: dict[str, Any] = {}
         observation = None

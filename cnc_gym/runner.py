@@ -46,6 +46,7 @@ class RunResult:
     feed_mm_min: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     override: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     contour_error_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    cutting: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=bool))
 
     def summary(self) -> dict[str, Any]:
         """The JSON-able summary (plain Python numbers)."""
@@ -106,7 +107,13 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         if bar is not None:
             bar.close()
     rms = float(info.get("contour_error_rms_mm", 0.0))
-    path_xyz = toolpath.evaluate(np.asarray(path_s))[0] if record and path_s else np.zeros((0, 3))
+    path_xyz, cutting = np.zeros((0, 3)), np.zeros(0, dtype=bool)
+    if record and path_s:
+        from cnc_gym.toolpath import SegmentKind
+
+        path_xyz = toolpath.evaluate(np.asarray(path_s))[0]
+        kind = toolpath.kind[toolpath.segment_at(np.asarray(path_s))]
+        cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
     return RunResult(
         program=str(info.get("program", getattr(base, "program_name", "program"))),
         machine=str(base.machine.name),
@@ -124,6 +131,7 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         feed_mm_min=np.asarray(feeds),
         override=np.asarray(overrides),
         contour_error_mm=np.asarray(errors),
+        cutting=cutting,
     )
 
 
@@ -153,11 +161,15 @@ def plot_run(result: RunResult, path: str | Path) -> Path:
     xy = result.path_xyz[:, :2]
     if len(xy) >= 2:
         segments = np.stack([xy[:-1], xy[1:]], axis=1)
-        lines = LineCollection(segments, cmap="viridis", linewidths=2)
-        lines.set_array(result.feed_mm_min[1:])
+        cut = result.cutting[1:] if len(result.cutting) == len(xy) else np.ones(len(segments), dtype=bool)
+        # Rapids in thin grey: their speed would swamp the colour scale of the cutting feed.
+        if np.any(~cut):
+            ax_path.add_collection(LineCollection(segments[~cut], colors="0.7", linewidths=0.8))
+        lines = LineCollection(segments[cut], cmap="viridis", linewidths=2)
+        lines.set_array(result.feed_mm_min[1:][cut])
         ax_path.add_collection(lines)
         ax_path.autoscale()
-        fig.colorbar(lines, ax=ax_path, label="feed (mm/min)")
+        fig.colorbar(lines, ax=ax_path, label="feed on cutting moves (mm/min)")
     ax_path.set_aspect("equal", adjustable="datalim")
     ax_path.set_xlabel("X (mm)")
     ax_path.set_ylabel("Y (mm)")

@@ -12,6 +12,20 @@ from cnc_gym.runner import run_episode
 
 OVERRIDES = np.round(np.arange(1, 21) * 0.1, 1)  # 10 %, 20 %, … 200 %
 
+# A corner-rich part that starts cutting at the origin (no rapid before the first cut): zig-zag teeth
+# (turns of ±53° and 127°), two 90° corners and a closing move; F3000.
+ZIGZAG = """(zigzag: sharp corners only)
+G90 G17 G21
+G01 X10 Y5 F3000
+X20 Y0
+X30 Y5
+X40 Y0
+X40 Y10
+X0 Y10
+X0 Y0
+M30
+"""
+
 
 def _constant_verdict(env, override: float, time_to_beat: float) -> str:
     """'violates', 'slower' (still running at ``time_to_beat``) or 'FASTER' for one constant override.
@@ -34,7 +48,9 @@ def _constant_verdict(env, override: float, time_to_beat: float) -> str:
             return "slower"
 
 
-@pytest.mark.parametrize("program", ["star"])
+@pytest.mark.parametrize(
+    "program", [ZIGZAG, "star", "pocket", "freeform"], ids=["zigzag", "star", "pocket", "freeform"]
+)
 def test_classical_beats_every_compliant_constant_override(program):
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program], machine="vmc-small")
     classical = run_episode(env, ClassicalPlanner(), record=False)
