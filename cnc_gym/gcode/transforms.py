@@ -374,9 +374,9 @@ class Parameters:
         self.raw: dict[tuple[int, int], int] = {}
 
     def write(self, interp: Interpreter, number: int, axis: int, value: int) -> None:
-        if number in AXIS_PARAMETERS and not 1 <= axis <= 5:
+        if (number in AXIS_PARAMETERS and not 1 <= axis <= 5) or not 0 <= axis <= 5:
             raise interp.error(f"parameter {number} is an axis parameter: give P1..P5", "bad-g10")
-        if number not in AXIS_PARAMETERS and axis:
+        if number in (1860, 1861) and axis:  # other numbers: we do not know, P1..P5 accepted
             raise interp.error(f"parameter {number} is not an axis parameter: P has no meaning",
                                "unused-word")  # fmt: skip
         limit = PARAMETER_RANGES.get(number)

@@ -53,7 +53,7 @@ _G_LIST = [
     # Group 00: one-shot.
     _g(4, 0, "dwell", step="dwell", uses_axes=True, words="P"),
     # G09 (one-shot exact stop) is missing from GSK's table (notes §3.5); Fanuc-standard, kept.
-    _g(9, 0, "g09", step="path_mode"),
+    _g(9, 0, "g09", step="modes"),  # after G61-G64 of the same block
     _todo(5, 0, "high-precision contour control G05"),
     _todo(7.1, 0, "cylindrical interpolation G07.1"),
     _todo(107, 0, "cylindrical interpolation G107"),
