@@ -756,6 +756,7 @@ def pattern_block(interp: Interpreter, code: int, values: dict, cycle_code: int 
             raise interp.error(f"G{code} needs J (length of sides 2 and 4)", "cycle-argument", alarm=216)
         # The block's cycle code, R, Z, Q, P, F are the modal cycle data (stored without drilling).
         data = {k: v for k, v in values.items() if k in "RZQP"}
+        data["K"] = 0.0  # store only: the pattern drills the holes
         cycle_block(interp, cycle_code, data)
         n13 = _count(interp, "P", values, code, required=False)
         n24 = _count(interp, "K", values, code, required=False)
