@@ -83,10 +83,11 @@ class CycleState:
     code: int = 0
     #: Initial level: the program coordinate of the drilling axis when the cycle mode was entered.
     initial: float = 0.0
-    #: Z (bottom) and R as programmed, in mm: absolute levels in G90, increments in G91 (R from the
-    #: initial level, Z from R), reinterpreted by the distance mode of each hole.
+    #: R level (program mm, absolute: a G91 R is taken from the initial level when programmed) and the
+    #: bottom Z: absolute, or (``z_from_r``, programmed in G91) the distance from the R level.
     z: float | None = None
     r: float | None = None
+    z_from_r: bool = False
     q: float | None = None  # peck depth / shift, mm (|Q|)
     dwell_s: float = 0.0  # P, seconds
     words: dict = field(default_factory=dict)  # special-cycle data (I J L W V U D E), mm / plain
@@ -97,6 +98,7 @@ class CycleState:
         """G80 or a group-01 code: cycle off, Z, R and all hole data cleared (F is kept, L2655)."""
         self.code = 0
         self.z = self.r = self.q = None
+        self.z_from_r = False
         self.dwell_s = 0.0
         self.words = {}
         self.rigid = self.rigid_pending = False
@@ -600,9 +602,10 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
     letters = interp.dialect.axes
     bottom_letter = letters[w]
     if "R" in values:
-        state.r = values["R"] * s
+        state.r = values["R"] * s + (state.initial if interp.incremental else 0.0)
     if bottom_letter in values:
         state.z = values[bottom_letter] * s
+        state.z_from_r = interp.incremental
     if "P" in values:
         state.dwell_s = _dwell_from_p(interp, values)
     drills = hole_xy is not None or "R" in values or not interp._axis_letters.isdisjoint(values)
@@ -638,11 +641,8 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
     words = tuple(None if a == w else t for a, t in enumerate(words))
     for _ in range(repeats):
         initial = state.initial
-        if interp.incremental:
-            r_level = initial + state.r
-            bottom = r_level + state.z
-        else:
-            r_level, bottom = state.r, state.z
+        r_level = state.r
+        bottom = state.z + (r_level if state.z_from_r else 0.0)
         if code == 87:
             if bottom <= r_level:
                 raise interp.error(f"G87 back boring needs {bottom_letter} above R", "cycle-levels", alarm=61)

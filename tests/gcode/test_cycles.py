@@ -23,6 +23,7 @@ def records(text: str, **kw) -> list[dict]:
     """One dict per segment with the fields these tests read (the trace records omit spindle and modes)."""
     tp = interpret(text, **kw)
     return [{"kind": _KINDS[SegmentKind(int(tp.kind[n]))], "end": [float(c) for c in tp.end[n]],
+             "start": [float(c) for c in tp.start[n]],
              "feed": float(tp.feed[n]), "dwell_s": float(tp.dwell_s[n]), "modes": int(tp.modes[n]),
              "spindle_rpm": float(tp.spindle_rpm[n]), "line": int(tp.line[n])} for n in range(len(tp.kind))]
 
@@ -378,3 +379,41 @@ def test_g28_in_cycle_mode_is_alarm_44():
         pytest.skip("G28 is another part of the issue; the check runs once it exists")
     err = program_error("G81 X0 Y0 Z-5 R1 F10;\nG28 X0;\n")
     assert err.alarm == 44
+
+
+# ------------------------------------------------------------------ with polar input and tool length offsets
+@pytest.mark.parametrize("positions", ["Y150;\nY270;\n", "G91 Y120;\nY120;\n"])
+def test_x21_polar_bolt_circle(positions):
+    """X21 (L1815-L1845): G16 with G81: X = radius 100, Y = angle 30°, 150°, 270° (absolute), or +120°
+    each (G91 angles): holes at (86.603, 50), (-86.603, 50), (0, -100). The G91 version keeps the hole
+    depth: R and Z were programmed in G90 and stay absolute levels (docs/gcode.md: the manual's two G91
+    examples, X21 and X46 N024, both mean the same holes)."""
+    text = "G17 G90 G16;\nG81 X100 Y30 Z-20 R-5 F200;\n" + positions + "G15 G80;\n"
+    holes = [e for k, e in path(records(text)) if k == "line"]
+    c = 100 * 3**0.5 / 2
+    assert close(sum(holes, ()), (c, 50, -20, -c, 50, -20, 0, -100, -20))
+
+
+def test_x46_canned_cycles_with_tool_length_offset():
+    """X46 (L3293-L3330, notes §4.3 reconstruction) with H11 = 200, H15 = 190, H31 = 150. G43 Z0 Hn puts
+    the machine at Z = 0 + H, the initial level; every program level is shifted by +H (machine = program +
+    H). Holes #1-#6: R-97, Z-153 (machine 103 / 47), G98 after #3 and #6 back to 200. #7-#10 (G82 P30 =
+    0.03 s): R-97, Z-130 (machine 93 / 60). #11-#13 (G85): R-47, Z-153 with H31 (machine 103 / -3), N024
+    in G91 moves Y by -200 twice and keeps the depth (the levels were programmed in G90)."""
+    text = ("N001 G92 X0 Y0 Z0;\nN002 G90 G00 Z250 T11 M6;\nN003 G43 Z0 H11;\nN004 S300 M3;\n"
+            "N005 G99 G81 X400 Y-350 Z-153 R-97 F120;\nN006 Y-550;\nN007 G98 Y-750;\nN008 G99 X1200;\n"
+            "N009 Y-550;\nN010 G98 Y-350;\nN011 G00 X0 Y0 M5;\nN012 G49 Z250 T15 M6;\nN013 G43 Z0 H15;\n"
+            "N014 S200 M3;\nN015 G99 G82 X550 Y-450 Z-130 R-97 P30 F70;\nN016 G98 Y-650;\nN017 G99 X1050;\n"
+            "N018 G98 Y-450;\nN019 G00 X0 Y0 M5;\nN020 G49 Z250 T31 M6;\nN021 G43 Z0 H31;\nN022 S100 M3;\n"
+            "N023 G85 G99 X800 Y-350 Z-153 R-47 F50;\nN024 G91 Y-200;\nY-200;\nN025 G00 G90 X0 Y0 M5;\n"
+            "N026 G49 Z0;\nN027 M30;\n")  # fmt: skip
+    recs = records(text, tool_offsets={"H": {11: 200.0, 15: 190.0, 31: 150.0}})
+    drilled = [tuple(r["end"]) for r in recs if r["kind"] == "line" and r["end"][2] < r["start"][2]]
+    expected = [(400, -350, 47), (400, -550, 47), (400, -750, 47), (1200, -750, 47), (1200, -550, 47),
+                (1200, -350, 47), (550, -450, 60), (550, -650, 60), (1050, -650, 60), (1050, -450, 60),
+                (800, -350, -3), (800, -550, -3), (800, -750, -3)]  # fmt: skip
+    assert close(sum(drilled, ()), sum((tuple(float(c) for c in e) for e in expected), ()))
+    retracts = [r["end"][2] for r in recs if r["kind"] == "rapid" and r["line"] in (7, 10, 16, 18)][-1:]
+    assert retracts == [190.0]  # N018 G98: back to the initial level of tool 15 (machine 190)
+    dwells = [r["dwell_s"] for r in recs if r["kind"] == "dwell"]
+    assert dwells == [0.03] * 4
