@@ -188,8 +188,15 @@ def _dedupe(points: list[Point], after: Point) -> list[Point]:
     return out
 
 
-def corner(a: PlaneElement, b: PlaneElement | None, d_a: float, d_b: float | None = None, *,
-           role: str = "offset", startup_type: str = "B") -> Corner:  # fmt: skip
+def corner(
+    a: PlaneElement,
+    b: PlaneElement | None,
+    d_a: float,
+    d_b: float | None = None,
+    *,
+    role: str = "offset",
+    startup_type: str = "B",
+) -> Corner:
     """Tool-centre points at the end of ``a`` / start of ``b`` (type C, seed notes §5.2).
 
     ``role``: ``offset`` (both blocks compensated), ``startup`` (``a`` is the start-up line: its start
@@ -238,9 +245,11 @@ def corner(a: PlaneElement, b: PlaneElement | None, d_a: float, d_b: float | Non
     if inner:
         point = _nearest(intersections(curve_a, curve_b), p)
         if point is None:
-            raise CompensationError("cutter compensation: the offset paths of an inner corner do not intersect "
-                                    f"(offset {r:g} mm is too large for the corner at ({p[0]:g}, {p[1]:g}))",
-                                    "comp-no-intersection")  # fmt: skip
+            raise CompensationError(
+                "cutter compensation: the offset paths of an inner corner do not intersect "
+                f"(offset {r:g} mm is too large for the corner at ({p[0]:g}, {p[1]:g}))",
+                "comp-no-intersection",
+            )
         return Corner(point, [], point, "inner")
     if role in ("startup", "cancel") and startup_type == "A":
         if role == "startup":
@@ -249,13 +258,25 @@ def corner(a: PlaneElement, b: PlaneElement | None, d_a: float, d_b: float | Non
     obtuse = dot >= -1e-12  # alpha >= 90 deg on the workpiece side
     if obtuse:
         point = _nearest(intersections(curve_a, curve_b), p)
-        if point is not None and _dist(point, p) <= OUTER_REACH * r + SAME_POINT and _forward(point, va, ta) \
-                and _forward(vb, point, tb):  # fmt: skip
+        if (
+            point is not None
+            and _dist(point, p) <= OUTER_REACH * r + SAME_POINT
+            and _forward(point, va, ta)
+            and _forward(vb, point, tb)
+        ):
             return Corner(point, [], point, "outer-intersection")
     # Acute outer corner (or an obtuse one whose curves do not meet nearby): extension points r beyond
     # the end of a and r before the start of b along their tangents (two or three extra points, L4452).
     q1 = (va[0] + r * ta[0], va[1] + r * ta[1])
     q2 = (vb[0] - abs(d_b) * tb[0], vb[1] - abs(d_b) * tb[1])
+    if (q2[0] - q1[0]) * tb[0] + (q2[1] - q1[1]) * tb[1] < -1e-9:
+        # With one offset on both sides the move between the extension points never runs against b; it
+        # does when D grows a lot at the corner (X60, L4574): check (a), interference.
+        raise CompensationError(
+            "cutter compensation interference: the corner move runs against the "
+            "programmed direction of the next block (check (a))",
+            "comp-interference",
+        )
     if a.is_arc:
         end_a, lead = va, [q1, q2]
     else:
@@ -271,11 +292,17 @@ def _forward(point: Point, origin: Point, direction: Point) -> bool:
 
 
 def arc_sweep_between(center: Point, start: Point, end: Point, programmed_sweep: float) -> float:
-    """Sweep from ``start`` to ``end`` about ``center`` nearest the programmed one (same 2π class)."""
+    """Sweep from ``start`` to ``end`` about ``center`` in the programmed direction: magnitude in [0, 2π)
+    (a full circle's 2π when the programmed arc is one and the ends meet), signed like ``programmed_sweep``.
+    With ``programmed_sweep`` 0: the shorter way round."""
     a0 = math.atan2(start[1] - center[1], start[0] - center[0])
     a1 = math.atan2(end[1] - center[1], end[0] - center[0])
-    raw = a1 - a0
-    return programmed_sweep + math.remainder(raw - programmed_sweep, TWO_PI)
+    if programmed_sweep == 0.0:
+        return math.remainder(a1 - a0, TWO_PI)
+    raw = (a1 - a0) % TWO_PI if programmed_sweep > 0 else (a0 - a1) % TWO_PI
+    if abs(programmed_sweep) > TWO_PI - 1e-9 and raw < math.pi:
+        raw += TWO_PI  # a programmed full circle stays a full turn (a little more or less)
+    return math.copysign(raw, programmed_sweep)
 
 
 def check_line(element: PlaneElement, start: Point, end: Point, line: int = 0) -> None:
@@ -283,9 +310,12 @@ def check_line(element: PlaneElement, start: Point, end: Point, line: int = 0) -
     pu, pv = element.end[0] - element.start[0], element.end[1] - element.start[1]
     cu, cv = end[0] - start[0], end[1] - start[1]
     if pu * cu + pv * cv < -1e-12 * max(1.0, math.hypot(pu, pv) * math.hypot(cu, cv)):
-        raise CompensationError("cutter compensation interference: the compensated path of this block runs "
-                                "against the programmed direction (a groove or step narrower than the tool)",
-                                "comp-interference", line)  # fmt: skip
+        raise CompensationError(
+            "cutter compensation interference: the compensated path of this block runs "
+            "against the programmed direction (a groove or step narrower than the tool)",
+            "comp-interference",
+            line,
+        )
 
 
 def check_arc(
@@ -294,16 +324,29 @@ def check_arc(
     """Interference checks on a compensated arc; returns (offset radius, compensated sweep)."""
     radius = offset_radius(element, d)
     if abs(radius) <= 1e-9:
-        raise CompensationError("cutter compensation: the arc's radius equals the offset, so the tool centre "
-                                "arc has its centre on its start and end", "comp-arc-centre", line)  # fmt: skip
+        raise CompensationError(
+            "cutter compensation: the arc's radius equals the offset, so the tool centre "
+            "arc has its centre on its start and end",
+            "comp-arc-centre",
+            line,
+        )
     if radius < 0.0:
-        raise CompensationError(f"cutter compensation interference: inner arc radius {element.radius:g} mm is "
-                                f"smaller than the offset {abs(d):g} mm", "comp-interference", line)  # fmt: skip
+        raise CompensationError(
+            f"cutter compensation interference: inner arc radius {element.radius:g} mm is "
+            f"smaller than the offset {abs(d):g} mm",
+            "comp-interference",
+            line,
+        )
     sweep = arc_sweep_between(element.center, start, end, element.sweep)
-    if sweep * element.sweep <= 0.0 and abs(element.sweep) > 1e-12:
-        raise CompensationError("cutter compensation interference: the tool centre arc would run the other "
-                                "way round (check (b): sweep differs from the programmed one)",
-                                "comp-interference", line)  # fmt: skip
+    if abs(sweep - element.sweep) > math.pi:
+        # Check (b) (L4570-L4580): the tool-centre arc would run (almost) the other way round, or a
+        # one-quadrant arc would become a four-quadrant one.
+        raise CompensationError(
+            "cutter compensation interference: the tool centre arc would run the other "
+            "way round (check (b): sweep differs from the programmed one)",
+            "comp-interference",
+            line,
+        )
     return radius, sweep
 
 
@@ -317,8 +360,9 @@ class OutputMove:
     block: int = 0  # index of the programmed element it belongs to
 
 
-def compensate(elements: list[PlaneElement], d: float, *, startup_type: str = "B",
-               cancel_direction: Point | None = None) -> list[OutputMove]:  # fmt: skip
+def compensate(
+    elements: list[PlaneElement], d: float, *, startup_type: str = "B", cancel_direction: Point | None = None
+) -> list[OutputMove]:
     """Tool-centre path of a whole sequence: ``elements[0]`` is the start-up line (from a tool with no
     vector), the rest are compensated by ``d``; the last one is a cancel line unless it is an arc
     (then the program ends in offset mode with the vector perpendicular to it). Pure; used by tests and
@@ -342,8 +386,9 @@ def compensate(elements: list[PlaneElement], d: float, *, startup_type: str = "B
         if i == 0 and nxt is not None and cancel_last and len(body) == 1:
             raise CompensationError("start-up followed directly by the cancel block", "comp-bad-sequence")
         if role == "cancel" and cancel_direction is not None:
-            virtual = PlaneElement(element.end, (element.end[0] + cancel_direction[0],
-                                                 element.end[1] + cancel_direction[1]))  # fmt: skip
+            virtual = PlaneElement(
+                element.end, (element.end[0] + cancel_direction[0], element.end[1] + cancel_direction[1])
+            )
             c = _cancel_with_direction(element, virtual, d)
         else:
             c = corner(element, nxt, d, role=role, startup_type=startup_type)
@@ -576,8 +621,11 @@ class OffsetStage:
         u, v, _w = PLANE_AXES[plane]
         start = self._position
         if (self.active or self.d != 0.0) and plane != self.plane:
-            raise CompensationError(f"arc in the {Plane(plane).name} plane while cutter compensation works in "
-                                    f"the {Plane(self.plane).name} plane", "comp-plane-change")  # fmt: skip
+            raise CompensationError(
+                f"arc in the {Plane(plane).name} plane while cutter compensation works in "
+                f"the {Plane(self.plane).name} plane",
+                "comp-plane-change",
+            )
         if not self.active and self.d == 0.0:
             self.machine.arc_feed(self._shift(end), self._shift(center), plane, sweep, feed)
             self._position = end
@@ -633,9 +681,11 @@ class OffsetStage:
             abs(abs(du) - radius) < 1e-6 and abs(abs(dv) - radius) < 1e-6 and min(abs(iu), abs(iv)) < 1e-6
         )
         if not quarter or abs(abs(sweep) - math.pi) < 1e-6:
-            raise CompensationError("G45-G48 on an arc: only quarter and three-quarter circles with the "
-                                    "centre on an axis direction can be offset (L4831)",
-                                    "position-offset-arc")  # fmt: skip
+            raise CompensationError(
+                "G45-G48 on an arc: only quarter and three-quarter circles with the "
+                "centre on an axis direction can be offset (L4831)",
+                "position-offset-arc",
+            )
         change = factor * amount
         new_end, new_center = list(end), list(center)
         new_end[u] = pos[u] + du + math.copysign(change, du)
@@ -643,8 +693,9 @@ class OffsetStage:
         new_center[u] = pos[u] + (iu + math.copysign(change, iu) if abs(iu) > 1e-6 else 0.0)
         new_center[v] = pos[v] + (iv + math.copysign(change, iv) if abs(iv) > 1e-6 else 0.0)
         if radius + change <= 0.0:
-            raise CompensationError("G45-G48: the offset makes the arc radius zero or negative",
-                                    "position-offset-arc")  # fmt: skip
+            raise CompensationError(
+                "G45-G48: the offset makes the arc radius zero or negative", "position-offset-arc"
+            )
         return (new_end[0], new_end[1], new_end[2]), (new_center[0], new_center[1], new_center[2])
 
     def _shift(self, p: Vec) -> Vec:
@@ -659,13 +710,12 @@ class OffsetStage:
         u, v, _w = PLANE_AXES[self.plane]
         start = self._position
         in_plane = abs(target[u] - start[u]) > SAME_POINT or abs(target[v] - start[v]) > SAME_POINT
-        if not self.active and (self.d == 0.0 or not in_plane):
-            # Cancel mode (or G41/G42 waiting for its start-up block): straight through, length vector added.
-            if self.pending is None and not self.deferred:
-                self._set_machine_context(self._context())
-                self._emit_straight(kind, self._shift(target), feed)
-                self._position = target
-                return
+        if not self.active and (self.d == 0.0 or not in_plane) and self.pending is None and not self.deferred:
+            # Cancel mode (or G41/G42 waiting for its start-up block): straight through.
+            self._set_machine_context(self._context())
+            self._emit_straight(kind, self._shift(target), feed)
+            self._position = target
+            return
         item = _Item(kind, target, feed, self._context(), self.vector)
         if in_plane:
             item.element = PlaneElement((start[u], start[v]), (target[u], target[v]))
@@ -686,8 +736,11 @@ class OffsetStage:
         line = self._line
         if not self.active:
             if item.kind == "arc":
-                raise CompensationError("cutter compensation start-up in an arc block: the start-up block "
-                                        "must be G00 or G01", "comp-arc-startup", line)  # fmt: skip
+                raise CompensationError(
+                    "cutter compensation start-up in an arc block: the start-up block must be G00 or G01",
+                    "comp-arc-startup",
+                    line,
+                )
             item.role = "startup"
             item.start_b = element.start
             self.active = True
@@ -697,8 +750,11 @@ class OffsetStage:
             return
         if self.cancel_requested or item.d == 0.0:
             if item.kind == "arc":
-                raise CompensationError("cutter compensation cancel in an arc block: the cancel block must be "
-                                        "G00 or G01", "comp-arc-startup", line)  # fmt: skip
+                raise CompensationError(
+                    "cutter compensation cancel in an arc block: the cancel block must be G00 or G01",
+                    "comp-arc-startup",
+                    line,
+                )
             item.role = "cancel"
             self._resolve(item)
             self._emit_deferred()
@@ -733,12 +789,20 @@ class OffsetStage:
         b_el = nxt.element if nxt is not None else None
         try:
             if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:
-                virtual = PlaneElement(a.element.end, (a.element.end[0] + self.cancel_direction[0],
-                                                       a.element.end[1] + self.cancel_direction[1]))  # fmt: skip
+                virtual = PlaneElement(
+                    a.element.end,
+                    (
+                        a.element.end[0] + self.cancel_direction[0],
+                        a.element.end[1] + self.cancel_direction[1],
+                    ),
+                )
                 c = _cancel_with_direction(a.element, virtual, a.d)
             else:
-                role = "startup" if a.role == "startup" else ("cancel" if nxt is not None and nxt.role == "cancel"
-                                                             else "offset")  # fmt: skip
+                role = (
+                    "startup"
+                    if a.role == "startup"
+                    else ("cancel" if nxt is not None and nxt.role == "cancel" else "offset")
+                )
                 d_b = None if nxt is None or nxt.role == "cancel" else nxt.d
                 c = corner(a.element, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
         except CompensationError as err:
@@ -799,8 +863,9 @@ class OffsetStage:
         u, v, _w = PLANE_AXES[self.plane]
         target = list(self.machine.position)
         target[u], target[v] = point[0] + item.vector[u], point[1] + item.vector[v]
-        self._emit_straight("rapid" if item.kind == "rapid" else "line", (target[0], target[1], target[2]),
-                            item.feed)  # fmt: skip
+        self._emit_straight(
+            "rapid" if item.kind == "rapid" else "line", (target[0], target[1], target[2]), item.feed
+        )
 
     def _emit_block(self, item: _Item, end: Point) -> None:
         """Emit a resolved in-plane block: its lead moves, then its element to ``end``."""
@@ -872,8 +937,9 @@ class ToolCompensation:
     # ------------------------------------------------------------------ helpers
     def install(self, interp) -> OffsetStage:
         if self.stage is None:
-            self.stage = OffsetStage(interp.out, startup_type=self.settings.startup_type,
-                                     alarms=interp.dialect.alarms)  # fmt: skip
+            self.stage = OffsetStage(
+                interp.out, startup_type=self.settings.startup_type, alarms=interp.dialect.alarms
+            )
             interp.out = self.stage
         return self.stage
 
@@ -925,14 +991,17 @@ class ToolCompensation:
     def check_plane(self, interp, plane) -> None:
         """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (L4175)."""
         if self.side and plane != self.plane:
-            raise interp.error(f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with "
-                               "G40 first)", "comp-plane-change")  # fmt: skip
+            raise interp.error(
+                f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with G40 first)",
+                "comp-plane-change",
+            )
 
     def corner_arc(self, interp, spec, values: dict) -> None:
         """G39 [I_J_]: corner arc of the compensation radius (L4646-L4666); only in offset mode."""
         if not self.side or self.stage is None or not self.stage.active:
-            raise interp.error("G39 is only allowed in cutter compensation mode (G41/G42 after start-up)",
-                               "g39-without-comp")  # fmt: skip
+            raise interp.error(
+                "G39 is only allowed in cutter compensation mode (G41/G42 after start-up)", "g39-without-comp"
+            )
         self.stage.corner_arc(self._direction(interp, values), interp.feed)
 
     # ------------------------------------------------------------------ G43 / G44 / G49
@@ -964,8 +1033,11 @@ class ToolCompensation:
         delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
         interp.offsets.tool_length = new
         interp.offsets.update()
-        if interp.incremental and not interp._transformed and any(
-                _LETTERS[a] in values and delta[a] != 0.0 for a in range(3)):  # fmt: skip
+        if (
+            interp.incremental
+            and not interp._transformed
+            and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
+        ):
             # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
             # transformed path does this by itself (its program position ignores the machine's).
             stage = self.install(interp)
@@ -984,8 +1056,10 @@ class ToolCompensation:
         """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
         value (L4785-L4862). Not in G41/G42 mode (L4825); ignored in canned-cycle mode (L4839)."""
         if self.side:
-            raise interp.error(f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
-                               "position-offset-in-comp")  # fmt: skip
+            raise interp.error(
+                f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
+                "position-offset-in-comp",
+            )
         cycle = getattr(interp, "cycle", None)
         if cycle is not None and getattr(cycle, "code", None):
             return
@@ -1000,8 +1074,14 @@ class ToolCompensation:
         value = values.get("R")
         if number is not None and number != int(number):
             raise interp.error(f"G10 L{kind} P{number:g}: P is an offset number", "bad-g10")
-        apply_g10(self.offsets, kind, number, None if value is None else value * interp.scale,
-                  incremental=interp.incremental, error=interp.error)  # fmt: skip
+        apply_g10(
+            self.offsets,
+            kind,
+            number,
+            None if value is None else value * interp.scale,
+            incremental=interp.incremental,
+            error=interp.error,
+        )
         if self.length_sign and kind in (10, 11) and number == self.h_number:
             self._apply_length(interp, {})
 

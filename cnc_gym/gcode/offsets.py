@@ -179,7 +179,7 @@ class CompensationSettings:
     wear_limit_mm: float = 99.999
 
     def new_offsets(self, initial: Mapping | ToolOffsets | None = None) -> ToolOffsets:
-        """A fresh offset memory with these limits, filled from ``initial`` (see :meth:`ToolOffsets.from_mapping`)."""
+        """A fresh offset memory with these limits, filled from ``initial`` (as ToolOffsets.from_mapping)."""
         return ToolOffsets.from_mapping(
             initial,
             count=self.offset_count,

@@ -1,0 +1,466 @@
+"""Cutter radius compensation C (G40/G41/G42, G39): seed notes §5.2-§5.3, manual L3921-L4666.
+
+Expected tool-centre paths are worked out by hand in each test with the small closed forms below (offset
+lines as ``n·p = c``, line/line, line/circle and circle/circle intersections), written independently of
+``cnc_gym.gcode.compensation``. G41 puts the tool on the left of the direction of travel, G42 on the right;
+D holds the radius (the examples' reading, notes §5.2 [CONFLICT]).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from gcode_helpers import close, moves, program_error
+
+from cnc_gym.errors import ConfigError
+from cnc_gym.gcode import interpret
+
+
+# --------------------------------------------------------------------------------------- hand geometry
+def left_normal(p0, p1):
+    dx, dy = p1[0] - p0[0], p1[1] - p0[1]
+    n = math.hypot(dx, dy)
+    return (-dy / n, dx / n)
+
+
+def offset_line(p0, p1, d):
+    """The line through p0-p1 shifted by d to the left, as (n, c) with n·p = c."""
+    n = left_normal(p0, p1)
+    return n, n[0] * p0[0] + n[1] * p0[1] + d
+
+
+def meet(line_a, line_b):
+    """Intersection of n1·p = c1 and n2·p = c2 (Cramer's rule)."""
+    (a1, b1), c1 = line_a
+    (a2, b2), c2 = line_b
+    det = a1 * b2 - a2 * b1
+    return ((c1 * b2 - c2 * b1) / det, (a1 * c2 - a2 * c1) / det)
+
+
+def circles_meet(c1, r1, c2, r2, near):
+    """The intersection of two circles nearest ``near``."""
+    dx, dy = c2[0] - c1[0], c2[1] - c1[1]
+    dist = math.hypot(dx, dy)
+    a = (dist**2 + r1**2 - r2**2) / (2 * dist)
+    h = math.sqrt(r1**2 - a**2)
+    mx, my = c1[0] + a * dx / dist, c1[1] + a * dy / dist
+    points = [(mx - h * dy / dist, my + h * dx / dist), (mx + h * dy / dist, my - h * dx / dist)]
+    return min(points, key=lambda p: math.dist(p, near))
+
+
+def xy(record):
+    return record["end"][:2]
+
+
+def ends(text, **kw):
+    return [xy(r) for r in moves(text, **kw)]
+
+
+def assert_path(text, expected, tol=1e-6, **kw):
+    got = ends(text, **kw)
+    assert len(got) == len(expected), (got, expected)
+    for g, e in zip(got, expected, strict=True):
+        assert close(g, e, tol), (got, expected)
+
+
+R10 = "G10 L12 P7 R10\n"  # D07 = 10 mm radius
+
+
+# ------------------------------------------------------------------------------------------------- X57
+X57 = (
+    "G92 X0 Y0 Z0\n"
+    "N1 G90 G17 G00 G41 D07 X250.0 Y550.0\n"
+    "N2 G01 Y900.0 F150\n"
+    "N3 X450.0\n"
+    "N4 G03 X500.0 Y1150.0 I-600.0 J250.0\n"
+    "N5 G02 X900.0 I200.0 J150.0\n"
+    "N6 G03 X950.0 Y900.0 I650.0 J0\n"
+    "N7 G01 X1150.0\n"
+    "N8 Y550.0\n"
+    "N9 X700.0 Y650.0\n"
+    "N10 X250.0 Y550.0\n"
+    "N11 G00 G40 X0 Y0\n"
+)
+
+
+def test_worked_example_x57_contour_with_g41():
+    # L4061-L4085 with the notes' two repairs: N7 restored (X1150) and N6 with I650 (the printed I250 fails
+    # the radius check). D07 = 10. Left offset, r = 10.
+    r = 10.0
+    # N1 start-up (0,0)→(250,550), then N2 goes straight up: a left turn with the tool on the left = an
+    # inner corner: the start-up ends at the intersection of N1's offset line and x = 250 - r.
+    p1 = meet(offset_line((0, 0), (250, 550), r), ((1.0, 0.0), 240.0))
+    # N2/N3: up then right, a 90° outer corner: the offset lines x = 240 and y = 910 meet at (240, 910).
+    p2 = (240.0, 910.0)
+    # N3 → N4: N4 is CCW about (450-600, 900+250) = (-150, 1150), R 650; left of a CCW arc is the centre
+    # side, so the offset circle has R 640. Inner corner: y = 910 meets it at x = -150 + sqrt(640²-240²).
+    p3 = (-150.0 + math.sqrt(640.0**2 - 240.0**2), 910.0)
+    # N4 → N5 at (500, 1150): N5 is CW about (700, 1300), R 250 (left of a CW arc is outside: 260).
+    # Tangents (0, 1) then (-0.6, 0.8): a left turn, inner: the two offset circles meet.
+    p4 = circles_meet((-150.0, 1150.0), 640.0, (700.0, 1300.0), 260.0, (500.0, 1150.0))
+    # N5 → N6 at (900, 1150): N6 CCW about (1550, 1150), R 650 → 640; the mirror image of N4/N5 in x = 700.
+    p5 = circles_meet((700.0, 1300.0), 260.0, (1550.0, 1150.0), 640.0, (900.0, 1150.0))
+    assert close(p5, (1400.0 - p4[0], p4[1]))
+    # N6 → N7 at (950, 900): inner again; the offset circle meets y = 910.
+    p6 = (1550.0 - math.sqrt(640.0**2 - 240.0**2), 910.0)
+    # N7 → N8: right then down, 90° outer: (1160, 910).
+    p7 = (1160.0, 910.0)
+    # N8 → N9 at (1150, 550): down, then toward (700, 650): the turn is to the right by more than 90°, an
+    # acute outer corner (alpha < 90°): extension points. N8's line runs on r past its offset end to
+    # (1160, 540); then to the point r before N9's offset start along N9's direction.
+    t9 = ((700 - 1150) / math.hypot(450, 100), (650 - 550) / math.hypot(450, 100))
+    n9 = (-t9[1], t9[0])
+    q2 = (1150 + r * n9[0] - r * t9[0], 550 + r * n9[1] - r * t9[1])
+    # N9 → N10 at (700, 650): a left turn (inner); by symmetry about x = 700 the offset lines meet at
+    # x = 700, r / cos(angle) below 650: y = 650 - r * |(450, 100)| / 450.
+    p9 = (700.0, 650.0 - r * math.hypot(450, 100) / 450)
+    assert close(p9, meet(offset_line((1150, 550), (700, 650), r), offset_line((700, 650), (250, 550), r)))
+    # N10 → N11 (G40 back to the origin): a left turn, inner: N10 ends at the intersection of its offset
+    # line with the cancel line's offset line; the cancel line then runs to (0, 0) without offset.
+    p10 = meet(offset_line((700, 650), (250, 550), r), offset_line((250, 550), (0, 0), r))
+    expected = [p1, p2, p3, p4, p5, p6, p7, (1160.0, 540.0), q2, p9, p10, (0.0, 0.0)]
+    out = moves(R10 + X57)
+    kinds = ["rapid", "line", "line", "arc", "arc", "arc", "line", "line", "line", "line", "line", "rapid"]
+    assert [r_["kind"] for r_ in out] == kinds
+    assert [r_["line"] for r_ in out] == [3, 4, 5, 6, 7, 8, 9, 10, 11, 11, 12, 13]  # q2 belongs to N9
+    for got, want in zip(out, expected, strict=True):
+        assert close(xy(got), want, 1e-6), (xy(got), want)
+    # The arcs keep their programmed centres, on the offset circles.
+    assert [a["center"][:2] for a in out[3:6]] == [[-150.0, 1150.0], [700.0, 1300.0], [1550.0, 1150.0]]
+    assert [round(a["radius"], 9) for a in out[3:6]] == [640.0, 260.0, 640.0]
+    # Every offset-mode line lies at exactly r from its programmed line: N2 x = 240, N3 y = 910, N7 y = 910,
+    # N8 x = 1160, N9 and N10 at distance r.
+    for index, (p0, p1_) in ((8, ((1150, 550), (700, 650))), (9, ((1150, 550), (700, 650))),
+                             (9, ((700, 650), (250, 550))), (10, ((700, 650), (250, 550)))):  # fmt: skip
+        n, c = offset_line(p0, p1_, r)
+        point = xy(out[index])
+        assert math.isclose(n[0] * point[0] + n[1] * point[1], c, abs_tol=1e-6)
+
+
+def test_worked_example_x57_as_printed_fails_the_radius_check():
+    # N6 as printed (I250 J0): start radius 250, end radius 320: alarm 20 (notes §10 X57).
+    bad = X57.replace("I650.0 J0", "I250.0 J0")
+    assert program_error(R10 + bad).alarm == 20
+
+
+def test_x57_with_g42_and_negative_d_are_the_same_path():
+    # A negative offset swaps G41 and G42 (L4005, L4479): G42 with D = -10 is G41 with D = 10.
+    assert ends("G10 L12 P7 R-10\n" + X57.replace("G41", "G42")) == ends(R10 + X57)
+
+
+# --------------------------------------------------------------------------------------------- corners
+SQUARE = "G01 G41 D1 X10 Y10 F100\nY50\nX50\nY10\nX10\nG40 X0 Y0\n"
+
+
+def test_outer_square_corners_are_intersection_points():
+    # A square traced clockwise (up, right, down, left) with G41: the tool is outside; every corner is a
+    # 90° outer corner: the offset lines meet r diagonally out. r = 2.
+    # Start-up (0,0)→(10,10) then up: a left turn with the tool on the left → inner corner: the intersection
+    # of the start-up line's offset with x = 8: the line x - y = 2·sqrt(2)·... computed with meet().
+    r = 2.0
+    start = meet(offset_line((0, 0), (10, 10), r), ((1.0, 0.0), 8.0))
+    # Cancel: from (10,10) toward (0,0) after travelling -x: a left turn again (inner): intersection of
+    # y = 12 (left of -x travel is +y... travelling -x the left normal is (0,-1): y = 10 - 2 = 8).
+    end = meet(offset_line((50, 10), (10, 10), r), offset_line((10, 10), (0, 0), r))
+    expected = [start, (8.0, 52.0), (52.0, 52.0), (52.0, 8.0), end, (0.0, 0.0)]
+    assert_path("G10 L12 P1 R2\n" + SQUARE, expected)
+
+
+def test_inner_square_corners_with_g42_are_intersection_points():
+    # The same square with G42: the tool is inside, every offset-mode corner inner: (12, 48), (48, 48),
+    # (48, 12). The start-up (45° line, then up) turns left with the tool on the right: an outer obtuse
+    # corner; start-up type A (the GSK default here) ends perpendicular to the next block: (10 + 2, 10).
+    # The cancel (-x, then toward (0, 0)) also turns left: outer; type A: perpendicular to the last block
+    # (right of -x is +y): (10, 12), then straight to (0, 0).
+    assert_path("G10 L12 P1 R2\n" + SQUARE.replace("G41", "G42"),
+                [(12, 10), (12, 48), (48, 48), (48, 12), (10, 12), (0, 0)])  # fmt: skip
+
+
+def test_acute_outer_corner_inserts_extension_points():
+    # From (0,0) along +x to (20,0), then back to (0,10) (a 153° turn to the left); G42 (tool on the
+    # right) makes it an outer corner with alpha = 180 - 153 < 90: extension points.
+    # r = 1. Block A's offset line y = -1 runs on r past the corner: (21, -1). Block B direction
+    # t = (-20, 10)/|..|, right normal -left(t); the point r before its offset start: P + r·nR - r·t.
+    r = 1.0
+    t = (-20 / math.hypot(20, 10), 10 / math.hypot(20, 10))
+    n_right = (t[1], -t[0])
+    q2 = (20 + r * n_right[0] - r * t[0], 0 + r * n_right[1] - r * t[1])
+    text = "G10 L12 P1 R1\nG00 X-10 Y-5\nG01 G42 D1 X0 Y0 F100\nX20 Y0\nX0 Y10\nX-10 Y10\nG40 X-20 Y20\n"
+    out = moves(text)
+    points = [xy(p) for p in out]
+    assert close(points[2], (21.0, -1.0))
+    assert close(points[3], q2)
+    # B's compensated line continues from q2 along B's direction: q2, B's offset end are collinear with t.
+    b_end = points[4]
+    cross = (b_end[0] - q2[0]) * t[1] - (b_end[1] - q2[1]) * t[0]
+    assert abs(cross) < 1e-7
+    assert out[3]["line"] == out[4]["line"] == 5  # the extension move belongs to block B (L4452)
+
+
+def test_arc_to_arc_inner_corner_and_line_to_arc_tangent():
+    # A line along +x into a tangent CCW half circle (tangent join: no corner), then a CW arc that turns
+    # back (a reversal of curvature with a left turn = inner for G41). G41 r = 1:
+    #   line y = 0 → y = 1 (left of +x).
+    #   CCW half circle about (10, 5) R5 from (10, 0) to (10, 10): offset R = 4 (centre side).
+    #   G02 from (10, 10) to (4, 10) about (7, 10) (R 3, CW): offset R = 3 + 1 = 4 (outside).
+    # At (10, 10) the first arc's end tangent is (-1, 0), the CW arc's start tangent: radial (1,0) → (0,-1)
+    # ... a left turn: inner: circles ((10,5), 4) and ((7,10), 4) meet near (10, 10).
+    # The first line (0,0)→(10,0) is the start-up; its corner with the tangent arc is smooth: (10, 1).
+    text = ("G10 L12 P1 R1\nG01 G41 D1 X0 Y0 F100\nX10\nG03 X10 Y10 J5\nG02 X4 Y10 I-3\n"
+            "G01 X4 Y20\nG40 X0 Y30\n")  # fmt: skip
+    out = moves(text)
+    kinds = [r["kind"] for r in out]
+    assert kinds == ["line", "arc", "arc", "line", "line"]
+    assert close(xy(out[0]), (10.0, 1.0))  # smooth join: the perpendicular point, no extra move
+    p = circles_meet((10.0, 5.0), 4.0, (7.0, 10.0), 4.0, (10.0, 10.0))
+    assert close(xy(out[1]), p)
+    assert math.isclose(out[1]["radius"], 4.0) and math.isclose(out[2]["radius"], 4.0)
+    # CW arc → line up at (4, 10): the arc's end radial is (-1, 0), its CW tangent (0, 1); the line goes
+    # +y: smooth; left of +y is -x: (3, 10).
+    assert close(xy(out[2]), (3.0, 10.0))
+
+
+def test_program_ending_in_offset_mode_keeps_the_vector_perpendicular_to_the_last_block():
+    # L4112: the end point is offset by one vector. Last block along +x with G41 r = 2: ends at (20, 2).
+    assert ends("G10 L12 P1 R2\nG01 G41 D1 X10 F100\nX20\n")[-1] == [20.0, 2.0]
+
+
+def test_d00_does_not_start_compensation():
+    # Start-up needs D ≠ 00 (L4107): with D00 the path is the programmed one.
+    assert ends("G01 G41 D0 X10 Y10 F100\nY50\nG40 X0\n") == [[10.0, 10.0], [10.0, 50.0], [0.0, 50.0]]
+
+
+def test_zero_offset_with_d_number_is_the_programmed_path():
+    # The default offset memory is all zero: D1 = 0 → no vector.
+    assert ends("G01 G41 D1 X10 Y10 F100\nY50\nG40 X0\n") == [[10.0, 10.0], [10.0, 50.0], [0.0, 50.0]]
+
+
+def test_d00_in_offset_mode_cancels():
+    # L4240 (a): D00 cancels like G40. G41 r = 2 along +y, then D0 X10: the corner at (0, 20) turning right
+    # is outer; start-up type A cancel: the vector perpendicular to the last block, then straight to (10, 20).
+    out = ends("G10 L12 P1 R2\nG01 G41 D1 X0 Y10 F100\nY20\nD0 X10 Y20\n")
+    assert close(out[-2], (-2.0, 20.0)) and close(out[-1], (10.0, 20.0))
+
+
+def test_type_a_and_b_start_up_at_an_outer_corner():
+    # Start-up from (0, 0) along +x to (10, 0), then up-right at 45°... a left turn; use G42 (tool on the
+    # right) to make it an outer corner (obtuse, alpha = 135°). r = 1.
+    # Type A (L3980): the start-up ends at the vector perpendicular to the NEXT block: the next block's
+    # right normal at its start: t = (1,1)/√2 → right normal (1,-1)/√2.
+    # Type B: the intersection of the start-up line's offset (y = -1) and the next block's offset line.
+    text = "G10 L12 P1 R1\nG01 G42 D1 X10 Y0 F100\nX20 Y10\nG40 X30 Y10\n"
+    a = ends(text)[0]
+    assert close(a, (10 + 1 / math.sqrt(2), -1 / math.sqrt(2)))
+    from dataclasses import replace
+
+    from cnc_gym.gcode import get_dialect
+
+    gsk = get_dialect("gsk25i")
+    type_b = replace(gsk, compensation=replace(gsk.compensation, startup_type="B"))
+    b = ends(text, dialect=type_b)[0]
+    assert close(b, meet(offset_line((0, 0), (10, 0), -1.0), offset_line((10, 0), (20, 10), -1.0)))
+
+
+def test_type_b_acute_start_up_uses_extension_points():
+    # Start-up along +x to (10, 0), then back to (0, 5) (a left turn of 153°) with G42: outer acute.
+    # Type B: the start-up line runs to r past its offset end (11, -1); an extra move to r before the next
+    # block's offset start.
+    from dataclasses import replace
+
+    from cnc_gym.gcode import get_dialect
+
+    gsk = get_dialect("gsk25i")
+    type_b = replace(gsk, compensation=replace(gsk.compensation, startup_type="B"))
+    text = "G10 L12 P1 R1\nG01 G42 D1 X10 Y0 F100\nX0 Y5\nG40 X-5 Y5\n"
+    out = ends(text, dialect=type_b)
+    t = (-10 / math.hypot(10, 5), 5 / math.hypot(10, 5))
+    n_right = (t[1], -t[0])
+    assert close(out[0], (11.0, -1.0))
+    assert close(out[1], (10 + n_right[0] - t[0], n_right[1] - t[1]))
+    # Type A: straight to the vector perpendicular to the next block.
+    assert close(ends(text)[0], (10 + n_right[0], n_right[1]))
+
+
+def test_cancel_with_ij_direction():
+    # L4420-L4436: (G42) G40 X_ Y_ I_ J_: the previous block ends where its offset path meets the offset
+    # line of the (I, J) direction from its end. G41 r = 1 along +x to (10, 0); G40 I0 J1: the virtual
+    # direction +y; offsets y = 1 and x = 9 meet at (9, 1). Then straight to (20, 20).
+    out = ends("G10 L12 P1 R1\nG01 G41 D1 X0 Y0 F100\nX10\nG40 X20 Y20 I0 J1\n")
+    assert close(out[-2], (9.0, 1.0)) and close(out[-1], (20.0, 20.0))
+
+
+def test_g40_without_a_move_leaves_the_vector_until_the_next_move():
+    # L4418: G40 in a block without movement: the vector stays perpendicular to the previous block and is
+    # cancelled by the next move. G41 r = 1 along +x to (10, 0): the tool stops at (10, 1), then (10, 10).
+    out = ends("G10 L12 P1 R1\nG01 G41 D1 X0 Y0 F100\nX10\nG40\nY10\n")
+    assert close(out[-2], (10.0, 1.0)) and close(out[-1], (10.0, 10.0))
+
+
+def test_switching_g41_to_g42_uses_the_intersection_of_both_offsets():
+    # L4335-L4349: the inside/outside concept is dropped; the offset paths intersect: left offset of +x
+    # (y = 1) and right offset of the 45° line. r = 1.
+    # (Switching is not allowed between the start-up block and the next one, L4305: the start-up here is
+    # the move to (0, 0).)
+    text = "G10 L12 P1 R1\nG00 X-10\nG01 G41 D1 X0 Y0 F100\nX10\nG42 X20 Y10\nX30 Y10\nG40 X40 Y0\n"
+    out = ends(text)
+    assert close(out[2], meet(offset_line((0, 0), (10, 0), 1.0), offset_line((10, 0), (20, 10), -1.0)))
+
+
+def test_changing_d_in_offset_mode_applies_from_the_end_vector_of_the_block():
+    # L4471-L4473: the new value applies to the end vector of the block that carries it. r1 = 1, r2 = 3,
+    # +x then the D2 block up: the corner at (10, 0) still uses r1 (11 ... outer 90° corner with G42:
+    # (11, -1)); the D2 block's end vector uses 3.
+    text = "G10 L12 P1 R1\nG10 L12 P2 R3\nG00 X-10\nG01 G42 D1 X0 Y0 F100\nX10\nD2 Y10\nX0\nG40 X0 Y-10\n"
+    out = ends(text)
+    assert close(out[2], (11.0, -1.0))
+    assert close(out[3], (13.0, 13.0))  # corner (10, 10), up then -x, outer 90° with r = 3
+
+
+# ------------------------------------------------------------------------------------------ look-ahead
+def test_x59_one_z_block_between_is_read_ahead():
+    # L4515-L4533 (0.001 mm units in the manual; here mm/1000): N1 start-up to (50, 50), N3 a Z move,
+    # N6 along +y. The NC reads N3 and N6 with N1: the start-up corner is computed with N6 (a left turn
+    # after the 45° start-up, inner for G41): the intersection of both offset lines; r = 5.
+    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y50 D1\nN3 G01 Z-30 F1\nN6 Y100 F2\n"
+    out = moves(text)
+    want = meet(offset_line((0, 0), (50, 50), 5.0), ((1.0, 0.0), 45.0))
+    assert close(xy(out[0]), want)
+    assert close(out[1]["end"], [want[0], want[1], -30.0])  # the Z move at the compensated point
+
+
+def test_x59_two_z_blocks_starve_the_look_ahead():
+    # Z split into N3 and N5: N6 is not in the buffer when N1 runs, the start-up vector is perpendicular to
+    # N1 itself (the overcut of L4535-L4545): (50, 50) + 5·(-1, 1)/√2.
+    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y50 D1\nN3 Z-25\nN5 G01 Z-5 F1\nN6 Y100 F2\n"
+    out = moves(text)
+    assert close(xy(out[0]), (50 - 5 / math.sqrt(2), 50 + 5 / math.sqrt(2)))
+    # N6 then runs from that point to its own end vector (straight from the old vector tip to the new).
+    assert close(xy(out[-1]), (45.0, 150.0))
+
+
+def test_x59_the_n2_fix_restores_the_corner():
+    # L4547-L4553: N2 Y10 (same direction as N6) before the Z moves: N1's corner is computed with N2:
+    # N1 (0,0)→(50,40), then +y: inner for G41: intersection with x = 45.
+    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y40 D1\nN2 Y10\nN3 Z-25\nN5 G01 Z-5 F1\nN6 Y100 F2\n"
+    out = moves(text)
+    assert close(xy(out[0]), meet(offset_line((0, 0), (50, 40), 5.0), ((1.0, 0.0), 45.0)))
+    assert close(xy(out[1]), (45.0, 50.0))
+    assert all(close(xy(r), (45.0, 50.0)) for r in out[2:4])  # the Z moves at the right vector
+    assert close(xy(out[-1]), (45.0, 150.0))
+
+
+def test_dwell_and_m_codes_count_as_blocks_without_motion():
+    # One non-move block between two in-plane moves: the corner is still right (outer 90°, G41 going up
+    # then -x... up then +x with G41 is outer: (−1, 11)... up then right turn = outer: (x=-1, y=11)).
+    out = moves("G10 L12 P1 R1\nG00 Y-10\nG01 G41 D1 X0 Y0 F100\nY10\nG04 P100\nX10\nG40 X20 Y0\n")
+    assert close(xy(out[2]), (-1.0, 11.0))
+
+
+# ------------------------------------------------------------------------------------------------- G39
+def test_g39_corner_arc_of_the_offset_radius():
+    # L4646-L4666: G39 at an outer corner inserts an arc of radius = offset about the corner; its end vector
+    # is perpendicular to the next block's start. G41 r = 2, up to (0, 10) then +x: the first block ends
+    # at (-2, 10) (perpendicular), an arc about (0, 10) to (0, 12), then along y = 12.
+    out = moves("G10 L12 P1 R2\nG00 Y-10\nG01 G41 D1 X0 Y0 F100\nY10\nG39\nX10\nG40 X20 Y0\n")
+    assert close(xy(out[2]), (-2.0, 10.0))
+    arc = out[3]
+    assert arc["kind"] == "arc" and close(arc["center"][:2], (0.0, 10.0)) and math.isclose(arc["radius"], 2.0)
+    assert close(xy(arc), (0.0, 12.0)) and math.isclose(arc["sweep_deg"], -90.0)
+    # The next block runs on y = 12 (left of +x); the cancel corner (+x, then down-right) turns right:
+    # outer, type A: perpendicular to the last block at (10, 12), then to (20, 0).
+    assert [xy(r) for r in out[4:]] == [[10.0, 12.0], [20.0, 0.0]]
+
+
+def test_g39_outside_offset_mode_is_an_error():
+    assert program_error("G39\n").code == "g39-without-comp"
+
+
+# ---------------------------------------------------------------------------------------------- alarms
+@pytest.mark.parametrize(
+    ("text", "code", "alarm"),
+    [
+        # T1: arc in the start-up block (L4117) and in the cancel block (L4245).
+        ("G10 L12 P1 R1\nG41 D1 G02 X10 Y0 R5 F100\n", "comp-arc-startup", 34),
+        ("G10 L12 P1 R1\nG01 G41 D1 X10 F100\nY10\nG40 G02 X20 Y20 R10\n", "comp-arc-startup", 34),
+        # T3: plane change in offset mode (L4175).
+        ("G10 L12 P1 R1\nG01 G41 D1 X10 F100\nG18\n", "comp-plane-change", 37),
+        # T4: the tool-centre arc degenerates: radius of an inner arc = the offset (centre = start = end).
+        ("G10 L12 P1 R5\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", "comp-arc-centre", 38),
+        # T6: inner arc radius smaller than the tool radius (L4496).
+        ("G10 L12 P1 R6\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", "comp-interference", 41),
+        # T6: a groove narrower than the tool diameter (L4505): 4 mm wide, r = 3.
+        # (G41: going down the left side is +x, inside the groove; the walls' offsets x = 13 and x = 11 make
+        # the bottom move run backwards.)
+        ("G10 L12 P1 R3\nG01 G41 D1 X10 F100\nY-10\nX14\nY0\nX30\nG40 X40\n", "comp-interference", 41),
+        # T2: no inner intersection (L4227): CCW arcs about (0,0) R5 and (4,2) R5 meet at (0,5) turning
+        # left; with G41 both offset circles shrink to R 2, and centres 4.47 apart: no intersection.
+        ("G10 L12 P1 R3\nG00 X5 Y-5\nG01 G41 D1 X5 Y0 F100\nG03 X0 Y5 R5\nG03 X1 Y-2 I4 J-3\n"
+         "G40 G01 X10 Y-2\n", "comp-no-intersection", 33),
+        # G43/G44 with no axis word (alarm 27) and offset numbers out of range (alarm 30).
+        ("G43 H1\n", "length-no-axis", 27),
+        ("G01 X1 D257 F100\n", "value-out-of-range", 30),
+        # G10 offset value beyond ±999.999 (geometry) / ±99.999 (wear): alarm 32.
+        ("G10 L12 P1 R1000\n", "bad-offset-value", 32),
+        ("G10 L13 P1 R100\n", "bad-offset-value", 32),
+        ("G10 L12 P0 R1\n", "bad-offset-number", 30),
+        # T10: G45-G48 in G41/G42 mode (L4825).
+        ("G41 D1\nG45 G01 X10 F100\n", "position-offset-in-comp", None),
+    ],
+)  # fmt: skip
+def test_compensation_alarms(text, code, alarm):
+    err = program_error(text)
+    assert (err.code, err.alarm) == (code, alarm), str(err)
+    assert err.line > 0
+
+
+def test_x60_interference_example_alarms():
+    # L4574-L4580 (0.001 mm units → mm/1000): (G41) N5 G01 G91 X8 Y2 D01; N6 G02 X3.2 Y-1.6 I-2 J-8 D02;
+    # N7 G01 X2 Y-5; with r1 = 2, r2 = 6: the one-quadrant arc would become a four-quadrant one (check b).
+    # The figure is lost. Our reading: N6's start vector still uses r1 = 2 at the N5/N6 corner (the new D
+    # applies from N6's end vector, L4471) while N6 runs on its r2 = 6 offset circle: the corner (a right
+    # turn of 28°, outer) has no nearby intersection and its extension move from r1 to r2 runs against
+    # N6's direction: interference check (a), alarm 41.
+    text = ("G10 L12 P1 R2\nG10 L12 P2 R6\nG01 G91 G41 X1 Y0 D01 F100\nN5 X8 Y2 D01\n"
+            "N6 G02 X3.2 Y-1.6 I-2 J-8 D02\nN7 G01 X2 Y-5\nG40 X5\n")  # fmt: skip
+    err = program_error(text)
+    assert err.alarm == 41 and err.code == "comp-interference"
+
+
+def test_error_names_file_and_line():
+    err = program_error("G10 L12 P1 R6\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", file="part.nc")
+    assert str(err).startswith("part.nc:3:")
+
+
+# ------------------------------------------------------------------------------------------------- API
+def test_initial_tool_offsets_argument():
+    # interpret(..., tool_offsets=...) preloads the memory; the same path as G10 L12.
+    text = "G01 G41 D1 X10 Y0 F100\nY10\nG40 X0\n"
+    assert ends(text, tool_offsets={"D": {1: 2.0}}) == ends("G10 L12 P1 R2\n" + text)
+    assert ends(text, tool_offsets={"D": {1: 1.5}, "D_wear": {1: 0.5}}) == ends("G10 L12 P1 R2\n" + text)
+    with pytest.raises(ConfigError):
+        interpret(text, tool_offsets={"Q": {1: 2.0}})
+    with pytest.raises(ConfigError):
+        interpret(text, tool_offsets={"D": {0: 2.0}})
+    with pytest.raises(ConfigError):
+        interpret(text, tool_offsets={"D": {1: "2"}})
+
+
+def test_d_as_diameter_switch():
+    # 2601#7 ODI: with D as a diameter, D = 4 is a 2 mm radius.
+    from dataclasses import replace
+
+    from cnc_gym.gcode import get_dialect
+
+    gsk = get_dialect("gsk25i")
+    diameter = replace(gsk, compensation=replace(gsk.compensation, d_is_diameter=True))
+    text = "G01 G41 D1 X10 Y0 F100\nY10\nG40 X0\n"
+    assert ends("G10 L12 P1 R4\n" + text, dialect=diameter) == ends("G10 L12 P1 R2\n" + text)
+
+
+def test_g10_l12_in_g91_adds_and_wear_adds_to_geometry():
+    # L4676-L4686: G91 adds to the stored value; the offset in use is geometry + wear.
+    text = "G01 G41 D1 X10 Y0 F100\nY10\nG40 X0\n"
+    assert ends("G10 L12 P1 R1\nG91 G10 L12 P1 R0.5\nG10 L13 P1 R0.5\nG90\n" + text) == ends(
+        "G10 L12 P1 R2\n" + text
+    )
