@@ -42,7 +42,7 @@ _SPACES = re.compile(r"[ \t\r\f\v]+")
 _NUMBER_AT = re.compile(_NUMBER)
 _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 #: Addresses of a call block that keep their own rules (the rest are arguments: any sign, decimal point).
-_CALL_CONTROL = "GMNOPL"
+_CALL_CONTROL = "GNOPL"
 
 
 class Block:
@@ -281,10 +281,14 @@ class Reader:
                     value = self._literal(letter, digits, rules[letter], line)
                 else:
                     value = float(digits)
+                if not low <= value <= high:
+                    self._literal(letter, digits, rules[letter], line)  # raises with the right code
             except ValueError:
                 raise self.error(f"bad number {letter}{digits}", "bad-number", line) from None
-            if not low <= value <= high:
-                self._literal(letter, digits, rules[letter], line)  # raises with the right code
+            except ProgramError:
+                if self._mentions_call(text):
+                    return self._scan_block(text, line)  # macro arguments have their own rules
+                raise
             if letter == "G":
                 if gs is None:
                     gs = [value]

@@ -17,6 +17,9 @@ from cnc_gym.toolpath import Plane
 
 # --------------------------------------------------------------------------- G codes
 _LATER = "a later issue"
+#: Addresses of a G65/G66 block besides G, N, O: P, L and the arguments (calls.py handles the block; these let
+#: a G65 that came from a variable reach its action, which names the problem).
+_ARGUMENTS = "ABCDEFHIJKLMPQRSTUVWXYZ"
 _AXES = "XYZ"
 
 
@@ -75,7 +78,7 @@ _G_LIST = [
     _g(53, 0, "g53", step="motion"),
     _todo(53.1, 0, "tool axis direction control G53.1"),
     _g(60, 0, "g60", step="motion", uses_axes=True),
-    _g(65, 0, "macro_call", step="stop", note="one-shot macro call (calls.py)"),
+    _g(65, 0, "macro_call", step="stop", words=_ARGUMENTS, note="one-shot macro call (calls.py)"),
     _g(92, 0, "g92", step="setting", uses_axes=True),
     # Hole patterns G120-G125 and face milling G126/G127 (L4863-L5077; cycles.py).
     *[_g(n, 0, "pattern", n, step="motion", uses_axes=True, words=PATTERN_WORDS[n]) for n in range(120, 128)],
@@ -115,7 +118,7 @@ _G_LIST = [
     _g(50, 11, "g50", step="modes"),
     _g(51, 11, "g51", step="setting", uses_axes=True, words="PIJK"),
     # Group 12: modal macro call.
-    _g(66, 12, "macro_call", step="stop", note="modal macro call (calls.py)"),
+    _g(66, 12, "macro_call", step="stop", words=_ARGUMENTS, note="modal macro call (calls.py)"),
     _g(67, 12, "modal_call_cancel", step="modes"),
     # Group 13: constant surface speed.
     _todo(96, 13, "constant surface speed G96"),
