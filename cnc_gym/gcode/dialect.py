@@ -129,6 +129,8 @@ class Dialect:
     #: Variables that exist, as (first, last) ranges; the rest of ``system_variables`` is rejected by name.
     variables: tuple[tuple[int, int], ...] = ((1, 33), (100, 199), (500, 999))
     system_variables: tuple[tuple[int, int], ...] = ()
+    #: Chamfer / corner-rounding words of G01-G03 blocks (GSK: ``,L`` and ``,R``; Fanuc: ``,C``, ``,R``).
+    corner_words: frozenset[str] = frozenset()
     #: Canned-cycle machine parameters (G73/G83 d, G76/G87 shift direction, rigid tapping limits).
     cycle_params: CycleParameters = field(default_factory=CycleParameters)
     #: Macro and subprogram calls by G, M and T codes (the controller's parameter settings).

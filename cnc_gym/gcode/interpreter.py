@@ -30,8 +30,11 @@ from cnc_gym.gcode.sysvars import SystemVariables
 from cnc_gym.gcode.transforms import (
     TRANSFORM_ACTIONS,
     Parameters,
+    arm_corner,
     check_coordinate_command,
     check_plane_change,
+    corner_motion,
+    finish_corner,
     map_arc,
     parameter_block,
 )
@@ -114,6 +117,8 @@ class Interpreter:
         self.after_g69 = False  # the first move after G69 must be absolute (L2044)
         self.extra_wcs = 0  # G54.1 P number in force (0 = none; #4130)
         self._restore_modes = False  # G09 one-shot exact stop
+        self._corner = None  # a chamfer/corner block waiting for the next move (transforms.py)
+        self._capture: list | None = None
         self.parameters = Parameters()  # G10 L50 writes; P1051-P1053, P1860-P1862, P1880
         self.parameter_input = False  # between G10 L50 and G11
         self.g28_intermediate: list[float | None] = [None, None, None]  # G28/G30 point, work coordinates, mm
@@ -154,8 +159,9 @@ class Interpreter:
         axes = dialect.axes
         base = frozenset("FSTODH")
         self._allowed_with_motion = {
-            key: base | frozenset(axes) | frozenset(spec.words) for key, spec in dialect.gcodes.items()
-            if spec.action == "motion"
+            key: base | frozenset(axes) | frozenset(spec.words)
+            | (dialect.corner_words if spec.value in (1, 2, 3) else frozenset())
+            for key, spec in dialect.gcodes.items() if spec.action == "motion"
         }  # fmt: skip
         self._axis_letters = frozenset(axes)
         self._motion_specs = {key: spec for key, spec in dialect.gcodes.items()
@@ -179,6 +185,8 @@ class Interpreter:
             # run's blocks alive after it returns.
             self.macro = None
             self.variables.system = None
+        if self._corner is not None:
+            finish_corner(self)  # a chamfer/corner R in the last move block (transforms.py)
         self.comp.finish(self.file)  # what the compensation look-ahead still holds
         return self.builder.build()
 
@@ -194,6 +202,8 @@ class Interpreter:
             self.variables.write(evaluate(target, self.variables, self.dialect),
                                  evaluate(value, self.variables, self.dialect))  # fmt: skip
             return
+        if self._corner is not None:  # a chamfer/corner block waits for the next move (transforms.py)
+            arm_corner(self)
         if block.has_expr:
             gs, ms, values = split_words(self._evaluate_words(block.words))
         else:
@@ -543,6 +553,8 @@ class Interpreter:
         y = values.get("Y")
         z = values.get("Z")
         motion = self.motion
+        if self._corner is not None or ",L" in values or ",R" in values:
+            return corner_motion(self, motion, x, y, z, values)  # chamfer / corner R (transforms.py)
         if motion >= 2:
             if x is None and y is None and z is None and not _ARC_WORDS.intersection(values):
                 return  # no geometry in the block: the arc mode is only (re)selected
@@ -740,6 +752,9 @@ class Interpreter:
         if self._transformed:
             p = self._program
             full = (p[0] if tx is None else tx, p[1] if ty is None else ty, p[2] if tz is None else tz)
+            if self._capture is not None:  # a chamfer/corner block: geometry only (transforms.py)
+                self._capture.append(("rapid" if rapid else "line", p, full, None, 0.0, feed))
+                return
             self._program = full
             target = self.to_machine(full)
             if self.after_g69:
@@ -766,6 +781,9 @@ class Interpreter:
                               plane, sweep, feed)  # fmt: skip
             return
         start = self._program
+        if self._capture is not None:  # a chamfer/corner block: geometry only (transforms.py)
+            self._capture.append(("arc", start, tuple(end_program), tuple(center_program), sweep, feed))
+            return
         end, center, sweep = map_arc(self, start, tuple(end_program), tuple(center_program), plane, sweep)
         self._program = tuple(end_program)  # type: ignore[assignment]
         if self.after_g69:

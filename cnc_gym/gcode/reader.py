@@ -443,9 +443,15 @@ class Reader:
                                      pos + 1)  # fmt: skip
                 assign, pos = self._assignment(text, pos, line)
                 break
-            if c == ",":
-                raise self.error(f"chamfer/corner rounding ,{text[pos + 1:pos + 2]} is not implemented yet",
-                                 "not-implemented", line, pos + 1)  # fmt: skip
+            if c == ",":  # ,L chamfer / ,R corner rounding (transforms.py): the word is ",L" / ",R"
+                letter = text[pos:pos + 2]
+                if letter not in rules:
+                    raise self.error(f"'{letter}' is not a chamfer/corner word of this controller",
+                                     "bad-character", line, pos + 1)  # fmt: skip
+                value, text_digits, pos = self._value(letter, text, pos + 2, line, rules[letter])
+                has_expr = has_expr or text_digits is None
+                words.append((letter, value, text_digits))
+                continue
             if not ("A" <= c <= "Z"):
                 raise self.error(f"illegal character {c!r}", "bad-character", line, pos + 1)
             keyword = self._keyword(text, pos)

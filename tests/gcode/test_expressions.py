@@ -131,7 +131,7 @@ def test_g_code_from_a_variable():
         ("#4001=1\n", "read-only-variable", 107),  # system variables #4001-#5105 cannot be assigned (L5441)
         ("#1=1\nIF[#1GT0]GOTO10\n", "sequence-not-found", 60),
         ("WHILE[#1LT3]DO1\n", "do-end", 96),  # DO1 without END1
-        ("G01 X10 ,R5 F100\n", "not-implemented", 10),
+        ("G01 X10 ,C5 F100\n", "bad-character", 9),  # GSK chamfers with ,L (L1597), not Fanuc's ,C
         ("G00 X[1.5AND1]\n", "math-domain", None),
     ],
 )

@@ -204,6 +204,9 @@ ADDRESSES = {
     "H": AddressRule(0.0, 256.0, "integer", point_allowed=False, alarm=30),
     "D": AddressRule(0.0, 256.0, "integer", point_allowed=False, alarm=30),
     **{a: AddressRule(-_BIG, _BIG, "plain") for a in "ABCEUVW"},
+    # Chamfer and corner rounding (L1597-L1646): ,L is the chamfer distance, ,R the corner radius.
+    ",L": AddressRule(0.0, _BIG, "length"),
+    ",R": AddressRule(0.0, _BIG, "length"),
 }
 WORD_STEPS = {"F": "feed", "S": "spindle_speed", "T": "tool"}
 
@@ -359,6 +362,7 @@ DIALECT = Dialect(
     max_words_per_block=32,  # alarm 12
     max_m_per_block=3,  # 1803#6 M3B standard 1
     m_groups=M_GROUPS,
+    corner_words=frozenset({",L", ",R"}),
     max_bracket_depth=5,  # L5593
     keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),
     variables=((1, 33), (100, 199), (500, 999)),
