@@ -662,7 +662,7 @@ class OffsetStage:
         for a in axes:
             delta = target[a] - pos[a]
             if delta != 0.0:
-                delta += math.copysign(factor * amount, delta)
+                delta += math.copysign(1.0, delta) * factor * amount
             elif incremental:
                 delta = factor * amount  # a zero move in G91 moves by the offset (L4806, N9/N11)
             out[a] = pos[a] + delta
@@ -688,10 +688,10 @@ class OffsetStage:
             )
         change = factor * amount
         new_end, new_center = list(end), list(center)
-        new_end[u] = pos[u] + du + math.copysign(change, du)
-        new_end[v] = pos[v] + dv + math.copysign(change, dv)
-        new_center[u] = pos[u] + (iu + math.copysign(change, iu) if abs(iu) > 1e-6 else 0.0)
-        new_center[v] = pos[v] + (iv + math.copysign(change, iv) if abs(iv) > 1e-6 else 0.0)
+        new_end[u] = pos[u] + du + math.copysign(1.0, du) * change
+        new_end[v] = pos[v] + dv + math.copysign(1.0, dv) * change
+        new_center[u] = pos[u] + (iu + math.copysign(1.0, iu) * change if abs(iu) > 1e-6 else 0.0)
+        new_center[v] = pos[v] + (iv + math.copysign(1.0, iv) * change if abs(iv) > 1e-6 else 0.0)
         if radius + change <= 0.0:
             raise CompensationError(
                 "G45-G48: the offset makes the arc radius zero or negative", "position-offset-arc"
@@ -1033,8 +1033,10 @@ class ToolCompensation:
         delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
         interp.offsets.tool_length = new
         interp.offsets.update()
+        # G90/G91 of this block has not run yet at this step (order of execution): read the modal table.
+        incremental = interp.modal.get(3) == 910 if 3 in interp.modal else interp.incremental
         if (
-            interp.incremental
+            incremental
             and not interp._transformed
             and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
         ):
