@@ -22,7 +22,7 @@ Steps are tuples (cheap to build, easy to compare in tests):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
@@ -539,6 +539,16 @@ def _level_now(interp: Interpreter, w: int) -> float:
     return interp.program_position[w]
 
 
+#: Most pecks, passes or holes one cycle block may generate (a bound against a tiny Q/L hanging the run).
+MAX_STEPS = 100_000
+
+
+def _limit(interp: Interpreter, count: float, what: str) -> None:
+    if not count <= MAX_STEPS:  # also catches NaN
+        raise interp.error(f"{what}: {count:.0f} is more than the {MAX_STEPS} one block may make",
+                           "cycle-too-long", alarm=61)  # fmt: skip
+
+
 def _dwell_from_p(interp: Interpreter, values: dict) -> float:
     """Cycle P: dwell in ms, an integer like G04 P (L2395)."""
     text = interp._word_text("P")
@@ -621,6 +631,12 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
         missing = " and ".join(n for n, val in (("R", state.r), (bottom_letter, state.z)) if val is None)
         raise interp.error(f"G{code} needs {missing}: the first drilling block gives all the hole data",
                            "cycle-missing-data", alarm=61)  # fmt: skip
+    comp = getattr(interp, "comp", None)
+    if comp is not None and comp.side:
+        # The manual ignores the radius offset in cycle mode (L2516); suspending and restarting the
+        # compensation around a cycle is not built, so this is an error rather than offset holes.
+        raise interp.error(f"G{code} with cutter compensation G41/G42 active: cancel it with G40 first",
+                           "cycle-in-compensation", alarm=61)  # fmt: skip
     feed = interp.feed
     if not feed:
         raise interp.error(f"G{code} needs a feed: no F programmed yet" if feed is None else
@@ -656,11 +672,26 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
         position[w] = None
         emit(interp, [("rapid", tuple(position))])
         if code in DRILLING:
-            shift = shift_vector(state.q or 0.0, u, v, interp.cycle_params.shift_direction)
+            params = interp.cycle_params
+            q = state.q or 0.0
+            shift = shift_vector(q, u, v, params.shift_direction)
+            chain = getattr(interp, "chain", None)
+            if chain is not None and chain.active:
+                # Scaling does not scale Q, d or the shift (L1962): they are machine amounts, so in
+                # program coordinates they are divided by the map's factor along the drilling axis, and
+                # the shift is the program vector the map sends onto the machine-axis shift.
+                k = math.sqrt(sum(chain.linear[a][w] ** 2 for a in range(3))) or 1.0
+                q = q / k
+                params = replace(params, g73_retract_mm=params.g73_retract_mm / k,
+                                 g83_clearance_mm=params.g83_clearance_mm / k)  # fmt: skip
+                inv = chain.inverse_linear
+                shift = tuple(sum(inv[a][b] * shift[b] for b in range(3)) for a in range(3))
+            if code in PECKING:
+                _limit(interp, (r_level - bottom) / q, f"G{code} pecks (depth / Q)")
             steps = drill_steps(code, hole, w, initial, r_level, bottom, return_initial=return_initial,
-                                feed=feed, q=state.q or 0.0, dwell_s=state.dwell_s,
-                                params=interp.cycle_params, spindle=interp.spindle_direction or 1,
-                                rigid=state.rigid, shift=shift)  # fmt: skip
+                                feed=feed, q=q, dwell_s=state.dwell_s, params=params,
+                                spindle=interp.spindle_direction or 1, rigid=state.rigid,
+                                shift=shift)  # fmt: skip
         else:
             steps = _pocket(interp, code, hole, values, r_level, bottom, initial, return_initial, feed)
         emit(interp, steps)
@@ -678,6 +709,9 @@ def _pocket(interp: Interpreter, code: int, hole: Vec, values: dict, r_level: fl
                            e_stock=words.get("E"))  # fmt: skip
     if problem is not None:
         raise interp.error(f"G{code}: {problem[0]}", "cycle-argument", alarm=problem[1])
+    if code in (110, 111, 114, 115, 130, 131, 134, 135):
+        span = max(abs(i), abs(j or 0.0)) * max(words.get("E", 1.0), 1.0)
+        _limit(interp, (1 + (r_level - bottom) / state.q) * (1 + span / words["L"]), f"G{code} passes")
     return pocket_steps(code, hole[0], hole[1], r_level, bottom, initial, return_initial=return_initial,
                         feed=feed, tool_radius=radius, i=abs(i), j=abs(j or 0.0), l_step=words.get("L", 0.0),
                         w_first=words.get("W", 0.0), q_step=state.q or 0.0, v_clear=words.get("V", 0.0),
@@ -745,6 +779,7 @@ def pattern_block(interp: Interpreter, code: int, values: dict, cycle_code: int 
         feed = interp.feed
         if not feed:
             raise interp.error(f"G{code} needs a feed", "missing-feed")
+        _limit(interp, abs(values["J"] * s) / step, f"G{code} passes (J / L)")
         emit(interp, face_mill_steps(x, y, values["I"] * s, values["J"] * s, step, level, r_level, initial,
                                      feed, zigzag=code == 126))  # fmt: skip
         return
@@ -772,6 +807,7 @@ def pattern_block(interp: Interpreter, code: int, values: dict, cycle_code: int 
         if code == 122 and "P" not in values:
             raise interp.error("G122 needs P (angular step)", "cycle-argument", alarm=61)
         if code == 123:
+            _limit(interp, k * values["P"], "G123 holes (P x K)")
             holes = pattern_holes(123, x, y, i=values["I"] * s, j=values["J"] * s, k=k,
                                   p=float(_count(interp, "P", values, code, required=True)))  # fmt: skip
         else:

@@ -417,3 +417,31 @@ def test_x46_canned_cycles_with_tool_length_offset():
     assert retracts == [190.0]  # N018 G98: back to the initial level of tool 15 (machine 190)
     dwells = [r["dwell_s"] for r in recs if r["kind"] == "dwell"]
     assert dwells == [0.03] * 4
+
+
+def test_scaling_does_not_scale_q_d_or_the_shift():
+    """L1962: under G51 P2 the levels scale (R-10 → -20, Z-20 → -40, X5 → 10) but the peck depth Q2, the
+    G73 retract d = 0.5 and the G76 shift Q2 stay machine amounts: pecks end at -22, -24, …, -40 with
+    0.5 retracts, and the G76 shift moves the machine 2 mm in +X."""
+    got = path(records("G51 X0 Y0 Z0 P2;\nG90 G98 G73 X5 Y0 Z-20 R-10 Q2 F100;\nG80;\nG50;\n"))
+    feeds = [e[2] for k, e in got if k == "line"]
+    rapids_up = [e[2] for k, e in got if k == "rapid" and -40 < e[2] < -20]
+    assert close(feeds, [-22.0 - 2 * n for n in range(10)])
+    assert close(rapids_up, [-21.5 - 2 * n for n in range(9)])
+    got = path(records("G51 X0 Y0 Z0 P2;\nG90 G99 G76 X5 Y0 Z-20 R-10 Q2 F100;\nG80;\nG50;\n"))
+    shifted = [e for k, e in got if k == "rapid" and e[0] != 10.0]
+    assert shifted and all(close(e[0], 12.0) for e in shifted)
+
+
+def test_cycle_in_cutter_compensation_is_an_error():
+    """The manual ignores G41/G42 in cycle mode (L2516); we reject drilling there (docs/gcode.md)."""
+    err = program_error("G10 L12 P1 R5;\nG41 G01 X10 Y0 D1 F100;\nG81 X20 Z-5 R1;\n")
+    assert err.code == "cycle-in-compensation" and err.alarm == 61
+
+
+@pytest.mark.parametrize("text", ["G73 X0 Y0 Z-1000 R0 Q0.0001 F100;\n",
+                                  "G81 Z-5 R1 F100 K0;\nG123 X0 Y0 I1 J1 P9999 K9999;\n",
+                                  "G126 X0 Y0 Z-1 R1 I10 J999999 L1 F100;\n"])
+def test_a_block_that_would_make_millions_of_moves_is_an_error(text):
+    err = program_error(text)
+    assert err.code == "cycle-too-long"
