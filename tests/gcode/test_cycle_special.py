@@ -245,3 +245,37 @@ def test_random_cycle_blocks_give_an_error_or_a_path_that_keeps_the_levels(code,
             assert code == "G83" and z1 >= deepest + 0.5 - 1e-6
         if tp.kind[n] == SegmentKind.RAPID and z1 >= r - 1e-9:
             deepest = r  # a new hole (or back at R) starts over
+
+
+# ------------------------------------------------------------------ X47-X54 as programs (D1 = 5)
+@pytest.mark.parametrize(("block", "reach"), [
+    # (example block, expected farthest tool-centre point from the centre (25, 25) while below R, |dx|, |dy|)
+    ("G99 G111 X25 Y25 R5 Z-50 I50 W20 Q10 L10 V10 F800 D1", (45, 45)),   # X47: circle radius I - r
+    ("G99 G112 X25 Y25 R5 Z-50 I50 J10 F800 D1", (45, 45)),               # X48: finish radius I - r
+    # X49: plunges outside the stock at J + r = 105 on +X; the first ring is one step in (95).
+    ("G99 G114 X25 Y25 R5 Z-50 I50 J100 W20 Q10 L10 V10 F800 D1", (105, 95)),
+    ("G99 G116 X25 Y25 R5 Z-50 I50 J60 F800 D1", (60, 55)),               # X50: start J60, circle I + r
+    ("G99 G130 X25 Y25 R5 Z-50 I70 J50 W20 Q10 L5 V10 U10 F800 D1", (30, 20)),  # X51: I/2 - r, J/2 - r
+    ("G132 X25 Y25 R5 Z-50 I80 J50 L30 U10 F800 D1", (35, 20)),           # X52
+    # X53: plunges at I/2 + r + (E-1)·max(I, J)/2 = 125 on +X; the first ring is L2 in: J/2 + r + 78.
+    ("G99 G134 X25 Y25 R5 Z-50 I80 J50 W10 Q5 V10 L2 E3 U5 F800 D1", (125, 108)),
+    ("G99 G136 X25 Y25 R5 Z-50 I80 J50 L30 U5 F800 D1", (70, 30)),        # X54: start L30 outside, J/2 + r
+])  # fmt: skip
+def test_x47_x54_special_cycle_examples(block, reach):
+    """The manual's examples (L3397-L3818; the paths are our design, notes: quality C) run with D1 = 5:
+    cut to the bottom Z-50, never beyond the reach the example's numbers give, back over the centre at R
+    (G99; G132's block has no G98/G99 and returns to the power-on G98 initial level Z50), then G80's
+    move to X50 Y50 Z50."""
+    text = f"G90 G00 X50 Y50 Z50;\n{block};\nG80 X50 Y50 Z50;\nM30;\n"
+    tp = interpret(text, tool_offsets={"D": {1: 5.0}})
+    below = tp.end[:, 2] < 5 - 1e-9
+    assert close(float(tp.end[:, 2].min()), -50.0)
+    dx = np.abs(tp.end[below, 0] - 25).max()
+    dy = np.abs(tp.end[below, 1] - 25).max()
+    arcs = tp.kind == SegmentKind.ARC
+    if arcs.any():  # an arc's extreme can lie between its ends: the radius about its centre bounds it
+        dx = max(dx, float(np.max(np.abs(tp.center[arcs, 0] - 25) + tp.radius[arcs])))
+        dy = max(dy, float(np.max(np.abs(tp.center[arcs, 1] - 25) + tp.radius[arcs])))
+    assert close(dx, reach[0]) and close(dy, reach[1])
+    back = 50.0 if "G132" in block else 5.0
+    assert close(tp.end[-2].tolist(), (25, 25, back)) and close(tp.end[-1].tolist(), (50, 50, 50))
