@@ -223,8 +223,8 @@ class SystemVariables:
                 return float(block.number)
             if letter == "M":
                 for word in reversed(block.words):
-                    if word[0] == "M" and isinstance(word[1], float):
-                        return word[1]
+                    if word[0] == "M" and isinstance(word[1], float | str):
+                        return float(word[1])  # a literal (plain blocks keep the digits as text)
         return None
 
     def _position(self, index: int) -> float | None:
