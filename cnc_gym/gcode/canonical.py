@@ -167,6 +167,12 @@ class OffsetStack:
         self.origin: Vec = ZERO
         self.update()
 
+    @property
+    def extra_wcs_number(self) -> int:
+        """The G54.1 P number in force (#4130), 0 while G54..G59 is selected."""
+        extra = self.active_wcs - self.n_standard_wcs + 1
+        return extra if extra > 0 else 0
+
     def work_origin(self) -> list[float]:
         if self.floating is not None:
             return list(self.floating)

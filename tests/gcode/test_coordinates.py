@@ -264,3 +264,10 @@ def test_seam_without_transforms_keeps_the_machine_position_of_omitted_axes():
     interp.offsets.update()
     interp.move_linear(True, (5.0, None, None))
     assert interp.out.position == (15.0, 2.0, 3.0)
+
+
+def test_system_variables_read_the_g54_1_number_and_the_g31_skip_position():
+    # #4130 = G54.1 P in force (0 under G54-G59); #5061-#5063 = the G31 end point in work coordinates.
+    text = ("G10 L20 P5 X1\nG54.1 P5\n#100=#4130\nG54\n#101=#4130\nG01 F100\nG31 X3 Y4\n"
+            "#102=#5061\n#103=#5062\nG00 X#102 Y#103 Z#100\nX#101\n")  # fmt: skip
+    assert ends(text)[-2:] == [[3.0, 4.0, 5.0], [0.0, 4.0, 5.0]]

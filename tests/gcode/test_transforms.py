@@ -354,3 +354,42 @@ def test_random_transform_programs_give_an_error_or_a_finite_path(blocks):
         assert err.code and err.line is not None
         return
     assert np.isfinite(toolpath.end).all() and np.isfinite(toolpath.start).all()
+
+
+X26 = """G92 X0 Y0 Z20 G69 G17
+M3 S1000
+G0 Z2
+G51 X0 Y0 I1.2 J1.2
+M98 P2100
+M98 P2200 L7
+G50
+G0 G90 Z20
+X0 Y0
+M30
+O2200
+G68 X0 Y0 G91 R45.0
+G90
+M98 P2100
+M99
+O2100
+G90 G0 X0 Y-20
+G01 Z-2 F200
+X8.284
+X14.142 Y-14.142
+M99
+"""
+
+
+def test_worked_example_x26_repeated_rotation_by_subprogram_under_scaling():
+    # L2056-L2095 without its G42 D01 / G40: the example issues G68 in cutter-compensation mode under
+    # scaling, which the manual's own rule forbids (L2046; notes §10 X26: quality B). O2100 cuts the
+    # polyline (0,-20) → (8.284,-20) → (14.142,-14.142); O2200 turns the system 45° more each call (G91
+    # R45 adds) and calls it: 8 copies in all, scaled 1.2 about (0, 0) (Z is not scaled: no K, P1862 = 1).
+    # G92 Z20 at machine Z0: machine Z = program Z - 20.
+    cuts = [r for r in moves(X26) if r["kind"] == "line" and r["line"] in (19, 20)]
+    expected = []
+    for k in range(8):
+        for p in ((8.284, -20.0), (14.142, -14.142)):
+            expected.append(rotate((1.2 * p[0], 1.2 * p[1]), (0.0, 0.0), 45.0 * k))
+    assert all_close(xy(r["end"] for r in cuts), expected)
+    assert all(r["end"][2] == -22.0 for r in cuts)
