@@ -462,7 +462,7 @@ class OffsetStage:
         self.modes = machine.modes
         self.tool = machine.tool
         self.spindle_rpm = machine.spindle_rpm
-        self._line = machine.line
+        self.line = machine.line
         # Cutter compensation state.
         self.d = 0.0  # signed offset of the blocks to come (left +)
         self.plane = Plane.XY
@@ -480,7 +480,7 @@ class OffsetStage:
         # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, L3869).
         self.vector: Vec = (0.0, 0.0, 0.0)
         self.length_pending: Vec | None = None
-        self._raw_next = False
+        self.suspended = False  # this block's moves pass through uncompensated (G53, G27-G30, G60)
         self._position_offset: tuple[int, float, frozenset[int], bool] | None = None
 
     # ------------------------------------------------------------------ context
@@ -493,14 +493,6 @@ class OffsetStage:
         p = self._position
         return (p[0] + pending[0], p[1] + pending[1], p[2] + pending[2])
 
-    @property
-    def line(self) -> int:
-        return self._line
-
-    @line.setter
-    def line(self, value: int) -> None:
-        self._guard(self._new_block, value)
-
     def _guard(self, fn, *args):
         """Run ``fn``; a compensation error gets the dialect's alarm number."""
         try:
@@ -510,11 +502,13 @@ class OffsetStage:
                 err.alarm = self.alarms.get(err.code)
             raise
 
-    def _new_block(self, value: int) -> None:
-        # The interpreter sets the line at the start of every block: the look-ahead counts blocks here.
-        self._line = value
+    def begin_block(self) -> None:
+        """The interpreter starts a block (after setting ``line``): the look-ahead counts blocks here."""
+        self._guard(self._new_block)
+
+    def _new_block(self) -> None:
         self.length_pending = None
-        self._raw_next = False
+        self.suspended = False
         self._position_offset = None
         if self.cancel_requested and self.pending is not None:
             # G40 in a block without a move in the plane: the vector stays perpendicular to the last
@@ -532,7 +526,7 @@ class OffsetStage:
             self.active = False
 
     def _context(self) -> tuple:
-        return (self._line, self.file_index, self.modes, self.tool, self.spindle_rpm)
+        return (self.line, self.file_index, self.modes, self.tool, self.spindle_rpm)
 
     # ------------------------------------------------------------------ controls
     def set_cutter(self, d: float, plane: Plane, *, cancel_direction: Point | None = None) -> None:
@@ -605,14 +599,6 @@ class OffsetStage:
         self._guard(self._dwell, seconds, modes)
 
     def _straight_traverse(self, target: Vec) -> None:
-        if self._raw_next:
-            self._raw_next = False
-            self._set_machine_context(self._context())
-            self.machine.straight_traverse(target)
-            self._position = target
-            if self.active:
-                self.active = False
-            return
         self._move("rapid", self._adjust(target), None)
 
     def _arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
@@ -626,7 +612,8 @@ class OffsetStage:
                 f"the {Plane(self.plane).name} plane",
                 "comp-plane-change",
             )
-        if not self.active and self.d == 0.0:
+        if self.suspended or (not self.active and self.d == 0.0):
+            self._set_machine_context(self._context())
             self.machine.arc_feed(self._shift(end), self._shift(center), plane, sweep, feed)
             self._position = end
             return
@@ -643,11 +630,14 @@ class OffsetStage:
         else:
             self._emit_dwell(item)
 
-    def begin_machine_move(self) -> None:
-        """G53 comes next: everything buffered is emitted first and the G53 rapid goes to the machine
-        position as given; cutter compensation restarts (a new start-up) after it (L1664, L3897)."""
+    def suspend(self) -> None:
+        """G53, G27-G30, G60 come next: everything buffered is emitted first (the last block ending with its
+        vector perpendicular to it) and this block's moves go through uncompensated; the next move in the
+        plane is a new start-up. A simplification of the manual's temporary cancel (L1664, L4371-L4394):
+        the vector is gone at the intermediate point and comes back with the next block's start-up."""
         self.flush()
-        self._raw_next = True
+        self.suspended = True
+        self.active = False
 
     # ------------------------------------------------------------------ internals
     def _adjust(self, target: Vec) -> Vec:
@@ -710,7 +700,8 @@ class OffsetStage:
         u, v, _w = PLANE_AXES[self.plane]
         start = self._position
         in_plane = abs(target[u] - start[u]) > SAME_POINT or abs(target[v] - start[v]) > SAME_POINT
-        if not self.active and (self.d == 0.0 or not in_plane) and self.pending is None and not self.deferred:
+        passthrough = not self.active and (self.d == 0.0 or not in_plane) and self.pending is None
+        if self.suspended or (passthrough and not self.deferred):
             # Cancel mode (or G41/G42 waiting for its start-up block): straight through.
             self._set_machine_context(self._context())
             self._emit_straight(kind, self._shift(target), feed)
@@ -733,7 +724,7 @@ class OffsetStage:
 
     def _plane_move(self, item: _Item) -> None:
         element = item.element
-        line = self._line
+        line = self.line
         if not self.active:
             if item.kind == "arc":
                 raise CompensationError(
@@ -1088,9 +1079,9 @@ class ToolCompensation:
             self._apply_length(interp, {})
 
     def before_machine_move(self) -> None:
-        """G53 is about to move in machine coordinates."""
+        """G53 (and G27-G30, G60) are about to move: compensation is suspended for this block."""
         if self.stage is not None:
-            self.stage.begin_machine_move()
+            self.stage.suspend()
 
     def finish(self, file: str = "<program>") -> None:
         """End of the program: emit what the look-ahead still holds (the vector stays, L4112)."""

@@ -209,6 +209,8 @@ class Interpreter:
         else:
             gs, ms, values = block.gs, block.ms, block.values
         self.out.line = block.line
+        if self.comp.stage is not None:  # compensation counts blocks for its look-ahead
+            self.comp.stage.begin_block()
 
         cycle = self.cycle
         if ms is None and not cycle.code and not cycle.rigid_pending and "D" not in values \
@@ -415,6 +417,8 @@ class Interpreter:
         self.resync_program_position()
 
     def _do_transform(self, spec: CodeSpec, values: dict) -> None:
+        if spec.action in ("g27", "g28", "g29", "g30", "g60"):
+            self.comp.before_machine_move()  # cutter compensation is suspended for the reference moves
         TRANSFORM_ACTIONS[spec.action](self, spec, values)  # transforms.py
 
     def _do_g09(self, spec: CodeSpec, values: dict) -> None:

@@ -133,7 +133,8 @@ def test_worked_example_x62_tool_position_offset():
     # block makes a closed figure; with X-80 (the Fanuc original) the tool returns to the start. We test the
     # corrected reading.
     text = ("G10 L12 P1 R10\nN1 G91 G46 G00 X80.0 Y50.0 D01\nN2 G47 G01 X50.0 F120.0\nN3 Y40.0\n"
-            "N4 G48 X40.0\nN5 Y-40.0\nN6 G45 X30.0\nN7 G45 G03 X30.0 Y30.0 J30.0\nN8 G45 G01 Y20.0\nN9 G46 X0\n"
+            "N4 G48 X40.0\nN5 Y-40.0\nN6 G45 X30.0\nN7 G45 G03 X30.0 Y30.0 J30.0\nN8 G45 G01 Y20.0\n"
+            "N9 G46 X0\n"
             "N10 G46 G02 X-30.0 Y30.0 J30.0\nN11 G45 G01 Y0\nN12 G47 X-120.0\nN13 G47 Y-80.0\n"
             "N14 G46 G00 X-80.0 Y-50.0\n")  # fmt: skip
     out = moves(text)
