@@ -588,6 +588,8 @@ class Interpreter:
 
     def _do_g53(self, spec: CodeSpec, values: dict) -> None:
         """G53 IP_: rapid to machine coordinates; one-shot; ignored in G91 (L1656)."""
+        if self.chain.stages["rotation"] is not None:
+            check_coordinate_command(self, "G53", local=True)  # "G52 to G59" in G68 mode (L2041)
         if self.incremental:
             return
         self.comp.before_machine_move()

@@ -243,6 +243,7 @@ def test_after_g15_the_next_move_starts_from_the_tool_position():
         ("G68 X0 Y0 R30\nG52 X1\n", "forbidden-in-rotation", None),
         ("G68 X0 Y0 R30\nG55\n", "forbidden-in-rotation", None),
         ("G68 X0 Y0 R30\nG54.1 P1\n", "forbidden-in-rotation", None),
+        ("G68 X0 Y0 R30\nG53 X0\n", "forbidden-in-rotation", None),
         ("G51 X0 Y0 P2\nG28 X0\n", "forbidden-in-scaling", 109),  # L1935
         ("G51 X0 Y0 P2\nG29 X0\n", "forbidden-in-scaling", 109),
         ("G51 X0 Y0 P2\nG30 X0\n", "forbidden-in-scaling", 109),
@@ -271,6 +272,9 @@ def test_restrictions_that_do_not_apply():
     # offset, added after the scaling and not scaled (L1907): X1 → 2·1 + 1 = 3. G17 in G17 G68 is not a
     # plane change; G91 right after G69 with no axis word is no move.
     assert ends("G51 X0 Y0 P2\nG52 X1\nG01 X1 F100\n") == [[3.0, 0.0, 0.0]]
+    # G53 in G51 mode is allowed (not named at L1935); the program position follows the tool: G91 X1
+    # after it is scaled about (0, 0): machine 5 + 2·1 = 7.
+    assert ends("G51 X0 Y0 P2\nG53 X5\nG91 G01 X1 F100\n") == [[5.0, 0.0, 0.0], [7.0, 0.0, 0.0]]
     assert ends("G68 X0 Y0 R90\nG17 G01 X1 F100\nG69\nG91\nG90 X0 Y0\n")[-1] == [0.0, 0.0, 0.0]
 
 
@@ -345,7 +349,8 @@ def test_arcs_stay_on_their_circle_under_similarity_transforms(angle, f, mirror_
 @given(st.lists(st.sampled_from([
     "G68 X0 Y0 R30", "G68 R-45", "G69", "G51 X1 Y2 P2", "G51 I-1 J1", "G50", "G16", "G15", "G51.1 X5",
     "G50.1 X0", "G91", "G90", "G01 X10 Y5 F100", "G00 X-3 Y7", "G02 X5 Y5 R8 F100", "G03 X0 Y0 I-3 J0 F50",
-    "X20 Y30", "G18", "G17", "G28 X0", "G92 X0", "G55",
+    "X20 Y30", "G18", "G17", "G28 X0", "G92 X0", "G55", "G01 X10 Y5 F100 ,L1", "G01 X0 Y20 F100 ,R2",
+    "G03 X5 Y0 R6 F100 ,R1", "G53 X1", "G60 X3 Y3", "G31 X2 F100",
 ]), max_size=12))  # fmt: skip
 def test_random_transform_programs_give_an_error_or_a_finite_path(blocks):
     try:
