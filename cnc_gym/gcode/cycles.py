@@ -601,12 +601,12 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
             raise interp.error(f"G{code} in rigid tapping mode: cancel with G80 first", "rigid-tap", alarm=61)
         if state.code == 0:
             state.initial = _level_now(interp, w)  # latched on entering the cycle mode (L2386)
-        if code in POCKETS and interp.plane != Plane.XY:
-            raise interp.error(f"G{code} works in the G17 plane only", "cycle-argument", alarm=227)
         state.code = code
         if state.rigid_pending:
             state.rigid, state.rigid_pending = True, False
     code = state.code
+    if code in POCKETS and interp.plane != Plane.XY:
+        raise interp.error(f"G{code} works in the G17 plane only", "cycle-argument", alarm=227)
     s = interp.scale
     letters = interp.dialect.axes
     bottom_letter = letters[w]
@@ -880,9 +880,15 @@ def check_block(interp: Interpreter, by_group: dict, motion_spec, axis_owner, it
     if (cycle_spec is not None and cycle_spec.action == "cycle_cancel") or motion_spec is not None:
         cancel(interp)
     elif state.code:
-        for spec in by_group.get(0, ()) and [by_group[0]]:
-            alarm = _NOT_IN_CYCLE.get(spec.name)
-            if alarm is not None:
-                raise interp.error(f"{spec.name} in canned-cycle mode: cancel the cycle with G80 first",
-                                   "cycle-not-allowed", alarm=alarm)  # fmt: skip
+        one_shot = by_group.get(0)
+        alarm = _NOT_IN_CYCLE.get(one_shot.name) if one_shot is not None else None
+        if alarm is not None:
+            raise interp.error(f"{one_shot.name} in canned-cycle mode: cancel the cycle with G80 first",
+                               "cycle-not-allowed", alarm=alarm)  # fmt: skip
+        plane = by_group.get(2)
+        follows = interp.cycle_params.drilling_axis_follows_plane
+        if plane is not None and follows and plane.value != interp.plane:
+            # With FXY = 1 the plane picks the drilling axis, which may not change in a cycle (L2620).
+            raise interp.error(f"{plane.name} changes the drilling axis in canned-cycle mode: cancel the "
+                               "cycle with G80 first", "cycle-not-allowed", alarm=61)  # fmt: skip
     return axis_owner

@@ -18,7 +18,14 @@ from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
-from cnc_gym.gcode.cycles import check_pocket, pattern_holes, pocket_steps, rectangle_holes
+from cnc_gym.gcode.cycles import (
+    CYCLE_WORDS,
+    PATTERN_WORDS,
+    check_pocket,
+    pattern_holes,
+    pocket_steps,
+    rectangle_holes,
+)
 from cnc_gym.toolpath import SegmentKind
 
 
@@ -279,3 +286,35 @@ def test_x47_x54_special_cycle_examples(block, reach):
     assert close(dx, reach[0]) and close(dy, reach[1])
     back = 50.0 if "G132" in block else 5.0
     assert close(tp.end[-2].tolist(), (25, 25, back)) and close(tp.end[-1].tolist(), (50, 50, 50))
+
+
+_SPECIAL = [f"G{n}" for n in (*range(110, 118), *range(130, 138))]
+_PATTERN = [f"G{n}" for n in range(120, 128)]
+_small = st.one_of(st.integers(-5, 60).map(str), st.floats(-5, 60, allow_nan=False).map(lambda v: f"{v:.2f}"))
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(code=st.sampled_from(_SPECIAL + _PATTERN), drill=st.sampled_from(["", "G81 Z-3 R1 F100 K0;\n"]),
+       words=st.dictionaries(st.sampled_from("XYZRIJLWQVUEKPD"), _small, max_size=12))  # fmt: skip
+def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, drill, words):
+    """Pocket, boss, pattern and face-milling blocks with random words: a ProgramError, or a finite path
+    that stays within the bottom and the start height (D1 = 4)."""
+    number = int(code[1:])
+    allowed = set("XYZ") | set(CYCLE_WORDS.get(number, "") or PATTERN_WORDS[number])
+    words = {k: v for k, v in words.items() if k in allowed}  # mostly well-formed: reach the geometry
+    for letter in "LKPD":
+        if letter in words:
+            words[letter] = str(abs(int(float(words[letter]))))
+    if "D" in words:
+        words["D"] = str(int(words["D"]) % 3)
+    block = " ".join(f"{k}{v}" for k, v in words.items())
+    text = f"G00 Z60 F200;\n{drill}{code} {block};\nG80;\n"
+    try:
+        tp = interpret(text, tool_offsets={"D": {1: 4.0, 2: 1.5}})
+    except ProgramError:
+        return
+    assert np.isfinite(tp.end).all() and np.isfinite(tp.start).all()
+    assert np.isfinite(tp.radius).all() and np.isfinite(tp.sweep).all()
+    assert tp.end[:, 2].max() <= 60 + 1e-6
+    if "Z" in words and code in _SPECIAL:
+        assert tp.end[:, 2].min() >= min(float(words["Z"]), -3.0) - 1e-6

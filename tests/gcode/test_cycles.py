@@ -445,3 +445,20 @@ def test_cycle_in_cutter_compensation_is_an_error():
 def test_a_block_that_would_make_millions_of_moves_is_an_error(text):
     err = program_error(text)
     assert err.code == "cycle-too-long"
+
+
+def test_drilling_axis_follows_the_plane_with_fxy_and_cannot_change_in_the_cycle():
+    """2000#0 FXY = 1: in G18 the drilling axis is Y (the bottom is the Y word, positions X/Z); a plane
+    change inside the cycle is an error (L2620). With FXY = 0 (standard) G18 still drills along Z."""
+    from dataclasses import replace
+
+    from cnc_gym.gcode.dialects.gsk25i import DIALECT
+
+    fxy = replace(DIALECT, cycle_params=replace(DIALECT.cycle_params, drilling_axis_follows_plane=True))
+    got = path(records("G18 G90 G98 G81 X10 Z5 Y-20 R-2 F100;\n", dialect=fxy))
+    assert got == [("rapid", (10, 0, 5)), ("rapid", (10, -2, 5)), ("line", (10, -20, 5)),
+                   ("rapid", (10, 0, 5))]  # fmt: skip
+    err = program_error("G90 G99 G81 X10 Y5 Z-20 R-2 F100;\nG18 X20;\n", dialect=fxy)
+    assert err.code == "cycle-not-allowed" and err.line == 2
+    got = path(records("G18 G90 G98 G81 X10 Y5 Z-20 R-2 F100;\n"))
+    assert got[2] == ("line", (10, 5, -20))
