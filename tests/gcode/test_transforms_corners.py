@@ -150,3 +150,28 @@ def test_corner_errors(text, code):
 def test_corner_error_names_the_line_of_the_corner_block():
     err = program_error("G01 X1 F100\nG01 X10 ,L2\n")
     assert err.line == 2
+
+
+block = st.tuples(st.sampled_from(["G01", "G02", "G03"]), st.integers(-30, 30), st.integers(-30, 30),
+                  st.integers(5, 40), st.sampled_from(["", ",L1", ",R1", ",L3", ",R4"]))  # fmt: skip
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(block, min_size=2, max_size=8),
+       st.sampled_from(["", "G68 X3 Y-2 R30\n", "G51 X0 Y0 I2 J-1\n"]))  # fmt: skip
+def test_random_contours_with_corners_stay_continuous(blocks, transform):
+    from cnc_gym.errors import ProgramError
+    from cnc_gym.gcode import interpret
+
+    lines = [transform + "G00 X0 Y0\nF100"]
+    for code, x, y, r, corner in blocks:
+        lines.append(f"{code} X{x} Y{y}" + (f" R{r}" if code != "G01" else "") + f" {corner}".rstrip())
+    try:
+        toolpath = interpret("\n".join(lines) + "\nG01 X50 Y50\n")
+    except ProgramError as err:
+        assert err.code and err.line is not None
+        return
+    records = toolpath.to_records()
+    moves_only = [r for r in records if r["kind"] != "dwell"]
+    for a, b in itertools.pairwise(moves_only):
+        assert close(a["end"], b["start"], 1e-4)
