@@ -153,7 +153,7 @@ def test_corner_error_names_the_line_of_the_corner_block():
 
 
 block = st.tuples(st.sampled_from(["G01", "G02", "G03"]), st.integers(-30, 30), st.integers(-30, 30),
-                  st.integers(5, 40), st.sampled_from(["", ",L1", ",R1", ",L3", ",R4"]))  # fmt: skip
+                  st.integers(45, 80), st.sampled_from(["", ",L1", ",R1", ",L3", ",R4"]))  # fmt: skip
 
 
 @settings(max_examples=80, deadline=None)
