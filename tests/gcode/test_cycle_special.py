@@ -318,3 +318,11 @@ def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, 
     assert tp.end[:, 2].max() <= 60 + 1e-6
     if "Z" in words and code in _SPECIAL:
         assert tp.end[:, 2].min() >= min(float(words["Z"]), -3.0) - 1e-6
+
+
+def test_pattern_origin_follows_g91_and_radius_must_be_positive():
+    """X, Y of a pattern are absolute in G90 and from the current position in G91 (L4877); G120's radius
+    must be positive (alarm 215, ours: "represented by the positive number")."""
+    a = interpret("G00 X10 Y10;\nG91 G121 X5 Y0 I2 J0. K2;\n")
+    assert close(a.end[-1].tolist(), (17, 10, 0))
+    assert program_error("G120 X0 Y0 I-5 J0 K3;\n").alarm == 215

@@ -99,6 +99,9 @@ def drop_zero_moves(expected):
     ("G82", "Z-150. R-100. P1000 F120", -100, False, 1.0),  # X36: P1000 = 1 s at the bottom
     ("G85", "Z-150. R-120. F120", -120, True, None),        # X39: feed out to R
     ("G89", "Z-150. R-120. P1000 F120", -120, True, 1.0),   # X43: dwell, then feed out
+    ("G84", "Z-150. R-120. P300 F120", -120, True, 0.3),    # X38: tap in, dwell 0.3 s, tap out to R
+    ("G74", "Z-150. R-120. P300 F120", -120, True, 0.3),    # X32: the same path, spindle the other way
+    ("G86", "Z-150. R-100. F120", -100, False, None),       # X40: spindle stop, rapid out
 ])  # fmt: skip
 def test_six_hole_examples(code, data, r, feed_out, dwell):
     text = "M3 S2000;\nG90 G99 " + code + " " + SIX.format(data=data)
@@ -106,6 +109,17 @@ def test_six_hole_examples(code, data, r, feed_out, dwell):
     for n, (x, y) in enumerate(HOLES):
         back = 0.0 if n == 5 else r  # G99 back to R; the last block is G98: back to the initial level Z0
         expected += simple_hole(x, y, r, -150, back, feed_out=feed_out, dwell=dwell)
+    assert matches(path(records(text)), drop_zero_moves(expected))
+
+
+def test_x34_g88_six_holes():
+    """X34 (the G80 example, L2652-L2667): G88 without P: at each bottom a feed hold (0 s exact-stop
+    dwell) for the operator, whose retract we model as a rapid to R (G99) or the initial level (G98)."""
+    text = "M3 S100;\nG90 G99 G88 " + SIX.format(data="Z-150. R-120. F120")
+    expected = []
+    for n, (x, y) in enumerate(HOLES):
+        expected += [("rapid", (x, y, None)), ("rapid", (x, y, -120)), ("line", (x, y, -150)), ("dwell", 0.0),
+                     ("rapid", (x, y, 0.0 if n == 5 else -120))]  # fmt: skip
     assert matches(path(records(text)), drop_zero_moves(expected))
 
 
