@@ -934,9 +934,23 @@ class ToolCompensation:
             interp.out = self.stage
         return self.stage
 
-    def signed_offset(self) -> float:
-        """The signed compensation offset (left +) for the D and G41/G42 in force."""
-        return self.side * self.offsets.radius(self.d_number) if self.side else 0.0
+    def signed_offset(self, interp) -> float:
+        """The signed compensation offset (left +) for the D and G41/G42 in force.
+
+        A mirror image in the plane (G51.1, or G51 with one negative factor) interchanges G41 and G42, so
+        the machine path is the mirror image of the compensated programmed path (Fanuc's rule; GSK's
+        manual is silent). The stage sees the mirrored moves, hence the sign. Scaling never scales the
+        offset."""
+        if not self.side:
+            return 0.0
+        sign = 1.0
+        chain = interp.chain
+        if chain.active:
+            u, v, _w = PLANE_AXES[self.plane if self.side else interp.plane]
+            a = chain.linear
+            if a[u][u] * a[v][v] - a[u][v] * a[v][u] < 0.0:
+                sign = -1.0
+        return sign * self.side * self.offsets.radius(self.d_number)
 
     def _direction(self, interp, values: dict) -> Point | None:
         u, v, _w = PLANE_AXES[interp.plane]
@@ -955,7 +969,7 @@ class ToolCompensation:
             self.d_number = int(values["D"])
             if self.side and self.stage is not None:
                 # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
-                self.stage.set_cutter(self.signed_offset(), self.plane)
+                self.stage.set_cutter(self.signed_offset(interp), self.plane)
         if "H" in values:
             self.h_number = int(values["H"])
             if self.length_sign:
@@ -972,7 +986,7 @@ class ToolCompensation:
             self.side = side
             self.plane = interp.plane
             stage = self.install(interp)
-            stage.set_cutter(self.signed_offset(), self.plane)
+            stage.set_cutter(self.signed_offset(interp), self.plane)
             return
         self.side = 0
         direction = self._direction(interp, values)

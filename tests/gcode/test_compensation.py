@@ -464,3 +464,38 @@ def test_g10_l12_in_g91_adds_and_wear_adds_to_geometry():
     assert ends("G10 L12 P1 R1\nG91 G10 L12 P1 R0.5\nG10 L13 P1 R0.5\nG90\n" + text) == ends(
         "G10 L12 P1 R2\n" + text
     )
+
+
+def test_line_to_arc_outer_obtuse_corner_is_the_intersection():
+    # G41 r = 1 along +x to (10, 0), then CCW about (16, 8) (R 10; start tangent (0.8, -0.6): a right turn
+    # of 37° with the tool on the left: outer, obtuse). The offset line y = 1 meets the offset circle
+    # (R 10 - 1 = 9, left of a CCW arc is the centre side): (x - 16)² + 7² = 81 → x = 16 - √32.
+    # End of the arc: 40° on from the start angle atan2(-8, -6).
+    end_angle = math.atan2(-8, -6) + math.radians(40)
+    ex, ey = 16 + 10 * math.cos(end_angle), 8 + 10 * math.sin(end_angle)
+    text = (
+        f"G10 L12 P1 R1\nG00 X-10\nG01 G41 D1 X0 Y0 F100\nX10\nG03 X{ex:.4f} Y{ey:.4f} I6 J8\n"
+        "G01 X30\nG40 Y-10\n"
+    )
+    out = moves(text)
+    assert close(xy(out[2]), (16 - math.sqrt(32), 1.0))
+    assert out[3]["kind"] == "arc" and math.isclose(out[3]["radius"], 9.0, abs_tol=1e-9)
+
+
+def test_helical_full_circle_is_compensated_in_projection():
+    # L3960: compensation in the plane only; the helix's Z moves with it. G41 r = 2 inside a CCW circle
+    # R 10 about (0, 0), entered along +y at (10, 0): the tool runs on R 8 and drops 5 in Z over the turn.
+    text = "G10 L12 P1 R2\nG00 X0 Y-20\nG01 G41 D1 X10 Y-10 F100\nX10 Y0\nG03 I-10 Z-5\nG01 X10 Y10\n"
+    out = moves(text)
+    arc = out[3]
+    assert arc["kind"] == "arc" and math.isclose(arc["radius"], 8.0) and math.isclose(arc["sweep_deg"], 360.0)
+    assert close(arc["start"], [8.0, 0.0, 0.0]) and close(arc["end"], [8.0, 0.0, -5.0])
+
+
+def test_mirror_image_interchanges_g41_and_g42():
+    # Fanuc rule (GSK silent): under a mirror in the plane the machine path is the mirror image of the
+    # compensated program path. G51.1 X0 mirrors x → -x.
+    body = "G00 X-10\nG01 G41 D1 X0 Y0 F100\nX10\nY10\nG40 X20 Y20\n"
+    plain = ends("G10 L12 P1 R1\n" + body)
+    mirrored = ends("G10 L12 P1 R1\nG51.1 X0\n" + body)
+    assert [[-x, y] for x, y in plain] == [[x + 0.0, y] for x, y in mirrored]
