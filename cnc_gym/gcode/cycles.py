@@ -599,6 +599,11 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
                                alarm=61)  # fmt: skip
         if state.rigid and state.code in TAPPING and code != state.code:
             raise interp.error(f"G{code} in rigid tapping mode: cancel with G80 first", "rigid-tap", alarm=61)
+        if code in POCKETS and state.code in DRILLING:
+            # Alarm 214 "CANNED CYCLE PUNCHING G73-G89 DEFINED": a special cycle while a drilling cycle is
+            # modal (our reading of the alarm text; the manual's examples always start them from G80).
+            raise interp.error(f"G{code} while the drilling cycle G{state.code} is active: cancel it with "
+                               "G80", "cycle-argument", alarm=214)  # fmt: skip
         if state.code == 0:
             state.initial = _level_now(interp, w)  # latched on entering the cycle mode (L2386)
         state.code = code

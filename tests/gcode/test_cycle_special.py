@@ -326,3 +326,9 @@ def test_pattern_origin_follows_g91_and_radius_must_be_positive():
     a = interpret("G00 X10 Y10;\nG91 G121 X5 Y0 I2 J0. K2;\n")
     assert close(a.end[-1].tolist(), (17, 10, 0))
     assert program_error("G120 X0 Y0 I-5 J0 K3;\n").alarm == 215
+
+
+def test_special_cycle_while_a_drilling_cycle_is_modal_is_alarm_214():
+    err = program_error("G81 X0 Y0 Z-5 R1 F100;\nG112 X25 Y25 R5 Z-50 I50 J10 D0;\n")
+    assert err.alarm == 214 and err.line == 2
+    interpret("G81 X0 Y0 Z-5 R1 F100;\nG80;\nG112 X25 Y25 R5 Z-50 I50 J10 D0;\n")  # after G80: fine
