@@ -794,7 +794,7 @@ def pattern_block(interp: Interpreter, code: int, values: dict, cycle_code: int 
         if "J" not in values:
             raise interp.error(f"G{code} needs J (length of sides 2 and 4)", "cycle-argument", alarm=216)
         # The block's cycle code, R, Z, Q, P, F are the modal cycle data (stored without drilling).
-        data = {k: v for k, v in values.items() if k in "RZQP"}
+        data = {k: v for k, v in values.items() if k in "RZQ"}  # P and K are the hole counts here
         data["K"] = 0.0  # store only: the pattern drills the holes
         cycle_block(interp, cycle_code, data)
         n13 = _count(interp, "P", values, code, required=False)

@@ -88,6 +88,9 @@ def test_x63_g124_rectangle_drilling():
     # Between holes back to R (Z5); after the last hole G98 (power-on) to the initial level Z25.
     assert close(float(tp.end[-2][2]), 25.0) and close(tp.end[-1].tolist(), (100, 100, 25))
     assert rectangle_holes(0, 0, 4, 2, 1, 1, ccw=True) == [(0, 0), (4, 0), (4, 2), (0, 2)]
+    # P3 is a hole count here, not a dwell: G82 in G124 dwells only with P from an earlier block.
+    tp = interpret("G124 G82 X0 Y0 R5 Z-5 I4 J2 P1 K1 F100;\n")
+    assert not (tp.kind == SegmentKind.DWELL).any() and len(bottoms(tp)) == 4
 
 
 def test_g124_needs_a_drilling_code_and_j():
