@@ -175,3 +175,18 @@ def test_random_contours_with_corners_stay_continuous(blocks, transform):
     moves_only = [r for r in records if r["kind"] != "dwell"]
     for a, b in itertools.pairwise(moves_only):
         assert close(a["end"], b["start"], 1e-4)
+
+
+def test_chamfer_and_fillet_are_compensated_with_the_contour():
+    # G41 D1 (radius 2) on a CCW square 20 x 20: the left side is the inside. The chamfer line x - y = 17
+    # (from (17,0) to (20,3)) moves 2 inwards: x - y = 17 - 2·√2; it meets the offset sides y = 2 and
+    # x = 18 there. The R4 fillet about (16, 16) becomes an R2 arc about the same centre.
+    text = ("G10 L12 P1 R2\nG00 X-10 Y-10\nG41 D1 G01 X0 Y0 F100\nX20 ,L3\nY20 ,R4\nX0\nY0\n"
+            "G40 G00 X-10 Y-10\n")  # fmt: skip
+    out = moves(text)
+    c = 17 - 2 * math.sqrt(2)
+    chamfer = next(r for r in out if r["line"] == 4 and r["start"][1] == 2.0 and r["end"][1] != 2.0)
+    assert close(chamfer["start"][:2], [c + 2, 2.0]) and close(chamfer["end"][:2], [18.0, 18.0 - c])
+    fillet = next(r for r in out if r["kind"] == "arc")
+    assert close(fillet["center"][:2], [16.0, 16.0]) and close(fillet["radius"], 2.0)
+    assert close(fillet["sweep_deg"], 90.0)
