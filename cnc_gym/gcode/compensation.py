@@ -361,12 +361,12 @@ class OutputMove:
 
 
 def compensate(
-    elements: list[PlaneElement], d: float, *, startup_type: str = "B", cancel_direction: Point | None = None
+    elements: list[PlaneElement], d: float, *, startup_type: str = "A", cancel_direction: Point | None = None
 ) -> list[OutputMove]:
     """Tool-centre path of a whole sequence: ``elements[0]`` is the start-up line (from a tool with no
     vector), the rest are compensated by ``d``; the last one is a cancel line unless it is an arc
-    (then the program ends in offset mode with the vector perpendicular to it). Pure; used by tests and
-    the same corner rules as the stage.
+    (then the program ends in offset mode with the vector perpendicular to it). Pure, with the same
+    corner rules as the stage (which adds the look-ahead, D changes, G41/G42 switches and the 3-D part).
     """
     if not elements:
         return []
@@ -383,8 +383,6 @@ def compensate(
         role = "startup" if i == 0 else "offset"
         if nxt is not None and cancel_last and i + 1 == len(body):
             role = "cancel" if i > 0 else "startup"
-        if i == 0 and nxt is not None and cancel_last and len(body) == 1:
-            raise CompensationError("start-up followed directly by the cancel block", "comp-bad-sequence")
         if role == "cancel" and cancel_direction is not None:
             virtual = PlaneElement(
                 element.end, (element.end[0] + cancel_direction[0], element.end[1] + cancel_direction[1])

@@ -499,3 +499,34 @@ def test_mirror_image_interchanges_g41_and_g42():
     plain = ends("G10 L12 P1 R1\n" + body)
     mirrored = ends("G10 L12 P1 R1\nG51.1 X0\n" + body)
     assert [[-x, y] for x, y in plain] == [[x + 0.0, y] for x, y in mirrored]
+
+
+def test_pure_compensate_function_gives_the_interpreter_path():
+    # compensation.compensate() runs the same corner rules on plane elements without the interpreter:
+    # the X57 contour as elements (start, end, centre, signed sweep) gives the same tool-centre points.
+    from cnc_gym.gcode.compensation import PlaneElement, compensate
+
+    def arc(start, end, center, ccw):
+        a0 = math.atan2(start[1] - center[1], start[0] - center[0])
+        a1 = math.atan2(end[1] - center[1], end[0] - center[0])
+        sweep = (a1 - a0) % (2 * math.pi) if ccw else -((a0 - a1) % (2 * math.pi))
+        return PlaneElement(start, end, center, sweep)
+
+    elements = [
+        PlaneElement((0, 0), (250, 550)),
+        PlaneElement((250, 550), (250, 900)),
+        PlaneElement((250, 900), (450, 900)),
+        arc((450, 900), (500, 1150), (-150, 1150), True),
+        arc((500, 1150), (900, 1150), (700, 1300), False),
+        arc((900, 1150), (950, 900), (1550, 1150), True),
+        PlaneElement((950, 900), (1150, 900)),
+        PlaneElement((1150, 900), (1150, 550)),
+        PlaneElement((1150, 550), (700, 650)),
+        PlaneElement((700, 650), (250, 550)),
+        PlaneElement((250, 550), (0, 0)),
+    ]
+    pure = [list(move.end) for move in compensate(elements, 10.0)]
+    interpreted = ends(R10 + X57)
+    assert len(pure) == len(interpreted)
+    for a, b in zip(pure, interpreted, strict=True):
+        assert close(a, b, 1e-5)  # trace records are rounded to 1e-6
