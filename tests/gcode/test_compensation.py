@@ -530,3 +530,51 @@ def test_pure_compensate_function_gives_the_interpreter_path():
     assert len(pure) == len(interpreted)
     for a, b in zip(pure, interpreted, strict=True):
         assert close(a, b, 1e-5)  # trace records are rounded to 1e-6
+
+
+X26 = """G10 L12 P1 R2
+G92 X0 Y0 Z20 G69 G17
+M3 S1000
+G0Z2
+G51 X0 Y0 I1.2 J1.2
+G42 D01
+M98 P2100
+M98 P2200L7
+G40
+G50
+G0 G90 Z20
+X0Y0
+M30
+O2200
+G68 X0 Y0 G91 R45.0
+G90
+M98 P2100
+M99
+O2100
+G90 G0 X0 Y-20
+G01Z-2 F200
+X8.284
+X14.142 Y-14.142
+M99
+"""
+
+
+def test_worked_example_x26_rotated_scaled_copies_keep_the_unscaled_offset():
+    # L2058-L2095 (Ex.3 of G68): 8 copies of O2100 rotated by 45° each (G68 G91 R45 in O2200), scaled 1.2
+    # about the origin, with G42 D01 (= 2 here) active. Scaling and rotation apply to the programmed path
+    # first; the offset is not scaled (L1907, notes §5.1): every N22 edge (X8.284 at Y-20) of copy k lies at
+    # exactly 2 mm to the right of the edge from R_k·1.2·(0, -20) to R_k·1.2·(8.284, -20).
+    # (The notes flag that the example sets G42 before G68, against the manual's own advice.)
+    out = [r for r in moves(X26) if r["kind"] != "dwell"]
+    n22 = [(i, r) for i, r in enumerate(out) if r["line"] == 22]
+    assert len(n22) == 8
+    for k, (i, record) in enumerate(n22):
+        angle = math.radians(45 * k)
+        c, s_ = math.cos(angle), math.sin(angle)
+        a = (1.2 * (0 * c - (-20) * s_), 1.2 * (0 * s_ + (-20) * c))
+        b = (1.2 * (8.284 * c - (-20) * s_), 1.2 * (8.284 * s_ + (-20) * c))
+        n, c0 = offset_line(a, b, -2.0)  # right of the edge
+        for point in (out[i - 1]["end"][:2], record["end"][:2]):
+            assert math.isclose(n[0] * point[0] + n[1] * point[1], c0, abs_tol=1e-5), (k, point)
+        assert math.isclose(record["end"][2], -22.0)  # G01 Z-2 with G92 Z20 at machine Z0: machine -22
+    assert out[-1]["end"] == [0.0, 0.0, 0.0]
