@@ -36,6 +36,7 @@ from cnc_gym.gcode.transforms import (
     corner_motion,
     finish_corner,
     map_arc,
+    mark_coordinate_change,
     parameter_block,
 )
 from cnc_gym.gcode.variables import VariableStore
@@ -398,6 +399,8 @@ class Interpreter:
             check_plane_change(self, spec.value)
         if self.comp.side:
             self.comp.check_plane(self, spec.value)
+        if spec.value != self.plane:
+            mark_coordinate_change(self)  # no chamfer/corner R in the next block (L1633)
         self.plane = spec.value
 
     def _do_distance(self, spec: CodeSpec, values: dict | None = None) -> None:
@@ -415,6 +418,8 @@ class Interpreter:
         self.offsets.select_wcs(spec.value - 1)
         self.extra_wcs = 0
         self.resync_program_position()
+        if values is not None:  # not at power-on
+            mark_coordinate_change(self)
 
     def _do_transform(self, spec: CodeSpec, values: dict) -> None:
         if spec.action in ("g27", "g28", "g29", "g30", "g60"):
@@ -520,6 +525,7 @@ class Interpreter:
                 self.offsets.local[axis] = values[letter] * self.scale
         self.offsets.update()
         self.resync_program_position()
+        mark_coordinate_change(self)
 
     def _do_g92(self, spec: CodeSpec, values: dict) -> None:
         """G92 IP_: the current position gets coordinates IP in a floating system (L1670-L1716)."""
@@ -531,6 +537,7 @@ class Interpreter:
                 self.offsets.set_floating(axis, position[axis], values[letter] * self.scale)
         self.offsets.update()
         self.resync_program_position()
+        mark_coordinate_change(self)
 
     # ------------------------------------------------------------------ canned cycles (cycles.py)
     def _do_cycle(self, spec: CodeSpec, values: dict) -> None:

@@ -298,6 +298,8 @@ def do_g54_1(interp: Interpreter, spec, values: dict) -> None:
                            "bad-offset-number", alarm=30)  # fmt: skip
     interp.offsets.select_wcs(interp.offsets.n_standard_wcs + int(number) - 1)
     interp.extra_wcs = int(number)
+    interp.resync_program_position()
+    mark_coordinate_change(interp)
 
 
 
@@ -468,6 +470,7 @@ def _return_via(interp: Interpreter, name: str, values: dict, n: int) -> None:
     machine_target = tuple(reference[a] if a in axes else m[a] for a in range(3))
     interp.out.straight_traverse(machine_target)  # type: ignore[arg-type]
     interp.resync_program_position()
+    mark_coordinate_change(interp)
 
 
 def do_g28(interp: Interpreter, spec, values: dict) -> None:
@@ -503,6 +506,7 @@ def do_g29(interp: Interpreter, spec, values: dict) -> None:
     else:
         target = interp.resolve_target(*(values.get(letter) for letter in letters))
     interp.move_linear(True, target)
+    mark_coordinate_change(interp)
 
 
 #: Largest distance from the reference position that still counts as on it for G27 (mm).
@@ -620,9 +624,32 @@ def _capture(interp: Interpreter, motion: int, x, y, z, values: dict):
     return captured[0]
 
 
+class CoordinateChangeMark:
+    """Set after G92, G52-G59, G54.1, G28-G30 or a plane change: the next block may not chamfer or round a
+    corner (L1633). It rides in ``Interpreter._corner`` so the plain path pays nothing for it."""
+
+    armed = False
+
+
+def mark_coordinate_change(interp: Interpreter) -> None:
+    corner = interp._corner
+    if corner is None or isinstance(corner, CoordinateChangeMark):
+        interp._corner = CoordinateChangeMark()
+        return
+    interp._corner = None
+    raise interp.error(f"a coordinate system or plane change between a chamfer/corner {corner.word} block "
+                       "and its next move (L1633)", "bad-corner")  # fmt: skip
+
+
 def arm_corner(interp: Interpreter) -> None:
     """Called before each block while a chamfer/corner is pending: the block after it must move."""
     corner = interp._corner
+    if isinstance(corner, CoordinateChangeMark):
+        if corner.armed:  # the block right after the change is over
+            interp._corner = None
+        else:
+            corner.armed = True
+        return
     if corner.armed:
         interp._corner = None
         raise interp.error(f"the block after a chamfer/corner {corner.word} block (line {corner.line}) must "
@@ -634,6 +661,8 @@ def finish_corner(interp: Interpreter) -> None:
     """End of program with a chamfer/corner block still waiting: it has no next move (L1631)."""
     corner = interp._corner
     interp._corner = None
+    if isinstance(corner, CoordinateChangeMark):
+        return
     raise interp.error(f"chamfer/corner {corner.word} in the last move block: no next move to meet (L1631)",
                        "bad-corner").located(interp.file, corner.line)  # fmt: skip
 
@@ -641,11 +670,19 @@ def finish_corner(interp: Interpreter) -> None:
 def corner_motion(interp: Interpreter, motion: int, x, y, z, values: dict) -> None:
     """A motion block while a chamfer/corner is pending, or one that carries ``,L``/``,R`` (L1597-L1646)."""
     words = [w for w in interp.dialect.corner_words if w in values]
+    has_geometry = x is not None or y is not None or z is not None or (motion >= 2 and "R" in values) or (
+        motion >= 2 and any(k in values for k in "IJK"))  # fmt: skip
+    if isinstance(interp._corner, CoordinateChangeMark):
+        if not has_geometry:
+            return None  # the change's own block, or a block that does not move: the mark stays
+        interp._corner = None
+        if words:
+            raise interp.error(f"chamfer/corner {words[0]} in the block right after a coordinate system or "
+                               "plane change or a reference return (L1633)", "bad-corner")  # fmt: skip
+        return interp._do_motion(None, values)
     if len(words) > 1:
         raise interp.error("a block takes either a chamfer ,L or a corner radius ,R, not both",
                            "bad-combination")  # fmt: skip
-    has_geometry = x is not None or y is not None or z is not None or (motion >= 2 and "R" in values) or (
-        motion >= 2 and any(k in values for k in "IJK"))  # fmt: skip
     pending = interp._corner
     if words:
         word = words[0]
@@ -655,6 +692,9 @@ def corner_motion(interp: Interpreter, motion: int, x, y, z, values: dict) -> No
             raise interp.error(f"chamfer/corner {word} needs a G01/G02/G03 block", "bad-corner")
         if not has_geometry:
             raise interp.error(f"chamfer/corner {word} in a block that does not move", "bad-corner")
+        if interp._restore_modes:  # G09 in this block; other group-00 codes own the axis words
+            raise interp.error("G09 in a chamfer/corner block (L1646: no group-00 code but G04)",
+                               "bad-corner")  # fmt: skip
         size = values[word] * interp.scale
         if size <= 0:
             raise interp.error(f"chamfer/corner {word}{values[word]:g}: the size must be positive",

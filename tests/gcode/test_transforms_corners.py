@@ -141,6 +141,13 @@ def test_chamfer_follows_the_rotation():
         ("G01 X10 F100 ,L0\nY10\n", "bad-corner"),
         ("G01 X10 F100 ,L2\nG18 Z10\n", "bad-corner"),  # the next block in another plane
         ("G01 X10 F100 ,C2\nY10\n", "bad-character"),  # GSK uses ,L, not Fanuc's ,C
+        ("G92 X0 Y0\nG01 X10 F100 ,L2\nY10\n", "bad-corner"),  # right after G92 (L1633)
+        ("G01 F100\nG55\nX10 ,L2\nY10\n", "bad-corner"),  # right after G54-G59
+        ("G52 X1\nG01 X10 F100 ,R2\nY10\n", "bad-corner"),
+        ("G28 X0\nG01 X10 F100 ,L2\nY10\n", "bad-corner"),  # right after a reference return
+        ("G18\nG17\nG01 X10 F100 ,L2\nY10\n", "bad-corner"),  # right after a plane change
+        ("G01 X10 F100 ,L2\nG92 X0\nY10\n", "bad-corner"),  # a coordinate change in between
+        ("G09 G01 X10 F100 ,L2\nY10\n", "bad-corner"),  # a group-00 code in the block (L1646)
     ],
 )  # fmt: skip
 def test_corner_errors(text, code):
@@ -190,3 +197,11 @@ def test_chamfer_and_fillet_are_compensated_with_the_contour():
     fillet = next(r for r in out if r["kind"] == "arc")
     assert close(fillet["center"][:2], [16.0, 16.0]) and close(fillet["radius"], 2.0)
     assert close(fillet["sweep_deg"], 90.0)
+
+
+def test_corner_restrictions_last_only_one_block():
+    # One block after the change the restriction is over; G04 is the allowed group-00 code (L1646);
+    # G17 in G17 is no plane change.
+    assert len(moves("G92 X0 Y0\nG04 X0.1\nG01 X10 F100 ,L2\nY10\n")) == 3
+    assert len(moves("G92 X0 Y0\nG01 X5 F100\nX10 ,L2\nY10\n")) == 4
+    assert len(moves("G17 G01 X10 F100 ,L2\nY10\n")) == 3
