@@ -29,7 +29,7 @@ import math
 from dataclasses import dataclass, field
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.offsets import ToolOffsets, apply_g10
+from cnc_gym.gcode.offsets import ToolOffsets
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 Point = tuple[float, float]
@@ -1048,14 +1048,6 @@ class ToolCompensation:
             stage = self.install(interp)
             stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
 
-    @property
-    def length_vector(self) -> tuple[float, float, float]:
-        """The selected tool length vector (for #5081-#5083): sign x H value on the offset axis."""
-        out = [0.0, 0.0, 0.0]
-        if self.length_sign:
-            out[self.length_axis] = self.length_sign * self.offsets.length(self.h_number)
-        return (out[0], out[1], out[2])
-
     # ------------------------------------------------------------------ G45-G48
     def position_offset(self, interp, spec, values: dict) -> None:
         """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
@@ -1072,24 +1064,7 @@ class ToolCompensation:
         amount = self.offsets.position_offset(self.d_number)
         self.install(interp).set_position_offset(int(spec.value), amount, axes, interp.incremental)
 
-    # ------------------------------------------------------------------ G10 L10-L13, G53, end
-    def g10(self, interp, kind: int, values: dict) -> None:
-        """``G10 L10..L13 P_ R_`` (the G10 action calls this for L10-L13)."""
-        number = values.get("P")
-        value = values.get("R")
-        if number is not None and number != int(number):
-            raise interp.error(f"G10 L{kind} P{number:g}: P is an offset number", "bad-g10")
-        apply_g10(
-            self.offsets,
-            kind,
-            number,
-            None if value is None else value * interp.scale,
-            incremental=interp.incremental,
-            error=interp.error,
-        )
-        if self.length_sign and kind in (10, 11) and number == self.h_number:
-            self._apply_length(interp, {})
-
+    # ------------------------------------------------------------------ G53, G27-G30, end
     def before_machine_move(self) -> None:
         """G53 (and G27-G30, G60) are about to move: compensation is suspended for this block."""
         if self.stage is not None:
