@@ -398,3 +398,11 @@ def test_worked_example_x26_repeated_rotation_by_subprogram_under_scaling():
             expected.append(rotate((1.2 * p[0], 1.2 * p[1]), (0.0, 0.0), 45.0 * k))
     assert all_close(xy(r["end"] for r in cuts), expected)
     assert all(r["end"][2] == -22.0 for r in cuts)
+
+
+def test_inch_programs_scale_centres_and_distances_but_not_factors_or_angles():
+    # G20: the G51 centre X1 is 25.4 mm, the factor 2 is a number; X2 → 25.4 + 2·(50.8 - 25.4) = 76.2.
+    # G68 about (1, 0) in: X2 Y0 (50.8 mm) turned 90° about 25.4 → (25.4, 25.4). A chamfer ,L0.1 is 2.54 mm.
+    assert close(ends("G20\nG51 X1 Y0 P2\nG01 X2 F10\n")[0], [76.2, 0.0, 0.0])
+    assert close(ends("G20\nG68 X1 Y0 R90\nG00 X2 Y0\n")[0], [25.4, 25.4, 0.0])
+    assert close(ends("G20\nG01 X1 F10 ,L0.1\nY1\n")[0], [25.4 - 2.54, 0.0, 0.0])
