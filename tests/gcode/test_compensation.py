@@ -318,12 +318,22 @@ def test_changing_d_in_offset_mode_applies_from_the_end_vector_of_the_block():
 
 
 # ------------------------------------------------------------------------------------------ look-ahead
+def _fanuc_units():
+    """The examples copied from Fanuc are printed in 0.001 mm units without decimal points (X50000 = 50 mm,
+    notes §1.7): a dialect variant with DPI = 0 and a 0.001 mm least increment reads them as printed."""
+    from dataclasses import replace
+
+    from cnc_gym.gcode import get_dialect
+
+    return replace(get_dialect("gsk25i"), integer_is_unit=False, least_increment_mm=0.001)
+
+
 def test_x59_one_z_block_between_is_read_ahead():
-    # L4515-L4533 (0.001 mm units in the manual; here mm/1000): N1 start-up to (50, 50), N3 a Z move,
-    # N6 along +y. The NC reads N3 and N6 with N1: the start-up corner is computed with N6 (a left turn
-    # after the 45° start-up, inner for G41): the intersection of both offset lines; r = 5.
-    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y50 D1\nN3 G01 Z-30 F1\nN6 Y100 F2\n"
-    out = moves(text)
+    # L4515-L4533, as printed (0.001 mm units): N1 start-up to (50, 50), N3 a Z move, N6 along +y. The NC
+    # reads N3 and N6 with N1: the start-up corner is computed with N6 (a left turn after the 45°
+    # start-up, inner for G41): the intersection of both offset lines; D1 = 5 mm.
+    text = "G10 L12 P1 R5.0\nN1 G91 G00 G41 X50000 Y50000 D1\nN3 G01 Z-30000 F1\nN6 Y100000 F2\n"
+    out = moves(text, dialect=_fanuc_units())
     want = meet(offset_line((0, 0), (50, 50), 5.0), ((1.0, 0.0), 45.0))
     assert close(xy(out[0]), want)
     assert close(out[1]["end"], [want[0], want[1], -30.0])  # the Z move at the compensated point
@@ -332,8 +342,8 @@ def test_x59_one_z_block_between_is_read_ahead():
 def test_x59_two_z_blocks_starve_the_look_ahead():
     # Z split into N3 and N5: N6 is not in the buffer when N1 runs, the start-up vector is perpendicular to
     # N1 itself (the overcut of L4535-L4545): (50, 50) + 5·(-1, 1)/√2.
-    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y50 D1\nN3 Z-25\nN5 G01 Z-5 F1\nN6 Y100 F2\n"
-    out = moves(text)
+    text = "G10 L12 P1 R5.0\nN1 G91 G00 G41 X50000 Y50000 D1\nN3 Z-25000\nN5 G01 Z-5000 F1\nN6 Y100000 F2\n"
+    out = moves(text, dialect=_fanuc_units())
     assert close(xy(out[0]), (50 - 5 / math.sqrt(2), 50 + 5 / math.sqrt(2)))
     # N6 then runs from that point to its own end vector (straight from the old vector tip to the new).
     assert close(xy(out[-1]), (45.0, 150.0))
@@ -342,8 +352,11 @@ def test_x59_two_z_blocks_starve_the_look_ahead():
 def test_x59_the_n2_fix_restores_the_corner():
     # L4547-L4553: N2 Y10 (same direction as N6) before the Z moves: N1's corner is computed with N2:
     # N1 (0,0)→(50,40), then +y: inner for G41: intersection with x = 45.
-    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y40 D1\nN2 Y10\nN3 Z-25\nN5 G01 Z-5 F1\nN6 Y100 F2\n"
-    out = moves(text)
+    text = (
+        "G10 L12 P1 R5.0\nN1 G91 G00 G41 X50000 Y40000 D1\nN2 Y10000\nN3 Z-25000\nN5 G01 Z-5000 F1\n"
+        "N6 Y100000 F2\n"
+    )
+    out = moves(text, dialect=_fanuc_units())
     assert close(xy(out[0]), meet(offset_line((0, 0), (50, 40), 5.0), ((1.0, 0.0), 45.0)))
     assert close(xy(out[1]), (45.0, 50.0))
     assert all(close(xy(r), (45.0, 50.0)) for r in out[2:4])  # the Z moves at the right vector
@@ -415,15 +428,16 @@ def test_compensation_alarms(text, code, alarm):
 
 
 def test_x60_interference_example_alarms():
-    # L4574-L4580 (0.001 mm units → mm/1000): (G41) N5 G01 G91 X8 Y2 D01; N6 G02 X3.2 Y-1.6 I-2 J-8 D02;
-    # N7 G01 X2 Y-5; with r1 = 2, r2 = 6: the one-quadrant arc would become a four-quadrant one (check b).
+    # L4574-L4580, as printed in 0.001 mm units: (G41) N5 G01 G91 X8000 Y2000 D01; N6 G02 X3200 Y-1600
+    # I-2000 J-8000 D02; N7 G01 X2000 Y-5000; with r1 = 2000 (2 mm), r2 = 6000 (6 mm): the one-quadrant arc
+    # would become a four-quadrant one (check b). A start-up block (G41 X1000) comes first.
     # The figure is lost. Our reading: N6's start vector still uses r1 = 2 at the N5/N6 corner (the new D
     # applies from N6's end vector, L4471) while N6 runs on its r2 = 6 offset circle: the corner (a right
     # turn of 28°, outer) has no nearby intersection and its extension move from r1 to r2 runs against
     # N6's direction: interference check (a), alarm 41.
-    text = ("G10 L12 P1 R2\nG10 L12 P2 R6\nG01 G91 G41 X1 Y0 D01 F100\nN5 X8 Y2 D01\n"
-            "N6 G02 X3.2 Y-1.6 I-2 J-8 D02\nN7 G01 X2 Y-5\nG40 X5\n")  # fmt: skip
-    err = program_error(text)
+    text = ("G10 L12 P1 R2.0\nG10 L12 P2 R6.0\nG01 G91 G41 X1000 Y0 D01 F100\nN5 G01 G91 X8000 Y2000 D01\n"
+            "N6 G02 X3200 Y-1600 I-2000 J-8000 D02\nN7 G01 X2000 Y-5000\nG40 X5000\n")  # fmt: skip
+    err = program_error(text, dialect=_fanuc_units())
     assert err.alarm == 41 and err.code == "comp-interference"
 
 
