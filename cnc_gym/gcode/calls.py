@@ -231,17 +231,22 @@ class FlowRunner:
 
     # ------------------------------------------------------------------ the loop
     def run(self) -> None:
+        """The program-counter loop. Plain blocks take the fast path (straight to ``execute``); the budget
+        of ``max_blocks`` is charged in bulk whenever control leaves the fast path (a straight run through
+        a program is finite, so only jumps, loops and calls need the check)."""
         interp = self.interp
         execute = interp.execute
         skip_mask = interp.skip_mask
         budget = self.options.max_blocks
         unit = self.main
         blocks, end = unit.blocks, unit.end
-        pc = unit.start
+        pc = mark = unit.start
+        watching = False  # G66 active: every block is checked for motion (the slow path)
         unit.loops(self.dialect)
         while True:
             if pc >= end:
-                pc = self._fall_off()
+                budget -= pc - mark
+                pc = mark = self._fall_off()
                 if pc < 0:
                     return
                 unit = self.frames[-1].unit
@@ -251,7 +256,17 @@ class FlowRunner:
             pc += 1
             if block.skip & skip_mask:
                 continue
-            budget -= 1
+            if block.kind is None and not watching:
+                try:
+                    execute(block)
+                except ProgramError as err:
+                    raise err.located(unit.file, block.line) from None
+                if interp._flow is None and not interp.ended:
+                    continue
+                slow = False
+            else:
+                slow = True
+            budget -= pc - mark
             if budget < 0:
                 err = self.dialect.error(
                     f"more than {self.options.max_blocks} blocks executed: a runaway loop? "
@@ -261,22 +276,20 @@ class FlowRunner:
                 raise err.located(unit.file, block.line)
             self.pc = pc
             try:
-                if block.kind is None and not self.modal_calls:
-                    execute(block)
-                    if interp._flow is None and not interp.ended:
-                        continue
-                    pc = self._after(block, pc, moved=False)
-                else:
-                    pc = self._special(block, pc)
+                pc = self._special(block, pc) if slow else self._after(block, pc, moved=False)
             except ProgramError as err:
                 raise err.located(unit.file, block.line) from None
             if pc < 0:
                 return
+            mark = pc
+            watching = bool(self.modal_calls)
             unit = self.frames[-1].unit
             blocks, end = unit.blocks, unit.end
 
     def _special(self, block: Block, pc: int) -> int:
         kind = block.kind
+        if kind == "assign" or kind == "stmt":
+            self.interp.out.line = block.line  # for #3006's stop and #4113/#4114
         if kind == "assign":
             target, value = block.assign
             variables = self.interp.variables

@@ -65,21 +65,21 @@ class Block:
     ``message``: the comment of an assignment block (``#3000=1 (TOOL NOT FOUND)``), else None.
     """
 
-    __slots__ = ("assign", "gs", "has_expr", "kind", "line", "message", "ms", "number", "skip", "stmt",
-                 "values", "words")  # fmt: skip
+    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
+    # Ordinary blocks share these class-level defaults (no per-block stores on the read hot path);
+    # :class:`SpecialBlock` gives statements, assignments and calls their own.
+    kind: str | None = None
+    stmt: tuple | None = None
+    message: str | None = None
 
     def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
-                 assign: tuple | None = None, number: int | None = None, kind: str | None = None,
-                 stmt: tuple | None = None) -> None:  # fmt: skip
+                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
         self.line = line
         self.words = words
         self.skip = skip
         self.has_expr = has_expr
         self.assign = assign
         self.number = number
-        self.kind = kind
-        self.stmt = stmt
-        self.message = None
         if has_expr:
             self.gs = self.ms = self.values = None
         else:
@@ -88,6 +88,19 @@ class Block:
     def __repr__(self) -> str:
         return (f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r}, "
                 f"kind={self.kind!r}, stmt={self.stmt!r})")
+
+
+class SpecialBlock(Block):
+    """A block of kind ``"assign"``, ``"stmt"`` or ``"call"`` (see :class:`Block`)."""
+
+    __slots__ = ("kind", "message", "stmt")
+
+    def __init__(self, line: int, words: tuple, *, kind: str, stmt: tuple | None = None, skip: int = 0,
+                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
+        super().__init__(line, words, skip=skip, has_expr=True, assign=assign, number=number)
+        self.kind = kind
+        self.stmt = stmt
+        self.message = None
 
 
 def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
@@ -136,6 +149,7 @@ class Reader:
         self._call_m = frozenset(float(m) for m in (*calls.m_macro, *calls.m_sub))
         self._call_t = calls.t_sub is not None
         self._last_comment: str | None = None
+        self._o_blocks: list[Block] = []
         rules = dialect.addresses
         self._rules = rules
         self._length_letters = frozenset(a for a, r in rules.items() if r.unit == "length")
@@ -158,6 +172,7 @@ class Reader:
     # ------------------------------------------------------------------ program
     def read(self, text: str, file: str = "<program>") -> Program:
         blocks: list[Block] = []
+        self._o_blocks = []
         program_number = None
         seen_percent = False
         for line_no, raw in enumerate(text.splitlines(), start=1):
@@ -185,15 +200,23 @@ class Reader:
             except ProgramError as exc:
                 raise exc.located(file, line_no) from None
         program = Program(blocks, file=file)
-        heads: list[tuple[int, int]] = []
         for index, block in enumerate(blocks):
             if block.number is not None:
                 program.sequence_index.setdefault(block.number, []).append(index)
-            if block.words and block.words[0][0] == "O":
-                number = int(float(block.words[0][1]))
-                if program_number is None:
-                    program_number = number
-                heads.append((index, number))
+        # Program heads: the reader noted every O block (self._o_blocks); find their indices, stopping at
+        # the last one (usually the first block).
+        heads: list[tuple[int, int]] = []
+        pending = {id(b): b for b in self._o_blocks}
+        if pending:
+            for index, block in enumerate(blocks):
+                if id(block) in pending:
+                    heads.append((index, int(float(block.words[0][1]))))
+                    del pending[id(block)]
+                    if not pending:
+                        break
+        self._o_blocks = []
+        if heads:
+            program_number = heads[0][1]
         program.program_number = program_number
         for k, (index, number) in enumerate(heads):
             end = heads[k + 1][0] if k + 1 < len(heads) else len(blocks)
@@ -309,7 +332,9 @@ class Reader:
                 or (ms is not None and not self._call_m.isdisjoint(ms)) or (self._call_t and "T" in values)):
             return self._scan_block(text, line)  # a possible macro call: words kept in order
         number = None
+        has_o = False
         if "N" in values or "O" in values:
+            has_o = "O" in values
             head = pairs[0][0]
             if "O" in values and head != "O":
                 raise self.error("O must be at the head of the block", "misplaced-word", line)
@@ -324,12 +349,11 @@ class Reader:
         block.has_expr = False
         block.assign = None
         block.number = number
-        block.kind = None
-        block.stmt = None
-        block.message = None
         block.gs = gs
         block.ms = ms
         block.values = values
+        if has_o:
+            self._o_blocks.append(block)
         return block
 
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:
@@ -477,14 +501,22 @@ class Reader:
             self._head(words, line)  # raises misplaced-word
         if not words and assign is None and stmt is None and not skip and number is None:
             return None
+        if words and words[0][0] == "O":
+            block = self._finish_scan(line, words, skip, has_expr, assign, number, stmt, relaxed)
+            if block is not None:
+                self._o_blocks.append(block)
+            return block
+        return self._finish_scan(line, words, skip, has_expr, assign, number, stmt, relaxed)
+
+    def _finish_scan(self, line: int, words: list, skip: int, has_expr: bool, assign: tuple | None,
+                     number: int | None, stmt: tuple | None, relaxed: bool) -> Block | None:  # fmt: skip
         if stmt is not None:
-            return Block(line, tuple(words), skip=skip, has_expr=True, number=number, kind="stmt", stmt=stmt)
+            return SpecialBlock(line, tuple(words), skip=skip, number=number, kind="stmt", stmt=stmt)
         if assign is not None:
-            return Block(line, tuple(words), skip=skip, has_expr=True, assign=assign, number=number,
-                         kind="assign")  # fmt: skip
+            return SpecialBlock(line, tuple(words), skip=skip, assign=assign, number=number, kind="assign")
         if relaxed and self._is_call(words):
             # Words stay in order for the arguments; split at run time if the block turns out ordinary.
-            return Block(line, tuple(words), skip=skip, has_expr=True, number=number, kind="call")
+            return SpecialBlock(line, tuple(words), skip=skip, number=number, kind="call")
         return Block(line, tuple(words), skip=skip, has_expr=has_expr, assign=assign, number=number)
 
     def _is_call(self, words: list) -> bool:

@@ -214,10 +214,13 @@ class SystemVariables:
         if letter == "P":
             value = getattr(interp.offsets, "extra_wcs_number", None)
             return None if value is None else float(value)
-        # N and M: the last one in program order up to this block (a scan back through the running unit).
+        # N and M: the last one in program order up to this block (a scan back through the running unit
+        # from the block of the current line; the fast path does not track the program counter).
         runner = interp.macro
         unit = runner.frames[-1].unit
-        for i in range(runner.pc - 1, unit.start - 1, -1):
+        line = interp.out.line
+        here = next((i for i in range(unit.start, unit.end) if unit.blocks[i].line == line), runner.pc - 1)
+        for i in range(here, unit.start - 1, -1):
             block = unit.blocks[i]
             if letter == "N" and block.number is not None:
                 return float(block.number)
