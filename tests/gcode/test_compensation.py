@@ -592,3 +592,18 @@ def test_worked_example_x26_rotated_scaled_copies_keep_the_unscaled_offset():
             assert math.isclose(n[0] * point[0] + n[1] * point[1], c0, abs_tol=1e-5), (k, point)
         assert math.isclose(record["end"][2], -22.0)  # G01 Z-2 with G92 Z20 at machine Z0: machine -22
     assert out[-1]["end"] == [0.0, 0.0, 0.0]
+
+
+def test_worked_example_x58_direction_switch_right_after_start_up():
+    # L4034-L4036 (figures lost, values ours): "G1G41 D_X_Y_; G42 D_X_Y_;" and the reverse. The manual also
+    # says the switch is not allowed between the start-up block and the next one (L4305); its own example
+    # does exactly that, so we accept it with the switch rule (L4335): the start-up ends where its left
+    # offset meets the next block's right offset (and vice versa). r = 1.
+    left_then_right = ends("G10 L12 P1 R1\nG1 G41 D1 X10 Y0 F100\nG42 D1 X20 Y10\nG40 X30 Y10\n")
+    assert close(
+        left_then_right[0], meet(offset_line((0, 0), (10, 0), 1.0), offset_line((10, 0), (20, 10), -1.0))
+    )
+    right_then_left = ends("G10 L12 P1 R1\nG1 G42 D1 X10 Y0 F100\nG41 D1 X20 Y10\nG40 X30 Y10\n")
+    assert close(
+        right_then_left[0], meet(offset_line((0, 0), (10, 0), -1.0), offset_line((10, 0), (20, 10), 1.0))
+    )
