@@ -1012,10 +1012,10 @@ class ToolCompensation:
         sign = int(spec.value)
         if sign and not any(letter in values for letter in _LETTERS):
             raise interp.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
-        motion_key = interp.modal.get(1)
-        if motion_key in (20, 30) and any(letter in values for letter in _LETTERS + "IJKR"):
-            _u, _v, w = PLANE_AXES[interp.plane]
-            if _LETTERS[w] in values:
+        if interp.modal.get(1) in (20, 30):  # G02/G03 in force: an arc block with the normal axis is a helix
+            u, v, w = PLANE_AXES[interp.plane]
+            arc_words = ("IJK"[u], "IJK"[v], "R", _LETTERS[u], _LETTERS[v])
+            if _LETTERS[w] in values and any(letter in values for letter in arc_words):
                 raise interp.error(
                     f"{spec.name} cannot be given in a helical block (L1103)", "length-helical"
                 )
