@@ -211,6 +211,53 @@ def _safe_now(s: float, v: float, a: float, acc_b: float, jerk_b: float, cap_now
 
 
 @njit(cache=True)
+def _delayed_end(s: float, v: float, a: float, dt: float, j_pre: float, tau: float, w: float, acc_b: float,
+                 jerk_b: float, cap_now: float, pts: np.ndarray, n_pts: int,
+                 col: int) -> tuple[bool, float, float, float]:  # fmt: skip
+    """Jerk ``j_pre`` for ``tau``, then the braking manoeuvre to ``w`` for the rest of the period:
+    (still safe?, ds, v', a')."""
+    ds1, v1, a1 = _step(v, a, j_pre, tau)
+    ok = _bottom(v, a, j_pre, tau, jerk_b) >= 0.0 if tau > 0.0 else True
+    ds2, v2, a2 = brake_step(v1, a1, w, acc_b, jerk_b, dt - tau)
+    ds = ds1 + ds2
+    top = max(v, v1, v2, _peak(v1, a1, jerk_b), _tick_top(v, a, j_pre, tau, v1))
+    if ok:
+        ok = _peak(v2, a2, jerk_b) <= cap_now * (1.0 + 1e-12) + 1e-12 and top <= max(cap_now, v) + 1e-12
+    for m in range(n_pts):
+        if not ok:
+            break
+        d = pts[m, 0] - s - ds
+        if d <= 0.0:
+            ok = top <= pts[m, col] * (1.0 + 1e-12) + 1e-12
+        else:
+            dist, _ = brake(v2, a2, pts[m, col], acc_b, jerk_b)
+            ok = dist <= d * (1.0 + 1e-12) + 1e-12
+    return ok, ds, v2, a2
+
+
+@njit(cache=True)
+def _delayed_manoeuvre(s: float, v: float, a: float, dt: float, j_pre: float, w: float, acc_b: float,
+                       jerk_b: float, cap_now: float, pts: np.ndarray, n_pts: int,
+                       col: int) -> tuple[float, float, float]:  # fmt: skip
+    """One period that keeps going (jerk ``j_pre``) as long as it can and then brakes exactly (towards
+    ``w``), so that it ends on the boundary of the safe set rather than braking early — otherwise a stop
+    would be reached short of its point. The undelayed manoeuvre is the fallback."""
+    ok, ds, v1, a1 = _delayed_end(s, v, a, dt, j_pre, dt, w, acc_b, jerk_b, cap_now, pts, n_pts, col)
+    if ok:
+        return ds, v1, a1
+    lo, hi = 0.0, dt
+    for _ in range(BISECT_ITERS):
+        mid = 0.5 * (lo + hi)
+        ok, _, _, _ = _delayed_end(s, v, a, dt, j_pre, mid, w, acc_b, jerk_b, cap_now, pts, n_pts, col)
+        if ok:
+            lo = mid
+        else:
+            hi = mid
+    _, ds, v1, a1 = _delayed_end(s, v, a, dt, j_pre, lo, w, acc_b, jerk_b, cap_now, pts, n_pts, col)
+    return ds, v1, a1
+
+
+@njit(cache=True)
 def _pick_manoeuvre(s: float, v: float, a: float, dt: float, acc_b: float, jerk_b: float, cap_now: float,
                     pts: np.ndarray, n_pts: int, col: int) -> float:  # fmt: skip
     """Target speed of the braking manoeuvre to follow for one period from a safe state.
@@ -523,18 +570,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         d_brk, t_brk = brake(v, a, 0.0, acc_b, jerk_b)
         if (t_brk <= dt * (1.0 + 1e-9) and d_stop <= d_brk + SNAP_MM) or (
                 d_stop <= SNAP_MM and v <= 1e-6 and abs(a) <= 1e-3):  # fmt: skip
-            j = -a / dt
-            st_f[S_S] = pt_f[q_stop, P_S]
-            st_f[S_V] = 0.0
-            st_f[S_A] = 0.0
-            st_f[S_J] = j
-            k_last = q_stop - 1
-            _position(seg_f, seg_i, k_last, st_f[S_S], out, tick)
-            out[tick, O_S] = st_f[S_S]
-            out[tick, O_J] = j
-            out[tick, O_SEG] = seg_i[k_last, I_TP]
-            out[tick, O_CUT] = 1.0 if seg_i[k_last, I_RAPID] == 0 else 0.0
-            _arrive_at_stop(pt_i, dwell_f, st_f, st_i, q_stop, n_seg)
+            _snap_to_stop(seg_f, seg_i, pt_f, pt_i, dwell_f, st_f, st_i, out, tick, q_stop, n_seg, dt, a)
             return
 
     # ---- relevant points: those that the most aggressive jerk would violate.
@@ -561,8 +597,12 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         elif d <= 0.0:
             bad = True
         else:
+            # The braking distance is not monotone in the target speed: test the soft and the hard one.
             dist, _ = brake(v_hi, a_hi, w_soft, acc_b, jerk_b)
             bad = dist > d
+            if not bad and w_hard < top_hi:
+                dist, _ = brake(v_hi, a_hi, w_hard, acc_b, jerk_b)
+                bad = dist > d
         if bad:
             pts[n_pts, 0] = pt_f[q, P_S]
             pts[n_pts, 1] = w_hard
@@ -575,6 +615,8 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     cap_soft = _target(seg_f, seg_i, k, mode, ov, rapid_ov, cmd)
     manoeuvre = False
     w_follow = 0.0
+    m_cap = cap_hard
+    m_col = 1
     # Where the override is still slewing down, the speed must not dip below where it will settle.
     cap_final = _target(seg_f, seg_i, k, mode, knob, rapid_ov, cmd)
     j_track = max(_track_jerk(v, a, cap_soft, jerk_b, dt), j_lo)
@@ -592,7 +634,9 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         # braking manoeuvre exactly for one period (see _pick_manoeuvre).
         manoeuvre = True
         w_follow = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
-        j = 0.0
+        j = min(j_track, j_hi)  # what the period would do before braking
+        m_cap = cap_soft
+        m_col = 2
     else:
         # The operator's target cannot be met any more (override turned down): slow down as fast as
         # the jerk allows without undershooting the lowest violated target ...
@@ -621,14 +665,17 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
             else:
                 manoeuvre = True
                 w_follow = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
-                j = 0.0
+                m_cap = cap_hard
+                m_col = 1
 
     if manoeuvre:
-        ds, v1, a1 = brake_step(v, a, w_follow, acc_b, jerk_b, dt)
+        ds, v1, a1 = _delayed_manoeuvre(s, v, a, dt, j, w_follow, acc_b, jerk_b, m_cap, pts, n_pts, m_col)
         j = (a1 - a) / dt
     else:
         ds, v1, a1 = _step(v, a, j, dt)
     s1 = s + ds
+    # A period never passes a mandatory stop; reaching it to rounding leaves a residual speed of ~1e-7 mm/s
+    # that the next period removes (the snap above).
     if s1 > pt_f[q_stop, P_S]:
         s1 = pt_f[q_stop, P_S]
     if v1 < 0.0:
@@ -647,6 +694,25 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     out[tick, O_J] = j
     out[tick, O_SEG] = seg_i[k, I_TP]
     out[tick, O_CUT] = 1.0 if seg_i[k, I_RAPID] == 0 else 0.0
+
+
+@njit(cache=True)
+def _snap_to_stop(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
+                  dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, out: np.ndarray, tick: int,
+                  q_stop: int, n_seg: int, dt: float, a: float) -> None:  # fmt: skip
+    """End this period at rest exactly on mandatory stop q_stop (the braking manoeuvre ends inside it)."""
+    j = -a / dt
+    st_f[S_S] = pt_f[q_stop, P_S]
+    st_f[S_V] = 0.0
+    st_f[S_A] = 0.0
+    st_f[S_J] = j
+    k_last = q_stop - 1
+    _position(seg_f, seg_i, k_last, st_f[S_S], out, tick)
+    out[tick, O_S] = st_f[S_S]
+    out[tick, O_J] = j
+    out[tick, O_SEG] = seg_i[k_last, I_TP]
+    out[tick, O_CUT] = 1.0 if seg_i[k_last, I_RAPID] == 0 else 0.0
+    _arrive_at_stop(pt_i, dwell_f, st_f, st_i, q_stop, n_seg)
 
 
 @njit(cache=True)
