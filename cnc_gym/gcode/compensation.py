@@ -899,6 +899,15 @@ class OffsetStage:
 
 
 # ====================================================================== interpreter glue
+
+
+def _incremental(interp) -> bool:
+    """G91 in force for this block's move: G90/G91 of the block have not run yet at the compensation
+    steps (order of execution), but the raw modal table already holds them."""
+    key = interp.modal.get(3)
+    return interp.incremental if key is None else key == 910
+
+
 _LETTERS = "XYZ"
 _IJK = "IJK"
 
@@ -1036,10 +1045,8 @@ class ToolCompensation:
         delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
         interp.offsets.tool_length = new
         interp.offsets.update()
-        # G90/G91 of this block has not run yet at this step (order of execution): read the modal table.
-        incremental = interp.modal.get(3) == 910 if 3 in interp.modal else interp.incremental
         if (
-            incremental
+            _incremental(interp)
             and not interp._transformed
             and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
         ):
@@ -1062,7 +1069,7 @@ class ToolCompensation:
             return
         axes = frozenset(a for a in range(3) if _LETTERS[a] in values)
         amount = self.offsets.position_offset(self.d_number)
-        self.install(interp).set_position_offset(int(spec.value), amount, axes, interp.incremental)
+        self.install(interp).set_position_offset(int(spec.value), amount, axes, _incremental(interp))
 
     # ------------------------------------------------------------------ G53, G27-G30, end
     def before_machine_move(self) -> None:

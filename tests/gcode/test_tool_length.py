@@ -168,3 +168,10 @@ def test_position_offset_on_other_arcs_is_an_error():
     # L4831: only quarter and three-quarter circles with I/J/K.
     err = program_error("G10 L12 P1 R10\nG91 G45 G03 X10 Y0 I5 D1 F100\n")
     assert err.code == "position-offset-arc"
+
+
+def test_g91_in_the_same_block_counts_for_the_zero_move_rule():
+    # G90/G91 run after the compensation steps in the order of execution; the zero-move rule still sees
+    # the block's own G91: G91 G45 X0 moves +D, G90 G45 X0 (at X0) does not move.
+    assert ends("G10 L12 P1 R10\nG91 G45 X0 D1\n") == [[10, 0, 0]]
+    assert ends("G10 L12 P1 R10\nG91\nG90 G45 X0 D1\nG00 X1\n") == [[1, 0, 0]]
