@@ -206,11 +206,9 @@ class SystemVariables:
             unit = interp.macro.frames[-1].unit
             return None if unit.number is None else float(unit.number)
         if letter in "HD":
-            for name in (f"{letter.lower()}_number", f"active_{letter.lower()}"):
-                value = getattr(interp, name, None)
-                if value is not None:
-                    return float(value)
-            return None
+            # The offset numbers in use live with the tool compensation (compensation.py).
+            value = getattr(getattr(interp, "comp", None), f"{letter.lower()}_number", None)
+            return None if value is None else float(value)
         if letter == "P":
             value = getattr(interp.offsets, "extra_wcs_number", None)
             return None if value is None else float(value)

@@ -163,3 +163,8 @@ def test_date_and_time_are_plausible():
     text = "G00 X[FIX[#3011/10000]] Y[FIX[#3012/10000]]\n"
     year, hour = last(text)[:2]
     assert 2000 <= year <= 2200 and 0 <= hour <= 23
+
+
+def test_last_h_and_d_numbers():
+    # #4111 / #4107: the H and D numbers last commanded (the compensation's state), here H2 and D3.
+    assert last("G43 H2 Z1 D3\nG49\n#1=#4111\n#2=#4107\nG00 X#1 Y#2\n") == (2.0, 3.0, 1.0)
