@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from motion_checks import check_run, random_program
@@ -165,3 +166,22 @@ def test_no_limit_is_exceeded_on_random_machines(machine, seed, n_blocks, step_m
     chunks = [controller.advance(150, override=k * machine.controller.max_override) for k in knobs]
     chunks.append(controller.run_to_end(override=1.0))
     check_run(controller, concat(chunks), overrides=np.zeros(1))
+
+
+@pytest.mark.parametrize("program", ["circle", "star", "freeform", "pocket"])
+def test_builtin_programs_respect_every_limit(program):
+    # The interpreted built-in programs (real G-code through the gsk25i interpreter) at 100 % and under a
+    # knob that sweeps 0.3 → 2.0 → 0.6: every limit holds and the program ends at rest at its end point.
+    from cnc_gym.programs import load_program, program_names
+
+    if program not in program_names():
+        pytest.skip(f"no built-in program {program!r}")
+    _, tp = load_program(program)
+    for machine in ("vmc-small", "p-loop-30"):
+        controller = Controller(tp, MACHINES[machine])
+        check_run(controller, controller.run_to_end(override=1.0))
+        controller.reset()
+        chunks = [controller.advance(100, override=float(k)) for k in np.linspace(0.3, 2.0, 12)]
+        chunks += [controller.advance(100, override=0.6) for _ in range(5)]
+        chunks.append(controller.run_to_end(override=1.0))
+        check_run(controller, concat(chunks), overrides=np.zeros(1))
