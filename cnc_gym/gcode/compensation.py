@@ -14,9 +14,9 @@ Two layers:
   moves in machine coordinates (after the work offsets), keeps the look-ahead the corners need (the
   manual's three-block buffer: a corner is resolved with the next move in the plane if it comes within
   the next two blocks, else the vector is perpendicular to the block, L4119, L4515-L4555), and emits
-  compensated moves, with the tool length vector added at the machine end. ``position`` reports the
-  *programmed* position, so the interpreter's incremental and arc arithmetic stays in programmed
-  coordinates.
+  compensated moves (the tool length vector is already in every target: ``OffsetStack.tool_length``).
+  ``position`` reports the *programmed* position, so the interpreter's incremental and arc arithmetic
+  stays in programmed coordinates.
 
 Conventions: ``d`` is the signed offset, positive to the left of the direction of travel (G41 with a
 positive D), negative to the right (G42, or G41 with a negative D: the manual's swap, L4005). Arcs are
@@ -432,7 +432,6 @@ class _Item:
     target: Vec  # programmed machine-coordinate end (dwell: the position)
     feed: float | None
     context: tuple  # (line, file_index, modes, tool, spindle_rpm)
-    vector: Vec  # tool length vector at enqueue time
     element: PlaneElement | None = None  # in-plane moves only
     d: float = 0.0
     seconds: float = 0.0
@@ -447,7 +446,7 @@ class OffsetStage:
     """Compensation stage with the :class:`CanonicalMachine` interface (see the module docstring).
 
     The interpreter installs it in place of its canonical machine the first time a program uses G41/G42,
-    G43/G44 or G45-G48, and drives it through :meth:`set_cutter`, :meth:`set_length_vector`,
+    G43/G44 or G45-G48, and drives it through :meth:`set_cutter`,
     :meth:`set_position_offset`, :meth:`corner_arc` and :meth:`flush`.
     """
 
@@ -473,10 +472,9 @@ class OffsetStage:
         self.corner_arc_pending = False
         self.corner_arc_direction: Point | None = None
         self.corner_arc_feed: float | None = None
-        # The tool length vector lives in OffsetStack.tool_length (it is in every target already); the
-        # stage only keeps it zero here. ``length_pending``: the change of that vector an incremental move of
+        # The tool length vector lives in OffsetStack.tool_length (it is in every target already).
+        # ``length_pending``: the change of that vector an incremental move of
         # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, L3869).
-        self.vector: Vec = (0.0, 0.0, 0.0)
         self.length_pending: Vec | None = None
         self.suspended = False  # this block's moves pass through uncompensated (G53, G27-G30, G60)
         self._position_offset: tuple[int, float, frozenset[int], bool] | None = None
@@ -612,17 +610,15 @@ class OffsetStage:
             )
         if self.suspended or (not self.active and self.d == 0.0):
             self._set_machine_context(self._context())
-            self.machine.arc_feed(self._shift(end), self._shift(center), plane, sweep, feed)
+            self.machine.arc_feed(end, center, plane, sweep, feed)
             self._position = end
             return
         element = PlaneElement((start[u], start[v]), (end[u], end[v]), (center[u], center[v]), sweep)
-        item = _Item("arc", end, feed, self._context(), self.vector, element, self.d)
+        item = _Item("arc", end, feed, self._context(), element, self.d)
         self._plane_move(item)
 
     def _dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None:
-        item = _Item(
-            "dwell", self._position, None, self._context(), self.vector, seconds=seconds, dwell_modes=modes
-        )
+        item = _Item("dwell", self._position, None, self._context(), seconds=seconds, dwell_modes=modes)
         if self.pending is not None:
             self.deferred.append(item)
         else:
@@ -686,10 +682,6 @@ class OffsetStage:
             )
         return (new_end[0], new_end[1], new_end[2]), (new_center[0], new_center[1], new_center[2])
 
-    def _shift(self, p: Vec) -> Vec:
-        v = self.vector
-        return (p[0] + v[0], p[1] + v[1], p[2] + v[2])
-
     def _set_machine_context(self, context: tuple) -> None:
         m = self.machine
         m.line, m.file_index, m.modes, m.tool, m.spindle_rpm = context
@@ -702,10 +694,10 @@ class OffsetStage:
         if self.suspended or (passthrough and not self.deferred):
             # Cancel mode (or G41/G42 waiting for its start-up block): straight through.
             self._set_machine_context(self._context())
-            self._emit_straight(kind, self._shift(target), feed)
+            self._emit_straight(kind, target, feed)
             self._position = target
             return
-        item = _Item(kind, target, feed, self._context(), self.vector)
+        item = _Item(kind, target, feed, self._context())
         if in_plane:
             item.element = PlaneElement((start[u], start[v]), (target[u], target[v]))
             item.d = self.d
@@ -751,7 +743,7 @@ class OffsetStage:
             self._set_machine_context(item.context)
             for q in item.lead:
                 self._emit_plane_point(q, item)
-            self._emit_straight(item.kind, self._with_plane(item.target, None, item.vector), item.feed)
+            self._emit_straight(item.kind, item.target, item.feed)
             self.active = False
             self.cancel_requested = False
             self._position = item.target
@@ -826,9 +818,9 @@ class OffsetStage:
             u, v, w = PLANE_AXES[self.plane]
             pos = self.machine.position
             end3 = [0.0, 0.0, 0.0]
-            end3[u], end3[v], end3[w] = target[0] + a.vector[u], target[1] + a.vector[v], pos[w]
+            end3[u], end3[v], end3[w] = target[0], target[1], pos[w]
             center3 = [0.0, 0.0, 0.0]
-            center3[u], center3[v], center3[w] = p[0] + a.vector[u], p[1] + a.vector[v], pos[w]
+            center3[u], center3[v], center3[w] = p[0], p[1], pos[w]
             feed = self.corner_arc_feed or a.feed or nxt.feed
             if not feed:
                 raise CompensationError("G39 needs a feed: no F programmed yet", "missing-feed", a.context[0])
@@ -838,20 +830,18 @@ class OffsetStage:
         self.pending = None
         self._emit_deferred()
 
-    def _with_plane(self, target: Vec, point: Point | None, vector: Vec) -> Vec:
-        """Machine target: programmed ``target`` with its plane coordinates replaced by ``point``, plus
-        the length vector."""
+    def _with_plane(self, target: Vec, point: Point) -> Vec:
+        """Machine target: programmed ``target`` with its plane coordinates replaced by ``point``."""
         out = list(target)
-        if point is not None:
-            u, v, _w = PLANE_AXES[self.plane]
-            out[u], out[v] = point
-        return (out[0] + vector[0], out[1] + vector[1], out[2] + vector[2])
+        u, v, _w = PLANE_AXES[self.plane]
+        out[u], out[v] = point
+        return (out[0], out[1], out[2])
 
     def _emit_plane_point(self, point: Point, item: _Item) -> None:
         """A straight connecting move in the plane (the normal axis stays) with the item's feed/rapid."""
         u, v, _w = PLANE_AXES[self.plane]
         target = list(self.machine.position)
-        target[u], target[v] = point[0] + item.vector[u], point[1] + item.vector[v]
+        target[u], target[v] = point
         self._emit_straight(
             "rapid" if item.kind == "rapid" else "line", (target[0], target[1], target[2]), item.feed
         )
@@ -865,21 +855,21 @@ class OffsetStage:
         for q in item.lead:
             self._emit_plane_point(q, item)
         pos = self.machine.position
-        here = (pos[u] - item.vector[u], pos[v] - item.vector[v])
+        here = (pos[u], pos[v])
         if item.kind == "arc":
             start = item.start_b if item.start_b is not None else here
             if _dist(here, start) > 1e-7:
                 self._emit_plane_point(start, item)
             radius, sweep = check_arc(element, item.d, start, end, line)
             del radius
-            target = self._with_plane(item.target, end, item.vector)
+            target = self._with_plane(item.target, end)
             center = list(target)
-            center[u], center[v] = element.center[0] + item.vector[u], element.center[1] + item.vector[v]
+            center[u], center[v] = element.center
             self.machine.arc_feed(target, (center[0], center[1], center[2]), self.plane, sweep, item.feed)
             return
         if item.role != "startup":
             check_line(element, here, end, line)
-        self._emit_straight(item.kind, self._with_plane(item.target, end, item.vector), item.feed)
+        self._emit_straight(item.kind, self._with_plane(item.target, end), item.feed)
 
     def _emit_deferred(self) -> None:
         items, self.deferred = self.deferred, []
@@ -889,9 +879,9 @@ class OffsetStage:
                 self._emit_dwell(item)
                 continue
             pos = self.machine.position
-            here = (pos[u] - item.vector[u], pos[v] - item.vector[v])
+            here = (pos[u], pos[v])
             self._set_machine_context(item.context)
-            self._emit_straight(item.kind, self._with_plane(item.target, here, item.vector), item.feed)
+            self._emit_straight(item.kind, self._with_plane(item.target, here), item.feed)
 
     def _emit_dwell(self, item: _Item) -> None:
         self._set_machine_context(item.context)
