@@ -1,6 +1,6 @@
 """The ``cnc-gym`` command.
 
-    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...]
+    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...] [--program-dir DIR]
     cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png] [--no-progress]
 
 ``trace`` prints the canonical tool path as JSON Lines (the contract in DESIGN.md: ``kind``, ``line``,
@@ -35,6 +35,8 @@ def build_parser() -> argparse.ArgumentParser:
     _common(trace)
     trace.add_argument("--block-skip", metavar="N", type=int, nargs="+", action="extend", default=[],
                        help="block skip switches that are ON (1..9; '/' alone is switch 1)")  # fmt: skip
+    trace.add_argument("--program-dir", metavar="DIR", default=None,
+                       help="where M98/G65 find called programs (default: the program's folder)")  # fmt: skip
     trace.set_defaults(func=cmd_trace)
 
     run = sub.add_parser("run", help="simulate a program through controller and servo plant")
@@ -65,7 +67,8 @@ def cmd_trace(args: argparse.Namespace) -> int:
 
         machine = load_machine(args.machine)
     toolpath = interpret_file(args.program, dialect=args.dialect, machine=machine,
-                              block_skip=frozenset(args.block_skip))  # fmt: skip
+                              block_skip=frozenset(args.block_skip),
+                              program_dir=args.program_dir)  # fmt: skip
     # The whole program is interpreted before anything is printed: an error leaves stdout empty.
     text = "".join(json.dumps(record) + "\n" for record in toolpath.to_records())
     try:

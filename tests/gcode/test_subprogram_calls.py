@@ -159,3 +159,23 @@ def test_a_file_holding_other_programs_only_is_not_the_one_called(tmp_path):
 def test_programs_in_the_same_file_win_over_the_folder(tmp_path):
     (tmp_path / "O0005.nc").write_text("O0005\nG00 X99\nM99\n")
     assert ends("M98 P5\nM30\nO5\nG00 X1\nM99\n", program_dir=tmp_path) == [(1.0, 0.0, 0.0)]
+
+
+def test_trace_command_finds_subprograms_and_names_their_file(tmp_path, capsys):
+    import json
+
+    from cnc_gym.cli import main
+
+    folder = tmp_path / "subs"
+    folder.mkdir()
+    (folder / "O0008.nc").write_text("O0008\nG00 X8\nM99\n")
+    program = tmp_path / "main.nc"
+    program.write_text("G00 Y1\nM98 P8\nM30\n")
+    assert main(["trace", str(program), "--program-dir", str(folder)]) == 0
+    records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    # The main file's segment has no "file"; the subprogram's names O0008.nc and its line 2.
+    assert "file" not in records[0]
+    assert (records[1]["file"], records[1]["line"]) == (str(folder / "O0008.nc"), 2)
+    # Without --program-dir the subprogram is looked for next to main.nc: alarm 59, exit status 2.
+    assert main(["trace", str(program)]) == 2
+    assert "O0008 not found" in capsys.readouterr().err
