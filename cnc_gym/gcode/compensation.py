@@ -702,6 +702,13 @@ class OffsetStage:
             item.element = PlaneElement((start[u], start[v]), (target[u], target[v]))
             item.d = self.d
             self._plane_move(item)
+        elif self.pending is None:
+            # Offset mode with nothing waiting (after a look-ahead-starved block): the tool keeps its
+            # compensated position in the plane.
+            pos = self.machine.position
+            self._set_machine_context(item.context)
+            self._emit_straight(kind, self._with_plane(target, (pos[u], pos[v])), feed)
+            self._position = target
         else:
             self.deferred.append(item)
             self._position = target
@@ -764,9 +771,11 @@ class OffsetStage:
         if a is None:
             return
         line = a.context[0]
-        if self.corner_arc_pending and nxt is not None and nxt.role != "cancel":
-            self._corner_arc_resolve(a, nxt)
-            return
+        if self.corner_arc_pending:
+            if nxt is not None and nxt.role != "cancel":
+                self._corner_arc_resolve(a, nxt)
+                return
+            self.corner_arc_pending = False  # G39 before a cancel or the end: no corner to round
         b_el = nxt.element if nxt is not None else None
         try:
             if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:

@@ -607,3 +607,14 @@ def test_worked_example_x58_direction_switch_right_after_start_up():
     assert close(
         right_then_left[0], meet(offset_line((0, 0), (10, 0), -1.0), offset_line((10, 0), (20, 10), 1.0))
     )
+
+
+def test_more_blocks_without_plane_motion_keep_their_order():
+    # Three Z blocks after the start-up: the look-ahead starves after two; the third Z move runs at the
+    # tool's compensated position, in program order, before N6.
+    text = "G10 L12 P1 R5\nN1 G91 G00 G41 X50 Y50 D1\nN3 Z-10\nN4 Z-10\nN5 G01 Z-10 F100\nN6 Y100\n"
+    out = moves(text)
+    assert [r["line"] for r in out] == [2, 3, 4, 5, 6]
+    corner = (50 - 5 / math.sqrt(2), 50 + 5 / math.sqrt(2))
+    assert all(close(xy(r), corner) for r in out[:4])
+    assert [r["end"][2] for r in out[1:4]] == [-10.0, -20.0, -30.0]

@@ -174,3 +174,6 @@ def test_random_programs_give_program_error_or_finite_path(blocks, r1, r2):
     assert np.all(np.isfinite(toolpath.radius[arcs])) and np.all(toolpath.radius[arcs] > 0)
     # Consecutive segments join: every segment starts where the previous one ended.
     assert np.allclose(toolpath.start[1:], toolpath.end[:-1], atol=1e-6)
+    # The look-ahead never reorders: segments come in program order (extra corner moves belong to the
+    # next block, a G39 arc to the block before it).
+    assert np.all(np.diff(toolpath.line) >= 0)
