@@ -821,8 +821,7 @@ class OffsetStage:
         self._emit_block(a, end_a)
         sweep = arc_sweep_between(p, end_a, target, 0.0)
         if abs(sweep) > SMOOTH:
-            # The corner arc turns the same way as the path around the corner: CCW for G42 (d < 0) going
-            # round an outer corner to the left... take the short way round the corner point.
+            # The short way round the corner point: at an outer corner, the way the path turns.
             self._set_machine_context(a.context)
             u, v, w = PLANE_AXES[self.plane]
             pos = self.machine.position
