@@ -168,3 +168,15 @@ def test_date_and_time_are_plausible():
 def test_last_h_and_d_numbers():
     # #4111 / #4107: the H and D numbers last commanded (the compensation's state), here H2 and D3.
     assert last("G43 H2 Z1 D3\nG49\n#1=#4111\n#2=#4107\nG00 X#1 Y#2\n") == (2.0, 3.0, 1.0)
+
+
+def test_skip_position_after_g31_and_extra_work_system_number():
+    # G31 with no skip signal runs to its end point; #5061-#5063 hold it (work coordinates, L5486).
+    # #4130 is the G54.1 P number in force.
+    assert last("G31 X10 Y5 F100\nG00 Z#5061\n") == (10.0, 5.0, 10.0)
+    assert last("G54.1 P3\nG00 X#4130\n") == (3.0, 0.0, 0.0)
+
+
+def test_tool_length_offset_5083():
+    # G43 H1 with H1 = 12.5 (set through #11001): #5083 reads the offset in use, 12.5; after G49, 0.
+    assert last("#11001=12.5\nG43 H1 Z0\n#1=#5083\nG49\n#2=#5083\nG00 X#1 Y#2\n")[:2] == (12.5, 0.0)
