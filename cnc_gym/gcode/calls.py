@@ -655,13 +655,23 @@ class FlowRunner:
         return self._ordinary(strict, pc)
 
     def _run_without(self, block: Block | None, pc: int, letter: str, value: float | None) -> int:
+        """The block's other words, before a subprogram call by M or T code (L6281, L6321)."""
         if block is None:
             return pc
         kept = tuple(w for w in block.words if not (w[0] == letter and (value is None or w[1] == value)))
-        rest = Block(block.line, kept, skip=0, has_expr=True, number=block.number)
         if not kept:
             return pc
-        return self._ordinary(rest, pc)
+        interp = self.interp
+        interp.execute(Block(block.line, kept, skip=0, has_expr=True, number=block.number))
+        if interp.ended:
+            self._count_part()
+            return -1
+        if interp._flow is not None:
+            interp._flow = None
+            raise self.dialect.error(
+                f"M98/M99 cannot share a block with {letter}, which calls a subprogram here", "bad-call"
+            )
+        return pc
 
     def _evaluated(self, words: tuple) -> list[tuple[str, float]]:
         """Call-block words → (letter, value) in order; a null variable drops its word (L5136)."""

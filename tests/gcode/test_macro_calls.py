@@ -211,6 +211,11 @@ def test_subprogram_call_by_m_code_x77():
     assert int(tp.kind[-1]) == 1 and int(tp.tool[-1]) == 5
 
 
+def test_m98_cannot_share_a_block_with_a_calling_m_code():
+    err = program_error("G00 X1 M06 M98 P3\nM30\nO3\nM99\nO9001\nM99\n", macro_calls={"m_sub": {6: 9001}})
+    assert err.code == "bad-call" and err.line == 1
+
+
 def test_macro_call_by_m_code_with_arguments():
     text = "M50 A3 B4\nM30\nO9020\nG00 X#1 Y#2\nM99\n"
     assert ends(text, macro_calls={"m_macro": {50: 9020}}) == [(3.0, 4.0, 0.0)]
