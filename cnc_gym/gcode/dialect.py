@@ -124,7 +124,7 @@ class Dialect:
     m_groups: Mapping[str, frozenset[int]] = field(default_factory=dict)
     #: Bracket nesting limit in expressions (GSK: 5, functions' brackets included).
     max_bracket_depth: int = 5
-    #: Macro statement keywords (IF, WHILE, GOTO …) the lexer recognises; all "not-implemented" for now.
+    #: Macro statement keywords (IF, THEN, GOTO, WHILE, DO, END) the reader recognises (reader.py, calls.py).
     keywords: frozenset[str] = frozenset()
     #: Variables that exist, as (first, last) ranges; the rest of ``system_variables`` is rejected by name.
     variables: tuple[tuple[int, int], ...] = ((1, 33), (100, 199), (500, 999))

@@ -1,7 +1,7 @@
 """Check and execute phases: blocks → canonical motion, driven by the dialect's tables.
 
-The core loop (:meth:`Interpreter.run`) walks the program with a program counter (so GOTO/WHILE and
-subprogram calls can be added later). Each block is
+The core loop (:meth:`Interpreter.run`, carried out by :class:`~cnc_gym.gcode.calls.FlowRunner`) walks the
+program with a program counter: GOTO/IF/WHILE, subprograms and macro calls. Each ordinary block is
 
 1. *evaluated*: expression and variable words become numbers (a null variable drops its word, L5136);
 2. *checked* against the dialect and the modal state: unknown or not-yet-implemented codes, two codes of

@@ -14,6 +14,11 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
 
 
+#: Largest magnitude a variable holds (§3.7.7 "Max ±10^47", L6386; L5219's ±999999 would refuse ordinary
+#: values such as a feed of 1 000 000 mm/min, so the limitations table is followed).
+MAX_VALUE = 1e47
+
+
 class SystemVariableSource(Protocol):
     """What the store needs from the system-variable table (cnc_gym.gcode.sysvars)."""
 
@@ -90,8 +95,8 @@ class VariableStore:
         kind = self._kind(index)
         if kind == "null":
             raise self.dialect.error("#0 is always null and cannot be assigned", "bad-variable")
-        if value is not None and not math.isfinite(value):
-            raise self.dialect.error(f"#{index}: value out of range", "overflow")
+        if value is not None and not abs(value) <= MAX_VALUE:  # also NaN
+            raise self.dialect.error(f"#{index}: {value:g} is beyond ±1e47 (L6386)", "overflow")
         if kind == "system":
             if self.system is None:
                 raise self.dialect.error(f"system variable #{index} is not available here", "not-implemented")

@@ -82,6 +82,13 @@ def test_bracket_nesting_beyond_five_levels_is_alarm_209():
     assert err.code == "bracket-nesting" and err.alarm == 209
 
 
+def test_values_beyond_1e47_overflow_alarm_102():
+    # §3.7.7 (L6386): variables hold at most ±10^47; 1E40 * 1E10 does not fit.
+    err = program_error("#1=10000000000*10000000000*10000000000*10000000000*10000000000\n")
+    assert (err.code, err.alarm) == ("overflow", 102)
+    assert x_values("#1=10000000000*10000000000*10000000000*10000000000\nG00 X[#1/#1]\n") == [1.0]
+
+
 def test_roundoff_example_x68_with_a_0_001_increment():
     # L5566-L5585 (notes X68) on a 0.001 mm controller: each variable is rounded to the address's increment
     # when used, so N3 moves 1.235 and N4 2.346 but N5 moves -3.580 (#1+#2 = 3.5801 → 3.580): the tool ends
