@@ -11,13 +11,15 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
+from gcode_helpers import close
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode import interpret
+from cnc_gym.gcode import get_dialect, interpret
 from cnc_gym.toolpath import SegmentKind
 
 
@@ -177,3 +179,73 @@ def test_random_programs_give_program_error_or_finite_path(blocks, r1, r2):
     # The look-ahead never reorders: segments come in program order (extra corner moves belong to the
     # next block, a G39 arc to the block before it).
     assert np.all(np.diff(toolpath.line) >= 0)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(convex_polygons(), st.sampled_from(["G41", "G42"]), st.floats(0.1, 0.9), st.floats(0.05, 0.45))
+def test_rounded_convex_polygon_offset_is_the_parallel_curve(polygon, side, rounding, fraction):
+    # Every corner of the convex CCW polygon rounded with a tangent CCW arc of radius rho (the tangent
+    # length rho / tan(alpha/2) takes at most a third of each edge). The contour is smooth, so the
+    # compensated path is its parallel curve: lines on the offset lines, arcs about the same centres with
+    # radius rho - r (G41, inside) or rho + r (G42, outside), and no extra corner moves.
+    (cx, cy), points = polygon
+    n = len(points)
+    angles, tangents = [], []
+    for i in range(n):
+        a, p, b = points[i - 1], points[i], points[(i + 1) % n]
+        v1 = (a[0] - p[0], a[1] - p[1])
+        v2 = (b[0] - p[0], b[1] - p[1])
+        cos = (v1[0] * v2[0] + v1[1] * v2[1]) / (math.hypot(*v1) * math.hypot(*v2))
+        angles.append(math.acos(max(-1.0, min(1.0, cos))))
+    shortest = min(math.dist(points[i], points[(i + 1) % n]) for i in range(n))
+    rho = rounding * min(shortest / 3 * math.tan(alpha / 2) for alpha in angles)
+    r = fraction * rho if side == "G41" else fraction * 5.0
+    if rho < 0.05 or r < 0.01:
+        return
+    arcs = []  # (tangent point in, tangent point out, centre) per vertex
+    for i in range(n):
+        a, p, b = points[i - 1], points[i], points[(i + 1) % n]
+        t_in = ((p[0] - a[0]) / math.dist(a, p), (p[1] - a[1]) / math.dist(a, p))
+        t_out = ((b[0] - p[0]) / math.dist(p, b), (b[1] - p[1]) / math.dist(p, b))
+        back = rho / math.tan(angles[i] / 2)
+        q_in = (p[0] - back * t_in[0], p[1] - back * t_in[1])
+        q_out = (p[0] + back * t_out[0], p[1] + back * t_out[1])
+        centre = (q_in[0] - rho * t_in[1], q_in[1] + rho * t_in[0])  # left of travel (CCW)
+        arcs.append((q_in, q_out, centre))
+        tangents.append((t_in, t_out))
+    # Program: start at the middle of edge 0 (from vertex 0 to 1), go round, back to the middle.
+    start = ((arcs[0][1][0] + arcs[1][0][0]) / 2, (arcs[0][1][1] + arcs[1][0][1]) / 2)
+    lines = [
+        f"G10 L12 P1 R{r:.6f}",
+        f"G00 X{cx:.6f} Y{cy:.6f}",
+        f"G01 {side} D1 X{start[0]:.6f} Y{start[1]:.6f} F500",
+    ]
+    for k in range(1, n + 1):
+        q_in, q_out, centre = arcs[k % n]
+        lines.append(f"G01 X{q_in[0]:.6f} Y{q_in[1]:.6f}")
+        lines.append(
+            f"G03 X{q_out[0]:.6f} Y{q_out[1]:.6f} I{centre[0] - q_in[0]:.6f} J{centre[1] - q_in[1]:.6f}"
+        )
+    lines.append(f"G01 X{start[0]:.6f} Y{start[1]:.6f}")
+    lines.append(f"G40 X{cx:.6f} Y{cy:.6f}")
+    dialect = replace(get_dialect("gsk25i"), least_increment_mm=1e-6)
+    records = interpret("\n".join(lines) + "\n", dialect=dialect).to_records()
+    offset_mode = [rec for rec in records if 4 <= rec["line"] <= 4 + 2 * n]
+    # No extra corner moves: one segment per block.
+    assert len(offset_mode) == 2 * n + 1
+    sign = 1.0 if side == "G41" else -1.0
+    for rec in offset_mode:
+        if rec["kind"] == "arc":
+            k = ((rec["line"] - 4) // 2 + 1) % n
+            assert close(rec["center"][:2], arcs[k][2], 1e-5)
+            assert math.isclose(rec["radius"], rho - sign * r, abs_tol=1e-5)
+        else:
+            # Both ends on the line at signed distance sign·r from the programmed line of the block.
+            a, b = rec["start"][:2], rec["end"][:2]
+            index = (rec["line"] - 4) // 2  # edge from vertex index to index + 1
+            p0, p1 = points[index % n], points[(index + 1) % n]
+            length = math.dist(p0, p1)
+            normal = (-(p1[1] - p0[1]) / length, (p1[0] - p0[0]) / length)
+            for q in (a, b):
+                distance = normal[0] * (q[0] - p0[0]) + normal[1] * (q[1] - p0[1])
+                assert math.isclose(distance, sign * r, abs_tol=1e-5), (rec, distance, r)
