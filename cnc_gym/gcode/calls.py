@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.dialect import gkey
 from cnc_gym.gcode.expressions import evaluate, evaluate_condition
 from cnc_gym.gcode.reader import Block, Reader
 from cnc_gym.toolpath import SegmentKind
@@ -59,6 +60,8 @@ ARGUMENT_SPEC_I = {
 }
 _IJK = {"I": 0, "J": 1, "K": 2}
 _DWELL = int(SegmentKind.DWELL)
+#: Actions of codes whose axis words set something rather than move (no G66 call after their block).
+_SETTING_ACTIONS = frozenset({"dwell", "g10", "g52", "g92", "g51", "g68", "g50_1", "g51_1"})
 
 
 @dataclass
@@ -305,13 +308,40 @@ class FlowRunner:
         return self._ordinary(block, pc)
 
     def _ordinary(self, block: Block, pc: int) -> int:
-        """An ordinary block while G66 is active (or after a call block's own words): watch for motion."""
+        """An ordinary block while G66 is active (or after a call block's own words): watch for motion.
+
+        "A block containing a move command" (L6147) is read from the block itself — a non-null axis word
+        not taken by a code that only sets something (G04 G10 G52 G92 G51 G68 G50.1 G51.1) — or from the
+        segments it produced (a move with no axis word of its own). The segments alone would miss moves
+        that cutter compensation's look-ahead emits a block later."""
         interp = self.interp
         kinds = interp.builder._rows["kind"]
         before = len(kinds)
         interp.execute(block)
-        moved = any(k != _DWELL for k in kinds[before:])
+        moved = bool(self.modal_calls) and (self._has_move_command(block)
+                                            or any(k != _DWELL for k in kinds[before:]))  # fmt: skip
         return self._after(block, pc, moved=moved)
+
+    def _has_move_command(self, block: Block) -> bool:
+        axes = self.dialect.axes
+        has_axis = False
+        for word in block.words:
+            letter, value = word[0], word[1]
+            if letter not in axes and letter != "G":
+                continue
+            if isinstance(value, str):
+                value = float(value)
+            elif not isinstance(value, float):
+                value = evaluate(value, self.interp.variables, self.dialect)
+                if value is None:
+                    continue  # a null word is dropped (L5136)
+            if letter == "G":
+                spec = self.dialect.gcodes.get(gkey(value))
+                if spec is not None and spec.action in _SETTING_ACTIONS:
+                    return False
+            else:
+                has_axis = True
+        return has_axis
 
     def _after(self, block: Block, pc: int, *, moved: bool) -> int:
         interp = self.interp

@@ -173,6 +173,20 @@ def test_g66_arguments_are_fixed_at_the_g66_block():
     assert [e[1] for e in ends(text)] == [0.0, 2.0, 2.0, 4.0]
 
 
+def test_g66_ignores_settings_and_null_axis_words():
+    # G92 X0 sets a coordinate (no move); X#1 with #1 vacant is dropped (no move); X5 moves: one call.
+    text = "G66 P5\nG92 X0\nX#1\nX5\nG67\nM30\nO5\nG91 G00 Z1\nG90\nM99\n"
+    assert [r["line"] for r in moves(text)] == [4, 8]
+
+
+def test_g66_calls_after_moves_that_cutter_compensation_holds_back():
+    # With G41 the compensation emits a block's segment only when it has seen the next move; each of the
+    # two moves (X20, Y10) still calls O5 once: its lines 9 and 10 appear twice each.
+    text = "G41 D1 G01 X10 F100\nG66 P5\nX20\nY10\nG67\nG40 X0\nM30\nO5\nG91 G01 Z-1\nZ1\nG90\nM99\n"
+    lines = interpret(text, tool_offsets={"D": {1: 2.0}}).line.tolist()
+    assert lines.count(9) == 2 and lines.count(10) == 2
+
+
 def test_g66_modal_state_shows_in_4012():
     text = "G65 P1\nG66 P2\nG65 P1\nG67\nG65 P1\nM30\nO1\nG91 G00 X#4012\nM99\nO2\nM99\n"
     assert [e[0] for e in ends(text)] == [67.0, 133.0, 200.0]
