@@ -639,3 +639,29 @@ def test_more_blocks_without_plane_motion_keep_their_order():
     corner = (50 - 5 / math.sqrt(2), 50 + 5 / math.sqrt(2))
     assert all(close(xy(r), corner) for r in out[:4])
     assert [r["end"][2] for r in out[1:4]] == [-10.0, -20.0, -30.0]
+
+
+def test_starved_look_ahead_then_an_arc_connects_to_its_offset_start():
+    # Start-up along +x to (0, 0), two Z blocks (the look-ahead starves: the start-up ends perpendicular,
+    # at (0, 2)), then a CCW half circle about (5, 0) from (0, 0) to (10, 0): the tool moves straight to
+    # the arc's offset start (R 5 - 2 = 3 on the centre side: (2, 0)) and runs on R 3. The arc then meets
+    # the next line (+x, offset y = 2) at an outer 90° corner: x = 5 + sqrt(3² - 2²).
+    out = moves(
+        "G10 L12 P1 R2\nG00 X-10\nG01 G41 D1 X0 Y0 F100\nZ-1\nZ-2\nG03 X10 Y0 I5 J0\nG01 X20\nG40 X30\n"
+    )
+    assert [xy(r) for r in out[1:5]] == [[0.0, 2.0], [0.0, 2.0], [0.0, 2.0], [2.0, 0.0]]
+    arc = out[5]
+    assert arc["kind"] == "arc" and math.isclose(arc["radius"], 3.0)
+    assert close(xy(arc), (5 + math.sqrt(5), 2.0))
+    # Sweep: from 180° round to atan2(2, √5) + 360°, past the programmed 180° (the outer corner).
+    assert math.isclose(arc["sweep_deg"], 180 + math.degrees(math.atan2(2, math.sqrt(5))), abs_tol=1e-4)
+
+
+def test_g53_in_offset_mode_clears_the_vector_and_restarts():
+    # L1664: G53 clears the compensation. The block before it ends perpendicular ((10, 2)); the G53 rapid
+    # goes to its machine position (X and Y uncommanded: the programmed (10, 0)); the next move is a new
+    # start-up: (10, 0)→(20, 0) then up, a left turn (inner): x = 18, y = 2.
+    out = ends(
+        "G10 L12 P1 R2\nG00 X-10\nG01 G41 D1 X0 Y0 F100\nX10\nG53 G00 Z0\nG01 X20 Y0\nY10\nG40 X30 Y10\n"
+    )
+    assert out[2:6] == [[10.0, 2.0], [10.0, 0.0], [18.0, 2.0], [18.0, 10.0]]
