@@ -482,7 +482,7 @@ class Reader:
             if keyword:
                 if any(w[0] not in "ON" for w in words):
                     raise self.error(f"macro statement {keyword} must be alone in its block (after O/N)",
-                                     "bad-expression", line, pos + 1)  # fmt: skip
+                                     "bad-macro-command", line, pos + 1)  # fmt: skip
                 stmt, pos = self._statement(keyword, text, pos, line)
                 break
             letter = c
@@ -535,8 +535,8 @@ class Reader:
         parser = ExpressionParser(text, pos + len(keyword), self.dialect)
         if keyword == "IF":
             if parser._peek() != "[":
-                raise self.error("IF needs a condition in brackets: IF[<condition>]GOTOn", "bad-expression",
-                                 line, parser.pos + 1)  # fmt: skip
+                raise self.error("IF needs a condition in brackets: IF[<condition>]GOTOn",
+                                 "bad-macro-command", line, parser.pos + 1)  # fmt: skip
             condition = parser.condition()
             word = parser._word()
             if word.startswith("GOTO"):
@@ -546,21 +546,21 @@ class Reader:
                 parser.pos += 4
                 if parser._peek() != "#":
                     raise self.error("THEN must be followed by an assignment #i=<expression>",
-                                     "bad-expression", line, parser.pos + 1)  # fmt: skip
+                                     "bad-macro-command", line, parser.pos + 1)  # fmt: skip
                 assign, end = self._assignment(text, parser.pos, line)
                 return ("if_then", condition, assign), end
             else:
                 raise self.error("IF[<condition>] must be followed by GOTOn or THEN #i=<expression>",
-                                 "bad-expression", line, parser.pos + 1)  # fmt: skip
+                                 "bad-macro-command", line, parser.pos + 1)  # fmt: skip
         elif keyword == "GOTO":
             stmt = ("goto", self._goto_target(parser, line))
         elif keyword == "WHILE":
             if parser._peek() != "[":
                 raise self.error("WHILE needs a condition in brackets: WHILE[<condition>]DOm",
-                                 "bad-expression", line, parser.pos + 1)  # fmt: skip
+                                 "bad-macro-command", line, parser.pos + 1)  # fmt: skip
             condition = parser.condition()
             if not parser._word().startswith("DO"):
-                raise self.error("WHILE[<condition>] must be followed by DOm", "bad-expression", line,
+                raise self.error("WHILE[<condition>] must be followed by DOm", "bad-macro-command", line,
                                  parser.pos + 1)  # fmt: skip
             parser.pos += 2
             stmt = ("while", condition, self._loop_number(parser, "DO", line))
@@ -569,9 +569,9 @@ class Reader:
         elif keyword == "END":
             stmt = ("end", self._loop_number(parser, "END", line))
         else:
-            raise self.error(f"{keyword} without IF", "bad-expression", line, pos + 1)
+            raise self.error(f"{keyword} without IF", "bad-macro-command", line, pos + 1)
         if parser.pos < len(text) and text[parser.pos] != "/":
-            raise self.error(f"unexpected {text[parser.pos:]!r} after {keyword}", "bad-expression", line,
+            raise self.error(f"unexpected {text[parser.pos:]!r} after {keyword}", "bad-macro-command", line,
                              parser.pos + 1)  # fmt: skip
         return stmt, len(text)
 

@@ -244,14 +244,16 @@ def test_computed_goto():
         ("GOTO77\n", "sequence-not-found", 60),
         ("GOTO#1\n", "sequence-not-found", 60),  # null target
         ("#1=2.5\nGOTO#1\n", "sequence-not-found", 60),
-        ("IF[#1]GOTO5\n", "bad-expression", 206),  # no comparison
-        ("IF[#1EQ1]\n", "bad-expression", 206),
-        ("IF#1EQ1GOTO5\n", "bad-expression", 206),
-        ("G00 X1 GOTO5\n", "bad-expression", 206),  # a statement is alone in its block
-        ("GOTO5 X1\n", "bad-expression", 206),
-        ("THEN#1=1\n", "bad-expression", 206),
-        ("WHILE[1LT2]\n", "bad-expression", 206),
-        ("IF[1LT2]THENG00X1\n", "bad-expression", 206),  # THEN takes an assignment only
+        ("IF[#1]GOTO5\n", "bad-expression", 206),  # no comparison: a malformed expression
+        ("IF[#1EQ1+]GOTO5\n", "missing-operand", 207),
+        # Malformed statements: ILLEGAL MACRO PROGRAM COMMAND.
+        ("IF[#1EQ1]\n", "bad-macro-command", 205),
+        ("IF#1EQ1GOTO5\n", "bad-macro-command", 205),
+        ("G00 X1 GOTO5\n", "bad-macro-command", 205),  # a statement is alone in its block
+        ("GOTO5 X1\n", "bad-macro-command", 205),
+        ("THEN#1=1\n", "bad-macro-command", 205),
+        ("WHILE[1LT2]\n", "bad-macro-command", 205),
+        ("IF[1LT2]THENG00X1\n", "bad-macro-command", 205),  # THEN takes an assignment only
     ],
 )  # fmt: skip
 def test_statement_errors(text, code, alarm):
