@@ -472,7 +472,12 @@ class FlowRunner:
                 f"or {number}.nc in {where})",
                 "program-not-found",
             )
-        raw = path.read_bytes()
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise self.dialect.error(
+                f"program O{number:04d}: cannot read {path} ({exc.strerror or exc})", "program-not-found"
+            ) from None
         try:
             text = raw.decode("utf-8-sig")
         except UnicodeDecodeError:

@@ -179,3 +179,16 @@ def test_trace_command_finds_subprograms_and_names_their_file(tmp_path, capsys):
     # Without --program-dir the subprogram is looked for next to main.nc: alarm 59, exit status 2.
     assert main(["trace", str(program)]) == 2
     assert "O0008 not found" in capsys.readouterr().err
+
+
+def test_unreadable_subprogram_file_is_a_program_error(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    (tmp_path / "O0005.nc").write_text("O0005\nM99\n")
+
+    def refuse(self):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(Path, "read_bytes", refuse)
+    err = program_error("M98 P5\n", program_dir=tmp_path)
+    assert err.alarm == 59 and "cannot read" in err.message and "Permission denied" in err.message
