@@ -272,7 +272,8 @@ class ClassicalPlanner:
         floor = np.where(cutting, self.min_override * feed_mm_s, 0.0)
         previous: list[tuple[float, float, float]] = []
         unresponsive: list[float] = []
-        for iteration in range(1, self.refine_iterations + 1):
+        # Every schedule returned has been simulated: the last round only measures.
+        for iteration in range(1, self.refine_iterations + 2):
             path_s, error, speed = self._simulate(env)
             if path_s is None:  # env could not be copied: model-only schedule
                 return schedule
@@ -291,7 +292,7 @@ class ClassicalPlanner:
             previous = [
                 (float(path_s[k]), float(error[k]), float(speed[k])) for k in np.flatnonzero(error > target)
             ]
-            if not offending:
+            if not offending or iteration > self.refine_iterations:
                 break
             # Lower the cap on the stretch behind each offending step (the error builds up over the
             # servo's settling distance) to the speed actually run there times target/error (a little
@@ -326,11 +327,17 @@ class ClassicalPlanner:
         cap = np.full(len(seg), _SPEED_CEILING_MM_S)
         is_arc = toolpath.kind[seg] == SegmentKind.ARC
         if np.any(~is_arc):
-            _, tangent, _ = toolpath.evaluate(s[~is_arc])
+            _, tangent, curvature = toolpath.evaluate(s[~is_arc])
             per_speed = model.line_error_per_speed(tangent)
-            cap[~is_arc] = np.where(
-                per_speed > 1e-12, target / np.maximum(per_speed, 1e-12), _SPEED_CEILING_MM_S
-            )
+            line_cap = np.where(per_speed > 1e-12, target / np.maximum(per_speed, 1e-12), _SPEED_CEILING_MM_S)
+            # Curved non-arc segments (NURBS): the arc model at the local radius 1/κ, taken in the XY
+            # plane, on radii rounded to 2 % steps so the bisection runs once per step.
+            curved = curvature > 1e-9
+            if np.any(curved):
+                radius = np.exp(np.round(np.log(1.0 / curvature[curved]) / 0.02) * 0.02)
+                caps = {r: model.arc_speed_cap(float(r), 0, target) for r in np.unique(radius)}
+                line_cap[curved] = np.minimum(line_cap[curved], [caps[r] for r in radius])
+            cap[~is_arc] = line_cap
         for index in np.unique(seg[is_arc]):
             value = model.arc_speed_cap(float(toolpath.radius[index]), int(toolpath.plane[index]), target)
             cap[seg == index] = value

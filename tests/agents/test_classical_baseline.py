@@ -27,18 +27,19 @@ M30
 """
 
 
-def _constant_verdict(env, override: float, time_to_beat: float) -> str:
-    """'violates', 'slower' (still running at ``time_to_beat``) or 'FASTER' for one constant override.
+def _constant_verdict(env, override: float, time_to_beat: float, allowed_violations: int) -> str:
+    """'violates', 'slower' or 'FASTER' for one constant override against the classical run.
 
-    A constant override that has violated the tolerance or is still cutting when the classical run has
-    finished cannot beat it, so the episode stops there (that keeps the slow overrides cheap).
+    'violates': more violations than the classical run had. A constant override that gets there, or is
+    still cutting when the classical run has finished, cannot beat it, so the episode stops there (that
+    keeps the slow overrides cheap).
     """
     policy = ConstantOverride(override)
     observation, info = env.reset(seed=0)
     policy.reset(env)
     while True:
         observation, _, terminated, truncated, info = env.step(policy.act(observation, info))
-        if info["violations"] > 0:
+        if info["violations"] > allowed_violations:
             return "violates"
         if truncated:  # cut off by the env's step budget: not finished, so not faster
             return "slower"
@@ -55,11 +56,23 @@ def test_classical_beats_every_compliant_constant_override(program):
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program], machine="vmc-small")
     classical = run_episode(env, ClassicalPlanner(), record=False)
     assert classical.finished
-    assert classical.violations == 0
-    verdicts = {float(x): _constant_verdict(env, float(x), classical.cycle_time_s) for x in OVERRIDES}
+    # Within tolerance: no violation the feed could have avoided. The most careful constant override
+    # (10 %) sets the floor; today the built-ins have one step at the first cut that no feed avoids (the
+    # servo still settling from the rapid before it), the zig-zag part (no rapid) has none.
+    careful = run_episode(env, ConstantOverride(0.1), record=False)
+    assert classical.violations <= careful.violations
+    if program == ZIGZAG:
+        assert classical.violations == 0
+    # Faster than every constant override 10 %…200 % that stays as compliant.
+    verdicts = {
+        float(x): _constant_verdict(env, float(x), classical.cycle_time_s, classical.violations)
+        for x in OVERRIDES
+    }
     assert "FASTER" not in verdicts.values(), verdicts
-    # The comparison is not empty: some constant overrides do stay within tolerance (and are slower) ...
+    # The comparison is not empty: some constant overrides are as compliant (and slower) ...
     assert "slower" in verdicts.values(), verdicts
+    # ... and the planner is not merely careful: it beats the slowest compliant one by a wide margin.
+    assert classical.cycle_time_s < 0.75 * careful.cycle_time_s
     env.close()
 
 
