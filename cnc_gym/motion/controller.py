@@ -96,10 +96,13 @@ class Controller:
         self.max_override = float(ctl.max_override)
         self.limits: PathLimits = build_limits(toolpath, machine)
         self._n_seg = self.limits.seg_f.shape[0]
-        window = max(int(ctl.lookahead_blocks), 1)
+        # Window in motion segments (a NURBS piece counts as one). Without look-ahead every block ends at rest
+        # anyway; 2 keeps the pieces of one NURBS block flowing (the window end is never the next junction).
+        window = max(int(ctl.lookahead_blocks), 2)
         self._cfg = np.array([self.dt, window, ctl.override_slew_per_s, *self.limits.rest_position])
         self._scratch = np.zeros((window + 2, 3))
-        self._kinds = toolpath.kind
+        # NURBS pieces are drawn as chords by the kernel; their exact points are put in after each call.
+        self._nurbs_rows = np.flatnonzero(toolpath.kind == SegmentKind.NURBS).astype(float)
         self._st_f = np.zeros(K.N_STATE_F)
         self._st_i = np.zeros(K.N_STATE_I, dtype=np.int64)
         self.reset()
@@ -215,6 +218,10 @@ class Controller:
         out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, self._cfg, self._st_f,
                                self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch,
                                stop_when_done)  # fmt: skip
+        if len(self._nurbs_rows) and len(out):
+            on_curve = np.isin(out[:, K.O_SEG], self._nurbs_rows)
+            if np.any(on_curve):
+                out[on_curve, K.O_X : K.O_Z + 1] = self.toolpath.evaluate(out[on_curve, K.O_S])[0]
         if len(out):
             self._last_position = out[-1, K.O_X : K.O_Z + 1].copy()
         return out

@@ -1,7 +1,8 @@
 """Static speed, acceleration and jerk limits of a tool path on a machine, computed once (vectorised).
 
 The controller works on *motion segments*: the toolpath's rapids, lines and arcs with a length above
-:data:`MIN_LENGTH_MM` (shorter ones are absorbed: their modes still count, their geometry does not).
+:data:`MIN_LENGTH_MM` (shorter ones are absorbed: their modes still count, their geometry does not), and
+NURBS curves cut into pieces of at most :data:`NURBS_PIECE_MM` whose limits are sampled along the curve.
 Between consecutive motion segments lies a *limit point* (junction); point 0 is the program start and
 point n the program end. Dwells sit on points.
 
@@ -151,6 +152,50 @@ def _backward_bounds(acc: np.ndarray, jerk: np.ndarray, length: np.ndarray, cap:
     return a_in, span_a, span_j
 
 
+#: NURBS curves are cut into pieces of at most this arc length (and at least NURBS_MIN_PIECES), mm.
+NURBS_PIECE_MM = 0.5
+NURBS_MIN_PIECES = 4
+NURBS_SAMPLES = 9  # samples per piece for tangent extent and curvature
+
+
+def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple | None]:
+    """(toolpath row, start arc length, length) per piece, and for the NURBS pieces (in order) the sampled
+    (extent, tangent at start, tangent at end, largest curvature, chord start, chord end)."""
+    nurbs = tp.kind[rows] == SegmentKind.NURBS
+    if not np.any(nurbs):
+        return rows, tp.s_start[rows].astype(float), tp.length[rows].astype(float), None
+    counts = np.ones(len(rows), dtype=np.int64)
+    lengths = tp.length[rows]
+    pieces = np.ceil(lengths[nurbs] / NURBS_PIECE_MM)
+    counts[nurbs] = np.clip(pieces, NURBS_MIN_PIECES, 1_000_000).astype(np.int64)
+    idx = np.repeat(rows, counts)
+    first = np.repeat(np.cumsum(counts) - counts, counts)
+    j = np.arange(len(idx)) - first  # piece number within its row
+    count = np.repeat(counts, counts)
+    piece_len = tp.length[idx] / count
+    s0 = tp.s_start[idx] + j * piece_len
+    geo = [[], [], [], [], [], []]
+    for r in rows[nurbs]:
+        curve = tp.nurbs[int(r)]
+        k = int(counts[np.searchsorted(rows, r)])
+        local = np.linspace(0.0, float(tp.length[r]), k * (NURBS_SAMPLES - 1) + 1)
+        point, tangent, curvature = curve.at_length(np.minimum(local, curve.length))
+        ends = np.arange(0, len(local), NURBS_SAMPLES - 1)
+        blocks = np.stack([np.arange(a, a + NURBS_SAMPLES) for a in ends[:-1]])  # (k, samples)
+        # Between samples a tangent component moves by at most κ·(spacing/2): add it, so the sampled
+        # extent bounds the true one (given the sampled curvature).
+        spacing = float(tp.length[r]) / (k * (NURBS_SAMPLES - 1))
+        kappa_max = curvature[blocks].max(axis=1)
+        bound = np.abs(tangent[blocks]).max(axis=1) + (kappa_max * spacing / 2)[:, None]
+        geo[0].append(np.minimum(bound, 1.0))
+        geo[1].append(tangent[ends[:-1]])
+        geo[2].append(tangent[ends[1:]])
+        geo[3].append(curvature[blocks].max(axis=1))
+        geo[4].append(point[ends[:-1]])
+        geo[5].append(point[ends[1:]])
+    return idx, s0, piece_len, tuple(np.concatenate(g) for g in geo)
+
+
 def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     """Compute every static limit of ``tp`` on ``machine`` (see the module docstring)."""
     ctl = machine.controller
@@ -159,13 +204,12 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         "rapid_mm_min", "max_feed_mm_min", "max_accel_mm_s2", "max_jerk_mm_s3", "rapid_accel_mm_s2",
         "rapid_jerk_mm_s3", "corner_step_mm_min")}  # fmt: skip
     kind = tp.kind.astype(np.int64)
-    if np.any(kind == SegmentKind.NURBS):
-        i = int(np.flatnonzero(kind == SegmentKind.NURBS)[0])
-        file, line = tp.source(i)
-        raise ProgramError("NURBS segments are not supported by the controller yet", code="motion.nurbs",
-                           file=file, line=line)  # fmt: skip
-    moving = (kind == SegmentKind.RAPID) | (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC)
-    idx = np.flatnonzero(moving & (tp.length > MIN_LENGTH_MM))
+    moving = (kind == SegmentKind.RAPID) | (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (
+        kind == SegmentKind.NURBS)
+    rows = np.flatnonzero(moving & (tp.length > MIN_LENGTH_MM))
+    # Pieces: one per line/arc/rapid; a NURBS curve is cut into pieces of equal arc length, each with the
+    # limits sampled over it (so the caps follow the curvature along the curve).
+    idx, s0, length, nurbs_geo = _pieces(tp, rows)
     n = len(idx)
     cutting = tp.kind[idx] != SegmentKind.RAPID
     feed = tp.path_feed[idx] / 60.0
@@ -177,6 +221,10 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
                            line=line)  # fmt: skip
 
     extent, t_start, t_end = _direction_extent(tp, idx)
+    kappa = _arc_curvature(tp, idx)
+    is_nurbs = tp.kind[idx] == SegmentKind.NURBS
+    if nurbs_geo is not None:
+        extent[is_nurbs], t_start[is_nurbs], t_end[is_nurbs], kappa[is_nurbs] = nurbs_geo[:4]
     with np.errstate(divide="ignore"):
         inv = np.where(extent > 1e-12, 1.0 / np.maximum(extent, 1e-300), np.inf)  # 1/|u_k|
 
@@ -185,7 +233,6 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
 
     rapid_rate = projected(axis["rapid_mm_min"] / 60.0)
     cut_axis_cap = np.minimum(projected(axis["max_feed_mm_min"] / 60.0), ctl.max_feed_mm_min / 60.0)
-    kappa = _arc_curvature(tp, idx)
     # Curvature limits use the in-plane axes' limits (the centripetal vector turns within the plane).
     plane_axes = _PLANE_TABLE[tp.plane[idx].astype(np.int64)]
     acc_ax = axis["max_accel_mm_s2"]
@@ -193,6 +240,9 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     a_n = np.minimum(ctl.max_centripetal_accel_mm_s2,
                      np.minimum(acc_ax[plane_axes[:, 0]], acc_ax[plane_axes[:, 1]]))  # fmt: skip
     j_n = np.minimum(jerk_ax[plane_axes[:, 0]], jerk_ax[plane_axes[:, 1]])
+    # A NURBS curve bends in any direction: all three axes count.
+    a_n = np.where(is_nurbs, min(ctl.max_centripetal_accel_mm_s2, acc_ax.min()), a_n)
+    j_n = np.where(is_nurbs, jerk_ax.min(), j_n)
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = np.where(kappa > 0, 1.0 / np.maximum(kappa, 1e-300), np.inf)
         v_centripetal = np.sqrt(a_n / kappa)
@@ -234,7 +284,8 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         rapid_prev = tp.kind[prev] == SegmentKind.RAPID
         mode_change = rapid_prev | (tp.kind[nxt] == SegmentKind.RAPID)
         aux_change = (tp.tool[prev] != tp.tool[nxt]) | (tp.spindle_rpm[prev] != tp.spindle_rpm[nxt])
-        no_lookahead = ctl.lookahead_blocks <= 1
+        # Without look-ahead every block ends at rest — but the pieces of one NURBS block are one block.
+        no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt)
         stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead
     hard[stop] = 0.0
 
@@ -255,11 +306,10 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     next_stop = stop_idx[np.searchsorted(stop_idx, np.arange(n + 1), side="left")]
 
     # ------------------------------------------------------------------ acceleration bound on arrival
-    length = tp.length[idx]
     a_in, span_a, span_j = _backward_bounds(acc, jerk, length, cap, stop)
 
     seg_f = np.zeros((n, K.N_SEG_F))
-    seg_f[:, K.F_S0] = tp.s_start[idx]
+    seg_f[:, K.F_S0] = s0
     seg_f[:, K.F_LEN] = length
     seg_f[:, K.F_CAP] = cap
     seg_f[:, K.F_BASE] = base
@@ -268,6 +318,9 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     seg_f[:, K.F_CURV] = kappa
     seg_f[:, K.F_SX : K.F_SX + 3] = tp.start[idx]
     seg_f[:, K.F_EX : K.F_EX + 3] = tp.end[idx]
+    if nurbs_geo is not None:  # the kernel draws the chord; the controller puts the exact curve in place
+        seg_f[is_nurbs, K.F_SX : K.F_SX + 3] = nurbs_geo[4]
+        seg_f[is_nurbs, K.F_EX : K.F_EX + 3] = nurbs_geo[5]
     seg_f[:, K.F_CX : K.F_CX + 3] = np.nan_to_num(tp.center[idx])
     seg_f[:, K.F_RADIUS] = tp.radius[idx]
     seg_f[:, K.F_ANG0] = tp.start_angle[idx]
@@ -283,7 +336,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     seg_i[:, K.I_LOCKED] = (modes[idx] & SegmentMode.OVERRIDE_LOCKED) != 0
     seg_i[:, K.I_RAPID] = ~cutting
     pt_f = np.zeros((n + 1, K.N_PT_F))
-    pt_f[:, K.P_S] = np.concatenate((tp.s_start[idx], [tp.s_start[idx[-1]] + length[-1]])) if n else 0.0
+    pt_f[:, K.P_S] = np.concatenate((s0, [s0[-1] + length[-1]])) if n else 0.0
     pt_f[:, K.P_HARD] = hard
     pt_f[:, K.P_AIN] = a_in
     pt_f[:, K.P_TURN] = turn

@@ -428,3 +428,32 @@ def test_feed_mode_keeps_g63_and_rapids_at_their_own_speed():
     rapid = np.concatenate([p.speed[p.segment == 1] for p in parts])
     assert np.max(tapping) == pytest.approx(20.0)  # F 1200 mm/min, not the commanded 9000
     assert np.max(rapid) == pytest.approx(500.0)  # the rapid rate
+
+
+def test_nurbs_quarter_circle_gets_the_arc_limits_and_stays_on_the_curve():
+    # The rational quadratic with weights (1, √½, 1) is an exact quarter circle: its pieces must get the
+    # same curvature cap as the G03 arc of that radius, and the reference lies exactly on the circle.
+    from cnc_gym.toolpath.nurbs import NurbsCurve
+
+    radius = 3.0
+    curve = NurbsCurve([[radius, 0, 0], [radius, radius, 0], [0, radius, 0]], [1, math.sqrt(0.5), 1],
+                       [0, 0, 0, 1, 1, 1], order=3)  # fmt: skip
+    b = ToolpathBuilder()
+    b.line((10, 0, 0), (radius, 0, 0), feed=9000, line=1)
+    b.nurbs(curve, feed=9000, line=2)
+    b.line((0, radius, 0), (0, 10, 0), feed=9000, line=3)
+    tp = b.build()
+    c = Controller(tp, VMC)
+    lim = c.segment_limits()
+    on_curve = lim["index"] == 1
+    assert on_curve.sum() >= 4  # cut into pieces
+    arc = ToolpathBuilder()
+    arc.arc((radius, 0, 0), (0, radius, 0), (0, 0, 0), Plane.XY, math.pi / 2, feed=9000, line=1)
+    arc_cap = Controller(arc.build(), VMC).segment_limits()["cap_mm_s"][0]
+    assert np.allclose(lim["cap_mm_s"][on_curve], arc_cap, rtol=1e-6)
+    assert np.allclose(c.lookahead(30.0, 30).curvature_1_mm[8:9], 1 / radius)  # bin (8, 9] mm is on the curve
+    chunk = c.run_to_end()
+    curving = chunk.segment == 1
+    assert curving.sum() > 10
+    assert np.allclose(np.hypot(chunk.position[curving, 0], chunk.position[curving, 1]), radius, atol=1e-9)
+    check_run(c, chunk)

@@ -1,6 +1,7 @@
 """Property tests: for random programs and random override sequences no limit is ever exceeded.
 
-Each example builds a random program (lines in 3-D, XY arcs and helices, G09 exact stops, dwells, rapids),
+Each example builds a random program (lines in 3-D, arcs and helices in the three planes, cubic NURBS,
+G09 exact stops, dwells, rapids),
 drives the controller with a random knob schedule (override or feed mode, rapid override), then runs it to
 the end, and checks the whole reference with :func:`motion_checks.check_run`: speed ≤ segment cap, |a| ≤
 projected A, |j| ≤ projected J, per-axis speeds from the positions, exact crossing speed at every junction ≤
@@ -53,7 +54,7 @@ schedules = st.lists(
 @given(seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(1, 30), machine=st.sampled_from(sorted(MACHINES)),
        schedule=schedules)  # fmt: skip
 def test_no_limit_is_exceeded_under_random_override(seed, n_blocks, machine, schedule):
-    tp = random_program(np.random.default_rng(seed), n_blocks)
+    tp = random_program(np.random.default_rng(seed), n_blocks, nurbs_p=0.05)
     controller = Controller(tp, MACHINES[machine])
     chunks, knobs = [], []
     for n_ticks, override, rapid in schedule:
@@ -161,7 +162,7 @@ def random_machines(draw):
        knobs=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=12))
 def test_no_limit_is_exceeded_on_random_machines(machine, seed, n_blocks, step_mm, knobs):
     # Unequal axes, coarse and fine interpolation periods, windows of 1..60 blocks, tiny and long blocks.
-    tp = random_program(np.random.default_rng(seed), n_blocks, step_mm=step_mm)
+    tp = random_program(np.random.default_rng(seed), n_blocks, step_mm=step_mm, nurbs_p=0.1)
     controller = Controller(tp, machine)
     chunks = [controller.advance(150, override=k * machine.controller.max_override) for k in knobs]
     chunks.append(controller.run_to_end(override=1.0))
