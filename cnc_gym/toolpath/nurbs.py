@@ -32,6 +32,7 @@ _MAX_SAMPLES = 4096  # coarse table for the nearest point
 _PRUNE_ABOVE_SAMPLES = 160  # smaller tables are scanned whole (cheaper than the span pruning)
 _NEAREST_STARTS = 3  # Newton runs per query: the best-ranked brackets of a sampled minimum
 _NEAREST_NEWTON_STEPS = 8
+_NEAREST_STEP_TOLERANCE_MM = 1e-4  # last Newton step, along the curve
 _INVERSE_NEWTON_STEPS = 12
 
 
@@ -75,11 +76,17 @@ class NurbsCurve:
     _leaf_dt_ds: np.ndarray = field(init=False, repr=False)
     _sample_t: np.ndarray = field(init=False, repr=False)
     _sample_points: np.ndarray = field(init=False, repr=False)
-    _sample_d1: np.ndarray = field(init=False, repr=False)  # (n, 2, 3): right and left derivative
-    _span_center: np.ndarray = field(init=False, repr=False)
+    _origin: np.ndarray = field(init=False, repr=False)
+    _sample_rel_t: np.ndarray = field(init=False, repr=False)  # (3, n): sample points - origin
+    _sample_rel_sq: np.ndarray = field(init=False, repr=False)  # (n,)
+    _sample_d1_t: np.ndarray = field(init=False, repr=False)  # (2, 3, n): right and left derivatives
+    _sample_rel_d1: np.ndarray = field(init=False, repr=False)  # (2, n): (point - origin) · derivative
+    _span_center_t: np.ndarray = field(init=False, repr=False)  # (3, spans), relative to the origin
+    _span_center_sq: np.ndarray = field(init=False, repr=False)
     _span_radius: np.ndarray = field(init=False, repr=False)
     _span_samples: np.ndarray = field(init=False, repr=False)
     _per_span: int = field(init=False, repr=False)
+    _nearest_step_tolerance: float = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         points, weights, knots, order = _validated(self.control_points, self.weights, self.knots, self.order)
@@ -181,13 +188,30 @@ class NurbsCurve:
         hull = self.control_points[first_knot[:, None] - self.order + 1 + np.arange(self.order)]
         center = hull.mean(axis=1)
         radius = np.sqrt(np.max(np.sum((hull - center[:, None, :]) ** 2, axis=2), axis=1))
-        object.__setattr__(self, "_span_center", _as_readonly(center))
         object.__setattr__(self, "_span_radius", _as_readonly(radius))
         object.__setattr__(self, "_span_samples", _as_readonly(np.arange(per_span + 1)))
         object.__setattr__(self, "_per_span", per_span)
+        # Coarse distances and slopes are matrix products (p·P, p·P'): coordinates relative to the
+        # control points' mean keep the expanded |P - p|² free of cancellation at large machine coords.
+        origin = self.control_points.mean(axis=0)
+        rel = point - origin
+        object.__setattr__(self, "_origin", _as_readonly(origin))
+        center_rel = center - origin
+        object.__setattr__(self, "_span_center_t", _as_readonly(center_rel.T))
+        center_sq = np.einsum("ij,ij->i", center_rel, center_rel)
+        object.__setattr__(self, "_span_center_sq", _as_readonly(center_sq))
+        max_speed = float(np.max(np.linalg.norm(np.concatenate((right_d1, left_d1)), axis=1)))
+        # Parameter step that moves at most _NEAREST_STEP_TOLERANCE_MM (speeds between samples may be a
+        # little higher than at them: factor 2).
+        step_tolerance = _NEAREST_STEP_TOLERANCE_MM / max(2.0 * max_speed, 1e-300)
+        object.__setattr__(self, "_nearest_step_tolerance", step_tolerance)
         object.__setattr__(self, "_sample_t", _as_readonly(t))
         object.__setattr__(self, "_sample_points", _as_readonly(point))
-        object.__setattr__(self, "_sample_d1", _as_readonly(np.stack((right_d1, left_d1), axis=1)))
+        object.__setattr__(self, "_sample_rel_t", _as_readonly(rel.T))
+        object.__setattr__(self, "_sample_rel_sq", _as_readonly(np.einsum("ij,ij->i", rel, rel)))
+        object.__setattr__(self, "_sample_d1_t", _as_readonly(np.stack((right_d1.T, left_d1.T))))
+        object.__setattr__(self, "_sample_rel_d1", _as_readonly(np.stack((
+            np.einsum("ij,ij->i", rel, right_d1), np.einsum("ij,ij->i", rel, left_d1)))))  # fmt: skip
 
     # ------------------------------------------------------------- evaluation
     @property
@@ -335,28 +359,33 @@ class NurbsCurve:
         """
         p = np.atleast_2d(np.asarray(points, dtype=float))
         m = len(p)
+        rel = p - self._origin
+        rel_sq_p = np.einsum("ij,ij->i", rel, rel)[:, None]
+        rel_t, rel_sq, d1_t, rel_d1 = (self._sample_rel_t, self._sample_rel_sq, self._sample_d1_t,
+                                       self._sample_rel_d1)  # fmt: skip
         if len(self._sample_t) > _PRUNE_ABOVE_SAMPLES:
             # Prune spans: keep those whose bounding sphere comes closer than some span's start point
             # (slack for rounding: a span's start point lies on or inside its sphere).
-            to_start = p[:, None, :] - self._sample_points[None, :: self._per_span, :]  # (m, spans + 1, 3)
-            upper = np.sqrt(np.min(np.einsum("msj,msj->ms", to_start, to_start), axis=1))
-            to_center = p[:, None, :] - self._span_center[None, :, :]
-            lower = np.sqrt(np.einsum("msj,msj->ms", to_center, to_center)) - self._span_radius
-            kept = np.flatnonzero(np.any(lower <= upper[:, None] * (1 + 1e-9) + 1e-12, axis=0))
+            starts = slice(None, None, self._per_span)
+            upper2 = np.min(rel_sq[starts] - 2.0 * (rel @ rel_t[:, starts]), axis=1)[:, None] + rel_sq_p
+            center2 = self._span_center_sq - 2.0 * (rel @ self._span_center_t) + rel_sq_p
+            lower = np.sqrt(np.maximum(center2, 0.0)) - self._span_radius
+            upper = np.sqrt(np.maximum(upper2, 0.0))
+            kept = np.flatnonzero(np.any(lower <= upper * (1 + 1e-9) + 1e-9, axis=0))
             index = np.unique((kept[:, None] * self._per_span + self._span_samples).ravel())
             consecutive = np.diff(index) == 1
-            sample_t, sample_points = self._sample_t[index], self._sample_points[index]
-            sample_d1 = self._sample_d1[index]
+            sample_t = self._sample_t[index]
+            rel_t, rel_sq, rel_d1 = rel_t[:, index], rel_sq[index], rel_d1[:, index]
+            d1_t = d1_t[:, :, index]
         else:
             consecutive = True
-            sample_t, sample_points, sample_d1 = self._sample_t, self._sample_points, self._sample_d1
+            sample_t = self._sample_t
         n = len(sample_t)
-        diff = sample_points[None, :, :] - p[:, None, :]  # (m, n, 3)
-        half_d2 = 0.5 * np.einsum("mnj,mnj->mn", diff, diff)
-        # One-sided slopes of d²/2 at the samples (right, left): a minimum sits where the slope turns
-        # from - to +.
-        slopes = np.einsum("mnj,nkj->kmn", diff, sample_d1)
-        slope_right, slope_left = slopes[0], slopes[1]
+        # |P - p|²/2 and the one-sided slopes (P - p)·P' of it at the samples, as matrix products.
+        half_d2 = 0.5 * (rel_sq - 2.0 * (rel @ rel_t) + rel_sq_p)
+        slope_right = rel_d1[0] - rel @ d1_t[0]
+        slope_left = rel_d1[1] - rel @ d1_t[1]
+        # A minimum sits where the slope turns from - to +.
         # Slots 0..n-1: a minimum exactly at sample i (an end, or a kink at a knot).
         at_sample = np.ones((m, n), dtype=bool)
         at_sample[:, 1:] = slope_left[:, 1:] <= 0
@@ -367,45 +396,59 @@ class NurbsCurve:
                                np.where(inside, np.minimum(half_d2[:, :-1], half_d2[:, 1:]), np.inf)),
                               axis=1)  # fmt: skip
         k = min(_NEAREST_STARTS, rank.shape[1])
-        slot = np.argpartition(rank, k - 1, axis=1)[:, :k].ravel()
-        valid = np.isfinite(rank[np.repeat(np.arange(m), k), slot])
+        slot = np.argpartition(rank, k - 1, axis=1)[:, :k]  # (m, k)
+        rows = np.arange(m)[:, None]
+        valid = np.isfinite(rank[rows, slot])
         first = np.where(slot < n, slot, slot - n)
         last = np.where((slot < n) | ~valid, first, slot - n + 1)  # empty slots: frozen, never chosen
+        g_lo, g_hi = slope_right[rows, first], slope_left[rows, last]
+        # One more, frozen start at the best sample: the result is never worse than the sampling.
+        best_sample = np.argmin(half_d2, axis=1)[:, None]
+        first = np.concatenate((first, best_sample), axis=1).ravel()
+        last = np.concatenate((last, best_sample), axis=1).ravel()
+        zero = np.zeros((m, 1))
+        g_lo = np.concatenate((g_lo, zero), axis=1).ravel()
+        g_hi = np.concatenate((g_hi, zero), axis=1).ravel()
+        valid = np.concatenate((valid, np.ones((m, 1), dtype=bool)), axis=1).ravel()
+        k += 1
         lo, hi = sample_t[first], sample_t[last]
         # Start where the slope's chord crosses zero (secant), inside the bracket.
-        g_lo = slope_right.ravel()[np.repeat(np.arange(m) * n, k) + first]
-        g_hi = slope_left.ravel()[np.repeat(np.arange(m) * n, k) + last]
         denom = g_hi - g_lo
         t = lo + (hi - lo) * np.divide(-g_lo, denom, out=np.full(len(lo), 0.5), where=denom > 0)
-        q = np.repeat(p, k, axis=0)
-        tolerance = 1e-9 * (self.knots[-1] - self.knots[0])
+        q = np.repeat(p, k, axis=0)[:, None, :]
         for _ in range(_NEAREST_NEWTON_STEPS):
-            point, d1, d2 = self._rational(self._homogeneous(t, 2))
-            err = point - q
-            grad = np.einsum("ij,ij->i", err, d1)
-            hess = np.einsum("ij,ij->i", d1, d1) + np.einsum("ij,ij->i", err, d2)
-            # Safeguarded Newton on the slope: the bracket shrinks on the slope's sign, and a step
-            # that leaves it (or a concave model) is replaced by bisection.
-            hi = np.where(grad > 0, t, hi)
-            lo = np.where(grad < 0, t, lo)
-            newton = t - grad / np.where(hess > 0, hess, np.nan)
-            t_new = np.where((newton >= lo) & (newton <= hi), newton, 0.5 * (lo + hi))
-            # Quadratic convergence: after a step below 1e-9 of the domain the error is ~1e-18.
-            converged = np.max(np.abs(t_new - t)) <= tolerance
-            t = t_new
-            if converged:
+            t_at = t
+            # Homogeneous form, no division: with E = A - W q (and E', E''), the slope of d²/2 is
+            # g / W³ with g = (E·E') W - (E·E) W', so g has its sign and its root; Newton runs on g.
+            h = self._homogeneous(t, 2).reshape(-1, 3, 4)
+            weight = h[:, :, 3]  # W, W', W''
+            e = h[:, :, :3] - weight[:, :, None] * q  # E, E', E''
+            gram = np.matmul(e, e.transpose(0, 2, 1))
+            ee, ee1, e1e1, ee2 = gram[:, 0, 0], gram[:, 0, 1], gram[:, 1, 1], gram[:, 0, 2]
+            w, w1, w2 = weight[:, 0], weight[:, 1], weight[:, 2]
+            g = ee1 * w - ee * w1
+            g_prime = (e1e1 + ee2) * w - ee1 * w1 - ee * w2
+            # Safeguarded Newton: the bracket shrinks on the slope's sign, and a step that leaves it
+            # (or a concave model) is replaced by bisection.
+            hi = np.where(g > 0, t, hi)
+            lo = np.where(g < 0, t, lo)
+            newton = t - g / np.where(g_prime > 0, g_prime, np.nan)
+            accepted = (newton >= lo) & (newton <= hi)
+            t = np.where(accepted, newton, 0.5 * (lo + hi))
+            if np.max(np.abs(t - t_at)) <= self._nearest_step_tolerance:
                 break
-        err = self.evaluate(t) - q
-        d2_final = np.where(valid, np.einsum("ij,ij->i", err, err), np.inf).reshape(m, k)
-        col = np.argmin(d2_final, axis=1)
+        # The distance is exact at t_at. Where the last step was Newton's (at most 0.1 µm of arc) the
+        # foot point moves on to t, and d² drops by the quadratic model's f'²/f'' = g²/(g' W³); both
+        # are then exact to O(step³) (~1e-12 mm), which saves evaluating the curve again.
+        refined = accepted & (g_prime > 0) & (np.abs(t - t_at) <= self._nearest_step_tolerance)
+        d2 = ee / (w * w)
+        d2 = np.where(refined, d2 - g * g / np.where(refined, g_prime * w**3, 1.0), d2)
+        t_at = np.where(refined, t, t_at)
+        d2 = np.where(valid, np.maximum(d2, 0.0), np.inf).reshape(m, k)
+        col = np.argmin(d2, axis=1)
         rows = np.arange(m)
-        t_best = t.reshape(m, k)[rows, col]
-        d2_best = d2_final[rows, col]
-        # Guard: never worse than the best sample (cannot happen with a valid bracket; costs nothing).
-        best_sample = np.argmin(half_d2, axis=1)
-        sample_wins = 2.0 * half_d2[rows, best_sample] < d2_best
-        t_best = np.where(sample_wins, sample_t[best_sample], t_best)
-        d2_best = np.where(sample_wins, 2.0 * half_d2[rows, best_sample], d2_best)
+        t_best = t_at.reshape(m, k)[rows, col]
+        d2_best = d2[rows, col]
         return np.sqrt(d2_best), t_best, self.length_at(t_best)
 
 
