@@ -468,6 +468,8 @@ def _validated(points, weights, knots, order) -> tuple[np.ndarray, np.ndarray, n
         raise ValueError(f"a rank-{order_int} NURBS needs at least {order_int} control points, got {n}")
     if not np.all(np.isfinite(points)):
         raise ValueError("NURBS control points must be finite numbers")
+    if np.all(points == points[0]):
+        raise ValueError("NURBS control points all coincide: the curve would have no length")
     weights = np.asarray(weights, dtype=float)
     if weights.shape != (n,):
         raise ValueError(f"NURBS needs one weight per control point ({n}), got shape {weights.shape}")

@@ -15,7 +15,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import IntEnum, IntFlag
-from types import MappingProxyType
 
 import numpy as np
 
@@ -55,6 +54,19 @@ class SegmentMode(IntFlag):
     OVERRIDE_LOCKED = 2  # G63 tapping mode: override fixed at 100 %, no deceleration at block end
     AUTO_CORNER = 4  # G62 automatic corner override
     INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
+
+
+class _ReadOnlyDict(dict):
+    """A dict that refuses changes (unlike a mappingproxy it pickles, e.g. into vector-env workers)."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("the tool path is immutable")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse  # type: ignore[assignment]
+    __ior__ = _refuse  # type: ignore[assignment]
+
+    def __reduce__(self):
+        return (type(self), (dict(self),))
 
 
 _FIELDS = (
@@ -136,7 +148,7 @@ class Toolpath:
                 raise ValueError(f"toolpath row {row}: a NURBS row needs a NurbsCurve, "
                                  f"got {type(curve).__name__}")  # fmt: skip
             length[row] = curve.length
-        object.__setattr__(self, "nurbs", MappingProxyType(dict(self.nurbs)))
+        object.__setattr__(self, "nurbs", _ReadOnlyDict(self.nurbs))
         planar = np.where(is_arc, arc_planar, length)
         s_start = np.concatenate(([0.0], np.cumsum(length)))
         object.__setattr__(self, "length", length)

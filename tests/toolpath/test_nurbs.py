@@ -2,6 +2,7 @@
 
 import itertools
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -256,11 +257,20 @@ def test_nearest_at_a_kink_knot():
         ([[0, 0, 0]] * 5, [1] * 5, [0, 0, 0, 0, 0, 1, 1, 1, 1], 4, "repeat exactly 4 times"),
         ([[0, 0, 0]] * 6, [1] * 6, [0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1], 3, "repeats 3 times"),
         ([[0, 0, float("nan")]] * 4, [1] * 4, [0] * 4 + [1] * 4, 4, "finite"),
+        ([[1, 2, 3]] * 4, [1] * 4, [0] * 4 + [1] * 4, 4, "all coincide"),
     ],
 )
 def test_validation_errors(points, weights, knots, order, message):
+    if message != "all coincide":  # distinct points, so that only the rule under test is broken
+        points = [[i, p[1], p[2]] if len(p) == 3 else [i, p[1]] for i, p in enumerate(points)]
     with pytest.raises(ValueError, match=message):
         NurbsCurve(points, weights, knots, order)
+
+
+def test_valid_definition_of_the_same_shape_is_accepted():
+    # The baseline of the table above: a line as a clamped cubic (guards against over-strict checks).
+    curve = NurbsCurve([[i, 0, 0] for i in range(4)], [1, 2, 2, 1], [0] * 4 + [1] * 4, 4)
+    assert curve.length == pytest.approx(3.0, rel=1e-12)
 
 
 def test_curve_is_immutable_and_owns_its_arrays():
@@ -287,6 +297,18 @@ def test_toolpath_rejects_nurbs_rows_without_curves():
         Toolpath(**fields, nurbs={})
     with pytest.raises(TypeError, match="NurbsCurve"):
         b.nurbs("not a curve", 100, line=2)
+
+
+def test_toolpath_with_nurbs_pickles():
+    # Vector-env workers receive the tool path by pickle: the curves (and their tables) must travel.
+    b = ToolpathBuilder()
+    b.line((20, 0, 0), (10, 0, 0), feed=100, line=1)
+    b.nurbs(quarter_circle(10.0), 100, line=2)
+    tp = pickle.loads(pickle.dumps(b.build()))
+    dist, seg, _ = tp.nearest([[3, 4, 0]])
+    assert seg[0] == 1 and dist[0] == pytest.approx(5.0, abs=1e-12)
+    with pytest.raises(TypeError):
+        tp.nurbs[0] = tp.nurbs[1]
 
 
 def test_builder_row_and_records():
