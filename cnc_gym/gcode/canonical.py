@@ -266,6 +266,14 @@ class CanonicalMachine:
                          spindle_rpm=self.spindle_rpm)  # fmt: skip
         self.position = end
 
+    def nurbs_feed(self, curve, feed: float) -> None:
+        """An exact NURBS segment (``NurbsCurve`` in machine coordinates, from the current position) at
+        ``feed`` mm/min; the position becomes its last control point."""
+        self.builder.nurbs(curve, feed, line=self.line, file_index=self.file_index, modes=self.modes,
+                           tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
+        end = curve.control_points[-1]
+        self.position = (float(end[0]), float(end[1]), float(end[2]))
+
     def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None:
         context = self._context()
         context["modes"] = self.modes | modes

@@ -864,9 +864,10 @@ def check_block(interp: Interpreter, by_group: dict, motion_spec, axis_owner, it
     cycle_spec = by_group.get(9)
     owners = [spec for spec in items if getattr(spec, "uses_axes", False)]
     interp._block_cycle = None
+    group01 = by_group.get(1)  # G00-G03, also G06.2 (not a "motion" action)
     if cycle_spec is not None and cycle_spec.action == "cycle":
-        if motion_spec is not None:
-            raise interp.error(f"{motion_spec.name} (group 01) in the block of the canned cycle "
+        if group01 is not None:
+            raise interp.error(f"{group01.name} (group 01) in the block of the canned cycle "
                                f"{cycle_spec.name}", "cycle-group01", alarm=61)  # fmt: skip
         pattern = next((spec for spec in owners if spec.action == "pattern"), None)
         if pattern is not None:
@@ -882,7 +883,7 @@ def check_block(interp: Interpreter, by_group: dict, motion_spec, axis_owner, it
                            "axis-word-conflict")  # fmt: skip
     if state.rigid_pending:
         check_rigid_pending(interp, values, cycle_spec.value if cycle_spec is not None else None)
-    if (cycle_spec is not None and cycle_spec.action == "cycle_cancel") or motion_spec is not None:
+    if (cycle_spec is not None and cycle_spec.action == "cycle_cancel") or group01 is not None:
         cancel(interp)
     elif state.code:
         one_shot = by_group.get(0)

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.cycles import CycleParameters
+from cnc_gym.gcode.nurbs import NurbsParameters
 from cnc_gym.gcode.offsets import CompensationSettings
 
 
@@ -43,6 +44,9 @@ class CodeSpec:
     ``uses_axes`` marks one-shot codes whose block's axis words belong to them rather than to the modal
     motion (G04 X, G10, G52, G92). ``words`` are the extra addresses the code gives a meaning to.
     ``implemented`` False: the code exists on the controller but this interpreter rejects it by name.
+    ``address_rules``: number formats this code gives its own words, in place of the dialect's address
+    rules (the L of a pocket cycle is a step-over length, ``L2.5``, where M98's L is a count). The reader
+    applies them to blocks that name the code; G06.2's modal blocks re-read theirs (nurbs.py).
     """
 
     name: str
@@ -54,6 +58,7 @@ class CodeSpec:
     words: str = ""
     implemented: bool = True
     note: str = ""
+    address_rules: Mapping[str, AddressRule] | None = None
 
 
 @dataclass(frozen=True)
@@ -142,6 +147,10 @@ class Dialect:
     max_loop_nesting: int = 3
     #: Tool compensation parameters: tool length type A/B, start-up type A/B, D radius/diameter (offsets.py).
     compensation: CompensationSettings = field(default_factory=CompensationSettings)
+    #: NURBS parameters (P1404, P1405, P1407, P1493-P1495; nurbs.py).
+    nurbs_params: NurbsParameters = field(default_factory=NurbsParameters)
+    #: G60 modal in group 01 (GSK 1870#0 MDL = 1) instead of one-shot (0, the standard setting).
+    g60_modal: bool = False
     #: Whether a dialect that is listed but not built yet (raises on use).
     implemented: bool = True
 

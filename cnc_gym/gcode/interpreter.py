@@ -19,7 +19,7 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode import cycles
+from cnc_gym.gcode import cycles, nurbs
 from cnc_gym.gcode.calls import FlowOptions, FlowRunner
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder, OffsetStack, TransformChain
 from cnc_gym.gcode.compensation import ToolCompensation
@@ -83,8 +83,14 @@ _ACTIONS = {
     "subprogram_call": "_do_subprogram_call", "subprogram_return": "_do_subprogram_return",
     "macro_call": "_do_macro_call", "modal_call_cancel": "_do_modal_call_cancel",
     "cycle": "_do_cycle", "cycle_cancel": "_do_cycle_cancel", "pattern": "_do_pattern",
-    "rigid_tap": "_do_rigid_tap",
+    "rigid_tap": "_do_rigid_tap", "g05": "_do_g05", "nurbs": "_do_nurbs",
 }  # fmt: skip
+
+
+def _parameter_hook(interp: Interpreter, block: Block) -> bool:
+    """Inside G10 L50 … G11 every block is a parameter block (transforms.py)."""
+    parameter_block(interp, block)
+    return True
 
 
 class Interpreter:
@@ -121,7 +127,13 @@ class Interpreter:
         self._corner = None  # a chamfer/corner block waiting for the next move (transforms.py)
         self._capture: list | None = None
         self.parameters = Parameters()  # G10 L50 writes; P1051-P1053, P1860-P1862, P1880
-        self.parameter_input = False  # between G10 L50 and G11
+        # Blocks in a special mode go to ``_block_hook(interp, block)`` first (True: handled there):
+        # G10 L50 parameter input (transforms.py), G06.2 NURBS mode (nurbs.py). One test per block.
+        self._block_hook = None
+        self.nurbs = nurbs.NurbsState()  # G05 P10000 contour control, the G06.2 curve being read
+        # Codes that give their own words a number format (CodeSpec.address_rules): number → rules.
+        self._override_codes = {key / 10: spec.address_rules for key, spec in dialect.gcodes.items()
+                                if spec.address_rules}  # fmt: skip
         self.g28_intermediate: list[float | None] = [None, None, None]  # G28/G30 point, work coordinates, mm
         self.skip_position: tuple[float, float, float] | None = None  # G31 end (#5061-#5063), mm
         # Modal state. ``modal`` is the raw table (group → code key, for #4001-style reads later); the
@@ -188,16 +200,31 @@ class Interpreter:
             self.variables.system = None
         if self._corner is not None:
             finish_corner(self)  # a chamfer/corner R in the last move block (transforms.py)
+        if self.nurbs.curve is not None:  # the program ended inside a G06.2 curve
+            curve = self.nurbs.curve
+            raise self.error(f"the program ends before the NURBS curve of line {curve.line} is complete (it "
+                             f"needs {curve.rank} knot-only blocks after its control points, L1244)",
+                             "nurbs-incomplete").located(self.builder.files[curve.file_index], curve.line)
         self.comp.finish(self.file)  # what the compensation look-ahead still holds
         return self.builder.build()
+
+    @property
+    def parameter_input(self) -> bool:
+        """Between G10 L50 and G11 (transforms.py): every block is a parameter block."""
+        return self._block_hook is _parameter_hook
+
+    @parameter_input.setter
+    def parameter_input(self, on: bool) -> None:
+        self._block_hook = _parameter_hook if on else None
 
     def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
 
     # ------------------------------------------------------------------ one block
     def execute(self, block: Block) -> None:
-        if self.parameter_input:  # inside G10 L50 … G11 (transforms.py)
-            return parameter_block(self, block)
+        hook = self._block_hook
+        if hook is not None and hook(self, block):  # G10 L50 parameter input, G06.2 NURBS mode
+            return
         if block.assign is not None:
             target, value = block.assign
             self.variables.write(evaluate(target, self.variables, self.dialect),
@@ -352,11 +379,16 @@ class Interpreter:
         """Expression words → numbers, with the address's rounding and range rules (L5126, L5136)."""
         dialect = self.dialect
         out = []
+        overrides = None  # the number formats the block's (literal) G codes give their words
+        if self._override_codes:
+            for word in words:
+                if word[0] == "G" and word[2] is not None and word[1] in self._override_codes:
+                    overrides = {**(overrides or {}), **self._override_codes[word[1]]}
         for letter, value, text in words:
             if text is not None:
                 out.append((letter, value, text))
                 continue
-            rule = dialect.addresses[letter]
+            rule = overrides[letter] if overrides and letter in overrides else dialect.addresses[letter]
             step = self.increment if rule.unit == "length" else None
             number = evaluate(value, self.variables, dialect, step)
             if number is None:
@@ -538,6 +570,13 @@ class Interpreter:
         self.offsets.update()
         self.resync_program_position()
         mark_coordinate_change(self)
+
+    # ------------------------------------------------------------------ NURBS (nurbs.py)
+    def _do_g05(self, spec: CodeSpec, values: dict) -> None:
+        nurbs.do_g05(self, spec, values)
+
+    def _do_nurbs(self, spec: CodeSpec, values: dict) -> None:
+        nurbs.start(self, spec, values)
 
     # ------------------------------------------------------------------ canned cycles (cycles.py)
     def _do_cycle(self, spec: CodeSpec, values: dict) -> None:

@@ -163,6 +163,17 @@ class Reader:
         # the increment and decimal-point mode.
         self._arg_rules = {a: (rule if a in _CALL_CONTROL else (-1e9, 1e9, True, rule[3]))
                            for a, rule in self._fast_rules.items()}  # fmt: skip
+        # Codes that give their words their own number format (CodeSpec.address_rules: the step-over L of
+        # the pocket cycles, G06.2's K and R): code number → the fast rules with those replaced. A block
+        # naming one is read with them (a plain block pays one set test when it has a G code).
+        self._override_rules: dict[float, dict] = {}
+        for key, spec in dialect.gcodes.items():
+            if spec.address_rules:
+                merged = dict(self._fast_rules)
+                for letter, rule in spec.address_rules.items():
+                    merged[letter] = (rule.low, rule.high, rule.point_allowed, rule.unit == "length")
+                self._override_rules[key / 10] = merged
+        self._override_codes = frozenset(self._override_rules)
 
     def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):
         err = self.dialect.error(message, code, column=column, alarm=alarm)
@@ -309,8 +320,9 @@ class Reader:
             except ValueError:
                 raise self.error(f"bad number {letter}{digits}", "bad-number", line) from None
             except ProgramError:
-                if self._mentions_call(text):
-                    return self._scan_block(text, line)  # macro arguments have their own rules
+                if self._mentions_call(text) or self._code_rules(text) is not None:
+                    # macro arguments have their own rules; so do the words of some codes (L2.5 in G110)
+                    return self._scan_block(text, line)
                 raise
             if letter == "G":
                 if gs is None:
@@ -331,6 +343,8 @@ class Reader:
         if ((gs is not None and not self._call_g.isdisjoint(gs))
                 or (ms is not None and not self._call_m.isdisjoint(ms)) or (self._call_t and "T" in values)):
             return self._scan_block(text, line)  # a possible macro call: words kept in order
+        if gs is not None and not self._override_codes.isdisjoint(gs):
+            return self._scan_block(text, line)  # a code with its own number formats (CodeSpec.address_rules)
         number = None
         has_o = False
         if "N" in values or "O" in values:
@@ -402,12 +416,33 @@ class Reader:
         head = [w for w in words[:1] if w[0] == "O"]
         return head + rest, number
 
+    def _code_rules(self, text: str) -> dict | None:
+        """The fast rules of the codes in ``text`` that have their own number formats, or None."""
+        if not self._override_codes:
+            return None
+        rules = None
+        for letter, digits in _CODE_WORD.findall(text):
+            if letter != "G":
+                continue
+            try:
+                number = float(digits)
+            except ValueError:
+                continue
+            if number in self._override_codes:
+                if rules is None:
+                    rules = dict(self._override_rules[number])
+                else:  # two such codes in one block: the later one's formats for its own letters
+                    rules.update({a: r for a, r in self._override_rules[number].items()
+                                  if r != self._fast_rules[a]})  # fmt: skip
+        return rules
+
     def _scan_block(self, text: str, line: int) -> Block | None:
         """Everything that is not plain: block skip, expressions, variables, assignments, keywords, calls."""
+        code_rules = self._code_rules(text)
         if not self._mentions_call(text):
-            return self._scan(text, line, False)
+            return self._scan(text, line, False, code_rules)
         try:
-            strict: Block | ProgramError | None = self._scan(text, line, False)
+            strict: Block | ProgramError | None = self._scan(text, line, False, code_rules)
         except ProgramError as exc:
             strict = exc
         block = self._scan(text, line, True)
@@ -430,7 +465,7 @@ class Reader:
                 return True
         return False
 
-    def _scan(self, text: str, line: int, relaxed: bool) -> Block | None:
+    def _scan(self, text: str, line: int, relaxed: bool, code_rules: dict | None = None) -> Block | None:
         pos = 0
         skip = 0
         # Optional block skip: /, /n, /1/3 at the head (L520-L524).
@@ -456,7 +491,7 @@ class Reader:
         has_expr = False
         assign = None
         stmt = None
-        rules = self._arg_rules if relaxed else self._fast_rules
+        rules = self._arg_rules if relaxed else (code_rules or self._fast_rules)
         while pos < len(text):
             c = text[pos]
             if c == "/":

@@ -21,6 +21,12 @@ _LATER = "a later issue"
 #: a G65 that came from a variable reach its action, which names the problem).
 _ARGUMENTS = "ABCDEFHIJKLMPQRSTUVWXYZ"
 _AXES = "XYZ"
+_BIG = 999999.9999
+#: Number formats codes give their own words (CodeSpec.address_rules). The L of the pocket, boss and
+#: face-milling cycles is a step-over length (``L2.5``), not the whole-number L of M98/G65/G10.
+_STEP_LENGTH = {"L": AddressRule(0.0, _BIG, "length")}
+#: G06.2: K is a knot and R a weight, plain numbers (``K0.008286`` keeps its digits; G20 does not convert).
+_NURBS_RULES = {"K": AddressRule(-_BIG, _BIG, "plain"), "R": AddressRule(-_BIG, _BIG, "plain")}
 
 
 def _g(
@@ -34,10 +40,11 @@ def _g(
     words: str = "",
     implemented: bool = True,
     note: str = "",
+    address_rules: dict | None = None,
 ) -> CodeSpec:
     whole, tenth = divmod(gkey(number), 10)
     name = f"G{whole:02d}" + (f".{tenth}" if tenth else "")
-    return CodeSpec(name, group, action, value, step, uses_axes, words, implemented, note)
+    return CodeSpec(name, group, action, value, step, uses_axes, words, implemented, note, address_rules)
 
 
 def _todo(number: float, group: int, what: str, *, uses_axes: bool = False) -> CodeSpec:
@@ -51,13 +58,14 @@ _G_LIST = [
     _g(1, 1, "motion", 1, step="motion"),
     _g(2, 1, "motion", 2, step="motion", words="IJKR"),
     _g(3, 1, "motion", 3, step="motion", words="IJKR"),
-    _todo(6.2, 1, "NURBS interpolation G06.2"),
+    # G06.2 NURBS (L1201-L1303; nurbs.py): modal in group 01; the block's axis words are control points.
+    _g(6.2, 1, "nurbs", step="motion", uses_axes=True, words="PKR", address_rules=_NURBS_RULES),
     _todo(33, 1, "thread cutting G33"),
     # Group 00: one-shot.
     _g(4, 0, "dwell", step="dwell", uses_axes=True, words="P"),
     # G09 (one-shot exact stop) is missing from GSK's table (notes §3.5); Fanuc-standard, kept.
     _g(9, 0, "g09", step="modes"),  # after G61-G64 of the same block
-    _todo(5, 0, "high-precision contour control G05"),
+    _g(5, 0, "g05", step="modes", words="P"),  # G05 P10000 / P0: high-precision contour control (nurbs.py)
     _todo(7.1, 0, "cylindrical interpolation G07.1"),
     _todo(107, 0, "cylindrical interpolation G107"),
     _g(10, 0, "g10", step="setting", uses_axes=True, words="LPR"),
@@ -81,7 +89,8 @@ _G_LIST = [
     _g(65, 0, "macro_call", step="stop", words=_ARGUMENTS, note="one-shot macro call (calls.py)"),
     _g(92, 0, "g92", step="setting", uses_axes=True),
     # Hole patterns G120-G125 and face milling G126/G127 (L4863-L5077; cycles.py).
-    *[_g(n, 0, "pattern", n, step="motion", uses_axes=True, words=PATTERN_WORDS[n]) for n in range(120, 128)],
+    *[_g(n, 0, "pattern", n, step="motion", uses_axes=True, words=PATTERN_WORDS[n],
+         address_rules=_STEP_LENGTH if "L" in PATTERN_WORDS[n] else None) for n in range(120, 128)],
     # Group 02: plane (L1755-L1773).
     _g(17, 2, "plane", Plane.XY, step="plane"),
     _g(18, 2, "plane", Plane.ZX, step="plane"),
@@ -109,7 +118,8 @@ _G_LIST = [
     _g(49, 8, "length_comp", 0, step="length_comp"),
     # Group 09: canned cycles (L2338-L3830). G80 = no cycle.
     # The axis words of a cycle block are the hole position and bottom (cycles.py).
-    *[_g(n, 9, "cycle", n, step="motion", uses_axes=True, words=CYCLE_WORDS[n]) for n in sorted(CYCLE_WORDS)],
+    *[_g(n, 9, "cycle", n, step="motion", uses_axes=True, words=CYCLE_WORDS[n],
+         address_rules=_STEP_LENGTH if "L" in CYCLE_WORDS[n] else None) for n in sorted(CYCLE_WORDS)],
     _g(80, 9, "cycle_cancel", step="motion"),
     # Group 10: canned-cycle return level; recorded for the cycles to come.
     _g(98, 10, "record", step="modes"),
@@ -189,7 +199,6 @@ EXECUTION_ORDER = (
 )  # fmt: skip
 
 # --------------------------------------------------------------------------- addresses (Table 1-1, §1.7)
-_BIG = 999999.9999
 ADDRESSES = {
     **{a: AddressRule(-_BIG, _BIG, "length") for a in "XYZIJKRQ"},
     "F": AddressRule(0.0, 1000000.0, "feed"),
