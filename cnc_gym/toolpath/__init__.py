@@ -1,5 +1,6 @@
 """Stage 2 of the pipeline: the canonical tool path and its geometry services."""
 
+from cnc_gym.toolpath.nurbs import NurbsCurve
 from cnc_gym.toolpath.segments import (
     PLANE_AXES,
     Plane,
@@ -9,4 +10,4 @@ from cnc_gym.toolpath.segments import (
     ToolpathBuilder,
 )
 
-__all__ = ["PLANE_AXES", "Plane", "SegmentKind", "SegmentMode", "Toolpath", "ToolpathBuilder"]
+__all__ = ["PLANE_AXES", "NurbsCurve", "Plane", "SegmentKind", "SegmentMode", "Toolpath", "ToolpathBuilder"]
