@@ -943,6 +943,9 @@ class ToolCompensation:
         self.length_sign = 0  # +1 G43, -1 G44, 0 G49
         self.length_axis = 2
         self.stage: OffsetStage | None = None
+        # G28/G30 cancel the tool length vector at the intermediate point (L3897): the cancelled part per
+        # axis, restored by the next block that commands that axis (``restore_length``), or None.
+        self.length_restore: list[float] | None = None
 
     # ------------------------------------------------------------------ helpers
     def install(self, interp) -> OffsetStage:
@@ -990,6 +993,7 @@ class ToolCompensation:
                 # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
                 self.stage.set_cutter(self.signed_offset(interp), self.plane)
         if "H" in values:
+            self.length_restore = None  # an H in G43/G44 mode sets the vector afresh
             self.h_number = int(values["H"])
             if self.length_sign:
                 self._apply_length(interp, values)
@@ -1030,6 +1034,7 @@ class ToolCompensation:
 
     # ------------------------------------------------------------------ G43 / G44 / G49
     def length(self, interp, spec, values: dict) -> None:
+        self.length_restore = None  # G43/G44/G49 set the vector afresh (after a G28/G30 cancel too)
         sign = int(spec.value)
         if sign and not any(letter in values for letter in _LETTERS):
             raise interp.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
@@ -1044,6 +1049,43 @@ class ToolCompensation:
         if sign:
             self.length_axis = 2 if self.settings.tool_length_type == "A" else PLANE_AXES[interp.plane][2]
         self._apply_length(interp, values)
+
+    def cancel_length_at_intermediate(self, interp, axes) -> None:
+        """G28/G30 reached the intermediate point: the tool length vector of the commanded axes is cancelled
+        (L3897: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
+        G43/G44). The next block commanding the axis restores it (:meth:`restore_length`)."""
+        vector = interp.offsets.tool_length
+        cancelled = [vector[a] if a in axes else 0.0 for a in range(3)]
+        if not any(cancelled):
+            return
+        interp.offsets.tool_length = [vector[a] - cancelled[a] for a in range(3)]
+        interp.offsets.update()
+        restore = self.length_restore or [0.0, 0.0, 0.0]
+        self.length_restore = [restore[a] + cancelled[a] for a in range(3)]
+        self.install(interp)  # its per-block hook (interpreter.execute) lets the restore see the next blocks
+
+    def restore_length(self, interp, values: dict) -> None:
+        """At the start of a block after G28/G30: the cancelled vector of each axis the block commands comes
+        back, and the block's move of that axis carries it (in G90 and G91 alike: ``length_pending``)."""
+        restore = self.length_restore
+        axes = [a for a in range(3) if restore[a] and _LETTERS[a] in values]
+        if not axes:
+            return
+        vector = list(interp.offsets.tool_length)
+        delta = [0.0, 0.0, 0.0]
+        for a in axes:
+            vector[a] += restore[a]
+            delta[a] = restore[a]
+            restore[a] = 0.0
+        if not any(restore):
+            self.length_restore = None
+        interp.offsets.tool_length = vector
+        interp.offsets.update()
+        if not interp._transformed and self.stage is not None:
+            # The programmed position moves with the vector, so an incremental move adds to the restored
+            # position and an absolute one goes to program + offsets + vector (the transformed path keeps
+            # its program position and gets this from the origin by itself).
+            self.stage.length_pending = (delta[0], delta[1], delta[2])
 
     def _apply_length(self, interp, values: dict) -> None:
         """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the

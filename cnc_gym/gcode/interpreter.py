@@ -239,6 +239,8 @@ class Interpreter:
         self.out.line = block.line
         if self.comp.stage is not None:  # compensation counts blocks for its look-ahead
             self.comp.stage.begin_block()
+            if self.comp.length_restore is not None:  # the tool length vector after G28/G30 (L3897)
+                self.comp.restore_length(self, values)
 
         cycle = self.cycle
         if ms is None and not cycle.code and not cycle.rigid_pending and "D" not in values \

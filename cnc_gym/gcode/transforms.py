@@ -465,6 +465,7 @@ def _return_via(interp: Interpreter, name: str, values: dict, n: int) -> None:
     for a in axes:
         interp.g28_intermediate[a] = target[a]  # stored in work coordinates, per axis (L2256)
     interp.move_linear(True, target)
+    interp.comp.cancel_length_at_intermediate(interp, axes)  # the tool length vector, L3897
     reference = reference_point(interp, n)
     m = interp.out.position
     machine_target = tuple(reference[a] if a in axes else m[a] for a in range(3))
