@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.cycles import CycleParameters
@@ -153,6 +153,13 @@ class Dialect:
     g60_modal: bool = False
     #: Whether a dialect that is listed but not built yet (raises on use).
     implemented: bool = True
+
+    def __post_init__(self) -> None:
+        # 1870#0 MDL = 1: G60 is a modal code of group 01 (ended by G00-G03), not a one-shot code.
+        key = gkey(60)
+        spec = self.gcodes.get(key)
+        if self.g60_modal and spec is not None and spec.group != 1:
+            object.__setattr__(self, "gcodes", {**self.gcodes, key: replace(spec, group=1)})
 
     def alarm(self, code: str) -> int | None:
         return self.alarms.get(code)

@@ -53,6 +53,7 @@ TWO_PI = 2.0 * math.pi
 SAME_POINT_MM = 1e-7
 _IJK = "IJK"
 _ARC_WORDS = frozenset("IJKR")
+_G60_MODAL = 60  # ``Interpreter.motion`` while G60 is the modal group-01 code (1870#0 MDL = 1)
 _PATH_MODES = {
     "exact_stop": SegmentMode.EXACT_STOP,
     "tapping": SegmentMode.OVERRIDE_LOCKED,
@@ -176,6 +177,9 @@ class Interpreter:
             | (dialect.corner_words if spec.value in (1, 2, 3) else frozenset())
             for key, spec in dialect.gcodes.items() if spec.action == "motion"
         }  # fmt: skip
+        for key, spec in dialect.gcodes.items():  # other group-01 modes: G60 with 1870#0 MDL = 1, G06.2
+            if spec.group == 1 and key not in self._allowed_with_motion:
+                self._allowed_with_motion[key] = base | frozenset(axes) | frozenset(spec.words)
         self._axis_letters = frozenset(axes)
         self._motion_specs = {key: spec for key, spec in dialect.gcodes.items()
                               if spec.action == "motion" and spec.implemented}  # fmt: skip
@@ -458,6 +462,9 @@ class Interpreter:
     def _do_transform(self, spec: CodeSpec, values: dict) -> None:
         if spec.action in ("g27", "g28", "g29", "g30", "g60"):
             self.comp.before_machine_move()  # cutter compensation is suspended for the reference moves
+            if spec.group == 1:  # G60 modal (1870#0 MDL = 1): axis-only blocks position like G60
+                self.motion = _G60_MODAL
+                self._motion_key = 600
         TRANSFORM_ACTIONS[spec.action](self, spec, values)  # transforms.py
 
     def _do_g09(self, spec: CodeSpec, values: dict) -> None:
@@ -608,6 +615,10 @@ class Interpreter:
         if self._corner is not None or ",L" in values or ",R" in values:
             return corner_motion(self, motion, x, y, z, values)  # chamfer / corner R (transforms.py)
         if motion >= 2:
+            if motion == _G60_MODAL:  # G60 in force as a group-01 mode (1870#0 MDL = 1, transforms.py)
+                if x is not None or y is not None or z is not None:
+                    self._do_transform(self.dialect.gcodes[600], values)
+                return
             if x is None and y is None and z is None and not _ARC_WORDS.intersection(values):
                 return  # no geometry in the block: the arc mode is only (re)selected
             return self._arc(motion, x, y, z, values)
