@@ -637,10 +637,11 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
                            "cycle-missing-data", alarm=61)  # fmt: skip
     comp = getattr(interp, "comp", None)
     if comp is not None and comp.side:
-        # The manual ignores the radius offset in cycle mode (L2516); suspending and restarting the
-        # compensation around a cycle is not built, so this is an error rather than offset holes.
-        raise interp.error(f"G{code} with cutter compensation G41/G42 active: cancel it with G40 first",
-                           "cycle-in-compensation", alarm=61)  # fmt: skip
+        # "In the canned cycle mode, the tool offset is ignored" (L2516): compensation is suspended for the
+        # block like for G53/G27-G30 (compensation.py: the last compensated block ends with its vector
+        # perpendicular, the cycle's moves run uncompensated, and the next move in the plane after the cycle
+        # starts the compensation up again).
+        comp.before_machine_move()
     feed = interp.feed
     if not feed:
         raise interp.error(f"G{code} needs a feed: no F programmed yet" if feed is None else
@@ -763,6 +764,9 @@ def _count(interp: Interpreter, letter: str, values: dict, code: int, *, require
 def pattern_block(interp: Interpreter, code: int, values: dict, cycle_code: int | None) -> None:
     """G120-G127 (one-shot). G120-G125 drill every hole with the modal canned cycle (only positioning
     when none is active); G124/G125 take the cycle code of their own block; G126/G127 face-mill."""
+    comp = getattr(interp, "comp", None)
+    if comp is not None and comp.side:
+        comp.before_machine_move()  # the radius offset is ignored by the cycles (L2516): see cycle_block
     s = interp.scale
     here = interp.program_position
     target = interp.resolve_target(values.get("X"), values.get("Y"), None)

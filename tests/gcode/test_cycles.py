@@ -447,12 +447,6 @@ def test_scaling_does_not_scale_q_d_or_the_shift():
     assert shifted and all(close(e[0], 12.0) for e in shifted)
 
 
-def test_cycle_in_cutter_compensation_is_an_error():
-    """The manual ignores G41/G42 in cycle mode (L2516); we reject drilling there (docs/gcode.md)."""
-    err = program_error("G10 L12 P1 R5;\nG41 G01 X10 Y0 D1 F100;\nG81 X20 Z-5 R1;\n")
-    assert err.code == "cycle-in-compensation" and err.alarm == 61
-
-
 @pytest.mark.parametrize("text", ["G73 X0 Y0 Z-1000 R0 Q0.0001 F100;\n",
                                   "G81 Z-5 R1 F100 K0;\nG123 X0 Y0 I1 J1 P9999 K9999;\n",
                                   "G126 X0 Y0 Z-1 R1 I10 J999999 L1 F100;\n"])
