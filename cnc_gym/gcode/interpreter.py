@@ -394,6 +394,9 @@ class Interpreter:
             if text is not None:
                 out.append((letter, value, text))
                 continue
+            if value[0] == "deferred":  # a literal only a code's own format accepts (reader.py)
+                out.append((letter, self._deferred_word(letter, value, words, overrides), value[2]))
+                continue
             rule = overrides[letter] if overrides and letter in overrides else dialect.addresses[letter]
             step = self.increment if rule.unit == "length" else None
             number = evaluate(value, self.variables, dialect, step)
@@ -410,6 +413,21 @@ class Interpreter:
                                  "value-out-of-range", alarm=rule.alarm)  # fmt: skip
             out.append((letter, number, None))
         return out
+
+    def _deferred_word(self, letter: str, node: tuple, words: tuple, overrides: dict | None) -> float:
+        """A literal the address's own rule rejects (``L2.5``): valid when the block belongs to a code that
+        gives the letter its own format: a code of the block, or else the modal canned cycle (a later block
+        of a G110 pocket). Otherwise the reader's error (decimal point not allowed) stands."""
+        _, value, _, error = node
+        if overrides and letter in overrides:
+            return value
+        gcodes = self.dialect.gcodes
+        own = any(w[0] == "G" and w[2] is not None and letter in getattr(gcodes.get(gkey(w[1])), "words", "")
+                  for w in words)  # fmt: skip
+        modal = self._override_codes.get(self.cycle.code) if self.cycle.code else None
+        if not own and modal and letter in modal:
+            return value
+        raise error
 
     # ------------------------------------------------------------------ modal actions
     def _do_nothing(self, spec: CodeSpec, values: dict | None = None) -> None:

@@ -174,6 +174,18 @@ class Reader:
                     merged[letter] = (rule.low, rule.high, rule.point_allowed, rule.unit == "length")
                 self._override_rules[key / 10] = merged
         self._override_codes = frozenset(self._override_rules)
+        # Letters a *modal* code gives its own format (the pocket cycles' L): a later block of the cycle
+        # names no code, so a word that fails the address's own rule there is kept with the code's format
+        # and checked when the block runs, against the code it then belongs to (``("deferred", …)`` node).
+        self._deferred_letters: frozenset[str] = frozenset()
+        lenient = dict(self._fast_rules)
+        for spec in dialect.gcodes.values():
+            if spec.address_rules and spec.group != 0:
+                for letter, rule in spec.address_rules.items():
+                    if rule.point_allowed and not self._fast_rules[letter][2]:
+                        lenient[letter] = (rule.low, rule.high, True, rule.unit == "length")
+                        self._deferred_letters |= {letter}
+        self._lenient_rules = lenient
 
     def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):
         err = self.dialect.error(message, code, column=column, alarm=alarm)
@@ -320,8 +332,10 @@ class Reader:
             except ValueError:
                 raise self.error(f"bad number {letter}{digits}", "bad-number", line) from None
             except ProgramError:
-                if self._mentions_call(text) or self._code_rules(text) is not None:
-                    # macro arguments have their own rules; so do the words of some codes (L2.5 in G110)
+                if (self._mentions_call(text) or self._code_rules(text) is not None
+                        or letter in self._deferred_letters):  # fmt: skip
+                    # macro arguments have their own rules; so do the words of some codes (L2.5 in G110,
+                    # also in a later block of the modal cycle: checked when it runs)
                     return self._scan_block(text, line)
                 raise
             if letter == "G":
@@ -440,7 +454,12 @@ class Reader:
         """Everything that is not plain: block skip, expressions, variables, assignments, keywords, calls."""
         code_rules = self._code_rules(text)
         if not self._mentions_call(text):
-            return self._scan(text, line, False, code_rules)
+            try:
+                return self._scan(text, line, False, code_rules)
+            except ProgramError:
+                if code_rules is not None or not self._deferred_letters:
+                    raise
+                return self._scan(text, line, False, self._lenient_rules, defer=True)
         try:
             strict: Block | ProgramError | None = self._scan(text, line, False, code_rules)
         except ProgramError as exc:
@@ -465,7 +484,8 @@ class Reader:
                 return True
         return False
 
-    def _scan(self, text: str, line: int, relaxed: bool, code_rules: dict | None = None) -> Block | None:
+    def _scan(self, text: str, line: int, relaxed: bool, code_rules: dict | None = None, *,
+              defer: bool = False) -> Block | None:  # fmt: skip
         pos = 0
         skip = 0
         # Optional block skip: /, /n, /1/3 at the head (L520-L524).
@@ -529,6 +549,14 @@ class Reader:
         if len(words) > self._max_words:
             raise self.error(f"{len(words)} words in one block (at most {self._max_words})", "too-many-words",
                              line)  # fmt: skip
+        if defer:  # words that fail their address's own rule wait for the code they belong to
+            for n, (letter, value, digits) in enumerate(words):
+                if digits is not None and letter in self._deferred_letters:
+                    try:
+                        self._literal(letter, digits, self._fast_rules[letter], line)
+                    except ProgramError as exc:
+                        words[n] = (letter, ("deferred", value, digits, exc), None)
+                        has_expr = True
         number = None
         if words and words[0][0] in "ON":
             words, number = self._head(words, line)

@@ -55,3 +55,22 @@ def test_other_codes_in_a_pocket_block_keep_their_rules():
     # The override is for L only: a T with a decimal point in the G110 block is still alarm 7.
     err = program_error("G0 X0 Y0 Z25 F100\nG110 X0 Y0 Z-5 R2 I10 L2.5 W5 Q5 V2 D1 T1.5\n")
     assert err.code == "decimal-point-not-allowed"
+
+
+def test_a_later_block_of_the_modal_pocket_cycle_takes_its_step_over():
+    # The block "X1 L2.5" names no code: its L belongs to the modal G110 (group 09), so L2.5 is a length
+    # there (the second pocket at X1 has rings 2.5, 5, 7.5; the first, L5, has 5, 7.5). Also with an
+    # expression word in the block (the scanner path).
+    base = "G90 G17 G0 X0 Y0 Z25 F1000\nG110 X0 Y0 Z-5 R2 I10 L5 W5 Q5 V2 D1 F500\n"
+    assert _ring_radii(base + "X1 L2.5\nG80\n") == [2.5, 5.0, 7.5]
+    assert _ring_radii("#1=1\n" + base + "X#1 L2.5\nG80\n") == [2.5, 5.0, 7.5]
+
+
+@pytest.mark.parametrize(("text", "line"), [
+    ("G01 X1 L2.5 F100\n", 1),  # no code gives L a length format
+    ("G81 X0 Y0 Z-5 R1 F100\nX1 L2.5\n", 2),  # a drilling cycle has no L
+    ("G0 X0 Y0 Z25\nG110 X0 Y0 Z-5 R2 I10 L5 W5 Q5 V2 D1 F500\nG80\nX1 L2.5\n", 4),  # after G80
+])  # fmt: skip
+def test_l_with_a_point_outside_a_code_that_takes_it_is_still_alarm_7(text, line):
+    err = program_error(text, tool_offsets={"D": {1: 2.5}})
+    assert err.code == "decimal-point-not-allowed" and err.line == line
