@@ -609,6 +609,9 @@ class FlowRunner:
     def _call_block(self, block: Block, pc: int) -> int:
         """A block holding G65, G66 or a G/M/T code the dialect maps to a call."""
         interp = self.interp
+        if interp.nurbs.hpcc and interp.modal.get(1) == 62:  # G06.2 in force (nurbs.py)
+            raise self.dialect.error("a macro or subprogram call in NURBS mode: no G, M or T codes until a "
+                                     "group-01 code ends G06.2 (L1281)", "nurbs-forbidden")  # fmt: skip
         words = self._evaluated(block.words)
         frame = self.frames[-1]
         gs = [w[1] for w in words if w[0] == "G"]

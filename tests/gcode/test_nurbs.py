@@ -287,6 +287,8 @@ _CURVE = "G06.2 P3 K0 X10 Y0 F600\nK0 X10 Y10 R0.7\nK0 X0 Y10\nK1\nK1\nK1\n"
         (_HEAD + _CURVE.replace("K0 X0 Y10", "K0 X0 Y10 Z5"), "nurbs-axes", 5),  # Z not in the first block
         (_HEAD + _CURVE + "K1 X3 Y4\n", "nurbs", 9),  # after the curve: a new one needs G06.2
         (_HEAD + _CURVE + "G05 P0\nX5 Y5\n", "nurbs-outside-hpcc", 10),  # G06.2 modal, contour control off
+        (_HEAD + _CURVE.replace("K0 X0 Y10", "M98 P1000\nK0 X0 Y10"), "nurbs-forbidden", 5),  # a call
+        (_HEAD + _CURVE.replace("K0 X0 Y10", "G65 P1000 A1\nK0 X0 Y10"), "nurbs-forbidden", 5),
         ("G05 P1\n", "bad-g05", 1),
         ("G05 P10000 X1\n", "bad-g05", 1),
         ("G05 P10000\nG16\nG00 X10 Y0\n" + _CURVE, "nurbs", 4),  # polar input
