@@ -735,6 +735,9 @@ def corner_motion(interp: Interpreter, motion: int, x, y, z, values: dict) -> No
     finally:
         interp.out.line, interp.out.modes = line, modes
     if words:
+        if second is None:  # the corner took all of this block: nothing is left for its own ,L/,R
+            raise interp.error(f"chamfer/corner {words[0]}: the previous corner {pending.word} takes all of "
+                               "this block, so no corner of its own fits (L1637)", "bad-corner")  # fmt: skip
         interp._corner = PendingCorner(words[0], size, second, interp.plane, line, modes)
     elif second is not None:
         _emit(interp, second)

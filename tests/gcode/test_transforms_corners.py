@@ -205,3 +205,10 @@ def test_corner_restrictions_last_only_one_block():
     assert len(moves("G92 X0 Y0\nG04 X0.1\nG01 X10 F100 ,L2\nY10\n")) == 3
     assert len(moves("G92 X0 Y0\nG01 X5 F100\nX10 ,L2\nY10\n")) == 4
     assert len(moves("G17 G01 X10 F100 ,L2\nY10\n")) == 3
+
+
+def test_a_corner_that_takes_all_of_a_block_with_its_own_corner_is_an_error():
+    # Found by the random-contour property: ,L1 on a 1 mm block consumes all of the next 1 mm block, which
+    # then has nothing left for its own ,L1: alarm-style error (L1637), not a crash.
+    err = program_error("G00 X0 Y0\nF100\nG01 X0 Y1 ,L1\nG01 X1 Y1 ,L1\nG01 X50 Y50\n")
+    assert err.code == "bad-corner" and err.line == 4
