@@ -22,12 +22,19 @@ ACTION_MODES = ("override", "feed")
 
 @dataclass(frozen=True)
 class RewardWeights:
-    """Reward weights: ``r = -time·dt/T - contour_error·min(e/tol, cap)² - violation·[e > tol]`` per step."""
+    """Reward weights, per control step:
+    ``r = -time·dt/T + progress·Δp - contour_error·min(e/tol, cap)² - violation·[e > tol]``
+    (Δp: path progress in the step as a fraction of the program's length; see FeedrateEnv's docstring).
+    """
 
     time: float = 10.0  # whole-episode time cost at nominal (100 %) speed
     contour_error: float = 0.05  # per step, per (e_max / tol)²
     violation: float = 1.0  # per control step whose contour error exceeds the tolerance
     error_ratio_cap: float = 10.0  # e_max / tol is capped here so one bad step cannot dominate a return
+    # Paid per unit of path progress; sums to exactly this over a finished episode whatever the policy,
+    # so it leaves the undiscounted ranking of finishing policies unchanged but pays for progress when it
+    # happens, which a discounted (γ < 1) learner needs to see that slow costs (see docs/env.md).
+    progress: float = 10.0
 
 
 @dataclass(frozen=True)
@@ -101,7 +108,7 @@ def reward_from_dict(data: Any, source: str = "<dict>") -> RewardWeights:
     """Validate a mapping of reward weights (all optional; unknown keys are errors)."""
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: reward must be a mapping of weights")
-    names = ("time", "contour_error", "violation", "error_ratio_cap")
+    names = ("time", "progress", "contour_error", "violation", "error_ratio_cap")
     _check_keys(data, set(names), source, "reward")
     values = {}
     for key, raw in data.items():

@@ -21,6 +21,9 @@ INFO_KEYS = {
 }  # fmt: skip
 # circle.nc at 100 % with infinite acceleration, by hand (test_nominal_time_by_hand).
 T_NOMINAL_CIRCLE = 2 * math.pi * 30 / 50 + 0.5 + 0.084
+# circle.nc's whole path length (cutting + rapid), by hand: rapids 5 + 30 + 1 + 6 = 42 mm, plunge 5 mm,
+# circle 2π·30 mm: 235.496 mm. The progress reward term is w_progress · Δs / this.
+LENGTH_CIRCLE_MM = 42 + 5 + 2 * math.pi * 30
 
 
 def run_constant(env: FeedrateEnv, knob: float, program: str | None = None, max_steps: int = 100_000):
@@ -259,17 +262,23 @@ def test_bad_configuration_is_a_config_error(kwargs, match):
 def test_reward_matches_the_documented_formula():
     # r = −w_time·dt/T_nominal − w_error·min(e/tol, cap)² − w_violation·[e > tol], with weights chosen here
     # and T_nominal of circle.nc computed by hand (see test_nominal_time_by_hand): 4.35391 s.
-    weights = {"time": 2.0, "contour_error": 0.3, "violation": 5.0, "error_ratio_cap": 1.5}
+    # The progress term + w_progress·Δp uses p = path_s / L with L of circle.nc by hand (LENGTH_CIRCLE_MM),
+    # and p = 1 exactly once the program is done (the last steps settle: Δp = 0 there).
+    weights = {"time": 2.0, "progress": 3.0, "contour_error": 0.3, "violation": 5.0, "error_ratio_cap": 1.5}
     env = FeedrateEnv(programs=["circle"], reward=weights)
     t_nominal = T_NOMINAL_CIRCLE
-    rewards, infos, *_ = run_constant(env, 1.0)  # 200 %: some steps exceed the tolerance
+    rewards, infos, terminated, _ = run_constant(env, 1.0)  # 200 %: some steps exceed the tolerance
+    assert terminated
     tol = 0.02
     seen_violation = seen_capped = False
-    for reward, info in zip(rewards, infos[1:], strict=True):
+    for reward, info, before in zip(rewards, infos[1:], infos[:-1], strict=True):
         e = info["contour_error_mm"]
         ratio = min(e / tol, 1.5)
-        expected = -2.0 * 0.01 / t_nominal - 0.3 * ratio**2 - (5.0 if e > tol else 0.0)
-        assert reward == pytest.approx(expected, rel=1e-9, abs=1e-12)
+        progress_now = 1.0 if info is infos[-1] else info["path_s"] / LENGTH_CIRCLE_MM
+        progress_before = before["path_s"] / LENGTH_CIRCLE_MM
+        delta_p = progress_now - progress_before
+        expected = 3.0 * delta_p - 2.0 * 0.01 / t_nominal - 0.3 * ratio**2 - (5.0 if e > tol else 0.0)
+        assert reward == pytest.approx(expected, rel=1e-9, abs=1e-9)
         assert info["cost"] == (1.0 if e > tol else 0.0)
         seen_violation |= e > tol
         seen_capped |= e > 1.5 * tol
@@ -280,10 +289,45 @@ def test_reward_matches_the_documented_formula():
 def test_hand_checked_first_step(circle_env):
     # First step from rest: the tool rises from Z0 on a rapid, which is not a cutting move, so the contour
     # error is 0 and the reward is the time term alone: −10 · 0.01 / 4.35391 = −0.0229679.
+    # Plus the progress term: 10 · path_s / 235.496 mm (the rapid's first 10 ms of travel).
     circle_env.reset(seed=0)
     _, reward, *_, info = circle_env.step(np.zeros(1, dtype=np.float32))
     assert info["contour_error_mm"] == 0.0
-    assert reward == pytest.approx(-0.0229679, rel=1e-5)
+    assert 0.0 < info["path_s"] < 5.0  # still on the first rapid
+    assert reward == pytest.approx(-0.0229679 + 10.0 * info["path_s"] / LENGTH_CIRCLE_MM, rel=1e-5)
+
+
+def test_hand_checked_progress_term():
+    # Only the progress term (w_progress = 4, all other weights 0). circle.nc is 235.496 mm long (see
+    # LENGTH_CIRCLE_MM), so every step pays 4 · Δs / 235.496 and a finished episode pays exactly 4,
+    # whatever the override: 4 at 100 % and at 200 %, though the 200 % run pays it in fewer steps.
+    weights = {"time": 0.0, "progress": 4.0, "contour_error": 0.0, "violation": 0.0}
+    env = FeedrateEnv(programs=["circle"], reward=weights)
+    env.reset(seed=0)
+    total, before = 0.0, 0.0
+    for _ in range(60):  # 0.6 s: past the 42 mm of rapids, into the plunge and the circle
+        _, reward, *_, info = env.step(np.zeros(1, dtype=np.float32))
+        expected = 4.0 * (info["path_s"] - before) / LENGTH_CIRCLE_MM
+        assert reward == pytest.approx(expected, rel=1e-9, abs=1e-15)
+        assert info["progress"] == pytest.approx(info["path_s"] / LENGTH_CIRCLE_MM, rel=1e-12)
+        before = info["path_s"]
+        total += reward
+    assert total == pytest.approx(4.0 * before / LENGTH_CIRCLE_MM, rel=1e-9)
+    returns = {}
+    for knob in (0.0, 1.0):
+        rewards, infos, terminated, _ = run_constant(env, knob)
+        assert terminated and infos[-1]["progress"] == 1.0
+        assert np.all(rewards >= 0.0)
+        returns[knob] = (rewards.sum(), len(rewards))
+    assert returns[0.0][0] == pytest.approx(4.0, rel=1e-12)
+    assert returns[1.0][0] == pytest.approx(4.0, rel=1e-12)
+    assert returns[1.0][1] < 0.7 * returns[0.0][1]
+    # Discounted (γ = 0.99), the faster run is worth more: the same 4 paid earlier.
+    def discounted(rewards):
+        return float(np.sum(rewards * 0.99 ** np.arange(len(rewards))))
+    fast, *_ = run_constant(env, 1.0)
+    slow, *_ = run_constant(env, 0.0)
+    assert discounted(fast) > discounted(slow) > 0.0
 
 
 def test_reward_yaml_path(tmp_path):
@@ -291,9 +335,10 @@ def test_reward_yaml_path(tmp_path):
     path.write_text("reward:\n  time: 1.0\n  contour_error: 0.0\n  violation: 0.0\n")
     env = FeedrateEnv(programs=["circle"], reward=path)
     rewards, infos, *_ = run_constant(env, 1.0)
-    # Only the time term: the return is −1 · (cycle time / T_nominal).
+    # The time term and the default progress term (10, summing to 10 over a finished episode): the
+    # return is 10 − 1 · (cycle time / T_nominal).
     t_nominal = nominal_time_s(env.toolpath, env.machine)
-    assert rewards.sum() == pytest.approx(-infos[-1]["cycle_time_s"] / t_nominal, rel=1e-9)
+    assert rewards.sum() == pytest.approx(10.0 - infos[-1]["cycle_time_s"] / t_nominal, rel=1e-9)
     path.write_text("reward:\n  time: 1.0\nprogrammes: [circle]\n")
     with pytest.raises(ConfigError, match="programmes"):
         FeedrateEnv(programs=["circle"], reward=path)
@@ -391,6 +436,7 @@ def test_sync_vector_env():
     assert obs.shape == (3, 41) and obs.dtype == np.float32
     for _ in range(20):
         obs, rewards, _, _, infos = envs.step(np.zeros((3, 1), dtype=np.float32))
-    assert rewards.shape == (3,) and np.all(rewards < 0)
+    # On the opening rapid the progress term (fast travel) outweighs the time cost: rewards are positive.
+    assert rewards.shape == (3,) and np.all(np.isfinite(rewards)) and np.all(rewards > 0)
     assert set(infos["program"]) <= {"star", "circle"} and infos["cycle_time_s"][0] == pytest.approx(0.2)
     envs.close()
