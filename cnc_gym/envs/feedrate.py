@@ -56,28 +56,6 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
     return max(cut_s + rapid_s + dwell_s, 1e-3)
 
 
-#: Contour windows are widened to multiples of this many segments (see _snapped_meter_class).
-WINDOW_SNAP_SEGMENTS = 16
-
-
-def _snapped_meter_class(meter_cls: type) -> type:
-    """The contour meter with its search window widened outwards to multiples of 16 segments.
-
-    The meter caches the geometry of each ``[first, last)`` window; on short-segment programs (0.5 mm
-    polylines) the exact window moves every control step and rebuilding it dominated the step time.
-    A snapped window is a superset of the exact one (so no error can be hidden that the exact window
-    would show, beyond what its own rule allows) and stays the same for 16 segments of progress.
-    """
-
-    class SnappedWindowMeter(meter_cls):
-        def _window_range(self, lo: int, hi: int) -> tuple[int, int]:
-            first, last = super()._window_range(lo, hi)
-            q = WINDOW_SNAP_SEGMENTS
-            return (first // q) * q, min(len(self.toolpath), -(-last // q) * q)
-
-    return SnappedWindowMeter
-
-
 class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     r"""Feed-rate control of a simulated CNC milling controller on real G-code.
 
@@ -207,7 +185,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         from cnc_gym.plant import ContourErrorMeter, ServoPlant
 
         self._controller_cls = Controller
-        self._meter_cls = _snapped_meter_class(ContourErrorMeter)
+        self._meter_cls = ContourErrorMeter
         if action_mode not in ACTION_MODES:
             raise ConfigError(f"action_mode must be one of {', '.join(ACTION_MODES)}, got {action_mode!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:

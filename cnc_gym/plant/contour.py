@@ -16,45 +16,118 @@ cutting moves only, against the programmed path after compensation (the tool pat
 - **Exactness.** Lines: clamped projection. Flat arcs: the radial distance where the point's angle lies
   inside the swept range, else the nearer end point. Helices and NURBS: the tool path's own exact
   service (:meth:`~cnc_gym.toolpath.Toolpath.nearest`), one call per such segment in the window. This
-  module is a faster, window-cached re-implementation of ``cnc_gym/toolpath/nearest.py`` for lines
-  and flat arcs (one matmul per call, see :class:`_Window`); the tests check the two agree.
+  module is a faster re-implementation of ``cnc_gym/toolpath/nearest.py`` for lines and flat arcs: one
+  numba-compiled loop over points × window segments (:func:`_measure_kernel`) on per-segment constants
+  packed once per tool path, with no per-call allocation beyond the result; the tests check the two agree.
+- **Speed.** One ``measure`` call of 5 points on a window of ~10 segments costs ~1–2 µs (the numpy
+  version it replaced: ~14 µs, more on 0.5 mm polylines, whose window moves every control step). The
+  kernel is compiled on first use and cached on disk (``cache=True``): ~1 s the first time, then ~0.1 s.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
 
 import numpy as np
+from numba import njit
 
 from cnc_gym.toolpath.segments import PLANE_AXES, Plane, SegmentKind, Toolpath
 
 _PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
 
 
-@dataclass(frozen=True)
-class _Window:
-    """The cutting geometry of one window as k *elements*, laid out so that one matmul serves them all.
+# Segment classes of the kernel.
+_SKIP, _LINE, _FLAT_ARC, _OTHER = 0, 1, 2, 3
+# Columns of the packed per-segment float table ``geometry`` (n, 14).
+#   lines: a (0..2), d = end − a (3..5), 1/|d|² or 0 for a zero-length line (6)
+#   flat arcs: centre u, v (0, 1), w of the plane (2), radius (3), start angle (4), |sweep| (5),
+#              direction ±1 (6), start point (7..9) and end point (10..12) from the arc's geometry
+_N_GEOMETRY = 13
+_TWO_PI = 2.0 * math.pi
 
-    Elements are line segments, flat arc pieces of at most half a turn (longer arcs are split), and the
-    end points of both. Each element has five columns of ``weights`` (3, 5k); ``points @ weights −
-    offsets`` gives per element ``(du, dv, dw, past_start, before_end)``, and the squared distance to the
-    element is ``(hypot(du, dv) − radius)² + dw²`` where ``past_start ≥ 0`` and ``before_end ≥ 0``:
 
-    - arc piece: the point relative to the centre in the arc's own (u, v, w) axes; the cross products
-      with the unit radii to the piece's start and end (travel direction folded in) are both ≥ 0 exactly
-      when the point's angle lies in the piece's range (≤ π);
-    - line: du, dv = components along two unit normals (hypot = distance to the infinite line,
-      radius 0), dw = 0; past_start / before_end = distance along the line past its start / before its end;
-    - end point: du, dv, dw = the point minus it, radius 0, always "inside".
+@njit(cache=True, nogil=True)
+def _measure_kernel(points, hints, n_segments, seg_class, axes, geometry, first_back, window_ahead, out):
+    """Contour error of each point into ``out``; returns ``(first, last)`` of the window used.
 
-    The columns are selections, unit vectors and offsets: no |p|² − 2p·q + |q|² cancellation, so the
-    result is exact to rounding of the coordinates. Helices and NURBS go to ``others``.
+    ``hints``: one hint for all points (length 1) or one per point. A point counts where its own hint
+    (or the common hint) is an in-range cutting segment (lines, flat arcs, helices, NURBS); the window is
+    ``[first_back[lo], min(n, hi + window_ahead + 1))`` over the counted hints' range ``[lo, hi]``.
+    Points that do not count get 0. Helices/NURBS in the window are left to the caller (class _OTHER);
+    if no point counts the window is (0, 0).
     """
-
-    weights: np.ndarray  # (3, 5k)
-    offsets: np.ndarray  # (5k,)
-    radius: np.ndarray  # (k,)
-    others: tuple[int, ...]  # helices and NURBS: measured with Toolpath.nearest, one call each
+    m = points.shape[0]
+    per_point = hints.shape[0] != 1
+    lo = n_segments
+    hi = -1
+    for i in range(hints.shape[0]):
+        h = hints[i]
+        if 0 <= h < n_segments and seg_class[h] != _SKIP:
+            if h < lo:
+                lo = h
+            if h > hi:
+                hi = h
+    if hi < 0:
+        for i in range(m):
+            out[i] = 0.0
+        return 0, 0
+    first = first_back[lo]
+    last = min(n_segments, hi + window_ahead + 1)
+    for i in range(m):
+        if per_point:
+            h = hints[i]
+            if not (0 <= h < n_segments and seg_class[h] != _SKIP):
+                out[i] = 0.0
+                continue
+        px = points[i, 0]
+        py = points[i, 1]
+        pz = points[i, 2]
+        best = np.inf
+        for s in range(first, last):
+            c = seg_class[s]
+            if c == _LINE:
+                g = geometry[s]
+                rx = px - g[0]
+                ry = py - g[1]
+                rz = pz - g[2]
+                t = (rx * g[3] + ry * g[4] + rz * g[5]) * g[6]
+                if t < 0.0:
+                    t = 0.0
+                elif t > 1.0:
+                    t = 1.0
+                dx = rx - t * g[3]
+                dy = ry - t * g[4]
+                dz = rz - t * g[5]
+                d2 = dx * dx + dy * dy + dz * dz
+            elif c == _FLAT_ARC:
+                g = geometry[s]
+                pu = points[i, axes[s, 0]]
+                pv = points[i, axes[s, 1]]
+                pw = points[i, axes[s, 2]]
+                du = pu - g[0]
+                dv = pv - g[1]
+                # Angle travelled from the start in the arc's direction, in [0, 2π) (Python-style mod).
+                phi = (math.atan2(dv, du) - g[4]) * g[6]
+                phi = phi - _TWO_PI * math.floor(phi / _TWO_PI)
+                if phi <= g[5]:
+                    off = math.hypot(du, dv) - g[3]
+                    dw = pw - g[2]
+                    d2 = off * off + dw * dw
+                else:  # outside the swept range: the nearer end point
+                    ex = px - g[7]
+                    ey = py - g[8]
+                    ez = pz - g[9]
+                    d2 = ex * ex + ey * ey + ez * ez
+                    ex = px - g[10]
+                    ey = py - g[11]
+                    ez = pz - g[12]
+                    d2 = min(d2, ex * ex + ey * ey + ez * ez)
+            else:
+                continue
+            if d2 < best:
+                best = d2
+        out[i] = math.sqrt(best)
+    return first, last
 
 
 class ContourErrorMeter:
@@ -82,12 +155,23 @@ class ContourErrorMeter:
         kind = np.asarray(toolpath.kind)
         self._cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
         self._n = len(toolpath)
-        self._cache: dict[tuple[int, int], _Window] = {}
+        self._seg_class, self._axes, self._geometry = _pack_segments(toolpath)
+        others = np.flatnonzero(self._seg_class == _OTHER)
+        self._others = others if len(others) else None
+        # First segment of the window for each lowest hint: window_back segments back, stretched back to
+        # cover window_back_mm of path (see _window_range).
+        idx = np.arange(self._n)
+        first = np.maximum(0, idx - self.window_back)
+        if self.window_back_mm > 0 and self._n:
+            s_from = toolpath.s_start[: self._n] - self.window_back_mm
+            by_mm = np.maximum(0, np.searchsorted(toolpath.s_start, s_from, side="right") - 1)
+            first = np.minimum(first, by_mm)
+        self._first_back = np.ascontiguousarray(first, dtype=np.int64)
+        self._hint1 = np.zeros(1, dtype=np.int64)
         self.reset()
 
     def reset(self) -> None:
-        """Forget cached windows (call at episode start; the tool path itself is immutable)."""
-        self._cache.clear()
+        """Nothing to forget between episodes (kept for callers; the tool path itself is immutable)."""
 
     # ------------------------------------------------------------------ windows
     def window(self, segment_hint: int | np.ndarray) -> tuple[int, int]:
@@ -97,23 +181,10 @@ class ContourErrorMeter:
         return self._window_range(lo, hi)
 
     def _window_range(self, lo: int, hi: int) -> tuple[int, int]:
-        first = max(0, lo - self.window_back)
-        if self.window_back_mm > 0 and 0 <= lo < self._n:
-            s_from = self.toolpath.s_start[lo] - self.window_back_mm
-            first = min(first, max(0, int(np.searchsorted(self.toolpath.s_start, s_from, side="right")) - 1))
+        """The window rule (the kernel reads the same precomputed ``_first_back`` table)."""
+        first = int(self._first_back[lo]) if 0 <= lo < self._n else max(0, lo - self.window_back)
         last = min(self._n, hi + self.window_ahead + 1)
         return first, last
-
-    def _window_geometry(self, first: int, last: int) -> _Window:
-        key = (first, last)
-        cached = self._cache.get(key)
-        if cached is not None:
-            return cached
-        if len(self._cache) > 64:  # the hint moves forward: old windows are not needed again
-            self._cache.clear()
-        window = _build_window(self.toolpath, first, last)
-        self._cache[key] = window
-        return window
 
     # ------------------------------------------------------------------ measuring
     def measure(self, points: np.ndarray, segment_hint: int | np.ndarray) -> np.ndarray:
@@ -122,143 +193,96 @@ class ContourErrorMeter:
         ``segment_hint`` is the reference's segment index: one int for all points, or one per point
         (then the window spans all of them and points whose own hint is a rapid/dwell get 0).
         """
-        pts = np.asarray(points, dtype=float)
-        if pts.ndim == 1:
-            pts = pts[None]
+        pts = points
+        usual = type(pts) is np.ndarray and pts.dtype == np.float64 and pts.ndim == 2
+        if not (usual and pts.flags.c_contiguous):
+            pts = np.ascontiguousarray(points, dtype=np.float64)
+            if pts.ndim == 1:
+                pts = pts[None]
         m = len(pts)
-        counted = None  # None: every point counts
-        if np.ndim(segment_hint) == 0:
-            lo = hi = int(segment_hint)
-            if not (0 <= lo < self._n) or not self._cutting[lo]:
-                return np.zeros(m)
+        if pts.shape[1:] != (3,):
+            raise ValueError(f"points must be (m, 3), got {pts.shape}")
+        if isinstance(segment_hint, int | np.integer):
+            hints = self._hint1
+            hints[0] = segment_hint
         else:
-            hint = np.asarray(segment_hint, dtype=np.intp)
-            if hint.shape != (m,):
-                raise ValueError(f"segment_hint must be an int or shape ({m},), got {hint.shape}")
-            if m == 0:
-                return np.zeros(0)
-            lo, hi = int(hint.min()), int(hint.max())
-            if lo >= 0 and hi < self._n:
-                counted = self._cutting[hint]
+            hints = np.asarray(segment_hint)
+            if hints.ndim == 0:
+                hints = np.array([int(hints)], dtype=np.int64)
             else:
-                in_range = (hint >= 0) & (hint < self._n)
-                counted = np.zeros(m, dtype=bool)
-                counted[in_range] = self._cutting[hint[in_range]]
-            if counted.all():
-                counted = None
-            elif not counted.any():
-                return np.zeros(m)
-            else:
-                lo, hi = int(hint[counted].min()), int(hint[counted].max())
-        first, last = self._window_range(lo, hi)
-        dist = self._min_distance(pts, self._window_geometry(first, last))
-        if counted is not None:
-            dist = np.where(counted, dist, 0.0)
-        return dist
+                if hints.shape != (m,):
+                    raise ValueError(f"segment_hint must be an int or shape ({m},), got {hints.shape}")
+                if m == 0:
+                    return np.zeros(0)
+                hints = np.ascontiguousarray(hints, dtype=np.int64)
+        out = np.empty(m)
+        first, last = _measure_kernel(pts, hints, self._n, self._seg_class, self._axes, self._geometry,
+                                      self._first_back, self.window_ahead, out)  # fmt: skip
+        if self._others is not None and last > first:
+            self._measure_others(pts, hints, first, last, out)
+        return out
 
-    def _min_distance(self, pts: np.ndarray, win: _Window) -> np.ndarray:
-        best = np.full(len(pts), np.inf)
-        k = len(win.radius)
-        if k:
-            local = (pts @ win.weights - win.offsets).reshape(len(pts), 5, k)
-            inside = np.minimum(local[:, 3], local[:, 4]) >= 0
-            off_curve = np.hypot(local[:, 0], local[:, 1]) - win.radius  # in the element's normal plane
-            best = np.where(inside, np.hypot(off_curve, local[:, 2]), np.inf).min(axis=1)
-        for seg in win.others:
-            d, _, _ = self.toolpath.nearest(pts, seg, seg + 1, cutting_only=True)
-            best = np.minimum(best, d)
-        return best
-
-
-def _build_window(tp: Toolpath, first: int, last: int) -> _Window:
-    """Element columns (see :class:`_Window`) for the cutting segments in ``[first, last)``."""
-    idx = np.arange(first, last)
-    kind = tp.kind[idx]
-    is_arc = kind == SegmentKind.ARC
-    w_axis = _PLANE_AXES_TABLE[tp.plane[idx].astype(np.int64), 2]
-    rise = np.where(is_arc, tp.end[idx, w_axis] - tp.start[idx, w_axis], 0.0)
-    lines = idx[kind == SegmentKind.LINE]
-    arcs = idx[is_arc & (rise == 0)]
-    others = idx[(is_arc & (rise != 0)) | (kind == SegmentKind.NURBS)]
-
-    # Lines.
-    a = tp.start[lines]
-    delta = tp.end[lines] - a
-    length = np.linalg.norm(delta, axis=1)
-    has_length = length > 0
-    direction = delta / np.where(has_length, length, 1.0)[:, None]
-    normal1, normal2 = _unit_normals(direction)
-    along = np.einsum("ij,ij->i", a, direction)
-    line_w = np.stack((normal1, normal2, np.zeros_like(a), direction, -direction), axis=1)  # (k, 5, 3)
-    # A zero-length line gets past_start ≡ −1: only its end points count.
-    past_start_offset = np.where(has_length, along, 1.0)
-    line_o = np.stack((np.einsum("ij,ij->i", a, normal1), np.einsum("ij,ij->i", a, normal2),
-                       np.zeros(len(a)), past_start_offset, -(along + length)), axis=1)  # fmt: skip
-
-    # Flat arcs, split into pieces of at most half a turn so that "inside" is "both cross products ≥ 0".
-    n_pieces = np.maximum(1, np.ceil(np.abs(tp.sweep[arcs]) / np.pi - 1e-12)).astype(np.int64)
-    piece_arc = np.repeat(arcs, n_pieces)
-    piece_no = np.arange(len(piece_arc)) - np.repeat(np.cumsum(n_pieces) - n_pieces, n_pieces)
-    sweep = tp.sweep[piece_arc]
-    piece_sweep = sweep / np.repeat(n_pieces, n_pieces)
-    theta0 = tp.start_angle[piece_arc] + piece_no * piece_sweep
-    theta1 = theta0 + piece_sweep
-    axes = _PLANE_AXES_TABLE[tp.plane[piece_arc].astype(np.int64)]
-    u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
-    rows = np.arange(len(piece_arc))
-    center = tp.center[piece_arc]
-    cu, cv, w0 = center[rows, u], center[rows, v], tp.start[piece_arc][rows, w]
-    sign = np.where(sweep >= 0, 1.0, -1.0)
-    su, sv = sign * np.cos(theta0), sign * np.sin(theta0)
-    eu, ev = sign * np.cos(theta1), sign * np.sin(theta1)
-    arc_w = np.zeros((len(piece_arc), 5, 3))
-    arc_w[rows, 0, u] = 1.0
-    arc_w[rows, 1, v] = 1.0
-    arc_w[rows, 2, w] = 1.0
-    arc_w[rows, 3, v] = su  # past_start = sign·(su·dv − sv·du)
-    arc_w[rows, 3, u] = -sv
-    arc_w[rows, 4, u] = ev  # before_end = sign·(du·ev − dv·eu)
-    arc_w[rows, 4, v] = -eu
-    arc_o = np.stack((cu, cv, w0, su * cv - sv * cu, ev * cu - eu * cv), axis=1)
-    radius = tp.radius[piece_arc]
-
-    # End points of every line and arc piece (arc ends from the arc's geometry, as the reference does).
-    arc_ends = _arc_points(u, v, w, center, radius, theta0, theta1)
-    ends = np.unique(np.concatenate((tp.start[lines], tp.end[lines], arc_ends)), axis=0)
-    end_w = np.zeros((len(ends), 5, 3))
-    end_w[:, 0, 0] = end_w[:, 1, 1] = end_w[:, 2, 2] = 1.0
-    end_o = np.concatenate((ends, np.full((len(ends), 2), -1.0)), axis=1)  # past_start = before_end = 1
-
-    weights = np.concatenate((line_w, arc_w, end_w))  # (k, 5, 3)
-    offsets = np.concatenate((line_o, arc_o, end_o))  # (k, 5)
-    return _Window(
-        weights=np.ascontiguousarray(weights.transpose(2, 1, 0).reshape(3, -1)),
-        offsets=np.ascontiguousarray(offsets.T.reshape(-1)),
-        radius=np.concatenate((np.zeros(len(lines)), radius, np.zeros(len(ends)))),
-        others=tuple(int(i) for i in others),
-    )
+    def _measure_others(
+        self, pts: np.ndarray, hints: np.ndarray, first: int, last: int, out: np.ndarray
+    ) -> None:
+        """Helices and NURBS in the window: the tool path's exact service, one call per segment."""
+        others = self._others[(self._others >= first) & (self._others < last)]
+        if len(others) == 0:
+            return
+        in_range = (hints >= 0) & (hints < self._n)
+        counted = np.zeros(len(hints), dtype=bool)
+        counted[in_range] = self._cutting[hints[in_range]]
+        if len(hints) == 1:
+            counted = np.broadcast_to(counted, (len(pts),))
+        # Points whose window had no line or flat arc came back as inf.
+        for seg in others:
+            d, _, _ = self.toolpath.nearest(pts, int(seg), int(seg) + 1, cutting_only=True)
+            np.minimum(out, np.where(counted, d, 0.0), out=out)
 
 
-def _unit_normals(direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors perpendicular to each unit ``direction`` and to each other (any for zero rows)."""
-    # Cross with the coordinate axis least aligned with the direction: well conditioned.
-    helper = np.zeros_like(direction)
-    helper[np.arange(len(direction)), np.argmin(np.abs(direction), axis=1)] = 1.0
-    first = np.cross(direction, helper)
-    norm = np.linalg.norm(first, axis=1)
-    first = first / np.where(norm > 0, norm, 1.0)[:, None]
-    second = np.cross(direction, first)
-    return first, second
-
-
-def _arc_points(u, v, w, center, radius, theta0, theta1) -> np.ndarray:
-    """Start then end points of flat arc pieces from their geometry."""
-    n = len(radius)
+def _pack_segments(tp: Toolpath) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-segment kernel class (n,) int8, plane axes (n, 3) int64 and float table (n, 13)."""
+    n = len(tp)
+    kind = np.asarray(tp.kind)
+    axes = np.ascontiguousarray(_PLANE_AXES_TABLE[np.asarray(tp.plane).astype(np.int64)], dtype=np.int64)
+    if n == 0:
+        return np.zeros(0, dtype=np.int8), axes.reshape(0, 3), np.zeros((0, _N_GEOMETRY))
     rows = np.arange(n)
-    points = np.empty((2 * n, 3))
-    for block, theta in enumerate((theta0, theta1)):
-        part = points[block * n : (block + 1) * n]
-        part[rows, u] = center[rows, u] + radius * np.cos(theta)
-        part[rows, v] = center[rows, v] + radius * np.sin(theta)
-        part[rows, w] = center[rows, w]
-    return points
+    u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
+    is_arc = kind == SegmentKind.ARC
+    rise = tp.end[rows, w] - tp.start[rows, w]
+    flat_arc = is_arc & (rise == 0)
+    seg_class = np.full(n, _SKIP, dtype=np.int8)
+    seg_class[kind == SegmentKind.LINE] = _LINE
+    seg_class[flat_arc] = _FLAT_ARC
+    seg_class[(is_arc & (rise != 0)) | (kind == SegmentKind.NURBS)] = _OTHER
+
+    geometry = np.zeros((n, _N_GEOMETRY))
+    lines = kind == SegmentKind.LINE
+    delta = tp.end - tp.start
+    len2 = np.einsum("ij,ij->i", delta, delta)
+    geometry[lines, 0:3] = tp.start[lines]
+    geometry[lines, 3:6] = delta[lines]
+    geometry[lines, 6] = np.where(len2[lines] > 0, 1.0 / np.where(len2[lines] > 0, len2[lines], 1.0), 0.0)
+
+    a = np.flatnonzero(flat_arc)
+    center = tp.center[a]
+    cu, cv = center[np.arange(len(a)), u[a]], center[np.arange(len(a)), v[a]]
+    radius, theta0, sweep = tp.radius[a], tp.start_angle[a], tp.sweep[a]
+    w0 = tp.start[a, w[a]]
+    geometry[a, 0] = cu
+    geometry[a, 1] = cv
+    geometry[a, 2] = w0
+    geometry[a, 3] = radius
+    geometry[a, 4] = theta0
+    geometry[a, 5] = np.abs(sweep)
+    geometry[a, 6] = np.where(sweep >= 0, 1.0, -1.0)
+    # End points from the arc's geometry (as the reference service evaluates them).
+    for col, theta in ((7, theta0), (10, theta0 + sweep)):
+        ends = np.empty((len(a), 3))
+        k = np.arange(len(a))
+        ends[k, u[a]] = cu + radius * np.cos(theta)
+        ends[k, v[a]] = cv + radius * np.sin(theta)
+        ends[k, w[a]] = w0
+        geometry[a, col : col + 3] = ends
+    return seg_class, axes, np.ascontiguousarray(geometry)

@@ -403,31 +403,27 @@ def test_no_render_mode_builds_nothing(circle_env):
     assert circle_env._renderer is None
 
 
-def test_snapped_contour_window_is_a_superset_and_measures_the_same():
-    # The env widens the meter's window to multiples of 16 segments for speed. That relies on the meter's
-    # _window_range hook; if it is renamed this test says so. On the freeform program (0.5 mm segments)
-    # the snapped meter must give the same errors as the plain one, sample by sample.
-    from cnc_gym.envs.feedrate import WINDOW_SNAP_SEGMENTS, _snapped_meter_class
-    from cnc_gym.plant import ContourErrorMeter
+def test_env_contour_error_is_the_meter_on_the_reference_segments():
+    # The env passes the meter one scalar hint when a step stays on one segment (a shortcut). On the
+    # freeform program (0.5 mm segments, several per step) and at 200 %, its per-step error must be the
+    # largest per-sample error of a separate meter fed the same actual points with per-sample hints.
+    from cnc_gym.motion import Controller
+    from cnc_gym.plant import ContourErrorMeter, ServoPlant
 
-    assert "_window_range" in vars(ContourErrorMeter), "ContourErrorMeter._window_range hook is gone"
     env = FeedrateEnv(programs=["freeform"])
-    tp = env.toolpath
-    plain = ContourErrorMeter(tp, window_back_mm=env._max_lag_mm)
-    snapped = _snapped_meter_class(ContourErrorMeter)(tp, window_back_mm=env._max_lag_mm)
-    for lo, hi in [(0, 3), (17, 20), (250, 260), (len(tp) - 3, len(tp) - 1)]:
-        first, last = snapped._window_range(lo, hi)
-        exact_first, exact_last = plain._window_range(lo, hi)
-        assert first <= exact_first and last >= exact_last
-        assert first % WINDOW_SNAP_SEGMENTS == 0 and (last % WINDOW_SNAP_SEGMENTS == 0 or last == len(tp))
     env.reset(seed=0)
-    controller, plant = env.controller, env.plant
+    tp = env.toolpath
+    controller, plant = Controller(tp, env.machine), ServoPlant(env.machine)
+    controller.reset()
+    plant.reset(tp.start[0])
+    meter = ContourErrorMeter(tp, window_back_mm=env._max_lag_mm)
+    action = np.ones(1, dtype=np.float32)
     for _ in range(300):
+        *_, info = env.step(action)
         chunk = controller.advance(5, override=2.0)
         actual = plant.step(chunk.position[None])[0]
-        np.testing.assert_allclose(
-            snapped.measure(actual, chunk.segment), plain.measure(actual, chunk.segment)
-        )
+        expected = meter.measure(actual, chunk.segment).max()
+        assert info["contour_error_mm"] == pytest.approx(expected, abs=1e-12)
 
 
 def test_sync_vector_env():

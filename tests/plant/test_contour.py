@@ -263,3 +263,65 @@ def test_plant_and_meter_together_give_the_circle_closed_form():
     exact = radius * (1 - 1 / math.sqrt(1 + (speed / (radius * 30.0)) ** 2))
     np.testing.assert_allclose(error[steady], exact, atol=5e-4)
     assert error[steady].mean() == pytest.approx(speed**2 / (2 * radius * 30.0**2), rel=0.10)
+
+
+def test_compiled_meter_equals_toolpath_nearest_on_random_paths_and_hints():
+    # The numba kernel against the reference service (cnc_gym/toolpath/nearest.py, plain numpy) on random
+    # paths mixing rapids, dwells, lines (some of zero length), flat arcs in all planes and helices,
+    # with per-point hints that straddle rapids. Expected values: a point whose own hint is not a cutting
+    # segment measures 0; the others measure Toolpath.nearest over the window [lo − back, hi + ahead + 1)
+    # of the counted hints' range [lo, hi], written out here from the documented rule.
+    rng = np.random.default_rng(2026)
+    back, ahead = 2, 4
+    for trial in range(6):
+        builder = ToolpathBuilder()
+        here = rng.uniform(-200.0, 200.0, 3)
+        for number in range(40):
+            choice = rng.integers(0, 10)
+            there = here + (0.0 if choice == 0 else 1.0) * rng.normal(0, 3, 3)
+            if choice <= 3:
+                builder.line(tuple(here), tuple(there), feed=1000.0, line=number + 1)
+            elif choice == 4:
+                builder.rapid(tuple(here), tuple(there), line=number + 1)
+            elif choice == 5:
+                builder.dwell(tuple(here), 0.5, line=number + 1)
+                there = here
+            else:
+                plane = Plane(int(rng.integers(0, 3)))
+                u, v, w = {Plane.XY: (0, 1, 2), Plane.ZX: (2, 0, 1), Plane.YZ: (1, 2, 0)}[plane]
+                center = here.copy()
+                center[u] += rng.normal(0, 4)
+                center[v] += rng.normal(0, 4)
+                sweep = rng.uniform(-2 * math.pi, 2 * math.pi)
+                radius = math.hypot(here[u] - center[u], here[v] - center[v])
+                angle = math.atan2(here[v] - center[v], here[u] - center[u]) + sweep
+                there = here.copy()
+                there[u] = center[u] + radius * math.cos(angle)
+                there[v] = center[v] + radius * math.sin(angle)
+                if choice == 9 and trial % 2:  # a helix: rises along the plane's normal
+                    there[w] += rng.normal(0, 2)
+                builder.arc(tuple(here), tuple(there), tuple(center), plane, sweep, feed=1000.0,
+                            line=number + 1)  # fmt: skip
+            here = there
+        tp = builder.build()
+        meter = ContourErrorMeter(tp, window_back=back, window_ahead=ahead)
+        cutting = np.isin(tp.kind, [1, 2, 4])  # line, arc, NURBS (rapid 0 and dwell 3 are not)
+        _, on_path = tp.sample(0.5)
+        for _ in range(40):
+            start = int(rng.integers(0, len(tp)))
+            hints = np.sort(np.minimum(start + rng.integers(0, 3, 5), len(tp) - 1))
+            points = on_path[rng.integers(0, len(on_path), 5)] + rng.normal(0, 0.3, (5, 3))
+            counted = cutting[hints]
+            expected = np.zeros(5)
+            if counted.any():
+                lo, hi = hints[counted].min(), hints[counted].max()
+                reference, _, _ = tp.nearest(points, max(0, lo - back), min(len(tp), hi + ahead + 1))
+                expected = np.where(counted, reference, 0.0)
+            np.testing.assert_allclose(meter.measure(points, hints), expected, rtol=1e-9, atol=1e-9)
+            # One common hint: every point counts where that segment cuts.
+            single = meter.measure(points, int(hints[0]))
+            if cutting[hints[0]]:
+                first, last = max(0, hints[0] - back), min(len(tp), hints[0] + ahead + 1)
+                np.testing.assert_allclose(single, tp.nearest(points, first, last)[0], rtol=1e-9, atol=1e-9)
+            else:
+                np.testing.assert_array_equal(single, 0.0)
