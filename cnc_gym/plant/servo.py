@@ -20,14 +20,19 @@ continuous-time lag (1 − f)·v/Kv, with no extra half-sample delay that a zero
 
 Vectorisation: for a given number of ticks n the recursion is lifted into one matrix per axis that maps
 ``[state (3), raw reference history (H ≥ N), new references (n)]`` to ``[actual x_1..x_n, state_n,
-ẋ_n]``; a step is one batched matmul over (axis, env). Lifted matrices are cached per n (n up to
-``MAX_LIFTED_TICKS``; longer steps are done in chunks). With per-env Kv (``set_kv_scale``) there is
-one lifted matrix per (axis, env).
+ẋ_n]``; a step is that matrix-vector product for every (axis, env), done in place on the state by
+one numba-compiled loop (:func:`_step_kernel`: ~1 µs for 5 ticks of one env, where the numpy batched
+matmul it replaced spent ~5 µs in call overhead; compiled on first use, cached on disk). Lifted matrices
+are cached per n (n up to ``MAX_LIFTED_TICKS``; longer steps are done in chunks). With per-env Kv
+(``set_kv_scale``) there is one lifted matrix per (axis, env).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 from scipy.linalg import expm
 
 from cnc_gym.errors import ConfigError
@@ -76,6 +81,50 @@ def axis_discrete_model(
     b_prev = g_r - g_d / period
     b_cur = g_d / period
     return a, b_prev, b_cur, c_vel, d_vel
+
+
+@njit(cache=True, nogil=True)
+def _step_kernel(lifted, state, history, velocity, reference, actual) -> bool:
+    """One block of ticks for every (axis, env), in place: the lifted matrix times
+    ``[state (3), raw history (H), new references (n)]`` (see :meth:`ServoPlant._lift_models`).
+
+    ``lifted`` (3, 1 or E, n + 4, 3 + H + n); ``state`` (3, 3, E), ``history`` (3, H, E), ``velocity``
+    (3, E) are updated; ``reference`` (E, n, 3) in, ``actual`` (E, n, 3) out. Returns False, touching
+    nothing, if a reference is not finite.
+    """
+    n_envs, n_ticks = reference.shape[0], reference.shape[1]
+    n_hist = history.shape[1]
+    total = 0.0
+    for e in range(n_envs):
+        for k in range(n_ticks):
+            for a in range(3):
+                total += reference[e, k, a]
+    if not math.isfinite(total):
+        return False
+    n_cols = _N_STATES + n_hist + n_ticks
+    inputs = np.empty(n_cols)
+    for a in range(3):
+        for e in range(n_envs):
+            matrix = lifted[a, e if lifted.shape[1] > 1 else 0]
+            for j in range(_N_STATES):
+                inputs[j] = state[a, j, e]
+            for j in range(n_hist):
+                inputs[_N_STATES + j] = history[a, j, e]
+            for j in range(n_ticks):
+                inputs[_N_STATES + n_hist + j] = reference[e, j, a]
+            for row in range(n_ticks + _N_STATES + 1):
+                acc = 0.0
+                for col in range(n_cols):
+                    acc += matrix[row, col] * inputs[col]
+                if row < n_ticks:
+                    actual[e, row, a] = acc
+                elif row < n_ticks + _N_STATES:
+                    state[a, row - n_ticks, e] = acc
+                else:
+                    velocity[a, e] = acc
+            for j in range(n_hist):  # the last H raw references
+                history[a, j, e] = inputs[_N_STATES + n_ticks + j]
+    return True
 
 
 class ServoPlant:
@@ -239,7 +288,9 @@ class ServoPlant:
 
         ``reference`` is (n_envs, n_ticks, 3), or (n_ticks, 3) when ``n_envs == 1``.
         """
-        ref = np.asarray(reference, dtype=float)
+        ref = reference
+        if type(ref) is not np.ndarray or ref.dtype != np.float64:
+            ref = np.asarray(reference, dtype=np.float64)
         squeeze = ref.ndim == 2
         if squeeze:
             if self.n_envs != 1:
@@ -250,31 +301,18 @@ class ServoPlant:
         n_ticks = ref.shape[1]
         if n_ticks == 0:
             return ref[0].copy() if squeeze else ref.copy()
-        if not np.isfinite(ref.sum()):
+        if n_ticks > MAX_LIFTED_TICKS and not np.isfinite(ref.sum()):  # the kernel checks one block
             raise ValueError("reference positions must be finite")
-        new = ref.transpose(2, 1, 0)  # (3, n, E)
-        if n_ticks <= MAX_LIFTED_TICKS:
-            actual = self._step_block(new)
-        else:
-            parts = [
-                self._step_block(new[:, i : i + MAX_LIFTED_TICKS])
-                for i in range(0, n_ticks, MAX_LIFTED_TICKS)
-            ]
-            actual = np.concatenate(parts, axis=1)
+        actual = np.empty((self.n_envs, n_ticks, 3))
+        for i in range(0, n_ticks, MAX_LIFTED_TICKS):
+            block = ref[:, i : i + MAX_LIFTED_TICKS]
+            lifted = self._lifted_matrix(block.shape[1])
+            if lifted.ndim == 3:  # shared model: one matrix per axis for every env
+                lifted = lifted[:, None]
+            if not _step_kernel(lifted, self._state, self._history, self._velocity, block,
+                                actual[:, i : i + MAX_LIFTED_TICKS]):  # fmt: skip
+                raise ValueError("reference positions must be finite")
         return actual[0] if squeeze else actual
-
-    def _step_block(self, new: np.ndarray) -> np.ndarray:
-        n_ticks = new.shape[1]
-        lifted = self._lifted_matrix(n_ticks)
-        inputs = np.concatenate((self._state, self._history, new), axis=1)  # (3, cols, E)
-        if lifted.ndim == 3:
-            out = np.matmul(lifted, inputs)  # (3, n + 4, E)
-        else:  # per-env gains: (3, E, rows, cols) @ (3, E, cols, 1)
-            out = np.matmul(lifted, inputs.transpose(0, 2, 1)[..., None])[..., 0].transpose(0, 2, 1)
-        self._state = out[:, n_ticks : n_ticks + _N_STATES]
-        self._velocity = out[:, -1]
-        self._history = inputs[:, -self._n_hist :]
-        return out[:, :n_ticks].transpose(2, 1, 0)  # (E, n, 3)
 
     @property
     def position(self) -> np.ndarray:
