@@ -10,6 +10,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from numba import njit
 
 from cnc_gym.envs.task import ACTION_MODES, RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
@@ -54,6 +55,50 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
     rapid_s = float(np.sum(length[kind == SegmentKind.RAPID])) / rapid_mm_s
     dwell_s = float(np.sum(toolpath.dwell_s))
     return max(cut_s + rapid_s + dwell_s, 1e-3)
+
+
+@njit(cache=True, nogil=True)
+def _error_statistics(error, reference_last, actual_last):
+    """``(max, sum of squares, last)`` of a step's contour errors and the following error ‖ref − act‖."""
+    e_max = 0.0
+    sum_sq = 0.0
+    for e in error:
+        sum_sq += e * e
+        if e > e_max:
+            e_max = e
+    dx = reference_last[0] - actual_last[0]
+    dy = reference_last[1] - actual_last[1]
+    dz = reference_last[2] - actual_last[2]
+    return e_max, sum_sq, error[-1], math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(cache=True, nogil=True)
+def _assemble_observation(raw, speed_limit, curvature, turn_angle, feed, scale, low, high):
+    """The observation: ``raw`` scalars (9) then the four look-ahead blocks, times ``scale``, clipped.
+
+    Curvature κ enters as κL/(1 + κL) (L = _CURVATURE_LENGTH_MM); NaN from upstream becomes 0 (a NaN
+    would poison a policy).
+    """
+    n = speed_limit.shape[0]
+    base = raw.shape[0]
+    obs = np.empty(base + 4 * n, dtype=np.float32)
+    for i in range(base + 4 * n):
+        if i < base:
+            x = raw[i]
+        elif i < base + n:
+            x = speed_limit[i - base]
+        elif i < base + 2 * n:
+            kl = curvature[i - base - n] * _CURVATURE_LENGTH_MM
+            x = kl / (kl + 1.0)
+        elif i < base + 3 * n:
+            x = turn_angle[i - base - 2 * n]
+        else:
+            x = feed[i - base - 3 * n]
+        x *= scale[i]
+        if x != x:
+            x = 0.0
+        obs[i] = min(max(x, low[i]), high[i])
+    return obs
 
 
 class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -253,8 +298,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         low = np.array([0, -2, 0, -1, 0, 0, 0, 0, 0] + [0] * (4 * n), dtype=np.float32)
         high = np.array([2, 2, 1, 1, 5, 5, 5, 1, 1] + [2] * n + [1] * n + [1] * n + [2] * n, dtype=np.float32)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
-        self._obs = np.zeros(len(low), dtype=np.float32)
-        self._raw = np.zeros(len(low))
+        self._raw = np.zeros(len(SCALAR_FEATURES))
         base = len(SCALAR_FEATURES)
         self._la_blocks = [slice(base + i * n, base + (i + 1) * n) for i in range(len(LOOKAHEAD_FEATURES))]
         scale = np.ones(len(low))
@@ -265,7 +309,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         scale[self._la_blocks[2]] = 1 / math.pi
         scale[self._la_blocks[3]] = 1 / self._v_ref
         self._obs_scale = scale  # entry 7 (progress) is set per program: 1 / path length
-        self._obs_low, self._obs_high = low, high
+        self._obs_low, self._obs_high = low.astype(np.float64), high.astype(np.float64)
 
         # Per-tick buffers for the settle phase after the controller has finished.
         self._settle_reference = np.zeros((self.ticks_per_step, 3))
@@ -418,7 +462,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._ticks += n
         self._steps += 1
 
-        e_max = float(error.max())
+        e_max, sum_sq, e_now, self._following_error_mm = _error_statistics(error, reference[-1], actual[-1])
         # The meter returns 0 where the reference is on a rapid or dwell, so the sum of squares over all
         # samples is the sum over cutting samples; only the count needs the cutting mask.
         if one_segment:
@@ -426,16 +470,14 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         else:
             n_cut = int(np.count_nonzero(self._cutting_segments[segment]))
         if n_cut:
-            self._error_sq_sum += float(error @ error)
+            self._error_sq_sum += sum_sq
             self._error_samples += n_cut
         if e_max > self._error_max_mm:
             self._error_max_mm = e_max
         violated = e_max > self.tolerance_mm
         self._violations += violated
         self._last_error_step = e_max
-        self._last_error_now = float(error[-1])
-        lag = reference[-1] - actual[-1]
-        self._following_error_mm = math.sqrt(float(lag @ lag))
+        self._last_error_now = e_now
 
         w = self.reward_weights
         ratio = min(e_max / self.tolerance_mm, w.error_ratio_cap)
@@ -462,7 +504,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     # ------------------------------------------------------------------------------------ observations
     def _observe(self) -> np.ndarray:
-        # Raw values into a preallocated float64 buffer, then one multiply by the per-entry scale, one clip.
+        # The nine scalars into a preallocated buffer; one compiled call scales, clips and appends the
+        # look-ahead blocks (one numpy ufunc each cost more than the whole call).
         raw = self._raw
         controller = self.controller
         features = controller.lookahead(self.lookahead_mm, self.lookahead_points)
@@ -475,20 +518,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         raw[6] = self._last_error_now
         raw[7] = controller.path_s
         raw[8] = features.distance_to_stop_mm
-        la = self._la_blocks
-        raw[la[0]] = features.speed_limit_mm_s
-        kappa_l = raw[la[1]]
-        np.multiply(features.curvature_1_mm, _CURVATURE_LENGTH_MM, out=kappa_l)
-        np.divide(kappa_l, kappa_l + 1.0, out=kappa_l)
-        raw[la[2]] = features.turn_angle_rad
-        raw[la[3]] = features.programmed_feed_mm_s
-        obs = self._obs
-        np.multiply(raw, self._obs_scale, out=obs, casting="same_kind")
-        np.minimum(obs, self._obs_high, out=obs)  # two ufuncs: cheaper than np.clip on small arrays
-        np.maximum(obs, self._obs_low, out=obs)
-        if not math.isfinite(float(obs.sum())):  # NaN from upstream would poison a policy: say 0
-            np.nan_to_num(obs, copy=False, nan=0.0)
-        return obs.copy()  # callers (replay buffers) may keep it; the buffer is reused
+        return _assemble_observation(raw, features.speed_limit_mm_s, features.curvature_1_mm,
+                                     features.turn_angle_rad, features.programmed_feed_mm_s,
+                                     self._obs_scale, self._obs_low, self._obs_high)  # fmt: skip
 
     def _info(self, step_error_mm: float, cost: float) -> dict[str, Any]:
         controller = self.controller
