@@ -163,6 +163,7 @@ class ServoPlant:
         self._shared_models = self._axis_models(np.ones(3))
         self._env_models: list[list[tuple]] | None = None
         self._lifted: dict[int, np.ndarray] = {}
+        self._lifted4: dict[int, np.ndarray] = {}  # the same as (3, 1 or n_envs, rows, cols), for the kernel
         # Internal layout is axis-major so that one batched matmul over axes serves every env.
         self._state = np.zeros((3, _N_STATES, self.n_envs))
         self._history = np.zeros((3, self._n_hist, self.n_envs))  # last raw references
@@ -216,6 +217,7 @@ class ServoPlant:
             envs = [env]
         if not np.all(np.isfinite(scale)) or np.any(scale <= 0):
             raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
+        self._lifted4.clear()
         new_scale = self._kv_scale.copy()
         for e in envs:
             new_scale[e] = scale[e]
@@ -248,6 +250,15 @@ class ServoPlant:
             lifted = np.stack([self._lift_models(models, n_ticks) for models in self._env_models], axis=1)
         self._lifted[n_ticks] = lifted
         return lifted
+
+    def _lifted4_matrix(self, n_ticks: int) -> np.ndarray:
+        cached = self._lifted4.get(n_ticks)
+        if cached is None:
+            cached = self._lifted_matrix(n_ticks)
+            if cached.ndim == 3:  # shared model: one matrix per axis for every env
+                cached = cached[:, None]
+            self._lifted4[n_ticks] = cached
+        return cached
 
     def _lift_models(self, models: list[tuple], n_ticks: int) -> np.ndarray:
         """(3, n + 3 + 1, 3 + H + n): [z_0, raw_{1−H}..raw_0, raw_1..raw_n] → [x_1..x_n, z_n, ẋ_n].
@@ -289,6 +300,15 @@ class ServoPlant:
         ``reference`` is (n_envs, n_ticks, 3), or (n_ticks, 3) when ``n_envs == 1``.
         """
         ref = reference
+        if (type(ref) is np.ndarray and ref.dtype == np.float64 and ref.ndim == 3
+                and ref.shape[0] == self.n_envs and ref.shape[2] == 3
+                and 0 < ref.shape[1] <= MAX_LIFTED_TICKS):  # fmt: skip
+            # The usual call (the env's): one block, no conversions.
+            actual = np.empty(ref.shape)
+            if not _step_kernel(self._lifted4_matrix(ref.shape[1]), self._state, self._history,
+                                self._velocity, ref, actual):  # fmt: skip
+                raise ValueError("reference positions must be finite")
+            return actual
         if type(ref) is not np.ndarray or ref.dtype != np.float64:
             ref = np.asarray(reference, dtype=np.float64)
         squeeze = ref.ndim == 2
@@ -306,9 +326,7 @@ class ServoPlant:
         actual = np.empty((self.n_envs, n_ticks, 3))
         for i in range(0, n_ticks, MAX_LIFTED_TICKS):
             block = ref[:, i : i + MAX_LIFTED_TICKS]
-            lifted = self._lifted_matrix(block.shape[1])
-            if lifted.ndim == 3:  # shared model: one matrix per axis for every env
-                lifted = lifted[:, None]
+            lifted = self._lifted4_matrix(block.shape[1])
             if not _step_kernel(lifted, self._state, self._history, self._velocity, block,
                                 actual[:, i : i + MAX_LIFTED_TICKS]):  # fmt: skip
                 raise ValueError("reference positions must be finite")
