@@ -4,7 +4,8 @@
 Both envs are built with ``gymnasium.make`` (the same wrappers), driven with random actions, reset at
 episode end; the two are timed in interleaved repeats and the median steps/s of each is reported with
 their ratio (goal ≥ 1.0×, floor 0.3×). ``--vector N`` adds ``gymnasium.vector.SyncVectorEnv`` figures
-(env-steps/s over N copies) for both; ``--profile`` prints where a Feedrate-v0 step spends its time.
+(env-steps/s over N copies) for both and the native ``FeedrateVectorEnv`` of N copies; ``--profile``
+prints where a Feedrate-v0 step spends its time.
 
 Usage::
 
@@ -28,6 +29,7 @@ import gymnasium as gym
 import numpy as np
 
 import cnc_gym  # noqa: F401  (registers cnc_gym/Feedrate-v0)
+from cnc_gym.envs.vector import FeedrateVectorEnv
 
 FEEDRATE_ID = "cnc_gym/Feedrate-v0"
 PENDULUM_ID = "Pendulum-v1"
@@ -150,11 +152,21 @@ def main(argv: list[str] | None = None) -> int:
             vec_steps,
             args.repeats,
         )
+        native_vec, pend_vec2 = interleaved(
+            lambda: FeedrateVectorEnv(n, **kwargs),
+            lambda: gym.vector.SyncVectorEnv([lambda: gym.make(PENDULUM_ID)] * n),
+            time_vector,
+            vec_steps,
+            args.repeats,
+        )
         result["vector_envs"] = n
         result["feedrate_sync_vector_env_steps_per_s"] = statistics.median(feed_vec)
-        result["pendulum_sync_vector_env_steps_per_s"] = statistics.median(pend_vec)
+        result["pendulum_sync_vector_env_steps_per_s"] = statistics.median(pend_vec + pend_vec2)
+        result["feedrate_native_vector_env_steps_per_s"] = statistics.median(native_vec)
         print(f"SyncVectorEnv ×{n} env-steps/s: Feedrate-v0 {statistics.median(feed_vec):,.0f}, "
-              f"Pendulum-v1 {statistics.median(pend_vec):,.0f}")  # fmt: skip
+              f"Pendulum-v1 {result['pendulum_sync_vector_env_steps_per_s']:,.0f}")  # fmt: skip
+        print(f"FeedrateVectorEnv ×{n} env-steps/s: {statistics.median(native_vec):,.0f} "
+              f"({statistics.median(native_vec) / statistics.median(feed_vec):.2f} × SyncVectorEnv)")
 
     if args.profile:
         result["profile_shares"] = profile(kwargs, args.steps, 25)
