@@ -58,17 +58,18 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
 
 
 @njit(cache=True, nogil=True)
-def _error_statistics(error, reference_last, actual_last):
-    """``(max, sum of squares, last)`` of a step's contour errors and the following error ‖ref − act‖."""
+def _error_statistics(error, reference, actual):
+    """``(max, sum of squares, last)`` of a step's contour errors and the last sample's following error
+    ‖reference − actual‖."""
     e_max = 0.0
     sum_sq = 0.0
     for e in error:
         sum_sq += e * e
         if e > e_max:
             e_max = e
-    dx = reference_last[0] - actual_last[0]
-    dy = reference_last[1] - actual_last[1]
-    dz = reference_last[2] - actual_last[2]
+    dx = reference[-1, 0] - actual[-1, 0]
+    dy = reference[-1, 1] - actual[-1, 1]
+    dz = reference[-1, 2] - actual[-1, 2]
     return e_max, sum_sq, error[-1], math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
@@ -462,7 +463,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._ticks += n
         self._steps += 1
 
-        e_max, sum_sq, e_now, self._following_error_mm = _error_statistics(error, reference[-1], actual[-1])
+        e_max, sum_sq, e_now, self._following_error_mm = _error_statistics(error, reference, actual)
         # The meter returns 0 where the reference is on a rapid or dwell, so the sum of squares over all
         # samples is the sum over cutting samples; only the count needs the cutting mask.
         if one_segment:
@@ -481,7 +482,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
         w = self.reward_weights
         ratio = min(e_max / self.tolerance_mm, w.error_ratio_cap)
-        progress = self._path_progress()
+        finished = controller.finished
+        progress = 1.0 if finished else min(controller.path_s / self._total_length, 1.0)  # _path_progress
         reward = (
             w.progress * (progress - self._progress)
             - self._time_reward
@@ -490,7 +492,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         )
         self._progress = progress
 
-        terminated = controller.finished and bool(self.plant.settled(self.in_position_mm)[0])
+        terminated = finished and bool(self.plant.settled(self.in_position_mm)[0])
         truncated = (not terminated) and self._steps >= self.max_episode_steps
         if self._renderer is not None:
             self._renderer.record(actual, error)
