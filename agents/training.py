@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import yaml
 
 from cnc_gym.errors import ConfigError
@@ -71,12 +70,6 @@ class TrainConfig:
     #: Scale rewards by a running estimate of the return's spread (VecNormalize with norm_obs=False):
     #: training only, so the saved model needs no extra statistics to run.
     normalize_reward: bool = False
-    #: Training-only bonus per unit of path progress: ``progress_bonus · Δ(progress)`` is added to each
-    #: step's reward. Over a finished episode it sums to exactly ``progress_bonus`` whatever the policy,
-    #: so the undiscounted return's ranking of policies that finish is unchanged; but with γ < 1 it
-    #: pays for progress when it happens, which the env's constant per-step time cost does not (a
-    #: discounted objective barely sees that a slow policy makes the episode longer). 0 = off.
-    progress_bonus: float = 0.0
     seed: int = 0
     torch_threads: int = 1
     output_dir: str = "runs"
@@ -143,27 +136,6 @@ def _build(cls: type, data: Any, source: str, where: str) -> Any:
     return cls(**values)
 
 
-class ProgressBonus(gym.Wrapper):
-    """Adds ``bonus · Δprogress`` to every step's reward (see ``TrainConfig.progress_bonus``)."""
-
-    def __init__(self, env: gym.Env, bonus: float) -> None:
-        super().__init__(env)
-        self.bonus = float(bonus)
-        self._progress = 0.0
-
-    def reset(self, **kwargs: Any):
-        observation, info = self.env.reset(**kwargs)
-        self._progress = float(info.get("progress", 0.0))
-        return observation, info
-
-    def step(self, action: Any):
-        observation, reward, terminated, truncated, info = self.env.step(action)
-        progress = float(info.get("progress", 0.0))
-        reward = float(reward) + self.bonus * (progress - self._progress)
-        self._progress = progress
-        return observation, reward, terminated, truncated, info
-
-
 def load_config(path: str | Path) -> TrainConfig:
     """Read and validate a training config (YAML via ``yaml.safe_load``)."""
     path = Path(path)
@@ -211,13 +183,11 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
         load_program(program, config.env.dialect)
     run_dir = Path(out or config.output_dir) / config.run_name
     run_dir.mkdir(parents=True, exist_ok=True)
-    bonus = float(config.progress_bonus)
     vec_env = make_vec_env(
         "cnc_gym/Feedrate-v0",
         n_envs=config.n_envs,
         seed=config.seed,
         env_kwargs=config.env.make_kwargs(),
-        wrapper_class=(lambda env: ProgressBonus(env, bonus)) if bonus > 0 else None,
         vec_env_cls=DummyVecEnv,
     )
     if config.normalize_reward:
