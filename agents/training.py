@@ -15,6 +15,7 @@ from typing import Any
 
 import yaml
 
+from cnc_gym.config import check_keys, read_yaml
 from cnc_gym.errors import ConfigError
 
 
@@ -101,11 +102,7 @@ def _build(cls: type, data: Any, source: str, where: str) -> Any:
         data = {}
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: {where or 'the config'} must be a mapping")
-    names = {f.name for f in dataclasses.fields(cls)} - {"source"}
-    unknown = sorted(set(map(str, data)) - names)
-    if unknown:
-        prefix = f"{where}." if where else ""
-        raise ConfigError(f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(names))})")
+    check_keys(data, {f.name for f in dataclasses.fields(cls)} - {"source"}, source, where)
     default = cls()
     values: dict[str, Any] = {}
     for key, raw in data.items():
@@ -139,12 +136,7 @@ def _build(cls: type, data: Any, source: str, where: str) -> Any:
 def load_config(path: str | Path) -> TrainConfig:
     """Read and validate a training config (YAML via ``yaml.safe_load``)."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read training config: {exc.strerror}") from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: invalid YAML: {exc}") from None
+    data = read_yaml(path, "training config")
     config = _build(TrainConfig, data, str(path), "")
     config.source = str(path)
     positive = {"total_timesteps": config.total_timesteps, "n_envs": config.n_envs,

@@ -23,9 +23,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from cnc_gym.config import check_keys, configs_dir, read_yaml
 from cnc_gym.errors import ConfigError
+
+__all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "configs_dir", "load_machine", "machine_names"]
 
 AXIS_NAMES = ("x", "y", "z")
 
@@ -84,14 +85,6 @@ class MachineConfig:
         return tuple(float(getattr(axis, name)) for axis in self.axes)  # type: ignore[return-value]
 
 
-def configs_dir() -> Path:
-    """The repository's ``configs/`` folder (set ``CNC_GYM_CONFIGS`` to use another)."""
-    import os
-
-    env = os.environ.get("CNC_GYM_CONFIGS")
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "configs"
-
-
 def machine_names() -> list[str]:
     return sorted(p.stem for p in (configs_dir() / "machines").glob("*.yaml"))
 
@@ -105,25 +98,20 @@ def load_machine(name_or_path: str | Path = "vmc-small") -> MachineConfig:
         path = configs_dir() / "machines" / f"{name_or_path}.yaml"
         if not path.exists():
             raise ConfigError(f"unknown machine {name_or_path!r}; presets: {', '.join(machine_names())}")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read machine config: {exc.strerror}") from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: invalid YAML: {exc}") from None
+    data = read_yaml(path, "machine config")
     return machine_from_dict(data, source=str(path))
 
 
 def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: a machine config must be a mapping")
-    _check_keys(data, {"name", "description", "controller", "axis_defaults", "axes"}, source, "")
+    check_keys(data, {"name", "description", "controller", "axis_defaults", "axes"}, source, "")
     controller = _build(ControllerConfig, data.get("controller", {}), source, "controller")
     defaults = data.get("axis_defaults", {}) or {}
     axes_data = data.get("axes", {}) or {}
     if not isinstance(axes_data, dict):
         raise ConfigError(f"{source}: 'axes' must be a mapping of x/y/z")
-    _check_keys(axes_data, set(AXIS_NAMES), source, "axes")
+    check_keys(axes_data, set(AXIS_NAMES), source, "axes")
     _build(AxisConfig, defaults, source, "axis_defaults")  # validate defaults on their own
     axes = tuple(
         _build(AxisConfig, {**defaults, **(axes_data.get(n) or {})}, source, f"axes.{n}") for n in AXIS_NAMES
@@ -135,20 +123,11 @@ def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
                          axes=axes, source=source)  # type: ignore[arg-type]  # fmt: skip
 
 
-def _check_keys(data: dict, allowed: set[str], source: str, where: str) -> None:
-    unknown = sorted(set(map(str, data)) - allowed)
-    if unknown:
-        prefix = f"{where}." if where else ""
-        raise ConfigError(
-            f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(allowed))})"
-        )
-
-
 def _build(cls, data: Any, source: str, where: str):
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: '{where}' must be a mapping")
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    _check_keys(data, set(fields), source, where)
+    check_keys(data, set(fields), source, where)
     values = {}
     for key, raw in data.items():
         want = type(getattr(cls(), key))

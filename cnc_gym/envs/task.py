@@ -12,10 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from cnc_gym.config import check_keys, configs_dir, read_yaml
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import configs_dir
 
 ACTION_MODES = ("override", "feed")
 
@@ -67,12 +65,7 @@ def task_path(name_or_path: str | Path) -> Path:
 def load_task(name_or_path: str | Path = "default") -> TaskConfig:
     """Load and validate a task file (by name under ``configs/tasks/`` or by path)."""
     path = task_path(name_or_path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read task config: {exc.strerror}") from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: invalid YAML: {exc}") from None
+    data = read_yaml(path, "task config")
     return task_from_dict(data, source=str(path))
 
 
@@ -81,7 +74,7 @@ def task_from_dict(data: Any, source: str = "<dict>") -> TaskConfig:
         raise ConfigError(f"{source}: a task config must be a mapping")
     allowed = {"name", "description", "programs", "dialect", "machine", "action_mode", "control_period_s",
                "reward"}  # fmt: skip
-    _check_keys(data, allowed, source, "")
+    check_keys(data, allowed, source, "")
     values: dict[str, Any] = {"source": source}
     for key in ("name", "description", "dialect", "machine", "action_mode"):
         if key in data:
@@ -109,7 +102,7 @@ def reward_from_dict(data: Any, source: str = "<dict>") -> RewardWeights:
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: reward must be a mapping of weights")
     names = ("time", "progress", "contour_error", "violation", "error_ratio_cap")
-    _check_keys(data, set(names), source, "reward")
+    check_keys(data, set(names), source, "reward")
     values = {}
     for key, raw in data.items():
         if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw) or raw < 0:
@@ -139,12 +132,3 @@ def _positive_number(raw: Any, source: str, key: str) -> float:
     if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw) or raw <= 0:
         raise ConfigError(f"{source}: {key} must be a positive number, got {raw!r}")
     return float(raw)
-
-
-def _check_keys(data: dict, allowed: set[str], source: str, where: str) -> None:
-    unknown = sorted(set(map(str, data)) - allowed)
-    if unknown:
-        prefix = f"{where}." if where else ""
-        raise ConfigError(
-            f"{source}: unknown key {prefix}{unknown[0]} (allowed: {', '.join(sorted(allowed))})"
-        )
