@@ -101,8 +101,6 @@ class Controller:
         window = max(int(ctl.lookahead_blocks), 2)
         self._cfg = np.array([self.dt, window, ctl.override_slew_per_s, *self.limits.rest_position])
         self._scratch = np.zeros((window + 2, 3))
-        # NURBS pieces are drawn as chords by the kernel; their exact points are put in after each call.
-        self._nurbs_rows = np.flatnonzero(toolpath.kind == SegmentKind.NURBS).astype(float)
         self._st_f = np.zeros(K.N_STATE_F)
         self._st_i = np.zeros(K.N_STATE_I, dtype=np.int64)
         self.reset()
@@ -130,7 +128,8 @@ class Controller:
         if self._n_seg:
             out = np.zeros((1, K.N_OUT))
             k = int(self._st_i[K.K_SEG])
-            K._position(self.limits.seg_f, self.limits.seg_i, k, self._st_f[K.S_S], out, 0)
+            lim = self.limits
+            K._position(lim.seg_f, lim.seg_i, lim.curve_f, k, self._st_f[K.S_S], out, 0)
             return out[0, 1:4].copy()
         return self.limits.rest_position.copy()
 
@@ -215,13 +214,9 @@ class Controller:
     def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
                      cmd: float = 0.0, stop_when_done: bool = False) -> np.ndarray:  # fmt: skip
         lim = self.limits
-        out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, self._cfg, self._st_f,
-                               self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch,
+        out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, lim.curve_f, self._cfg,
+                               self._st_f, self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch,
                                stop_when_done)  # fmt: skip
-        if len(self._nurbs_rows) and len(out):
-            on_curve = np.isin(out[:, K.O_SEG], self._nurbs_rows)
-            if np.any(on_curve):
-                out[on_curve, K.O_X : K.O_Z + 1] = self.toolpath.evaluate(out[on_curve, K.O_S])[0]
         if len(out):
             self._last_position = out[-1, K.O_X : K.O_Z + 1].copy()
         return out

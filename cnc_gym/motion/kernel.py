@@ -54,7 +54,9 @@ I_PU, I_PV, I_PW = 1, 2, 3  # plane axes (u, v, w) of an arc
 I_TP = 4  # index of the segment in the Toolpath
 I_LOCKED = 5  # 1 = override fixed at 100 % (G63)
 I_RAPID = 6  # 1 = rapid
-N_SEG_I = 7
+I_TABLE = 7  # NURBS piece: first row of its samples in the curve table (-1 otherwise)
+I_NSAMP = 8  # NURBS piece: number of equally spaced samples (point, unit tangent) in the table
+N_SEG_I = 9
 
 # Per limit point q (the start of motion segment q; q = n is the program end), float columns.
 P_S = 0  # arc length, mm
@@ -448,7 +450,8 @@ def _bottom(v: float, a: float, j: float, dt: float, jerk_b: float) -> float:
 
 
 @njit(cache=True)
-def _position(seg_f: np.ndarray, seg_i: np.ndarray, k: int, s: float, out: np.ndarray, row: int) -> None:
+def _position(seg_f: np.ndarray, seg_i: np.ndarray, curve_f: np.ndarray, k: int, s: float, out: np.ndarray,
+              row: int) -> None:  # fmt: skip
     """Point at arc length s on motion segment k, written to out[row, O_X:O_Z+1]."""
     length = seg_f[k, F_LEN]
     local = min(max(s - seg_f[k, F_S0], 0.0), length)
@@ -460,6 +463,23 @@ def _position(seg_f: np.ndarray, seg_i: np.ndarray, k: int, s: float, out: np.nd
         out[row, O_X + iu] = seg_f[k, F_CX + iu] + r * math.cos(theta)
         out[row, O_X + iv] = seg_f[k, F_CX + iv] + r * math.sin(theta)
         out[row, O_X + iw] = seg_f[k, F_SX + iw] + seg_f[k, F_RISE] * frac
+    elif seg_i[k, I_TABLE] >= 0:
+        # NURBS piece: cubic Hermite through the sampled points and unit tangents (by arc length); the table
+        # is dense enough that this is within 1e-10 mm of the exact curve (checked when it is built).
+        n_int = seg_i[k, I_NSAMP] - 1
+        h = length / n_int
+        i = min(int(local / h), n_int - 1) if h > 0.0 else 0
+        u = (local - i * h) / h if h > 0.0 else 0.0
+        r0 = seg_i[k, I_TABLE] + i
+        u2 = u * u
+        u3 = u2 * u
+        h00 = 2.0 * u3 - 3.0 * u2 + 1.0
+        h10 = (u3 - 2.0 * u2 + u) * h
+        h01 = -2.0 * u3 + 3.0 * u2
+        h11 = (u3 - u2) * h
+        for ax in range(3):
+            out[row, O_X + ax] = (h00 * curve_f[r0, ax] + h10 * curve_f[r0, 3 + ax]
+                                  + h01 * curve_f[r0 + 1, ax] + h11 * curve_f[r0 + 1, 3 + ax])  # fmt: skip
     else:
         for ax in range(3):
             p0 = seg_f[k, F_SX + ax]
@@ -468,8 +488,8 @@ def _position(seg_f: np.ndarray, seg_i: np.ndarray, k: int, s: float, out: np.nd
 
 @njit(cache=True)
 def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
-                   dwell_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray,
-                   n_ticks: int, mode: int, knob: float, rapid_ov: float, cmd: float,
+                   dwell_f: np.ndarray, curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray,
+                   st_i: np.ndarray, n_ticks: int, mode: int, knob: float, rapid_ov: float, cmd: float,
                    pts: np.ndarray, stop_when_done: bool = False) -> np.ndarray:  # fmt: skip
     """Run ``n_ticks`` interpolation periods from the state (st_f, st_i); returns one row per tick.
 
@@ -483,8 +503,8 @@ def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i:
     n_seg = seg_f.shape[0]
     out = np.zeros((n_ticks, N_OUT))
     for tick in range(n_ticks):
-        _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts, out, tick,
-              dt, window, slew_step, n_seg)
+        _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts,
+              out, tick, dt, window, slew_step, n_seg)
         if st_i[K_PHASE] == PHASE_DONE:
             out[tick, O_DONE] = 1.0
             if stop_when_done:
@@ -494,9 +514,9 @@ def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i:
 
 @njit(cache=True)
 def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, dwell_f: np.ndarray,
-          cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, mode: int, knob: float, rapid_ov: float,
-          cmd: float, pts: np.ndarray, out: np.ndarray, tick: int, dt: float, window: int, slew_step: float,
-          n_seg: int) -> None:  # fmt: skip
+          curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, mode: int, knob: float,
+          rapid_ov: float, cmd: float, pts: np.ndarray, out: np.ndarray, tick: int, dt: float, window: int,
+          slew_step: float, n_seg: int) -> None:  # fmt: skip
     """One interpolation period (see the module docstring)."""
     phase = st_i[K_PHASE]
     k = st_i[K_SEG]
@@ -522,7 +542,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     if phase == PHASE_DONE:
         out[tick, O_S] = st_f[S_S]
         if n_seg > 0:
-            _position(seg_f, seg_i, n_seg - 1, st_f[S_S], out, tick)
+            _position(seg_f, seg_i, curve_f, n_seg - 1, st_f[S_S], out, tick)
             out[tick, O_SEG] = seg_i[n_seg - 1, I_TP]
             out[tick, O_CUT] = 1.0 if seg_i[n_seg - 1, I_RAPID] == 0 else 0.0
         else:
@@ -570,7 +590,8 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         d_brk, t_brk = brake(v, a, 0.0, acc_b, jerk_b)
         if (t_brk <= dt * (1.0 + 1e-9) and d_stop <= d_brk + SNAP_MM) or (
                 d_stop <= SNAP_MM and v <= 1e-6 and abs(a) <= 1e-3):  # fmt: skip
-            _snap_to_stop(seg_f, seg_i, pt_f, pt_i, dwell_f, st_f, st_i, out, tick, q_stop, n_seg, dt, a)
+            _snap_to_stop(seg_f, seg_i, curve_f, pt_f, pt_i, dwell_f, st_f, st_i, out, tick, q_stop, n_seg,
+                          dt, a)
             return
 
     # ---- relevant points: those that the most aggressive jerk would violate.
@@ -687,7 +708,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     while k < n_seg - 1 and s1 >= seg_f[k + 1, F_S0] and k + 1 < q_stop:
         k += 1
     st_i[K_SEG] = k
-    _position(seg_f, seg_i, k, s1, out, tick)
+    _position(seg_f, seg_i, curve_f, k, s1, out, tick)
     out[tick, O_S] = s1
     out[tick, O_V] = v1
     out[tick, O_A] = a1
@@ -697,9 +718,9 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
 
 
 @njit(cache=True)
-def _snap_to_stop(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
-                  dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, out: np.ndarray, tick: int,
-                  q_stop: int, n_seg: int, dt: float, a: float) -> None:  # fmt: skip
+def _snap_to_stop(seg_f: np.ndarray, seg_i: np.ndarray, curve_f: np.ndarray, pt_f: np.ndarray,
+                  pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, out: np.ndarray,
+                  tick: int, q_stop: int, n_seg: int, dt: float, a: float) -> None:  # fmt: skip
     """End this period at rest exactly on mandatory stop q_stop (the braking manoeuvre ends inside it)."""
     j = -a / dt
     st_f[S_S] = pt_f[q_stop, P_S]
@@ -707,7 +728,7 @@ def _snap_to_stop(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: 
     st_f[S_A] = 0.0
     st_f[S_J] = j
     k_last = q_stop - 1
-    _position(seg_f, seg_i, k_last, st_f[S_S], out, tick)
+    _position(seg_f, seg_i, curve_f, k_last, st_f[S_S], out, tick)
     out[tick, O_S] = st_f[S_S]
     out[tick, O_J] = j
     out[tick, O_SEG] = seg_i[k_last, I_TP]

@@ -55,6 +55,7 @@ class PathLimits:
     pt_f: np.ndarray  # (n + 1, N_PT_F)
     pt_i: np.ndarray  # (n + 1, N_PT_I)
     dwell_f: np.ndarray  # (m, 5): seconds, toolpath index, x, y, z
+    curve_f: np.ndarray  # (r, 6): NURBS table, point and unit tangent per sample
     rest_position: np.ndarray  # (3,) where the reference rests when there is no motion at all
 
 
@@ -155,12 +156,15 @@ def _backward_bounds(acc: np.ndarray, jerk: np.ndarray, length: np.ndarray, cap:
 #: NURBS curves are cut into pieces of at most this arc length (and at least NURBS_MIN_PIECES), mm.
 NURBS_PIECE_MM = 0.5
 NURBS_MIN_PIECES = 4
-NURBS_SAMPLES = 9  # samples per piece for tangent extent and curvature
+NURBS_SAMPLES = 9  # samples per piece (at least): limits are sampled there, positions interpolated between
+NURBS_TABLE_TOL_MM = 1e-10  # the Hermite table is refined until it is this close to the exact curve
+NURBS_MAX_SAMPLES = 1025
 
 
 def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple | None]:
     """(toolpath row, start arc length, length) per piece, and for the NURBS pieces (in order) the sampled
-    (extent, tangent at start, tangent at end, largest curvature, chord start, chord end)."""
+    (extent, tangent at start, tangent at end, largest curvature, chord start, chord end, first table row,
+    samples per piece) plus the curve table (point, unit tangent per row)."""
     nurbs = tp.kind[rows] == SegmentKind.NURBS
     if not np.any(nurbs):
         return rows, tp.s_start[rows].astype(float), tp.length[rows].astype(float), None
@@ -174,26 +178,49 @@ def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     count = np.repeat(counts, counts)
     piece_len = tp.length[idx] / count
     s0 = tp.s_start[idx] + j * piece_len
-    geo = [[], [], [], [], [], []]
+    geo: list[list] = [[] for _ in range(8)]
+    table = []
+    table_rows = 0
     for r in rows[nurbs]:
         curve = tp.nurbs[int(r)]
         k = int(counts[np.searchsorted(rows, r)])
-        local = np.linspace(0.0, float(tp.length[r]), k * (NURBS_SAMPLES - 1) + 1)
-        point, tangent, curvature = curve.at_length(np.minimum(local, curve.length))
-        ends = np.arange(0, len(local), NURBS_SAMPLES - 1)
-        blocks = np.stack([np.arange(a, a + NURBS_SAMPLES) for a in ends[:-1]])  # (k, samples)
+        length = float(tp.length[r])
+        samples = NURBS_SAMPLES
+        while True:  # refine until the cubic Hermite between samples matches the exact curve
+            n_int = samples - 1
+            local = np.minimum(np.linspace(0.0, length, k * n_int + 1), curve.length)
+            point, tangent, curvature = curve.at_length(local)
+            mid = np.minimum((local[:-1] + local[1:]) / 2, curve.length)
+            exact, _, _ = curve.at_length(mid)
+            h = np.diff(local)[:, None]
+            hermite = (point[:-1] + point[1:]) / 2 + h / 8 * (tangent[:-1] - tangent[1:])
+            if np.max(np.linalg.norm(hermite - exact, axis=1)) <= NURBS_TABLE_TOL_MM:
+                break
+            if samples >= NURBS_MAX_SAMPLES:
+                break  # ≤ 0.5 mm / 1024 spacing: whatever is left is below what a servo can show
+            samples = 2 * n_int + 1
+        ends = np.arange(0, len(local), n_int)
+        blocks = ends[:-1, None] + np.arange(samples)[None, :]  # (k, samples)
+        kappa_max = curvature[blocks].max(axis=1)
+        spacing = length / (k * n_int)
         # Between samples a tangent component moves by at most κ·(spacing/2): add it, so the sampled
         # extent bounds the true one (given the sampled curvature).
-        spacing = float(tp.length[r]) / (k * (NURBS_SAMPLES - 1))
-        kappa_max = curvature[blocks].max(axis=1)
         bound = np.abs(tangent[blocks]).max(axis=1) + (kappa_max * spacing / 2)[:, None]
         geo[0].append(np.minimum(bound, 1.0))
         geo[1].append(tangent[ends[:-1]])
         geo[2].append(tangent[ends[1:]])
-        geo[3].append(curvature[blocks].max(axis=1))
+        geo[3].append(kappa_max)
         geo[4].append(point[ends[:-1]])
         geo[5].append(point[ends[1:]])
-    return idx, s0, piece_len, tuple(np.concatenate(g) for g in geo)
+        # Each piece's rows in the table (pieces share their end samples: store per piece for simplicity).
+        for piece in range(k):
+            sl = slice(piece * n_int, piece * n_int + samples)
+            table.append(np.hstack((point[sl], tangent[sl])))
+            geo[6].append(table_rows)
+            geo[7].append(samples)
+            table_rows += samples
+    out = tuple(np.concatenate(g) for g in geo[:6])
+    return idx, s0, piece_len, (*out, np.array(geo[6]), np.array(geo[7]), np.concatenate(table))
 
 
 def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
@@ -335,6 +362,12 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     seg_i[:, K.I_TP] = idx
     seg_i[:, K.I_LOCKED] = (modes[idx] & SegmentMode.OVERRIDE_LOCKED) != 0
     seg_i[:, K.I_RAPID] = ~cutting
+    seg_i[:, K.I_TABLE] = -1
+    curve_f = np.zeros((1, 6))
+    if nurbs_geo is not None:
+        seg_i[is_nurbs, K.I_TABLE] = nurbs_geo[6]
+        seg_i[is_nurbs, K.I_NSAMP] = nurbs_geo[7]
+        curve_f = nurbs_geo[8]
     pt_f = np.zeros((n + 1, K.N_PT_F))
     pt_f[:, K.P_S] = np.concatenate((s0, [s0[-1] + length[-1]])) if n else 0.0
     pt_f[:, K.P_HARD] = hard
@@ -353,7 +386,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         rest = tp.start[dwell_rows[-1]].astype(float)
     else:
         rest = np.zeros(3)
-    for arr in (seg_f, seg_i, pt_f, pt_i, dwell_f):
+    for arr in (seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f):
         arr.flags.writeable = False
     return PathLimits(seg_f=np.ascontiguousarray(seg_f), seg_i=seg_i, pt_f=pt_f, pt_i=pt_i,
-                      dwell_f=dwell_f, rest_position=rest)  # fmt: skip
+                      dwell_f=dwell_f, curve_f=np.ascontiguousarray(curve_f), rest_position=rest)  # fmt: skip
