@@ -455,6 +455,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             reference[:] = self._last_reference
             segment = np.full(n, self._last_segment)
         actual = self.plant.step(reference[None])[0]
+        # In-position check (P1471), sampled once per control step: the controller holds the reference on
+        # an exact stop, a rapid end or start, or the program end until the servo is settled there.
+        if controller.waiting_in_position and self.plant.settled(self.in_position_mm)[0]:
+            controller.release_in_position()
         # The reference only moves forward, so equal first and last segments mean one segment for the whole
         # step: the meter's scalar-hint path (same window, same result) skips the per-sample bookkeeping.
         first_segment = int(segment[0])

@@ -88,8 +88,11 @@ class Controller:
     :class:`MotionChunk`; ``lookahead`` returns :class:`LookaheadFeatures` for observations.
     """
 
-    def __init__(self, toolpath: Toolpath, machine: MachineConfig) -> None:
+    def __init__(self, toolpath: Toolpath, machine: MachineConfig, in_position_check: bool = True) -> None:
         self.toolpath = toolpath
+        #: Hold the reference at every in-position stop until :meth:`release_in_position` (see
+        #: ``docs/motion.md``); False runs straight on from every stop once the reference is at rest.
+        self.in_position_check = bool(in_position_check)
         self.machine = machine
         ctl = machine.controller
         self.dt = float(ctl.interpolation_period_s)
@@ -135,8 +138,22 @@ class Controller:
 
     @property
     def finished(self) -> bool:
-        """True once the reference is at rest at the program end and every dwell is done."""
+        """True once the reference is at rest at the program end, released from its in-position wait, and
+        every dwell is done."""
         return bool(self._st_i[K.K_PHASE] == K.PHASE_DONE)
+
+    @property
+    def waiting_in_position(self) -> bool:
+        """True while the reference rests on a stop with an in-position check and waits for
+        :meth:`release_in_position` (time runs on, speed 0)."""
+        return bool(self._st_i[K.K_PHASE] == K.PHASE_WAIT)
+
+    def release_in_position(self) -> None:
+        """The axes are in position: end the wait (the next period goes on with the stop's dwells, the next
+        block, or finishes the program). Does nothing when not waiting."""
+        if self._st_i[K.K_PHASE] == K.PHASE_WAIT:
+            lim = self.limits
+            K.release_wait(lim.pt_i, lim.dwell_f, self._st_f, self._st_i, self._n_seg)
 
     @property
     def time_s(self) -> float:
@@ -212,11 +229,12 @@ class Controller:
         return _chunk(self._advance_raw(int(n_ticks), knob, rapid, mode, cmd))
 
     def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
-                     cmd: float = 0.0, stop_when_done: bool = False) -> np.ndarray:  # fmt: skip
+                     cmd: float = 0.0, stop_when_done: bool = False,
+                     wait: bool = True) -> np.ndarray:  # fmt: skip
         lim = self.limits
         out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, lim.curve_f, self._cfg,
                                self._st_f, self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch,
-                               stop_when_done)  # fmt: skip
+                               stop_when_done, wait and self.in_position_check)  # fmt: skip
         if len(out):
             self._last_position = out[-1, K.O_X : K.O_Z + 1].copy()
         return out
@@ -225,16 +243,19 @@ class Controller:
         self, override: float = 1.0, max_ticks: int = 50_000_000, chunk: int = 4096
     ) -> MotionChunk:
         """Advance at a constant override until the program is finished; the run (and the controller's
-        clock) stops on the period at which it finished (for tests, scripts and baselines)."""
+        clock) stops on the period at which it finished (for tests, scripts and baselines). With no servo
+        to wait for, the reference goes on from every stop once at rest (no in-position wait; a wait
+        already begun is released)."""
         knob = _finite(override, "override")
         if not 0.0 <= knob <= self.max_override:
             raise ActionError(f"override must be within 0..{self.max_override:g}, got {override!r}")
         parts = []
         done = 0
+        self.release_in_position()
         while not self.finished:
             if done >= max_ticks:
                 raise CncGymError(f"program did not finish within {max_ticks} interpolation periods")
-            parts.append(self._advance_raw(chunk, knob, stop_when_done=True))
+            parts.append(self._advance_raw(chunk, knob, stop_when_done=True, wait=False))
             done += chunk
         out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
         return _chunk(out)

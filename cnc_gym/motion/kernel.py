@@ -72,14 +72,16 @@ Q_STOP = 0  # 1 = mandatory stop (exact stop, dwell, mode change, program end)
 Q_DW0 = 1  # dwells to run at this point: rows Q_DW0 .. Q_DW1-1 of the dwell table
 Q_DW1 = 2
 Q_NEXT_STOP = 3  # index of the first mandatory stop at or after this point
-N_PT_I = 4
+Q_WAIT = 4  # 1 = a stop with an in-position check (exact stop, rapid end or start, M/S/T, program end)
+N_PT_I = 5
 
 # State vectors.
 S_T, S_S, S_V, S_A, S_OV, S_DWELL_LEFT, S_J = 0, 1, 2, 3, 4, 5, 6
 N_STATE_F = 7
 K_SEG, K_PHASE, K_DWELL = 0, 1, 2  # motion segment, phase, current dwell row
 N_STATE_I = 3
-PHASE_MOVE, PHASE_DWELL, PHASE_DONE = 0, 1, 2
+# PHASE_WAIT: at rest on an in-position stop (K_SEG = the segment arrived on), until released from outside.
+PHASE_MOVE, PHASE_DWELL, PHASE_DONE, PHASE_WAIT = 0, 1, 2, 3
 
 # Output columns of advance().
 O_T, O_X, O_Y, O_Z, O_S, O_V, O_A, O_J, O_SEG, O_CUT, O_DONE = range(11)  # O_DONE: finished after the tick
@@ -490,12 +492,14 @@ def _position(seg_f: np.ndarray, seg_i: np.ndarray, curve_f: np.ndarray, k: int,
 def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
                    dwell_f: np.ndarray, curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray,
                    st_i: np.ndarray, n_ticks: int, mode: int, knob: float, rapid_ov: float, cmd: float,
-                   pts: np.ndarray, stop_when_done: bool = False) -> np.ndarray:  # fmt: skip
+                   pts: np.ndarray, stop_when_done: bool = False,
+                   wait: bool = True) -> np.ndarray:  # fmt: skip
     """Run ``n_ticks`` interpolation periods from the state (st_f, st_i); returns one row per tick.
 
     cfg: [dt, window_blocks, override_slew_per_s, rest_x, rest_y, rest_z]. ``dwell_f`` rows: [seconds,
     toolpath index, x, y, z]. ``pts`` is scratch space (window + 2 rows, 3 columns). With
-    ``stop_when_done`` the run ends on the period that finishes the program (fewer rows).
+    ``stop_when_done`` the run ends on the period that finishes the program (fewer rows). With ``wait``
+    the reference holds at every in-position stop (PHASE_WAIT) until :func:`release_wait` is called.
     """
     dt = cfg[0]
     window = int(cfg[1])
@@ -504,7 +508,7 @@ def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i:
     out = np.zeros((n_ticks, N_OUT))
     for tick in range(n_ticks):
         _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts,
-              out, tick, dt, window, slew_step, n_seg)
+              out, tick, dt, window, slew_step, n_seg, wait)
         if st_i[K_PHASE] == PHASE_DONE:
             out[tick, O_DONE] = 1.0
             if stop_when_done:
@@ -516,7 +520,7 @@ def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i:
 def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, dwell_f: np.ndarray,
           curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, mode: int, knob: float,
           rapid_ov: float, cmd: float, pts: np.ndarray, out: np.ndarray, tick: int, dt: float, window: int,
-          slew_step: float, n_seg: int) -> None:  # fmt: skip
+          slew_step: float, n_seg: int, wait: bool) -> None:  # fmt: skip
     """One interpolation period (see the module docstring)."""
     phase = st_i[K_PHASE]
     k = st_i[K_SEG]
@@ -538,6 +542,12 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         out[tick, O_SEG] = dwell_f[row, 1]
         if st_f[S_DWELL_LEFT] <= 1e-12:
             _after_dwell(pt_i, dwell_f, st_f, st_i, n_seg)
+        return
+    if phase == PHASE_WAIT:  # at rest on the stop at the end of segment k, waiting to be in position
+        _position(seg_f, seg_i, curve_f, k, st_f[S_S], out, tick)
+        out[tick, O_S] = st_f[S_S]
+        out[tick, O_SEG] = seg_i[k, I_TP]
+        out[tick, O_CUT] = 1.0 if seg_i[k, I_RAPID] == 0 else 0.0
         return
     if phase == PHASE_DONE:
         out[tick, O_S] = st_f[S_S]
@@ -591,7 +601,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         if (t_brk <= dt * (1.0 + 1e-9) and d_stop <= d_brk + SNAP_MM) or (
                 d_stop <= SNAP_MM and v <= 1e-6 and abs(a) <= 1e-3):  # fmt: skip
             _snap_to_stop(seg_f, seg_i, curve_f, pt_f, pt_i, dwell_f, st_f, st_i, out, tick, q_stop, n_seg,
-                          dt, a)
+                          dt, a, wait)
             return
 
     # ---- relevant points: those that the most aggressive jerk would violate.
@@ -720,7 +730,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
 @njit(cache=True)
 def _snap_to_stop(seg_f: np.ndarray, seg_i: np.ndarray, curve_f: np.ndarray, pt_f: np.ndarray,
                   pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, out: np.ndarray,
-                  tick: int, q_stop: int, n_seg: int, dt: float, a: float) -> None:  # fmt: skip
+                  tick: int, q_stop: int, n_seg: int, dt: float, a: float, wait: bool) -> None:  # fmt: skip
     """End this period at rest exactly on mandatory stop q_stop (the braking manoeuvre ends inside it)."""
     j = -a / dt
     st_f[S_S] = pt_f[q_stop, P_S]
@@ -733,13 +743,26 @@ def _snap_to_stop(seg_f: np.ndarray, seg_i: np.ndarray, curve_f: np.ndarray, pt_
     out[tick, O_J] = j
     out[tick, O_SEG] = seg_i[k_last, I_TP]
     out[tick, O_CUT] = 1.0 if seg_i[k_last, I_RAPID] == 0 else 0.0
+    if wait and pt_i[q_stop, Q_WAIT] == 1:
+        st_i[K_PHASE] = PHASE_WAIT
+        st_i[K_SEG] = k_last
+        return
     _arrive_at_stop(pt_i, dwell_f, st_f, st_i, q_stop, n_seg)
+
+
+@njit(cache=True)
+def release_wait(pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray,
+                 n_seg: int) -> None:  # fmt: skip
+    """End an in-position wait (PHASE_WAIT on the stop at the end of segment K_SEG): go on as on arrival."""
+    if st_i[K_PHASE] == PHASE_WAIT:
+        _arrive_at_stop(pt_i, dwell_f, st_f, st_i, st_i[K_SEG] + 1, n_seg)
 
 
 @njit(cache=True)
 def _arrive_at_stop(pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, q: int,
                     n_seg: int) -> None:  # fmt: skip
-    """At rest on mandatory stop q: start its dwells, or go on with segment q, or finish."""
+    """At rest on mandatory stop q (and in position): start its dwells, or go on with segment q, or
+    finish."""
     if pt_i[q, Q_DW1] > pt_i[q, Q_DW0]:
         st_i[K_PHASE] = PHASE_DWELL
         st_i[K_DWELL] = pt_i[q, Q_DW0]

@@ -288,6 +288,11 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     stop = np.zeros(n + 1, dtype=bool)
     turn = np.zeros(n + 1)
     stop[n] = True
+    # Stops with an in-position check before the next block (P1471): exact stops (G09/G61 block ends,
+    # G04 without P/X, M00), both ends of every rapid, M/S/T changes and the program end. Plain dwells and
+    # the block ends of look-ahead off are stops without it.
+    wait = np.zeros(n + 1, dtype=bool)
+    wait[n] = n > 0
     modes = tp.modes.astype(np.int64)
     if n:
         hard[0] = cap[0]
@@ -314,6 +319,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         # Without look-ahead every block ends at rest — but the pieces of one NURBS block are one block.
         no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt)
         stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead
+        wait[1:n] = has_exact | mode_change | aux_change
     hard[stop] = 0.0
 
     # ------------------------------------------------------------------ dwells per point
@@ -380,6 +386,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     pt_i[:, K.Q_DW0] = dw0
     pt_i[:, K.Q_DW1] = dw1
     pt_i[:, K.Q_NEXT_STOP] = next_stop
+    pt_i[:, K.Q_WAIT] = wait
     if n:
         rest = tp.end[idx[-1]].astype(float)
     elif len(dwell_rows):

@@ -45,7 +45,7 @@ def test_line_time_triangular_acceleration_matches_closed_form():
     # V = 100 mm/s < A²/J = 300 mm/s: the acceleration never reaches A; each ramp is a triangle in a(t)
     # lasting 2·√(V/J), covering V·√(V/J); total time L/V + 2·√(V/J), peak acceleration √(V·J).
     V, J, L = 100.0, 30000.0, 100.0
-    c = Controller(single_line(L, V * 60), VMC)
+    c = Controller(single_line(L, V * 60), VMC, in_position_check=False)
     t, chunk = finish_time(c)
     expected = L / V + 2 * math.sqrt(V / J)
     assert abs(t - expected) <= 2 * DT
@@ -60,7 +60,7 @@ def test_line_time_trapezoidal_acceleration_matches_closed_form():
     # V/A + A/J and covers V·(V/A + A/J)/2 (symmetric S-curve): total L/V + V/A + A/J.
     m = machine(max_jerk_mm_s3=300000)
     V, A, J, L = 200.0, 3000.0, 300000.0, 150.0
-    c = Controller(single_line(L, V * 60), m)
+    c = Controller(single_line(L, V * 60), m, in_position_check=False)
     t, chunk = finish_time(c)
     assert abs(t - (L / V + V / A + A / J)) <= 2 * DT
     assert np.max(np.abs(chunk.accel)) == pytest.approx(A, rel=1e-6)
@@ -72,7 +72,7 @@ def test_diagonal_line_uses_projected_axis_limits():
     # Along (1,1,0)/√2 each axis sees u_k = 1/√2, so the path may accelerate at A·√2 and jerk at J·√2,
     # and the per-axis feed clamp allows 250·√2 mm/s (capped by the 250 mm/s composite clamp P1224).
     m = machine(max_jerk_mm_s3=300000)
-    c = Controller(single_line(200.0, 15000, direction=(1, 1, 0)), m)
+    c = Controller(single_line(200.0, 15000, direction=(1, 1, 0)), m, in_position_check=False)
     lim = c.segment_limits()
     assert lim["accel_mm_s2"][0] == pytest.approx(3000 * math.sqrt(2))
     assert lim["jerk_mm_s3"][0] == pytest.approx(300000 * math.sqrt(2))
@@ -86,7 +86,7 @@ def test_diagonal_line_uses_projected_axis_limits():
 def test_short_line_never_reaches_feed():
     # L = 1 mm at F 12000 (200 mm/s): a rest-to-rest jerk-limited move with peak speed v covers
     # 2·v·√(v/J) when v < A²/J, so the peak solves 2 v^1.5 / √J = L → v = (L·√J / 2)^(2/3).
-    c = Controller(single_line(1.0, 12000), VMC)
+    c = Controller(single_line(1.0, 12000), VMC, in_position_check=False)
     chunk = c.run_to_end()
     v_peak = (1.0 * math.sqrt(30000.0) / 2) ** (2 / 3)
     assert np.max(chunk.speed) == pytest.approx(v_peak, rel=0.02)
@@ -100,7 +100,7 @@ def test_right_angle_corner_speed_is_the_axis_step():
     b = ToolpathBuilder()
     b.line((0, 0, 0), (50, 0, 0), feed=6000, line=1)
     b.line((50, 0, 0), (50, 50, 0), feed=6000, line=2)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     assert c.junction_limits()["limit_mm_s"][1] == pytest.approx(10.0)
     chunk = c.run_to_end()
     speeds, crossed = crossing_speeds(chunk, np.array([50.0]))
@@ -116,7 +116,7 @@ def test_shallow_corner_is_faster_than_sharp_corner():
     b.line((0, 0, 0), (50, 0, 0), feed=6000, line=1)
     ang = math.radians(10)
     b.line((50, 0, 0), (50 + 50 * math.cos(ang), 50 * math.sin(ang), 0), feed=6000, line=2)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     assert c.junction_limits()["limit_mm_s"][1] == pytest.approx(10.0 / math.sin(ang))
     assert c.junction_limits()["turn_rad"][1] == pytest.approx(ang)
 
@@ -125,7 +125,7 @@ def test_exact_stop_and_program_end_come_to_rest():
     b = ToolpathBuilder()
     b.line((0, 0, 0), (20, 0, 0), feed=6000, line=1, modes=SegmentMode.EXACT_STOP)  # G09
     b.line((20, 0, 0), (40, 0, 0), feed=6000, line=2)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     chunk = c.run_to_end()
     at_stop = np.flatnonzero(np.abs(chunk.path_s - 20.0) <= 1e-12)
     assert len(at_stop) and chunk.speed[at_stop[0]] == 0.0 and chunk.accel[at_stop[0]] == 0.0
@@ -133,7 +133,7 @@ def test_exact_stop_and_program_end_come_to_rest():
     b2 = ToolpathBuilder()
     b2.line((0, 0, 0), (20, 0, 0), feed=6000, line=1)
     b2.line((20, 0, 0), (40, 0, 0), feed=6000, line=2)
-    c2 = Controller(b2.build(), VMC)
+    c2 = Controller(b2.build(), VMC, in_position_check=False)
     t2 = c2.run_to_end().time_s[-1]
     assert t2 == pytest.approx(40 / 100 + 2 * math.sqrt(100 / 30000), abs=2 * DT)
     assert chunk.time_s[-1] > t2 + 0.1
@@ -145,7 +145,7 @@ def test_arc_speed_limits_closed_form():
     # chord (2/T)·√(2Rδ − δ²) with δ = 1 µm = 1000·√(0.004 − 1e-6) = 63.2 mm/s → the jerk limit binds.
     b = ToolpathBuilder()
     b.arc((2, 0, 0), (-2, 0, 0), (0, 0, 0), Plane.XY, math.pi, feed=12000, line=1)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     cap = c.segment_limits()["cap_mm_s"][0]
     expected = min(math.sqrt(3000 * 2), (30000 * 4) ** (1 / 3), 1000 * math.sqrt(0.004 - 1e-6))
     assert cap == pytest.approx(expected)
@@ -162,7 +162,7 @@ def test_helix_feed_is_the_projected_speed():
     r, rise = 20.0, 10.0
     b.arc((r, 0, 0), (r, 0, rise), (0, 0, 0), Plane.XY, 2 * math.pi, feed=3000, line=1)
     tp = b.build()
-    c = Controller(tp, VMC)
+    c = Controller(tp, VMC, in_position_check=False)
     planar = 2 * math.pi * r
     expected = 50.0 * math.hypot(planar, rise) / planar
     assert c.segment_limits()["base_mm_s"][0] == pytest.approx(expected)
@@ -172,7 +172,7 @@ def test_helix_feed_is_the_projected_speed():
 def test_override_change_mid_block_is_jerk_limited():
     # 200 mm at F 6000 (100 mm/s); after 0.5 s the knob drops to 50 %. The applied override slews at
     # 10/s (0.05 s for 1.0 → 0.5) and the speed follows with |j| ≤ J; it settles at 50 mm/s.
-    c = Controller(single_line(200.0, 6000), VMC)
+    c = Controller(single_line(200.0, 6000), VMC, in_position_check=False)
     first = c.advance(250, override=1.0)
     assert first.speed[-1] == pytest.approx(100.0)
     second = c.advance(250, override=0.5)
@@ -187,7 +187,7 @@ def test_override_change_mid_block_is_jerk_limited():
 
 
 def test_override_zero_holds_and_resumes():
-    c = Controller(single_line(100.0, 6000), VMC)
+    c = Controller(single_line(100.0, 6000), VMC, in_position_check=False)
     c.advance(200, override=1.0)
     held = c.advance(300, override=0.0)
     assert held.speed[-1] == 0.0 or held.speed[-1] < 1e-9
@@ -200,13 +200,13 @@ def test_override_zero_holds_and_resumes():
 
 def test_override_is_clamped_by_the_maximum_cutting_feed():
     # F 12000 × 200 % = 400 mm/s, clamped to P1224 = 15000 mm/min = 250 mm/s.
-    c = Controller(single_line(300.0, 12000), VMC)
+    c = Controller(single_line(300.0, 12000), VMC, in_position_check=False)
     chunk = c.advance(1000, override=2.0)
     assert np.max(chunk.speed) == pytest.approx(250.0)
 
 
 def test_feed_mode_replaces_f_times_override():
-    c = Controller(single_line(200.0, 6000), VMC)
+    c = Controller(single_line(200.0, 6000), VMC, in_position_check=False)
     chunk = c.advance(500, feed_mm_min=3000.0)
     assert chunk.speed[-1] == pytest.approx(50.0)
     chunk = c.advance(300, feed_mm_min=30000.0)  # clamped at 250 mm/s
@@ -214,7 +214,7 @@ def test_feed_mode_replaces_f_times_override():
 
 
 def test_override_lock_g63_ignores_the_knob():
-    c = Controller(single_line(100.0, 3000, modes=SegmentMode.OVERRIDE_LOCKED), VMC)
+    c = Controller(single_line(100.0, 3000, modes=SegmentMode.OVERRIDE_LOCKED), VMC, in_position_check=False)
     chunk = c.advance(500, override=2.0)
     assert np.max(chunk.speed) == pytest.approx(50.0)
 
@@ -224,12 +224,12 @@ def test_rapid_rate_and_rapid_override():
     b = ToolpathBuilder()
     b.rapid((0, 0, 0), (400, 0, 0), line=1)
     tp = b.build()
-    c = Controller(tp, VMC)
+    c = Controller(tp, VMC, in_position_check=False)
     chunk = c.run_to_end()
     assert np.max(chunk.speed) == pytest.approx(500.0)
     assert chunk.time_s[-1] == pytest.approx(400 / 500 + 500 / 5000 + 5000 / 70000, abs=2 * DT)
     assert not np.any(chunk.cutting)
-    c2 = Controller(tp, VMC)
+    c2 = Controller(tp, VMC, in_position_check=False)
     half = c2.advance(2000, override=1.0, rapid_override=0.25)
     assert np.max(half.speed) == pytest.approx(125.0)
 
@@ -241,11 +241,11 @@ def test_dwell_holds_position_for_its_time():
     b.dwell((10, 0, 0), 0.5, line=2)
     b.line((10, 0, 0), (20, 0, 0), feed=6000, line=3)
     tp = b.build()
-    with_dwell = Controller(tp, VMC).run_to_end()
+    with_dwell = Controller(tp, VMC, in_position_check=False).run_to_end()
     b2 = ToolpathBuilder()
     b2.line((0, 0, 0), (10, 0, 0), feed=6000, line=1, modes=SegmentMode.EXACT_STOP)
     b2.line((10, 0, 0), (20, 0, 0), feed=6000, line=3)
-    without = Controller(b2.build(), VMC).run_to_end()
+    without = Controller(b2.build(), VMC, in_position_check=False).run_to_end()
     # the dwell adds its time (rounded to whole periods) to an exact-stop run
     assert with_dwell.time_s[-1] - without.time_s[-1] == pytest.approx(0.5, abs=DT + 1e-9)
     dwelling = with_dwell.segment == 1
@@ -255,7 +255,7 @@ def test_dwell_holds_position_for_its_time():
 
 
 def test_finished_controller_stays_at_rest_and_reset_restarts():
-    c = Controller(single_line(10.0, 6000), VMC)
+    c = Controller(single_line(10.0, 6000), VMC, in_position_check=False)
     first = c.run_to_end()
     assert c.finished
     more = c.advance(5)
@@ -268,12 +268,12 @@ def test_finished_controller_stays_at_rest_and_reset_restarts():
 
 
 def test_empty_and_dwell_only_programs():
-    c = Controller(ToolpathBuilder().build(), VMC)
+    c = Controller(ToolpathBuilder().build(), VMC, in_position_check=False)
     assert c.finished
     assert c.advance(3).position.shape == (3, 3)
     b = ToolpathBuilder()
     b.dwell((1, 2, 3), 0.01, line=1)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     chunk = c.run_to_end()
     assert c.finished and len(chunk) == 5 and np.allclose(chunk.position, [1, 2, 3])
 
@@ -283,7 +283,7 @@ def test_no_lookahead_stops_at_every_block_end():
     b = ToolpathBuilder()
     b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
     b.line((10, 0, 0), (20, 0, 0), feed=6000, line=2)
-    c = Controller(b.build(), m)
+    c = Controller(b.build(), m, in_position_check=False)
     assert c.junction_limits()["stop"][1]
     chunk = c.run_to_end()
     speeds, _ = crossing_speeds(chunk, np.array([10.0]))
@@ -296,7 +296,7 @@ def test_lookahead_features_of_a_corner():
     b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
     b.line((10, 0, 0), (10, 10, 0), feed=3000, line=2, modes=SegmentMode.EXACT_STOP)
     b.line((10, 10, 0), (0, 10, 0), feed=6000, line=3)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     f = c.lookahead(40.0, 8)  # bins of 5 mm: [0,5) [5,10] (corner at 10) ... stop at 20, end at 30
     assert f.distance_to_stop_mm == pytest.approx(20.0)
     assert f.speed_limit_mm_s[0] == pytest.approx(100.0)
@@ -320,7 +320,7 @@ def test_lookahead_features_of_a_corner():
     ({"override": "fast"}, "number"),
 ])  # fmt: skip
 def test_bad_actions_raise_action_error(kwargs, match):
-    c = Controller(single_line(10.0, 6000), VMC)
+    c = Controller(single_line(10.0, 6000), VMC, in_position_check=False)
     with pytest.raises(ActionError, match=match):
         c.advance(5, **kwargs)
     assert issubclass(ActionError, CncGymError) and issubclass(ActionError, ValueError)
@@ -328,13 +328,13 @@ def test_bad_actions_raise_action_error(kwargs, match):
 
 @pytest.mark.parametrize("n_ticks", [-1, 2.5, True, "5"])
 def test_bad_tick_count(n_ticks):
-    c = Controller(single_line(10.0, 6000), VMC)
+    c = Controller(single_line(10.0, 6000), VMC, in_position_check=False)
     with pytest.raises(ActionError):
         c.advance(n_ticks)
 
 
 def test_bad_lookahead_arguments():
-    c = Controller(single_line(10.0, 6000), VMC)
+    c = Controller(single_line(10.0, 6000), VMC, in_position_check=False)
     with pytest.raises(ActionError):
         c.lookahead(0.0, 4)
     with pytest.raises(ActionError):
@@ -347,7 +347,7 @@ def test_cutting_without_feed_is_a_program_error(feed):
     b.line((0, 0, 0), (10, 0, 0), feed=6000, line=3)
     b.line((10, 0, 0), (20, 0, 0), feed=feed, line=7)
     with pytest.raises(ProgramError, match=r"part.nc:7: .*\[motion.no_feed\]"):
-        Controller(b.build(), VMC)
+        Controller(b.build(), VMC, in_position_check=False)
 
 
 def test_lookahead_features_of_an_arc_and_after_the_end():
@@ -355,7 +355,7 @@ def test_lookahead_features_of_an_arc_and_after_the_end():
     b = ToolpathBuilder()
     b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
     b.arc((10, 0, 0), (15, 5, 0), (10, 5, 0), Plane.XY, math.pi / 2, feed=6000, line=2)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     f = c.lookahead(20.0, 4)  # bins of 5 mm; the arc spans s = 10 .. 17.85
     assert list(f.curvature_1_mm) == pytest.approx([0.0, 0.0, 0.2, 0.2])
     assert np.all(f.turn_angle_rad < 1e-9)  # tangent continuous
@@ -375,7 +375,7 @@ def test_lookahead_distance_to_stop_tracks_the_motion():
     pts = [(0, 0, 0), (10, 0, 0), (12, 3, 0), (20, 3, 1), (20, 10, 1)]
     for i, (p, q) in enumerate(itertools.pairwise(pts)):
         b.line(p, q, feed=4000 + 1000 * i, line=i + 1)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     last = c.lookahead(5.0, 5).distance_to_stop_mm
     s_prev = 0.0
     while not c.finished:
@@ -393,7 +393,7 @@ def test_tiny_block_with_exact_stop_still_stops():
     b.line((0, 0, 0), (10, 0, 0), feed=6000, line=1)
     b.line((10, 0, 0), (10 + 1e-7, 0, 0), feed=6000, line=2, modes=SegmentMode.EXACT_STOP)
     b.line((10 + 1e-7, 0, 0), (20, 0, 0), feed=6000, line=3)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     assert len(c.segment_limits()["index"]) == 2
     assert c.junction_limits()["stop"][1]
     check_run(c, c.run_to_end())
@@ -404,7 +404,7 @@ def test_state_properties_through_a_dwell():
     b.dwell((0, 0, 0), 0.01, line=1)
     b.line((0, 0, 0), (5, 0, 0), feed=6000, line=2)
     b.dwell((5, 0, 0), 0.01, line=3)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     assert c.override_applied == 1.0 and c.segment_index == 0  # dwelling at the start
     c.advance(2, override=0.5)
     assert c.override_applied == 0.5  # the first call takes the knob as it is
@@ -420,7 +420,7 @@ def test_feed_mode_keeps_g63_and_rapids_at_their_own_speed():
     b = ToolpathBuilder()
     b.line((0, 0, 0), (0, 0, -30), feed=1200, line=1, modes=SegmentMode.OVERRIDE_LOCKED)  # G63 tapping
     b.rapid((0, 0, -30), (0, 0, 100), line=2)
-    c = Controller(b.build(), VMC)
+    c = Controller(b.build(), VMC, in_position_check=False)
     parts = []
     while not c.finished:
         parts.append(c.advance(500, feed_mm_min=9000.0))
@@ -443,13 +443,13 @@ def test_nurbs_quarter_circle_gets_the_arc_limits_and_stays_on_the_curve():
     b.nurbs(curve, feed=9000, line=2)
     b.line((0, radius, 0), (0, 10, 0), feed=9000, line=3)
     tp = b.build()
-    c = Controller(tp, VMC)
+    c = Controller(tp, VMC, in_position_check=False)
     lim = c.segment_limits()
     on_curve = lim["index"] == 1
     assert on_curve.sum() >= 4  # cut into pieces
     arc = ToolpathBuilder()
     arc.arc((radius, 0, 0), (0, radius, 0), (0, 0, 0), Plane.XY, math.pi / 2, feed=9000, line=1)
-    arc_cap = Controller(arc.build(), VMC).segment_limits()["cap_mm_s"][0]
+    arc_cap = Controller(arc.build(), VMC, in_position_check=False).segment_limits()["cap_mm_s"][0]
     assert np.allclose(lim["cap_mm_s"][on_curve], arc_cap, rtol=1e-6)
     assert np.allclose(c.lookahead(30.0, 30).curvature_1_mm[8:9], 1 / radius)  # bin (8, 9] mm is on the curve
     chunk = c.run_to_end()
@@ -457,3 +457,103 @@ def test_nurbs_quarter_circle_gets_the_arc_limits_and_stays_on_the_curve():
     assert curving.sum() > 10
     assert np.allclose(np.hypot(chunk.position[curving, 0], chunk.position[curving, 1]), radius, atol=1e-9)
     check_run(c, chunk)
+
+
+# ------------------------------------------------------------------------------------- in-position wait
+def _rapid_plunge_cut():
+    """Rapid to (10, 0, 5), plunge to Z 0, G09 line to X 20, line to X 30, G04 P 0.02 s, line to X 40."""
+    b = ToolpathBuilder()
+    b.rapid((0, 0, 5), (10, 0, 5), line=1)  # 0
+    b.line((10, 0, 5), (10, 0, 0), feed=1200, line=2)  # 1
+    b.line((10, 0, 0), (20, 0, 0), feed=3000, line=3, modes=SegmentMode.EXACT_STOP)  # 2
+    b.line((20, 0, 0), (30, 0, 0), feed=3000, line=4)  # 3
+    b.dwell((30, 0, 0), 0.02, line=5)  # 4
+    b.line((30, 0, 0), (40, 0, 0), feed=3000, line=6)  # 5
+    return b.build()
+
+
+def _run_until_waiting(c: Controller, limit: int = 100_000):
+    parts = []
+    while not c.waiting_in_position:
+        assert len(parts) < limit and not c.finished
+        parts.append(c.advance(1, override=1.0))
+    return parts
+
+
+def test_in_position_wait_holds_the_reference_on_the_rapid_end():
+    c = Controller(_rapid_plunge_cut(), VMC)
+    _run_until_waiting(c)
+    # At rest exactly on the rapid's end point, still reported on the (non-cutting) rapid.
+    assert c.speed == 0.0 and c.segment_index == 0
+    np.testing.assert_array_equal(c.position, [10.0, 0.0, 5.0])
+    t0 = c.time_s
+    held = c.advance(50, override=2.0)  # the knob cannot move it
+    assert c.waiting_in_position and not c.finished
+    np.testing.assert_allclose(held.time_s, t0 + DT * np.arange(1, 51), rtol=0, atol=1e-12)
+    assert np.all(held.position == [10.0, 0.0, 5.0]) and np.all(held.speed == 0.0)
+    assert np.all(held.segment == 0) and not np.any(held.cutting)
+
+
+def test_release_resumes_exactly_as_without_the_wait_shifted_by_the_waiting_time():
+    # The profile after the release is the one the controller would have run without the check, started
+    # n_wait periods later (the state at the stop is rest, a = 0, so nothing else may differ).
+    tp = _rapid_plunge_cut()
+    off = Controller(tp, VMC, in_position_check=False)
+    ref = off.advance(4000, override=1.0)
+    on = Controller(tp, VMC)
+    before = np.concatenate([ch.path_s for ch in _run_until_waiting(on)])
+    n_arrive = len(before)
+    on.advance(37, override=1.0)  # wait 37 more periods
+    on.release_in_position()
+    assert not on.waiting_in_position
+    after = on.advance(100, override=1.0)
+    np.testing.assert_array_equal(before, ref.path_s[:n_arrive])
+    np.testing.assert_allclose(after.path_s, ref.path_s[n_arrive : n_arrive + 100], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(after.time_s, ref.time_s[n_arrive : n_arrive + 100] + 37 * DT, atol=1e-12)
+    assert after.segment[-1] == 1 and after.speed[-1] > 0
+
+
+def test_which_stops_wait_and_program_end_finishes_only_after_release():
+    # Waits: the rapid end (point 1), the G09 block end (X 20), the program end. Not: the plunge → G01
+    # junction, the X 30 plain dwell (G04 P: a stop without the check), the release when not waiting.
+    c = Controller(_rapid_plunge_cut(), VMC)
+    c.release_in_position()  # not waiting: nothing happens
+    assert c.time_s == 0.0 and not c.waiting_in_position
+    stops = []
+    for _ in range(10):
+        _run_until_waiting(c)
+        stops.append((tuple(np.round(c.position, 9)), c.segment_index))
+        if stops[-1][0] == (40.0, 0.0, 0.0):
+            assert not c.finished
+            c.release_in_position()
+            break
+        c.release_in_position()
+    assert stops == [((10.0, 0.0, 5.0), 0), ((20.0, 0.0, 0.0), 2), ((40.0, 0.0, 0.0), 5)]
+    c.advance(1)
+    assert c.finished and not c.waiting_in_position
+
+
+def test_a_rapid_start_waits_too():
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=3000, line=1)
+    b.rapid((10, 0, 0), (10, 0, 20), line=2)
+    c = Controller(b.build(), VMC)
+    _run_until_waiting(c)
+    assert c.segment_index == 0 and np.allclose(c.position, [10, 0, 0])
+
+
+def test_in_position_check_off_and_run_to_end_never_wait():
+    tp = _rapid_plunge_cut()
+    off = Controller(tp, VMC, in_position_check=False)
+    for _ in range(2000):
+        off.advance(5, override=1.0)
+        assert not off.waiting_in_position
+        if off.finished:
+            break
+    assert off.finished
+    on = Controller(tp, VMC)
+    _run_until_waiting(on)
+    on.reset()
+    # run_to_end has no servo to wait for: same time as with the check off
+    expected = Controller(tp, VMC, in_position_check=False).run_to_end().time_s[-1]
+    assert on.run_to_end().time_s[-1] == pytest.approx(expected, abs=1e-12)

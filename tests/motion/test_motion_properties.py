@@ -55,7 +55,7 @@ schedules = st.lists(
        schedule=schedules)  # fmt: skip
 def test_no_limit_is_exceeded_under_random_override(seed, n_blocks, machine, schedule):
     tp = random_program(np.random.default_rng(seed), n_blocks, nurbs_p=0.05)
-    controller = Controller(tp, MACHINES[machine])
+    controller = Controller(tp, MACHINES[machine], in_position_check=False)
     chunks, knobs = [], []
     for n_ticks, override, rapid in schedule:
         chunks.append(controller.advance(n_ticks, override=override, rapid_override=rapid))
@@ -70,7 +70,7 @@ def test_no_limit_is_exceeded_under_random_override(seed, n_blocks, machine, sch
        feeds=st.lists(st.tuples(st.integers(1, 150), st.floats(0.0, 30000.0)), min_size=1, max_size=15))
 def test_no_limit_is_exceeded_in_feed_mode(seed, n_blocks, feeds):
     tp = random_program(np.random.default_rng(seed), n_blocks)
-    controller = Controller(tp, MACHINES["vmc-small"])
+    controller = Controller(tp, MACHINES["vmc-small"], in_position_check=False)
     chunks = [controller.advance(n, feed_mm_min=f) for n, f in feeds]
     chunks.append(controller.run_to_end(override=1.0))
     check_run(controller, concat(chunks), overrides=np.zeros(1))
@@ -81,7 +81,7 @@ def test_no_limit_is_exceeded_in_feed_mode(seed, n_blocks, feeds):
 def test_constant_override_respects_the_feed_and_finishes(seed, n_blocks, override):
     # At a constant knob the speed never exceeds F × override (clamped), and the program ends at rest.
     tp = random_program(np.random.default_rng(seed), n_blocks, dwell_p=0.0)
-    controller = Controller(tp, MACHINES["vmc-small"])
+    controller = Controller(tp, MACHINES["vmc-small"], in_position_check=False)
     chunk = controller.run_to_end(override=override)
     check_run(controller, chunk, overrides=np.zeros(1))
     lim = controller.segment_limits()
@@ -102,7 +102,7 @@ def test_look_ahead_window_end_counts_as_a_stop():
     b = ToolpathBuilder()
     for i in range(200):
         b.line((0.5 * i, 0, 0), (0.5 * (i + 1), 0, 0), feed=12000, line=i + 1)
-    controller = Controller(b.build(), m)
+    controller = Controller(b.build(), m, in_position_check=False)
     chunk = controller.run_to_end()
     bound = 50000.0 ** (1 / 3)  # default AxisConfig jerk 50000 mm/s³ (no preset): (J·1²)^(1/3)
     assert np.max(chunk.speed) <= bound * (1 + 1e-6)
@@ -119,7 +119,7 @@ def test_override_ramp_jerk_and_settling_closed_form():
     # 50 mm/s over 0.1 s; the speed must settle at 100 mm/s and the whole transition respects |j| ≤ J.
     b = ToolpathBuilder()
     b.line((0, 0, 0), (300, 0, 0), feed=3000, line=1)
-    controller = Controller(b.build(), MACHINES["vmc-small"])
+    controller = Controller(b.build(), MACHINES["vmc-small"], in_position_check=False)
     controller.advance(200, override=1.0)
     chunk = controller.advance(200, override=2.0)
     assert math.isclose(chunk.speed[-1], 100.0, rel_tol=1e-6)
@@ -163,7 +163,7 @@ def random_machines(draw):
 def test_no_limit_is_exceeded_on_random_machines(machine, seed, n_blocks, step_mm, knobs):
     # Unequal axes, coarse and fine interpolation periods, windows of 1..60 blocks, tiny and long blocks.
     tp = random_program(np.random.default_rng(seed), n_blocks, step_mm=step_mm, nurbs_p=0.1)
-    controller = Controller(tp, machine)
+    controller = Controller(tp, machine, in_position_check=False)
     chunks = [controller.advance(150, override=k * machine.controller.max_override) for k in knobs]
     chunks.append(controller.run_to_end(override=1.0))
     check_run(controller, concat(chunks), overrides=np.zeros(1))
@@ -179,7 +179,7 @@ def test_builtin_programs_respect_every_limit(program):
         pytest.skip(f"no built-in program {program!r}")
     _, tp = load_program(program)
     for machine in ("vmc-small", "p-loop-30"):
-        controller = Controller(tp, MACHINES[machine])
+        controller = Controller(tp, MACHINES[machine], in_position_check=False)
         check_run(controller, controller.run_to_end(override=1.0))
         controller.reset()
         chunks = [controller.advance(100, override=float(k)) for k in np.linspace(0.3, 2.0, 12)]
