@@ -269,7 +269,7 @@ class ClassicalPlanner:
             return schedule
         # Offending places of the previous round: (path position, error, speed). Every round lowers the
         # cap below the speed actually run at an offending place, so a place whose error did not drop
-        # does not depend on the feed (e.g. the servo still settling from a rapid when the cut begins);
+        # does not depend on the feed (a transient the feed does not drive);
         # lowering the cap there again would only cost time.
         floor = np.where(cutting, self.min_override * feed_mm_s, 0.0)
         model_cap = cap.copy()
