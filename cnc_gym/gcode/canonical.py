@@ -210,25 +210,6 @@ class OffsetStack:
         return (machine[0] - o[0], machine[1] - o[1], machine[2] - o[2])
 
 
-class FastToolpathBuilder(ToolpathBuilder):
-    """ToolpathBuilder with a scalar-math ``arc``: the same rows, nearly half the cost per arc.
-
-    The base class computes radius and start angle with numpy scalar functions (several µs per call on
-    the interpreter's hot path). This override computes the same two values with :mod:`math`; the test
-    ``tests/gcode/test_canonical.py`` checks row for row that both give the same Toolpath.
-    """
-
-    def arc(self, start, end, center, plane: Plane, sweep: float, feed: float, **kw) -> None:
-        u, v, w = _PLANE_AXES[plane]
-        c = list(center)
-        c[w] = start[w]
-        du = start[u] - c[u]
-        dv = start[v] - c[v]
-        self._append(_ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
-                     radius=math.hypot(du, dv), start_angle=math.atan2(dv, du), sweep=sweep,
-                     **kw)  # fmt: skip
-
-
 class CanonicalMachine:
     """Current machine position plus the per-segment context; appends segments to a builder."""
 

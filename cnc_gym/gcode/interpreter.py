@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import cycles, nurbs
 from cnc_gym.gcode.calls import FlowOptions, FlowRunner
-from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, FastToolpathBuilder, OffsetStack, TransformChain
+from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, OffsetStack, TransformChain
 from cnc_gym.gcode.compensation import ToolCompensation
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
@@ -40,7 +40,7 @@ from cnc_gym.gcode.transforms import (
     parameter_block,
 )
 from cnc_gym.gcode.variables import VariableStore
-from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -106,7 +106,7 @@ class Interpreter:
         self.file = program.file
         self.skip_mask = sum(1 << n for n in block_skip)
         self.variables = VariableStore(dialect)
-        self.builder = FastToolpathBuilder(files=(program.file,))
+        self.builder = ToolpathBuilder(files=(program.file,))
         self.out = CanonicalMachine(self.builder, start)
         self.offsets = OffsetStack()
         # Tool compensation (compensation.py): D/H tables (offsets.py), G40-G42, G43/G44/G49, G45-G48.

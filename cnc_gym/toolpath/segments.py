@@ -12,6 +12,7 @@ clockwise (G02). The centre's normal coordinate is the start's; a helix rises li
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import IntEnum, IntFlag
@@ -373,8 +374,9 @@ class ToolpathBuilder:
         u, v, w = PLANE_AXES[Plane(plane)]
         c = list(center)
         c[w] = start[w]
-        radius = float(np.hypot(start[u] - c[u], start[v] - c[v]))
-        start_angle = float(np.arctan2(start[v] - c[v], start[u] - c[u]))
+        du, dv = float(start[u] - c[u]), float(start[v] - c[v])
+        # Scalar math, not numpy scalars: this runs once per arc block on the interpreter's hot path.
+        radius, start_angle = math.hypot(du, dv), math.atan2(dv, du)
         self._append(SegmentKind.ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
                      radius=radius, start_angle=start_angle, sweep=sweep, **kw)  # fmt: skip
 
