@@ -16,7 +16,7 @@ Steps are tuples (cheap to build, easy to compare in tests):
 ``("dwell", seconds)``
 ``("spindle", direction)``               spindle +1 CW (M03), -1 CCW (M04), 0 stop (M05)
 ``("orient",)``                          oriented spindle stop (M19): a 0 s exact-stop dwell, spindle 0
-``("hold",)``                            feed hold for an operator action (G88): a 0 s exact-stop dwell
+``("hold",)``                            feed hold for an operator action (G88, G87 I): a 0 s exact-stop dwell
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
+from cnc_gym.errors import ConfigError
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 if TYPE_CHECKING:
@@ -40,9 +41,13 @@ POCKETS = frozenset({*range(110, 118), *range(130, 138)})
 #: Cycles that need Q (alarm 45).
 PECKING = frozenset({73, 83})
 TAPPING = frozenset({74, 84})
-#: Words each cycle gives a meaning to (besides the axis words, F, S, T, O).
+#: Cycles with a shift at the hole bottom (Q, or I/J with 022#6 SIJ).
+SHIFTING = frozenset({76, 87})
+#: Words each cycle gives a meaning to (besides the axis words, F, S, T, O). I/J of G76/G87 are accepted
+#: here and rejected in :func:`cycle_block` unless the SIJ parameter selects the I/J shift.
 CYCLE_WORDS = {
     **{n: "RQPK" for n in DRILLING},
+    76: "RQPKIJ", 87: "RQPKIJ",
     110: "RIKLWQVDP", 111: "RIKLWQVDP", 114: "RIJKLWQVDP", 115: "RIJKLWQVDP",
     112: "RIJDKQPL", 113: "RIJDKQPL", 116: "RIJDKQPL", 117: "RIJDKQPL",
     130: "RIJLWQVUDKP", 131: "RIJLWQVUDKP", 132: "RIJDLUKQP", 133: "RIJDLUKQP",
@@ -74,6 +79,22 @@ class CycleParameters:
     max_cutting_feed: float = 4000.0
     #: The unnamed G124/G125 parameter: hole-to-hole moves as cutting feed (True) or rapid (False).
     pattern_moves_cutting: bool = False
+    #: "022#6 SIJ" (L2618; not in the Parameter volume): True = the G76/G87 shift is the incremental
+    #: vector I (X), J (Y), modal in the cycle mode, moved at the feed F; Q then shifts nothing (it stays
+    #: the modal peck depth of G73/G83). False = the shift is |Q| in the 2000#4/#5 direction, at rapid.
+    shift_by_ij: bool = False
+    #: G87 variant (L3030-L3044): 2 = back boring (the manual's example X41), 1 = boring with a feed
+    #: hold and manual retract at the bottom (like G88, without the shift). The manual names no selector
+    #: but "canned cycle I / II"; its only parameter there, 009#7 FIX2, is not in the Parameter volume.
+    g87_variant: int = 2
+
+    def __post_init__(self) -> None:
+        if self.shift_direction not in (0, 1, 2, 3):
+            raise ConfigError(f"cycle parameter shift_direction {self.shift_direction!r}: must be 0..3 "
+                              "(2000#5 RD2, #4 RD1 as 2·RD2 + RD1)")  # fmt: skip
+        if self.g87_variant not in (1, 2):
+            raise ConfigError(f"cycle parameter g87_variant {self.g87_variant!r}: must be 1 (manual retract) "
+                              "or 2 (back boring)")  # fmt: skip
 
 
 @dataclass
@@ -91,6 +112,9 @@ class CycleState:
     q: float | None = None  # peck depth / shift, mm (|Q|)
     dwell_s: float = 0.0  # P, seconds
     words: dict = field(default_factory=dict)  # special-cycle data (I J L W V U D E), mm / plain
+    #: G76/G87 I/J shift (SIJ), program mm; modal in the cycle mode (L2618), None = not programmed.
+    shift_i: float | None = None
+    shift_j: float | None = None
     rigid: bool = False  # M29 rigid tapping active
     rigid_pending: bool = False  # M29 given, the tapping cycle not yet
 
@@ -98,6 +122,7 @@ class CycleState:
         """G80 or a group-01 code: cycle off, Z, R and all hole data cleared (F is kept, L2655)."""
         self.code = 0
         self.z = self.r = self.q = None
+        self.shift_i = self.shift_j = None
         self.z_from_r = False
         self.dwell_s = 0.0
         self.words = {}
@@ -114,17 +139,19 @@ def _at(hole: Vec, w: int, level: float) -> Vec:
 def drill_steps(code: int, hole: Vec, w: int, initial: float, r_level: float, bottom: float, *,
                 return_initial: bool, feed: float, q: float = 0.0, dwell_s: float = 0.0,
                 params: CycleParameters = CycleParameters(), spindle: int = 1, rigid: bool = False,
-                shift: Vec = (0.0, 0.0, 0.0)) -> list[Step]:  # fmt: skip
+                shift: Vec = (0.0, 0.0, 0.0), shift_feed: float | None = None) -> list[Step]:  # fmt: skip
     """Moves of one hole of drilling cycle ``code`` (73..89), the tool already positioned over ``hole``
     (its drilling-axis coordinate ignored). ``w``: drilling axis index; levels are program coordinates
-    of that axis. ``shift``: the G76/G87 shift vector (mm, already the full |Q| in the parameter's
-    direction). ``spindle``: the programmed spindle direction restored after a reversal or stop.
-    Sequences: seed notes §4.2 (L2474-L3288)."""
+    of that axis. ``shift``: the G76/G87 shift vector (mm: the full |Q| in the parameter's direction, or
+    the SIJ I/J vector). ``shift_feed``: None = the shift and the shift back are rapids (Q form); a feed
+    = linear interpolation at that feed (the SIJ form, L2618). ``spindle``: the programmed spindle
+    direction restored after a reversal or stop. ``params.g87_variant`` picks G87 I (manual retract) or
+    II (back boring). Sequences: seed notes §4.2 (L2474-L3288)."""
     at = _at
     retract = initial if return_initial else r_level
     steps: list[Step] = []
-    if code == 87:
-        return _back_boring(hole, w, initial, r_level, bottom, feed, dwell_s, params, shift)
+    if code == 87 and params.g87_variant == 2:
+        return _back_boring(hole, w, initial, r_level, bottom, feed, dwell_s, params, shift, shift_feed)
     steps.append(("rapid", at(hole, w, r_level)))
     if code in PECKING:
         d = params.g73_retract_mm if code == 73 else params.g83_clearance_mm
@@ -157,16 +184,16 @@ def drill_steps(code: int, hole: Vec, w: int, initial: float, r_level: float, bo
             steps.append(("rapid", at(hole, w, initial)))
         return steps
     steps.append(("feed", at(hole, w, bottom), feed, False))
-    if code in (82, 88, 89, 76) and dwell_s > 0:
+    if code in (82, 87, 88, 89, 76) and dwell_s > 0:
         steps.append(("dwell", dwell_s))
     if code == 76:
         if not params.no_m05_before_orient:
             steps.append(("spindle", 0))
         steps.append(("orient",))
         shifted = (hole[0] + shift[0], hole[1] + shift[1], hole[2] + shift[2])
-        steps.append(("rapid", at(shifted, w, bottom)))
+        steps.append(_shift_move(at(shifted, w, bottom), shift_feed))
         steps.append(("rapid", at(shifted, w, retract)))
-        steps.append(("rapid", at(hole, w, retract)))
+        steps.append(_shift_move(at(hole, w, retract), shift_feed))
         steps.append(("spindle", 1))  # M03 after the shift back (L2600)
         return steps
     if code in (85, 89):
@@ -179,9 +206,10 @@ def drill_steps(code: int, hole: Vec, w: int, initial: float, r_level: float, bo
         steps.append(("rapid", at(hole, w, retract)))
         steps.append(("spindle", spindle))
         return steps
-    if code == 88:
+    if code in (87, 88):
         # Spindle stop and feed hold at the bottom; the operator retracts (modelled as a rapid to the
-        # return level), cycle start restarts the spindle CW (L3075-L3121).
+        # return level), cycle start restarts the spindle CW (G88 L3075-L3121; G87 I L3030-L3034, whose
+        # dwell P is the example's "stop at point Z", L3063).
         steps.append(("spindle", 0))
         steps.append(("hold",))
         steps.append(("rapid", at(hole, w, retract)))
@@ -191,8 +219,14 @@ def drill_steps(code: int, hole: Vec, w: int, initial: float, r_level: float, bo
     return steps
 
 
+def _shift_move(target: Vec, shift_feed: float | None) -> Step:
+    """A G76/G87 shift or shift back: rapid (Q form) or linear at F (SIJ form, L2618)."""
+    return ("rapid", target) if shift_feed is None else ("feed", target, shift_feed, False)
+
+
 def _back_boring(hole: Vec, w: int, initial: float, r_level: float, top: float, feed: float, dwell_s: float,
-                 params: CycleParameters, shift: Vec) -> list[Step]:  # fmt: skip
+                 params: CycleParameters, shift: Vec, shift_feed: float | None = None,
+                 ) -> list[Step]:  # fmt: skip
     """G87 II (L2999-L3073): R is the hole bottom below the part, Z the top; always back to the initial
     level (the R level is under the part, so G99 cannot return there)."""
     at = _at
@@ -201,9 +235,9 @@ def _back_boring(hole: Vec, w: int, initial: float, r_level: float, top: float, 
     if not params.no_m05_before_orient:
         steps.append(("spindle", 0))
     steps.append(("orient",))
-    steps.append(("rapid", at(shifted, w, initial)))
+    steps.append(_shift_move(at(shifted, w, initial), shift_feed))
     steps.append(("rapid", at(shifted, w, r_level)))
-    steps.append(("rapid", at(hole, w, r_level)))
+    steps.append(_shift_move(at(hole, w, r_level), shift_feed))
     steps.append(("spindle", 1))
     steps.append(("feed", at(hole, w, top), feed, False))
     if dwell_s > 0:
@@ -211,9 +245,9 @@ def _back_boring(hole: Vec, w: int, initial: float, r_level: float, top: float, 
     if not params.no_m05_before_orient:
         steps.append(("spindle", 0))
     steps.append(("orient",))
-    steps.append(("rapid", at(shifted, w, top)))
+    steps.append(_shift_move(at(shifted, w, top), shift_feed))
     steps.append(("rapid", at(shifted, w, initial)))
-    steps.append(("rapid", at(hole, w, initial)))
+    steps.append(_shift_move(at(hole, w, initial), shift_feed))
     steps.append(("spindle", 1))
     return steps
 
@@ -569,6 +603,29 @@ def _repeats(interp: Interpreter, values: dict) -> int:
     return int(k)
 
 
+def _store_shift_ij(interp: Interpreter, code: int, values: dict, scale: float) -> None:
+    """I/J of G76/G87: the shift increment when 022#6 SIJ is set (L2618), modal in the cycle mode (a block
+    with only I/J stores them, it does not bore); without SIJ they mean nothing (``unused-word``). I is the
+    X and J the Y increment ("X and Y axes move"); one along the drilling axis (2000#0 FXY in G18/G19)
+    would move the tool in the hole, which the shift never does: an error."""
+    if "I" not in values and "J" not in values:
+        return
+    letter = "I" if "I" in values else "J"
+    if not interp.cycle_params.shift_by_ij:
+        raise interp.error(f"address {letter} has no meaning with G{code}: the I/J shift needs parameter "
+                           "022#6 SIJ (CycleParameters.shift_by_ij); the standard shift is Q", "unused-word")
+    w = drilling_axes(interp)[2]
+    for axis, letter in ((0, "I"), (1, "J")):
+        if letter in values and axis == w and values[letter] != 0.0:
+            raise interp.error(f"G{code} {letter}{values[letter]:g}: {letter} would shift along the drilling "
+                               f"axis {interp.dialect.axes[w]}", "cycle-argument", alarm=61)  # fmt: skip
+    state = interp.cycle
+    if "I" in values:
+        state.shift_i = values["I"] * scale
+    if "J" in values:
+        state.shift_j = values["J"] * scale
+
+
 def _tool_radius(interp: Interpreter, values: dict, stored: dict) -> float:
     """Tool radius from the D offset number (D0 = radius 0, L3350); D missing is alarm 221."""
     if "D" in values:
@@ -625,9 +682,12 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
     drills = hole_xy is not None or "R" in values or not interp._axis_letters.isdisjoint(values)
     if "Q" in values and (drills or code not in PECKING):
         state.q = abs(values["Q"]) * s  # the sign of Q is ignored (L2802); stored only when drilling (L2806)
-    for letter in "IJLWVUE":
-        if letter in values:
-            state.words[letter] = values[letter] * (s if letter != "E" else 1.0)
+    if code in SHIFTING:
+        _store_shift_ij(interp, code, values, s)
+    else:
+        for letter in "IJLWVUE":
+            if letter in values:
+                state.words[letter] = values[letter] * (s if letter != "E" else 1.0)
     repeats = _repeats(interp, values)
     if not drills or repeats == 0:
         return
@@ -664,7 +724,7 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
         initial = state.initial
         r_level = state.r
         bottom = state.z + (r_level if state.z_from_r else 0.0)
-        if code == 87:
+        if code == 87 and interp.cycle_params.g87_variant == 2:
             if bottom <= r_level:
                 raise interp.error(f"G87 back boring needs {bottom_letter} above R", "cycle-levels", alarm=61)
         elif bottom >= r_level:
@@ -679,24 +739,39 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
         if code in DRILLING:
             params = interp.cycle_params
             q = state.q or 0.0
-            shift = shift_vector(q, u, v, params.shift_direction)
+            shift_feed = None
+            if params.shift_by_ij:
+                # SIJ (L2618): the shift is the programmed increment I (X), J (Y), cut at F.
+                shift = (state.shift_i or 0.0, state.shift_j or 0.0, 0.0)
+                shift_feed = feed
+            else:
+                shift = shift_vector(q, u, v, params.shift_direction)
             chain = getattr(interp, "chain", None)
             if chain is not None and chain.active:
                 # Scaling does not scale Q, d or the shift (L1962): they are machine amounts, so in
-                # program coordinates they are divided by the map's factor along the drilling axis, and
-                # the shift is the program vector the map sends onto the machine-axis shift.
+                # program coordinates they are divided by the map's factor along the drilling axis. The Q
+                # shift is the program vector the map sends onto the machine-axis shift (2000#4/#5 name a
+                # machine direction); the I/J shift is a programmed increment, so it turns and mirrors with
+                # the map like any other but keeps its length.
                 k = math.sqrt(sum(chain.linear[a][w] ** 2 for a in range(3))) or 1.0
                 q = q / k
                 params = replace(params, g73_retract_mm=params.g73_retract_mm / k,
                                  g83_clearance_mm=params.g83_clearance_mm / k)  # fmt: skip
-                inv = chain.inverse_linear
-                shift = tuple(sum(inv[a][b] * shift[b] for b in range(3)) for a in range(3))
+                if shift_feed is None:
+                    inv = chain.inverse_linear
+                    shift = tuple(sum(inv[a][b] * shift[b] for b in range(3)) for a in range(3))
+                else:
+                    lin = chain.linear
+                    mapped = math.hypot(*(sum(lin[a][b] * shift[b] for b in range(3)) for a in range(3)))
+                    if mapped > 0.0:
+                        factor = math.hypot(*shift) / mapped
+                        shift = (shift[0] * factor, shift[1] * factor, shift[2] * factor)
             if code in PECKING:
                 _limit(interp, (r_level - bottom) / q, f"G{code} pecks (depth / Q)")
             steps = drill_steps(code, hole, w, initial, r_level, bottom, return_initial=return_initial,
                                 feed=feed, q=q, dwell_s=state.dwell_s, params=params,
                                 spindle=interp.spindle_direction or 1, rigid=state.rigid,
-                                shift=shift)  # fmt: skip
+                                shift=shift, shift_feed=shift_feed)  # fmt: skip
         else:
             steps = _pocket(interp, code, hole, values, r_level, bottom, initial, return_initial, feed)
         emit(interp, steps)
@@ -764,6 +839,12 @@ def _count(interp: Interpreter, letter: str, values: dict, code: int, *, require
 def pattern_block(interp: Interpreter, code: int, values: dict, cycle_code: int | None) -> None:
     """G120-G127 (one-shot). G120-G125 drill every hole with the modal canned cycle (only positioning
     when none is active); G124/G125 take the cycle code of their own block; G126/G127 face-mill."""
+    if code <= 123 and interp.cycle.code in POCKETS:
+        # "G110 ... G137 isn't with the function of continuous drilling holes" (L5075): the patterns
+        # drill with the standard cycles only (L4881), never a pocket per hole.
+        raise interp.error(f"G{code} while the special cycle G{interp.cycle.code} is modal: the hole "
+                           "patterns drill with G73-G89 only; cancel it with G80", "cycle-conflict",
+                           alarm=61)  # fmt: skip
     comp = getattr(interp, "comp", None)
     if comp is not None and comp.side:
         comp.before_machine_move()  # the radius offset is ignored by the cycles (L2516): see cycle_block
