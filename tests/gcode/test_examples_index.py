@@ -1,0 +1,141 @@
+"""The index of the manual's worked examples (docs/gsk25i_examples.md) stays complete and true.
+
+The table lists X1-X80 of the seed notes §10 with the tests that check each one. These tests fail when a
+row is missing or doubled, when a test the table names disappears or is renamed, when a quality-A example
+is called out of scope without naming a code the dialect really rejects, or when the counts under the
+table no longer add up. Test nodes are found by parsing the test files (no pytest subprocess).
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import re
+from pathlib import Path
+
+import pytest
+
+from cnc_gym.errors import ProgramError
+from cnc_gym.gcode import interpret
+
+ROOT = Path(__file__).resolve().parents[2]
+INDEX = ROOT / "docs" / "gsk25i_examples.md"
+EXAMPLES = [f"X{n}" for n in range(1, 81)]
+# Being built this session by the LEAD (rotary axes, G37, G20 ordering); nothing else may be pending.
+MAY_BE_PENDING = {"X8", "X27", "X61"}
+NODE = re.compile(r"`(tests/[\w/]+\.py)::(\w+)`")
+CODE = re.compile(r"`(G\d+(?:\.\d)?)`")
+
+
+def parse_table(text: str) -> tuple[list[str], list[dict[str, str]]]:
+    """The examples table: its column names and one dict per row (cells stripped, ``\\|`` unescaped)."""
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("| # |"))
+    header = split_row(lines[start])
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        cells = split_row(line)
+        assert len(cells) == len(header), f"wrong number of cells: {line}"
+        rows.append(dict(zip(header, cells, strict=True)))
+    return header, rows
+
+
+def split_row(line: str) -> list[str]:
+    cells = re.split(r"(?<!\\)\|", line.strip())[1:-1]
+    return [cell.strip().replace("\\|", "|") for cell in cells]
+
+
+@functools.cache
+def rows() -> list[dict[str, str]]:
+    header, table = parse_table(INDEX.read_text(encoding="utf-8"))
+    assert header == ["#", "Manual lines", "What it tests", "Quality", "Status", "Reading"]
+    return table
+
+
+def row_of(example: str) -> dict[str, str]:
+    return next(row for row in rows() if row["#"] == example)
+
+
+@functools.cache
+def functions_in(path: str) -> frozenset[str]:
+    """Module-level test function names of a test file, by parsing it."""
+    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
+    functions = (node for node in tree.body if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef))
+    return frozenset(node.name for node in functions if node.name.startswith("test_"))
+
+
+def status_kind(status: str) -> str:
+    if status.startswith("out of scope"):
+        return "out of scope"
+    if status == "pending (LEAD)":
+        return "pending"
+    assert NODE.search(status), f"status is neither test nodes, out of scope nor pending: {status!r}"
+    # Nothing but test nodes and separators: a typo in a node would otherwise hide in the text.
+    assert NODE.sub("", status).replace(",", "").strip() == "", f"stray text in a status: {status!r}"
+    return "tested"
+
+
+def test_every_example_has_exactly_one_row():
+    numbers = [row["#"] for row in rows()]
+    missing = [x for x in EXAMPLES if x not in numbers]
+    doubled = sorted({x for x in numbers if numbers.count(x) > 1})
+    unknown = [x for x in numbers if x not in EXAMPLES]
+    assert not missing and not doubled and not unknown, (missing, doubled, unknown)
+    assert numbers == EXAMPLES  # in order, so a reader finds them
+
+
+def test_rows_are_well_formed():
+    for row in rows():
+        assert row["Quality"] in {"A", "B", "C"}, row
+        assert re.fullmatch(r"L\d+(-L\d+)?(, L\d+(-L\d+)?)*", row["Manual lines"]), row
+        assert row["What it tests"] and row["Reading"], row
+        status_kind(row["Status"])
+
+
+@pytest.mark.parametrize("example", EXAMPLES)
+def test_every_referenced_test_exists(example):
+    status = row_of(example)["Status"]
+    for path, name in NODE.findall(status):
+        assert (ROOT / path).is_file(), f"{example}: {path} does not exist"
+        assert name in functions_in(path), f"{example}: {path} has no test function {name}"
+
+
+def test_only_the_leads_examples_are_pending():
+    pending = {row["#"] for row in rows() if status_kind(row["Status"]) == "pending"}
+    assert pending <= MAY_BE_PENDING, pending - MAY_BE_PENDING
+
+
+@pytest.mark.parametrize("example", EXAMPLES)
+def test_out_of_scope_names_codes_the_dialect_rejects(example):
+    """An example is out of scope only for codes the dialect refuses by name (``not-implemented``); a
+    quality-A example must name one (a B/C example may instead give its reason only)."""
+    row = row_of(example)
+    if status_kind(row["Status"]) != "out of scope":
+        return
+    codes = CODE.findall(row["Status"])
+    assert codes or row["Quality"] != "A", f"{example} is quality A and out of scope without a rejected code"
+    for code in codes:
+        with pytest.raises(ProgramError) as info:
+            interpret(f"{code}\n", file="index.nc")
+        assert info.value.code == "not-implemented" and code in str(info.value), (example, str(info.value))
+
+
+def test_counts_under_the_table_add_up():
+    counts: dict[tuple[str, str], int] = {}
+    for row in rows():
+        key = (status_kind(row["Status"]), row["Quality"])
+        counts[key] = counts.get(key, 0) + 1
+    text = INDEX.read_text(encoding="utf-8")
+    for kind in ("tested", "out of scope", "pending"):
+        per_quality = [counts.get((kind, q), 0) for q in "ABC"]
+        line = f"| {kind} | " + " | ".join(map(str, per_quality)) + f" | {sum(per_quality)} |"
+        assert line in text, f"counts table out of date: expected the line {line!r}"
+
+
+def test_every_new_example_test_is_indexed():
+    """Each test in test_manual_examples.py is there for an example, so the table must name it."""
+    path = "tests/gcode/test_manual_examples.py"
+    named = {name for row in rows() for p, name in NODE.findall(row["Status"]) if p == path}
+    assert functions_in(path) <= named, sorted(functions_in(path) - named)

@@ -1,0 +1,193 @@
+"""Worked examples of the GSK 25i manual (seed notes §10) that had no test of their own, and the six-hole
+canned-cycle examples transcribed whole (with their closing reference return), as tool paths.
+
+docs/gsk25i_examples.md indexes every example X1-X80 and the tests that check it. The expected paths here
+are worked out by hand from the manual's text (``Lnnnn`` = line of shared/seeds/000_18ea896251c7cb21.txt) and
+the step lists of the notes (§4.2), never taken from the code under test. The simulated machine starts
+at the machine origin with every offset zero, so the work and machine coordinates agree unless an example
+sets an offset, and the initial level of the canned cycles is Z0.
+"""
+
+from __future__ import annotations
+
+import pytest
+from gcode_helpers import close, records
+
+from cnc_gym.gcode import get_dialect, read_program
+from cnc_gym.gcode.interpreter import Interpreter
+
+
+# ---------------------------------------------------------------------------------------- X2, X3, X16, X20
+def test_x2_power_on_mode_is_g00():
+    """X2, second program (L656-L660): ``O00001; X100 Y100; G1 X0 Y0 F100;``. The first block has no
+    motion code: the power-on mode G00 (Table 3-1) makes it a rapid to (100, 100); then a line back to the
+    origin at F100. The O line is a program number, not motion."""
+    got = records("O00001\nX100 Y100\nG1 X0 Y0 F100\n")
+    assert [(r["kind"], r["start"], r["end"]) for r in got] == [
+        ("rapid", [0.0, 0.0, 0.0], [100.0, 100.0, 0.0]),
+        ("line", [100.0, 100.0, 0.0], [0.0, 0.0, 0.0]),
+    ]  # fmt: skip
+    assert "feed" not in got[0] and got[1]["feed"] == 100.0
+
+
+@pytest.mark.parametrize("text", [
+    "G00 X50.123\n",        # the plain word
+    "G00 X 50.123\n",       # spaces are allowed anywhere, also inside the number (§1)
+    "G00 X+50.123\n",       # an explicit plus sign
+    "G91 G00 X50.123\n",    # from the origin, incremental gives the same point
+])  # fmt: skip
+def test_x3_position_x_to_50_123(text):
+    """X3 (L497-L499): "with the following command the tool can be positioned to 50.123 mm along X"; the
+    format box is lost. 50.123 has three decimals, within the least increment 0.0001 mm (L2101), so the
+    truncation of finer digits (L690) must leave it exactly 50.123: a truncation done on the binary float
+    (50.123 is 50.12299999… in binary) would give 50.1229."""
+    (move,) = records(text)
+    assert move["kind"] == "rapid" and close(move["end"], [50.123, 0.0, 0.0], 1e-9)
+    back = records("G00 X-50.123\n")[0]["end"][0]
+    assert close(back, -50.123, 1e-9)
+
+
+@pytest.mark.xfail(strict=True, reason="the reader's R range (±999999.9999, alarm 8) rejects the 8-digit raw "
+                   "bit pattern R10000000 that the manual's G10 L50 example 1 writes (L1507)")
+def test_x16_bit_parameter_as_printed():
+    """X16 example 1 (L1503-L1509): ``G10L50; N2501 R 10000000; G11;`` sets bit 7 (LTM) of parameter 2501.
+    In parameter input R is the raw integer value of the parameter (no decimal point, L1480); for a bit
+    parameter the eight digits are the bits 7..0, so 10000000 is a legal value and must be stored as is.
+    (Example 2 of the same page runs in test_coordinates.py.)"""
+    interp = Interpreter(read_program("G10L50\nN2501 R 10000000\nG11\nG00 X1\n"), get_dialect("gsk25i"))
+    interp.parameters.raw.clear()
+    toolpath = interp.run()
+    assert interp.parameters.raw == {(2501, 0): 10000000}
+    assert not interp.parameter_input and len(toolpath) == 1
+
+
+def test_x20_g92_sets_the_current_position():
+    """X20 (L1670-L1704; the figures are lost). ``G92 X25.0 Z23.0``: "the tool nose coincides with the
+    starting position of the program": the current position becomes X25 Z23; Y, not in the block, keeps
+    its coordinate. From the machine origin, G90 X0 Y0 Z0 then goes to machine (-25, 0, -23)."""
+    got = records("G92 X25.0 Z23.0\nG90 G00 X0 Y0 Z0\n")
+    assert [r["end"] for r in got] == [[-25.0, 0.0, -23.0]]
+    # ``G92 X600.0 Z1200.0`` with an external offset and G54 set (L1700: "after the external workpiece zero
+    # offset is set, the coordinate system isn't affected by the offset value: G92X100.0Z80.0 makes the
+    # current position X=100, Z=80"). External (1, 1, 1) + G54 (9, 9, 9): work zero at machine (10, 10, 10).
+    # After G92 at that point the position reads X600 Z1200, so work X0 is machine 10 - 600 = -590 and
+    # work Z0 is 10 - 1200 = -1190; Y keeps the G54 origin (machine 10). GSK's G92 replaces the work system
+    # until a G54-G59 selection (L1712, docs/gcode.md), which brings back machine (10, 10, 10) for X0 Y0 Z0.
+    text = ("G10 L2 P0 X1 Y1 Z1\nG10 L2 P1 X9 Y9 Z9\nG90 G54 G00 X0 Y0 Z0\nG92 X600.0 Z1200.0\n"
+            "G00 X600.0 Z1200.0\nX0 Y0 Z0\nG54 X0 Y0 Z0\n")  # fmt: skip
+    got = records(text)
+    # "G00 X600 Z1200" is where the tool already is: no segment.
+    assert [r["end"] for r in got] == [[10.0, 10.0, 10.0], [-590.0, 10.0, -1190.0], [10.0, 10.0, 10.0]]
+    assert [r["line"] for r in got] == [3, 6, 7]
+
+
+# ---------------------------------------------------------------------------------------- six-hole programs
+# The manual's standard canned-cycle examples, transcribed line by line with their comments dropped (OCR
+# splits such as "R-120 . P300" joined). Holes 1-5 return to R (G99), hole 6 to the initial level (G98);
+# the literal program visits (300,-250), (300,-550), (300,-750), (1000,-750), (1000,-550), (1000,-750)
+# (notes §10: hole 6 repeats hole 4's position). Each ends G80; G28 G91 X0 Y0 Z0; M5; M30.
+TAIL = "G80;\nG28 G91 X0 Y0 Z0 ;\nM5;\nM30;\n"
+SIX_HOLES = "Y-550.;\nY-750.;\nX1000.;\nY-550.;\nG98 Y-750.;\n"
+PROGRAMS = {
+    # X31 G73 (L2518-L2529): its own hole list.
+    "X31": ("G73", "M3 S1500;\nG90 G99 G73 X0 Y0 Z-15. R-10. Q5 F120;\nY-50.;\nY-80.;\nX10.;\nY10.;\n"
+                   "G98 Y75.;\n" + TAIL),
+    # X32 G74 (L2567-L2581): "X1000" without a point is 1000 mm (DPI = 1).
+    "X32": ("G74", "M4 S100;\nG90 G99 G74 X300. Y-250. Z-150. R-120. P300 F120;\nY-550.;\nY-750.;\nX1000;\n"
+                   "Y-550.;\nG98 Y-750.;\n" + TAIL),
+    "X35": ("G81", "M3 S2000;\nG90 G99 G81 X300. Y-250. Z-150. R-10. F120;\n" + SIX_HOLES + TAIL),  # L2699
+    # X36 G82 (L2754-L2765): "Y-550;" without a point.
+    "X36": ("G82", "M3 S2000;\nG90 G99 G82 X300. Y-250. Z-150. R-100. P1000 F120;\nY-550;\nY-750;\nX1000.;\n"
+                   "Y-550;\nG98 Y-750;\n" + TAIL),
+    "X37": ("G83", "M3 S2000;\nG90 G99 G83 X300. Y-250. Z-150. R-100. Q15 F120;\nY-550;\nY-750;\nX1000;\n"
+                   "Y-550;\nG98 Y-750;\n" + TAIL),  # L2814-L2828
+    # X38 G84 (L2875-L2891): the garbled duplicate of the cycle line read once.
+    "X38": ("G84", "M3 S100;\nG90 G99 G84 X300. Y-250. Z-150. R-120 P300 F120;\nY-550.;\nY-750.;\nX1000;\n"
+                   "Y-550.;\nG98 Y-750.;\n" + TAIL),
+    "X39": ("G85", "M3 S100;\nG90 G99 G85 X300. Y-250. Z-150. R-120. F120;\n" + SIX_HOLES + TAIL),  # L2927
+    # X40 G86 (L2985-L2997): the last comment says "return to point R"; G98 returns to the initial level.
+    "X40": ("G86", "M3 S2000;\nG90 G99 G86 X300. Y-250. Z-150. R-100. F120;\n" + SIX_HOLES + TAIL),
+    "X43": ("G89", "M3 S100;\nG90 G99 G89 X300. Y-250. Z-150. R-120. P1000 F120;\n" + SIX_HOLES + TAIL),
+}
+HOLES = {"X31": [(0, 0), (0, -50), (0, -80), (10, -80), (10, 10), (10, 75)]}
+STANDARD_HOLES = [(300, -250), (300, -550), (300, -750), (1000, -750), (1000, -550), (1000, -750)]
+PECK_RETRACT = 0.5  # d: P2010 (G73) and P2011 (G83), 0.5 mm
+
+
+class ExpectedPath:
+    """Builds the expected (kind, end) list, dropping zero-length moves (the interpreter emits none)."""
+
+    def __init__(self) -> None:
+        self.position = (0.0, 0.0, 0.0)
+        self.steps: list[tuple] = []
+
+    def move(self, kind: str, x: float | None = None, y: float | None = None, z: float | None = None) -> None:
+        x0, y0, z0 = self.position
+        target = (x0 if x is None else float(x), y0 if y is None else float(y), z0 if z is None else float(z))
+        if target != self.position:
+            self.steps.append((kind, target))
+            self.position = target
+
+    def dwell(self, seconds: float) -> None:
+        self.steps.append(("dwell", seconds))
+
+
+def expected_hole(path: ExpectedPath, code: str, x: float, y: float, *, r: float, bottom: float, back: float,
+                  q: float | None, dwell: float | None) -> None:
+    """One hole by the manual's step list (notes §4.2; L2474-L3175): XY rapid at the current level, rapid
+    to R, then the cycle's own steps; ``back`` is R (G99) or the initial level (G98)."""
+    path.move("rapid", x, y)
+    path.move("rapid", z=r)
+    if code == "G73":  # feed Q deeper each time, rapid up d between pecks (L2474-L2531)
+        depth = r
+        while depth > bottom:
+            depth = max(depth - q, bottom)
+            path.move("line", z=depth)
+            if depth > bottom:
+                path.move("rapid", z=depth + PECK_RETRACT)
+        path.move("rapid", z=back)
+    elif code == "G83":  # after each peck rapid to R, rapid down to d above the last depth (L2769-L2832)
+        depth = r
+        while depth > bottom:
+            if depth < r:
+                path.move("rapid", z=r)
+                path.move("rapid", z=depth + PECK_RETRACT)
+            depth = max(depth - q, bottom)
+            path.move("line", z=depth)
+        path.move("rapid", z=back)
+    elif code in ("G81", "G82", "G86"):  # feed in, [dwell], rapid out (G86 with the spindle stopped)
+        path.move("line", z=bottom)
+        if dwell:
+            path.dwell(dwell)
+        path.move("rapid", z=back)
+    else:  # G74, G84 (tap in, dwell, reverse, tap out), G85 and G89 ([dwell], feed out): feed back to R
+        path.move("line", z=bottom)
+        if dwell:
+            path.dwell(dwell)
+        path.move("line", z=r)
+        path.move("rapid", z=back)  # G98: rapid R → initial level
+
+
+@pytest.mark.parametrize("example", sorted(PROGRAMS, key=lambda x: int(x[1:])))
+def test_six_hole_programs_as_printed(example):
+    code, text = PROGRAMS[example]
+    words = dict((w[0], float(w[1:].rstrip("."))) for w in text.split(";\n")[1].split() if w[0] in "RZQP")
+    r, bottom = words["R"], words["Z"]
+    dwell = words["P"] / 1000 if "P" in words else None  # canned-cycle P is in ms
+    expected = ExpectedPath()
+    holes = HOLES.get(example, STANDARD_HOLES)
+    for n, (x, y) in enumerate(holes):
+        expected_hole(expected, code, x, y, r=r, bottom=bottom, back=0.0 if n == 5 else r, q=words.get("Q"),
+                      dwell=dwell)  # fmt: skip
+    # G28 G91 X0 Y0 Z0: the intermediate point is where the tool is (no move), then the reference position
+    # (machine zero) in one rapid (L2236).
+    expected.move("rapid", 0, 0, 0)
+    got = records(text, file=f"{example}.nc")
+    actual = [("dwell", rec["seconds"]) if rec["kind"] == "dwell" else (rec["kind"], tuple(rec["end"]))
+              for rec in got]
+    assert len(actual) == len(expected.steps), (actual, expected.steps)
+    for have, want in zip(actual, expected.steps, strict=True):
+        assert have[0] == want[0] and close(have[1], want[1]), (have, want)
+    assert all(rec["feed"] == 120.0 for rec in got if rec["kind"] == "line")  # F120 throughout
+    assert got[-1]["line"] == text.count("\n") - 2  # the G28 block, before M5 and M30
+
