@@ -18,12 +18,15 @@ The machine starts at the machine origin, so the initial level is Z0 unless a bl
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import pytest
 from gcode_helpers import close, program_error
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from cnc_gym.errors import ConfigError
+from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import interpret, read_program
 from cnc_gym.gcode.cycles import CycleParameters
 from cnc_gym.gcode.dialects.gsk25i import DIALECT
@@ -131,6 +134,41 @@ def test_without_sij_i_j_mean_nothing_to_g76_g87(text):
 
 def test_i_j_still_mean_nothing_to_the_other_drilling_cycles_with_sij():
     assert program_error("G90 G81 X0 Y0 Z-5 R1 I3 F10;\n", dialect=SIJ).code == "unused-word"
+
+
+_coord = st.integers(-400, 400).map(lambda v: v / 8.0)  # steps of 0.125 mm, exact in binary
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(code=st.sampled_from(["G76", "G87"]), ret=st.sampled_from(["G98", "G99"]),
+       hole=st.tuples(_coord, _coord), levels=st.tuples(_coord, _coord),
+       shift=st.tuples(st.one_of(st.none(), _coord), st.one_of(st.none(), _coord)),
+       q=st.one_of(st.none(), _coord))  # fmt: skip
+def test_random_sij_boring_blocks_move_sideways_only_by_the_i_j_shift_at_f(code, ret, hole, levels, shift, q):
+    """Any SIJ G76/G87 block from Z0: a ProgramError (levels the wrong way round), or a path whose only
+    sideways moves after the positioning are cutting moves at F of exactly ±(I, J) (0 where omitted) —
+    Q never shifts — and which ends over the hole, at the initial level (G98, G87) or R (G76 G99)."""
+    words = f"X{hole[0]} Y{hole[1]} Z{levels[0]} R{levels[1]}"
+    words += "".join(f" {letter}{v}" for letter, v in zip("IJ", shift, strict=True) if v is not None)
+    words += f" Q{q}" if q is not None else ""
+    try:
+        tp = interpret(f"G90 {ret} {code} {words} F150;\n", dialect=SIJ)
+    except ProgramError as err:
+        assert err.code == "cycle-levels"
+        bottom, r_level = levels
+        assert (bottom >= r_level) if code == "G76" else (bottom <= r_level)
+        return
+    si, sj = (v or 0.0 for v in shift)
+    start = 1 if (hole[0], hole[1]) != (0.0, 0.0) else 0  # the positioning rapid (dropped when zero-length)
+    for n in range(start, len(tp.kind)):
+        dx, dy = (float(tp.end[n][a] - tp.start[n][a]) for a in range(2))
+        if math.hypot(dx, dy) > 1e-9:
+            assert tp.kind[n] == SegmentKind.LINE and close(float(tp.feed[n]), 150.0)
+            assert close((abs(dx), abs(dy)), (abs(si), abs(sj)))
+            assert float(tp.end[n][2]) == float(tp.start[n][2])  # a level move
+    end = [float(c) for c in tp.end[-1]]
+    back = levels[1] if (code == "G76" and ret == "G99") else 0.0
+    assert close(end, [hole[0], hole[1], back])
 
 
 # ------------------------------------------------------------------ G87 back boring with SIJ
