@@ -10,6 +10,8 @@ sets an offset, and the initial level of the canned cycles is Z0.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 from gcode_helpers import close, records
 
@@ -80,6 +82,51 @@ def test_x20_g92_sets_the_current_position():
     assert [r["end"] for r in got] == [[10.0, 10.0, 10.0], [-590.0, 10.0, -1190.0], [10.0, 10.0, 10.0]]
     assert [r["line"] for r in got] == [3, 6, 7]
 
+
+
+# G10 L50 sets P1880 = (-8, 5) mm, X and Y (in 0.0001 mm, no decimal point: L1480); then the start point of
+# the manual's example (1), G90 G00 X-10 Y10 (L1360).
+P1880 = "G10 L50\nN1880 P1 R-80000\nN1880 P2 R50000\nG11\nG90 G00 X-10 Y10\n"
+
+
+@pytest.mark.parametrize(("text", "modal"), [
+    ("G90;\nG60 X0Y0;\nG60 X100;\nG60 Y100;\nG04 X10;\nG00 X0Y0;\n", False),  # one-shot (standard)
+    ("G90G60;\nX0Y0;\nX100;\nY100;\nG04 X10;\nG00 X0Y0;\n", True),             # modal (1870#0 MDL = 1)
+])  # fmt: skip
+def test_x14_one_shot_and_modal_g60_tables(text, modal):
+    """X14's table (L1364-L1367): the one-shot program and the modal one run the same path. Each G60 move
+    rapids to the end less the overrun, end - P1880, dwells 1 s (L1350) and rapids to the end (AB → 1 s →
+    BC); an axis that does not move gets no overrun (L1348: the overrun is for the final approach of a
+    positioning). G04 in G60 mode is a plain one-shot (L1369); G00 ends the mode."""
+    dialect = replace(get_dialect("gsk25i"), g60_modal=True) if modal else get_dialect("gsk25i")
+    got = [(r["kind"], r["end"] if r["kind"] != "dwell" else r["seconds"])
+           for r in records(P1880 + text, dialect=dialect)]  # fmt: skip
+    assert got == [
+        ("rapid", [-10.0, 10.0, 0.0]),
+        ("rapid", [8.0, -5.0, 0.0]), ("dwell", 1.0), ("rapid", [0.0, 0.0, 0.0]),          # X0Y0: (0+8, 0-5)
+        ("rapid", [108.0, 0.0, 0.0]), ("dwell", 1.0), ("rapid", [100.0, 0.0, 0.0]),       # X100: X only
+        ("rapid", [100.0, 95.0, 0.0]), ("dwell", 1.0), ("rapid", [100.0, 100.0, 0.0]),    # Y100: Y only
+        ("dwell", 10.0),
+        ("rapid", [0.0, 0.0, 0.0]),
+    ]  # fmt: skip
+
+
+@pytest.mark.xfail(strict=True, reason="the interpreter leaves Y at the reference position (60, 0): it "
+                   "follows L2270 'other axes remain still'; the manual's example says (60, 30) (L2294)")
+def test_x29_g29_returns_uncommanded_axes_to_the_intermediate_point():
+    """X29 example 2 (L2292-L2294): ``G90 G0 X10 Y10; G91 G28 X20 Y20; G29 X30;`` — "return the reference
+    position via the intermediate point (30, 30)"; then "G29 X30; Return from the reference position (60, 30)
+    via the intermediate point (30, 30). ... in the incremental programming mode, the vector of X axial
+    direction is 60". The manual contradicts itself: L2270 says "when some axis isn't specified, it means
+    the relative intermediate point in the axis doesn't have any move amount" (Y: zero increment from the
+    intermediate point, so Y ends at 30) and then "other axes remain still". Issue 4 says to follow the
+    reading the manual's own examples support: this example prints (60, 30) and passes (30, 30), so Y
+    travels to its intermediate point too. X28 (L2238-L2252) agrees: there N3 G29 X30 leaves Y at 10,
+    where Y has no intermediate point stored (N2 was G28 X40 only).
+    Expected: (10, 10); G28 via (30, 30) to the reference (0, 0); G29 via (30, 30) to (60, 30)."""
+    got = [r["end"] for r in records("G90 G0 X10 Y10\nG91 G28 X20 Y20\nG29 X30\n")]
+    assert got == [[10.0, 10.0, 0.0], [30.0, 30.0, 0.0], [0.0, 0.0, 0.0],
+                   [30.0, 30.0, 0.0], [60.0, 30.0, 0.0]]  # fmt: skip
 
 # ---------------------------------------------------------------------------------------- six-hole programs
 # The manual's standard canned-cycle examples, transcribed line by line with their comments dropped (OCR
