@@ -944,7 +944,7 @@ def check_block(interp: Interpreter, by_group: dict, motion_spec, axis_owner, it
     A group-01 code in the block of a cycle code is alarm 61 (L2514); in a later block, and G80, it ends
     the cycle (L2655). G27-G30 in cycle mode: alarm 44; G10: must cancel first (L1500). G124/G125 take
     the drilling code of their block; with G120-G123 a cycle code is an error (ours: the manual ignores
-    the cycle code, L4930)."""
+    the cycle code, L4933)."""
     state = interp.cycle
     cycle_spec = by_group.get(9)
     owners = [spec for spec in items if getattr(spec, "uses_axes", False)]
