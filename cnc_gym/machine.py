@@ -13,6 +13,11 @@ Layout of a preset file::
     controller: {interpolation_period_s: 0.002, lookahead_blocks: 32, ...}   # ControllerConfig fields
     axis_defaults: {rapid_mm_min: 30000, kv_1_s: 40, ...}                     # AxisConfig fields
     axes: {x: {kv_1_s: 40}, y: {kv_1_s: 38}, z: {...}}                        # per-axis overrides
+    rotary_axes: {b: {rapid_deg_min: 3600, ...}}                              # optional A/B/C axes
+
+Rotary axes (``RotaryAxisConfig``) are optional: a machine without them rejects A/B/C words by name. The
+controller times their moves and keeps their speed, acceleration and jerk within limits; the plant
+simulates the three linear axes only (contour error is the tool's XYZ error, see docs/motion.md).
 """
 
 from __future__ import annotations
@@ -26,9 +31,11 @@ from typing import Any
 from cnc_gym.config import check_keys, configs_dir, read_yaml
 from cnc_gym.errors import ConfigError
 
-__all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "configs_dir", "load_machine", "machine_names"]
+__all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "RotaryAxisConfig", "configs_dir",
+           "load_machine", "machine_names"]  # fmt: skip
 
 AXIS_NAMES = ("x", "y", "z")
+ROTARY_NAMES = ("a", "b", "c")
 
 
 @dataclass(frozen=True)
@@ -56,6 +63,25 @@ class AxisConfig:
 
 
 @dataclass(frozen=True)
+class RotaryAxisConfig:
+    """One rotary axis (A, B or C), in degrees: the limits the controller keeps while timing its moves.
+
+    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (L981-L995): in a block that
+    moves linear and rotary axes together, F is the rate along the composite vector
+    √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01 runs at F deg/min.
+    """
+
+    rapid_deg_min: float = 3600.0  # P1226 rapid traverse rate of the axis
+    max_feed_deg_min: float = 3600.0  # P1225 per-axis cutting-feed clamp
+    max_accel_deg_s2: float = 1800.0
+    max_jerk_deg_s3: float = 18000.0
+    rapid_accel_deg_s2: float = 1800.0
+    rapid_jerk_deg_s3: float = 18000.0
+    corner_step_deg_min: float = 1000.0  # P1227 largest velocity step at a block junction
+    reference_1_deg: float = 0.0  # G28 reference position (machine coordinate)
+
+
+@dataclass(frozen=True)
 class ControllerConfig:
     """Path-level controller parameters."""
 
@@ -79,6 +105,13 @@ class MachineConfig:
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     axes: tuple[AxisConfig, AxisConfig, AxisConfig] = (AxisConfig(), AxisConfig(), AxisConfig())
     source: str = "<defaults>"
+    #: Rotary axes by upper-case letter, in A, B, C order (empty: a 3-axis machine).
+    rotary_axes: dict[str, RotaryAxisConfig] = field(default_factory=dict)
+
+    @property
+    def rotary_letters(self) -> str:
+        """The rotary axes' letters, e.g. ``"B"`` (``""`` on a 3-axis machine)."""
+        return "".join(self.rotary_axes)
 
     def axis_array(self, name: str) -> tuple[float, float, float]:
         """One AxisConfig field for X, Y, Z, e.g. ``machine.axis_array("kv_1_s")``."""
@@ -105,7 +138,8 @@ def load_machine(name_or_path: str | Path = "vmc-small") -> MachineConfig:
 def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: a machine config must be a mapping")
-    check_keys(data, {"name", "description", "controller", "axis_defaults", "axes"}, source, "")
+    keys = {"name", "description", "controller", "axis_defaults", "axes", "rotary_axes"}
+    check_keys(data, keys, source, "")
     controller = _build(ControllerConfig, data.get("controller", {}), source, "controller")
     defaults = data.get("axis_defaults", {}) or {}
     axes_data = data.get("axes", {}) or {}
@@ -116,11 +150,17 @@ def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
     axes = tuple(
         _build(AxisConfig, {**defaults, **(axes_data.get(n) or {})}, source, f"axes.{n}") for n in AXIS_NAMES
     )
+    rotary_data = data.get("rotary_axes", {}) or {}
+    if not isinstance(rotary_data, dict):
+        raise ConfigError(f"{source}: 'rotary_axes' must be a mapping of a/b/c")
+    check_keys(rotary_data, set(ROTARY_NAMES), source, "rotary_axes")
+    rotary = {n.upper(): _build(RotaryAxisConfig, rotary_data[n] or {}, source, f"rotary_axes.{n}")
+              for n in ROTARY_NAMES if n in rotary_data}  # fmt: skip
     name = data.get("name", Path(source).stem)
     if not isinstance(name, str):
         raise ConfigError(f"{source}: 'name' must be a string")
     return MachineConfig(name=name, description=str(data.get("description", "")), controller=controller,
-                         axes=axes, source=source)  # type: ignore[arg-type]  # fmt: skip
+                         axes=axes, source=source, rotary_axes=rotary)  # type: ignore[arg-type]  # fmt: skip
 
 
 def _build(cls, data: Any, source: str, where: str):
@@ -151,7 +191,8 @@ def _check_ranges(obj, source: str, where: str) -> None:
         "interpolation_period_s", "lookahead_blocks", "max_feed_mm_min", "max_override",
         "override_slew_per_s", "max_centripetal_accel_mm_s2", "chord_tolerance_mm", "in_position_mm",
         "contour_tolerance_mm", "rapid_mm_min", "max_accel_mm_s2", "max_jerk_mm_s3", "rapid_accel_mm_s2",
-        "rapid_jerk_mm_s3", "kv_1_s",
+        "rapid_jerk_mm_s3", "kv_1_s", "rapid_deg_min", "max_feed_deg_min", "max_accel_deg_s2",
+        "max_jerk_deg_s3", "rapid_accel_deg_s2", "rapid_jerk_deg_s3",
     }  # fmt: skip
     for f in dataclasses.fields(obj):
         if f.name in positive and getattr(obj, f.name) <= 0:

@@ -62,9 +62,10 @@ def make_env(program: str, *, dialect: str = "gsk25i", machine: str = "vmc-small
     import gymnasium
 
     import cnc_gym  # noqa: F401  (registers the env ids)
+    from cnc_gym.machine import load_machine
     from cnc_gym.programs import load_program
 
-    load_program(program, dialect)  # raises ProgramError / ConfigError with a clear message
+    load_program(program, dialect, load_machine(machine))  # ProgramError / ConfigError with a clear message
     return gymnasium.make(
         "cnc_gym/Feedrate-v0", programs=[program], dialect=dialect, machine=machine, **kwargs
     )

@@ -54,7 +54,16 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
     rapid_mm_s = min(machine.axis_array("rapid_mm_min")) / 60.0
     rapid_s = float(np.sum(length[kind == SegmentKind.RAPID])) / rapid_mm_s
     dwell_s = float(np.sum(toolpath.dwell_s))
-    return max(cut_s + rapid_s + dwell_s, 1e-3)
+    rotary_s = 0.0
+    if toolpath.rotary_axes:  # rotary-only moves: F covers the rotary travel (deg as mm), rapids at the
+        alone = (length == 0) & (toolpath.rotary_travel > 0)  # slowest rotary rapid rate
+        feed_mm_s = np.where(alone & cutting, toolpath.feed / 60.0, 1.0)
+        rotary_s = float(np.sum(np.where(alone & cutting, toolpath.rotary_length / feed_mm_s, 0.0)))
+        rates = [axis.rapid_deg_min / 60.0 for axis in machine.rotary_axes.values()]
+        rapid_travel = float(np.sum(toolpath.rotary_travel[alone & (kind == SegmentKind.RAPID)]))
+        if rates:
+            rotary_s += rapid_travel / min(rates)
+    return max(cut_s + rapid_s + dwell_s + rotary_s, 1e-3)
 
 
 @njit(cache=True, nogil=True)
@@ -287,7 +296,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             programs = [programs]
         if len(programs) == 0:
             raise ConfigError("programs must name at least one program")
-        self._programs: list[tuple[str, Toolpath]] = [load_program(p, dialect) for p in programs]
+        self._programs: list[tuple[str, Toolpath]] = [
+            load_program(p, dialect, self.machine) for p in programs
+        ]
         self._episode_cache: dict[str, dict[str, Any]] = {}
         self.program_names = [name for name, _ in self._programs]
 
@@ -356,7 +367,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             name, toolpath = self._programs[int(index_or_name)]
         elif isinstance(index_or_name, str | Path):
             found = [p for p in self._programs if p[0] == index_or_name]
-            name, toolpath = found[0] if found else load_program(index_or_name, self.dialect)
+            name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine)
         else:
             raise ConfigError(
                 f"options['program'] must be a name, path, text or index, got {index_or_name!r}"

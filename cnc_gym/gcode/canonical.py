@@ -213,9 +213,13 @@ class OffsetStack:
 class CanonicalMachine:
     """Current machine position plus the per-segment context; appends segments to a builder."""
 
-    def __init__(self, builder: ToolpathBuilder, start: Vec = ZERO) -> None:
+    def __init__(self, builder: ToolpathBuilder, start: Vec = ZERO, rotary: tuple[float, ...] = ()) -> None:
         self.builder = builder
         self.position: Vec = tuple(float(c) for c in start)  # type: ignore[assignment]
+        # Rotary axes (machine degrees); ``rotary_next`` is the target the next rapid/feed move takes them
+        # to (set by the interpreter for a block with rotary words, consumed by that move).
+        self.rotary: tuple[float, ...] = tuple(rotary)
+        self.rotary_next: tuple[float, ...] | None = None
         self.line = 0
         self.file_index = 0
         self.modes = SegmentMode.NONE
@@ -228,6 +232,8 @@ class CanonicalMachine:
 
     def straight_traverse(self, target: Vec) -> None:
         """Rapid to a machine-coordinate target (no segment for a zero-length move)."""
+        if self.rotary_next is not None:
+            return self._rotary_move(target, None)
         if target != self.position:
             self.builder.rapid(self.position, target, line=self.line, file_index=self.file_index,
                                modes=self.modes, tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
@@ -235,10 +241,27 @@ class CanonicalMachine:
 
     def straight_feed(self, target: Vec, feed: float) -> None:
         """Feed move to a machine-coordinate target at ``feed`` mm/min."""
+        if self.rotary_next is not None:
+            return self._rotary_move(target, feed)
         if target != self.position:
             self.builder.line(self.position, target, feed, line=self.line, file_index=self.file_index,
                               modes=self.modes, tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
             self.position = target
+
+    def _rotary_move(self, target: Vec, feed: float | None) -> None:
+        """A rapid (``feed`` None) or feed move that also takes the rotary axes to ``rotary_next``."""
+        rotary, self.rotary_next = self.rotary_next, None
+        if target == self.position and rotary == self.rotary:
+            return
+        context = self._context()
+        if feed is None:
+            self.builder.rapid(self.position, target, **context)
+        else:
+            self.builder.line(self.position, target, feed, **context)
+        if rotary != self.rotary:
+            self.builder.move_rotary(self.rotary, rotary)
+            self.rotary = rotary
+        self.position = target
 
     def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
         """Arc or helix (signed sweep in rad, + = CCW about the plane normal) to ``end``."""

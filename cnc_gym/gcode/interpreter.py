@@ -30,6 +30,7 @@ from cnc_gym.gcode.sysvars import SystemVariables
 from cnc_gym.gcode.transforms import (
     TRANSFORM_ACTIONS,
     Parameters,
+    PendingCorner,
     arm_corner,
     check_coordinate_command,
     check_plane_change,
@@ -106,8 +107,12 @@ class Interpreter:
         self.file = program.file
         self.skip_mask = sum(1 << n for n in block_skip)
         self.variables = VariableStore(dialect)
-        self.builder = ToolpathBuilder(files=(program.file,))
-        self.out = CanonicalMachine(self.builder, start)
+        # Rotary axes (A/B/C) the machine has: they move with G00/G01 only (L981-L995), in degrees.
+        self.rotary_axes = "" if machine is None else "".join(a for a in machine.rotary_letters
+                                                              if a in dialect.other_axes)  # fmt: skip
+        self.rotary_origin = [0.0] * len(self.rotary_axes)  # program 0 in machine degrees (G92)
+        self.builder = ToolpathBuilder(files=(program.file,), rotary_axes=self.rotary_axes)
+        self.out = CanonicalMachine(self.builder, start, rotary=self.builder.rotary_origin)
         self.offsets = OffsetStack()
         # Tool compensation (compensation.py): D/H tables (offsets.py), G40-G42, G43/G44/G49, G45-G48.
         self.comp = ToolCompensation(dialect, tool_offsets)
@@ -181,6 +186,10 @@ class Interpreter:
             if spec.group == 1 and key not in self._allowed_with_motion:
                 self._allowed_with_motion[key] = base | frozenset(axes) | frozenset(spec.words)
         self._axis_letters = frozenset(axes)
+        self._rotary_letters = frozenset(self.rotary_axes)
+        for key, spec in dialect.gcodes.items():  # rotary words belong to G00/G01 blocks only
+            if spec.action == "motion" and spec.value in (0, 1):
+                self._allowed_with_motion[key] = self._allowed_with_motion[key] | self._rotary_letters
         self._motion_specs = {key: spec for key, spec in dialect.gcodes.items()
                               if spec.action == "motion" and spec.implemented}  # fmt: skip
         for key in dialect.power_on:
@@ -334,8 +343,10 @@ class Interpreter:
         base = frozenset("FSTODH")
         if axis_owner is not None:
             allowed = base | self._axis_letters | frozenset(axis_owner.words)
+            if axis_owner.action == "g92":
+                allowed = allowed | self._rotary_letters
         elif g53:
-            allowed = base | self._axis_letters
+            allowed = base | self._axis_letters | self._rotary_letters
         elif motion_spec is None and self.cycle.code:
             allowed = base | self._axis_letters | frozenset(cycles.CYCLE_WORDS[self.cycle.code])
         else:
@@ -375,8 +386,14 @@ class Interpreter:
         for letter in values:
             if letter in allowed:
                 continue
+            if letter in self._rotary_letters:
+                where = f"with {owner.name}" if owner is not None else "in this block"
+                raise self.error(f"rotary axis {letter} cannot move {where}: rotary axes move with "
+                                 "G00/G01 (and are set by G92, positioned by G53)",
+                                 "rotary-axis-context")  # fmt: skip
             if letter in self.dialect.other_axes:
-                raise self.error(f"axis {letter} is not on this machine (axes: {self.dialect.axes})",
+                axes = self.dialect.axes + self.rotary_axes
+                raise self.error(f"axis {letter} is not on this machine (axes: {axes})",
                                  "unsupported-axis")  # fmt: skip
             context = f"with {owner.name}" if owner is not None else "in this block"
             raise self.error(f"address {letter} has no meaning {context}", "unused-word")
@@ -594,6 +611,9 @@ class Interpreter:
         for axis, letter in enumerate(self.dialect.axes):
             if letter in values:
                 self.offsets.set_floating(axis, position[axis], values[letter] * self.scale)
+        for axis, letter in enumerate(self.rotary_axes):  # degrees: G20/G21 do not scale them
+            if letter in values:
+                self.rotary_origin[axis] = self.out.rotary[axis] - values[letter]
         self.offsets.update()
         self.resync_program_position()
         mark_coordinate_change(self)
@@ -630,6 +650,8 @@ class Interpreter:
         y = values.get("Y")
         z = values.get("Z")
         motion = self.motion
+        if self._rotary_letters and not self._rotary_letters.isdisjoint(values):
+            return self._rotary_motion(motion, x, y, z, values)
         if self._corner is not None or ",L" in values or ",R" in values:
             return corner_motion(self, motion, x, y, z, values)  # chamfer / corner R (transforms.py)
         if motion >= 2:
@@ -663,6 +685,35 @@ class Interpreter:
                                  "G01 with F0: the feed is zero", "missing-feed")  # fmt: skip
             self.out.straight_feed(target, feed)
 
+    def _rotary_motion(self, motion: int, x, y, z, values: dict) -> None:
+        """A G00/G01 block with rotary axis words (L981-L995): the rotary axes move linearly with the XYZ
+        move (or alone). F is the rate along the composite vector, degrees counted as mm (inch in G20):
+        the tool path carries the angles, ``Toolpath.path_feed`` the resulting XYZ feed."""
+        if isinstance(self._corner, PendingCorner) or ",L" in values or ",R" in values:
+            raise self.error("chamfer/corner rounding cannot join a block that moves a rotary axis",
+                             "rotary-axis-context")  # fmt: skip
+        if self.comp.side:
+            raise self.error("a rotary axis cannot move in cutter compensation mode (G41/G42): cancel it "
+                             "with G40 first", "rotary-axis-context")  # fmt: skip
+        start = self.out.rotary
+        target = list(start)
+        for axis, letter in enumerate(self.rotary_axes):
+            value = values.get(letter)
+            if value is not None:
+                target[axis] = start[axis] + value if self.incremental else value + self.rotary_origin[axis]
+        self.out.rotary_next = tuple(target)
+        if x is None and y is None and z is None:
+            if motion == 1 and not self.feed:
+                raise self.error("G01 needs a feed: no F programmed yet" if self.feed is None else
+                                 "G01 with F0: the feed is zero", "missing-feed")  # fmt: skip
+            position = self.out.position
+            if motion == 0:
+                self.out.straight_traverse(position)
+            else:
+                self.out.straight_feed(position, self.feed)
+            return
+        self.move_linear(motion == 0, self.resolve_target(x, y, z))
+
     def _do_g53(self, spec: CodeSpec, values: dict) -> None:
         """G53 IP_: rapid to machine coordinates; one-shot; ignored in G91 (L1656)."""
         if self.chain.stages["rotation"] is not None:
@@ -674,6 +725,10 @@ class Interpreter:
         s = self.scale
         target = tuple(pos[a] if letter not in values else values[letter] * s
                        for a, letter in enumerate(self.dialect.axes))  # fmt: skip
+        if not self._rotary_letters.isdisjoint(values):
+            current = self.out.rotary
+            self.out.rotary_next = tuple(values.get(letter, current[a])
+                                         for a, letter in enumerate(self.rotary_axes))  # fmt: skip
         self.out.straight_traverse(target)  # type: ignore[arg-type]
         self.resync_program_position()
 

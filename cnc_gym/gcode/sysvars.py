@@ -30,8 +30,9 @@ like every value a program sees; the interpreter stores mm.
 
 The clocks: the interpreter runs before any motion, so #3001/#3002 give the *nominal* time of the path
 emitted so far — feed moves at their programmed F, rapids at :data:`NOMINAL_RAPID_MM_MIN`, dwells —
-plus whatever the program wrote to them. The 4th and 5th axes (#2800-#2906, #5004, #5005 …) read null:
-the machine model is XYZ.
+plus whatever the program wrote to them. The 4th and 5th axis positions (#5004, #5024, #5044 …) are the
+machine's rotary axes in A, B, C order (degrees; null where the machine has none); their work offsets
+(#2800-#2906 4th/5th columns) do not exist here (rotary axes have only the G92 origin).
 """
 
 from __future__ import annotations
@@ -238,7 +239,12 @@ class SystemVariables:
         if group == 4:  # #5081-#5085: tool length offset vector
             return interp.offsets.tool_length[axis] / self._scale if axis < 3 else None
         if axis >= 3:
-            return None
+            # The 4th/5th axis: the machine's rotary axes in A, B, C order (degrees, never scaled).
+            rotary = axis - 3
+            if rotary >= len(interp.rotary_axes) or group == 3:
+                return None
+            machine_deg = interp.out.rotary[rotary]
+            return machine_deg if group == 1 else machine_deg - interp.rotary_origin[rotary]
         scale = self._scale
         if group == 0:
             return interp.program_position[axis] / scale

@@ -59,6 +59,65 @@ class PathLimits:
     rest_position: np.ndarray  # (3,) where the reference rests when there is no motion at all
 
 
+def rest_to_rest_time(distance: np.ndarray, speed: np.ndarray, accel: np.ndarray,
+                      jerk: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Time of the fastest jerk-limited move over ``distance`` from rest to rest (vectorised; any unit).
+
+    Accelerating to a speed v takes T(v) = v/a + a/j when v ≥ a²/j (the acceleration reaches a) and
+    2·√(v/j) otherwise, covering v·T(v)/2. If two such ramps fit within the distance the move cruises at
+    ``speed`` in between; otherwise its peak speed v_p solves v_p·T(v_p) = distance:
+    v_p = (a/2)·(√(a²/j² + 4·d/a) − a/j) in the first case, (d·√j/2)^(2/3) in the second.
+    """
+    d, v, a, j = (np.asarray(x, dtype=float) for x in (distance, speed, accel, jerk))
+    full_ramp = v >= a * a / j
+    ramp = np.where(full_ramp, v / a + a / j, 2.0 * np.sqrt(v / j))
+    cruise = d - v * ramp  # both ramps together cover v·T(v)
+    peak_full = 0.5 * a * (np.sqrt((a / j) ** 2 + 4.0 * d / a) - a / j)
+    peak = np.where(peak_full >= a * a / j, peak_full, np.cbrt((d * np.sqrt(j) / 2.0) ** 2))
+    peak_ramp = np.where(peak >= a * a / j, peak / a + a / j, 2.0 * np.sqrt(peak / j))
+    return np.where(d <= 0, 0.0, np.where(cruise >= 0, 2.0 * ramp + cruise / v, 2.0 * peak_ramp))
+
+
+def _rotary_rates(tp: Toolpath, machine: MachineConfig) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Per toolpath row, the rotary axes' degrees per mm of XYZ path (n, k), and their limits (k,) each."""
+    letters = tp.rotary_axes
+    missing = [a for a in letters if a not in machine.rotary_axes]
+    if missing:
+        raise ProgramError(f"the tool path moves rotary axis {missing[0]}, which machine {machine.name!r} "
+                           "does not have", code="motion.no_rotary_axis")  # fmt: skip
+    axes = [machine.rotary_axes[a] for a in letters]
+    names = ("rapid_deg_min", "max_feed_deg_min", "max_accel_deg_s2", "max_jerk_deg_s3", "rapid_accel_deg_s2",
+             "rapid_jerk_deg_s3", "corner_step_deg_min")  # fmt: skip
+    limits = {name: np.array([float(getattr(axis, name)) for axis in axes]) for name in names}
+    delta = np.abs(tp.rotary_end - tp.rotary_start)
+    rates = np.divide(delta, tp.length[:, None], out=np.zeros_like(delta), where=tp.length[:, None] > 0)
+    return rates, limits
+
+
+def _rotary_only_seconds(tp: Toolpath, machine: MachineConfig, rows: np.ndarray,
+                         limits: dict[str, np.ndarray]) -> np.ndarray:  # fmt: skip
+    """Duration of rotary-only moves (no XYZ travel): the fastest jerk-limited move along the rotary
+    vector at F (deg/min: the composite rate with no linear part, L981-L995) or the rapid rate, each axis's
+    speed, acceleration and jerk limit projected on the vector. Timed at 100 % override."""
+    delta = np.abs(tp.rotary_end[rows] - tp.rotary_start[rows])
+    travel = np.linalg.norm(delta, axis=1)
+    share = delta / travel[:, None]  # |direction component| per axis
+    with np.errstate(divide="ignore"):
+        inv = np.where(share > 1e-12, 1.0 / np.maximum(share, 1e-300), np.inf)
+
+    def projected(name: str) -> np.ndarray:
+        return np.min(limits[name][None, :] * inv, axis=1)
+
+    rapid = tp.kind[rows] == SegmentKind.RAPID
+    deg_per_mm = travel / tp.rotary_length[rows]  # 1, or 1/25.4 in a G20 program
+    composite = machine.controller.max_feed_mm_min  # P1224 applies to the composite rate
+    feed = np.minimum(np.minimum(tp.feed[rows], composite) * deg_per_mm, projected("max_feed_deg_min"))
+    speed = np.where(rapid, projected("rapid_deg_min"), np.nan_to_num(feed)) / 60.0
+    accel = np.where(rapid, projected("rapid_accel_deg_s2"), projected("max_accel_deg_s2"))
+    jerk = np.where(rapid, projected("rapid_jerk_deg_s3"), projected("max_jerk_deg_s3"))
+    return rest_to_rest_time(travel, speed, accel, jerk)
+
+
 def _max_abs_trig(theta0: np.ndarray, sweep: np.ndarray, offset: float) -> np.ndarray:
     """max |cos(θ − offset)| over θ in [θ0, θ0 + sweep] (offset = π/2 gives |sin|)."""
     lo = np.minimum(theta0, theta0 + sweep) - offset
@@ -234,6 +293,9 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     moving = (kind == SegmentKind.RAPID) | (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (
         kind == SegmentKind.NURBS)
     rows = np.flatnonzero(moving & (tp.length > MIN_LENGTH_MM))
+    rotary_only = np.flatnonzero(moving & (tp.length <= MIN_LENGTH_MM) & (tp.rotary_travel > 0))
+    held = kind == SegmentKind.DWELL
+    held[rotary_only] = True
     # Pieces: one per line/arc/rapid; a NURBS curve is cut into pieces of equal arc length, each with the
     # limits sampled over it (so the caps follow the curvature along the curve).
     idx, s0, length, nurbs_geo = _pieces(tp, rows)
@@ -282,6 +344,25 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     base = np.where(cutting, feed, rapid_rate)
     acc = np.where(cutting, projected(acc_ax), projected(axis["rapid_accel_mm_s2"]))
     jerk = np.where(cutting, projected(jerk_ax), projected(axis["rapid_jerk_mm_s3"]))
+    rotary_rate = np.zeros((n, 0))
+    if tp.rotary_axes:
+        # A rotary axis moving with the XYZ path turns at rate·v (deg per mm of path × mm/s): its speed,
+        # acceleration and jerk limits cap the path's like a linear axis's projected ones.
+        rates, rotary_limits = _rotary_rates(tp, machine)
+        rotary_rate = rates[idx]
+        with np.errstate(divide="ignore"):
+            inv_rate = np.where(rotary_rate > 1e-12, 1.0 / np.maximum(rotary_rate, 1e-300), np.inf)
+
+        def rotary_projected(name: str) -> np.ndarray:
+            return np.min(rotary_limits[name][None, :] * inv_rate, axis=1, initial=np.inf)
+
+        cap = np.minimum(cap, np.where(cutting, rotary_projected("max_feed_deg_min"),
+                                       rotary_projected("rapid_deg_min")) / 60.0)  # fmt: skip
+        base = np.minimum(base, cap)
+        acc = np.minimum(acc, np.where(cutting, rotary_projected("max_accel_deg_s2"),
+                                       rotary_projected("rapid_accel_deg_s2")))  # fmt: skip
+        jerk = np.minimum(jerk, np.where(cutting, rotary_projected("max_jerk_deg_s3"),
+                                         rotary_projected("rapid_jerk_deg_s3")))  # fmt: skip
 
     # ------------------------------------------------------------------ junctions
     hard = np.zeros(n + 1)
@@ -304,12 +385,19 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         step = axis["corner_step_mm_min"] / 60.0
         with np.errstate(divide="ignore"):
             corner = np.min(np.where(du > 1e-12, step[None, :] / np.maximum(du, 1e-300), np.inf), axis=1)
+        if tp.rotary_axes:  # a rotary axis's speed steps by v·Δrate at the junction (P1227 per axis)
+            rotary_step = rotary_limits["corner_step_deg_min"] / 60.0
+            d_rate = np.abs(rotary_rate[1:] - rotary_rate[:-1])
+            with np.errstate(divide="ignore"):
+                rotary_corner = np.where(d_rate > 1e-12, rotary_step[None, :] / np.maximum(d_rate, 1e-300),
+                                         np.inf)  # fmt: skip
+            corner = np.minimum(corner, np.min(rotary_corner, axis=1, initial=np.inf))
         hard[1:n] = np.minimum(corner, np.minimum(cap[:-1], cap[1:]))
         turn[1:n] = np.arccos(np.clip(np.sum(u_in * u_out, axis=1), -1.0, 1.0))
         # Everything between two motion segments (short moves, dwells) may carry a stop.
         exact = (modes & SegmentMode.EXACT_STOP) != 0
         exact_cum = np.concatenate(([0], np.cumsum(exact)))
-        dwell_cum = np.concatenate(([0], np.cumsum(kind == SegmentKind.DWELL)))
+        dwell_cum = np.concatenate(([0], np.cumsum(held)))
         # stops from prev (inclusive) up to nxt (exclusive)
         has_exact = exact_cum[nxt] - exact_cum[prev] > 0
         has_dwell = dwell_cum[nxt] - dwell_cum[prev] > 0
@@ -324,13 +412,17 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
 
     # ------------------------------------------------------------------ dwells per point
     # A dwell belongs to the first point after it: point q = number of motion segments before it.
-    dwell_rows = np.flatnonzero(kind == SegmentKind.DWELL)
+    # Rotary-only moves (no XYZ travel) are timed holds of the XYZ reference, like dwells.
+    dwell_rows = np.flatnonzero(held)
     dwell_point = np.searchsorted(idx, dwell_rows)
     dw0 = np.searchsorted(dwell_point, np.arange(n + 1), side="left")
     dw1 = np.searchsorted(dwell_point, np.arange(n + 1), side="right")
     dwell_f = np.zeros((max(len(dwell_rows), 1), 5))
     if len(dwell_rows):
         dwell_f[: len(dwell_rows), 0] = tp.dwell_s[dwell_rows]
+        if len(rotary_only):
+            at = np.searchsorted(dwell_rows, rotary_only)
+            dwell_f[at, 0] = _rotary_only_seconds(tp, machine, rotary_only, _rotary_rates(tp, machine)[1])
         dwell_f[: len(dwell_rows), 1] = dwell_rows
         dwell_f[: len(dwell_rows), 2:5] = tp.start[dwell_rows]
 

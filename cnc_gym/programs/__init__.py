@@ -25,6 +25,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from cnc_gym.errors import ConfigError
+from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import Toolpath
 
 PROGRAMS_DIR = Path(__file__).resolve().parent
@@ -49,33 +50,39 @@ def program_path(name: str) -> Path:
     return PROGRAMS_DIR / f"{name}.nc"
 
 
-def load_program(program: str | Path, dialect: str = "gsk25i") -> tuple[str, Toolpath]:
+def load_program(program: str | Path, dialect: str = "gsk25i",
+                 machine: MachineConfig | None = None) -> tuple[str, Toolpath]:  # fmt: skip
     """Interpret a program once and cache it. Returns ``(name, toolpath)``.
 
     ``program`` is a built-in name (``"circle"`` …), a path to a program file (``str`` or ``Path``), or
     G-code text (anything containing a newline or a G/M word that is not an existing file). The name is
     the built-in name, the file's stem, or ``text-<8 hex digits of its SHA-1>``. Program errors raise
-    :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
+    :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``). With ``machine`` the program may
+    move the machine's rotary axes and must stay within its travel (see :func:`cnc_gym.gcode.interpret`).
     """
+    key = None
+    if machine is not None:
+        key = repr(machine)  # machines hold a dict (rotary axes): their repr is the hashable cache key
+        _MACHINES[key] = machine
     if not isinstance(program, str | Path):
         raise ConfigError(
             f"a program must be a built-in name, a path or G-code text, got {type(program).__name__}"
         )
     if isinstance(program, str) and program in BUILTIN_PROGRAMS:
-        return program, _load_file(str(program_path(program)), dialect, 0.0)
+        return program, _load_file(str(program_path(program)), dialect, 0.0, key)
     if isinstance(program, Path) or _looks_like_path(program):
         path = Path(program)
         if not path.is_file():
             raise ConfigError(f"program file not found: {path}")
         # The modification time is part of the cache key so an edited file is read again.
-        return path.stem, _load_file(str(path.resolve()), dialect, path.stat().st_mtime)
+        return path.stem, _load_file(str(path.resolve()), dialect, path.stat().st_mtime, key)
     if _NAME_LIKE.fullmatch(program):
         raise ConfigError(
             f"unknown program {program!r}: not a built-in ({', '.join(BUILTIN_PROGRAMS)}) nor a file"
         )
     text = program
     digest = hashlib.sha1(text.encode("utf-8")).hexdigest()[:8]
-    return f"text-{digest}", _load_text(text, dialect)
+    return f"text-{digest}", _load_text(text, dialect, key)
 
 
 def _looks_like_path(program: str) -> bool:
@@ -86,19 +93,22 @@ def _looks_like_path(program: str) -> bool:
     return Path(program).is_file()
 
 
+_MACHINES: dict[str, MachineConfig] = {}
+
+
 @lru_cache(maxsize=64)
-def _load_file(path: str, dialect: str, mtime: float) -> Toolpath:
+def _load_file(path: str, dialect: str, mtime: float, machine_key: str | None) -> Toolpath:
     from cnc_gym.gcode import interpret_file
 
-    return interpret_file(path, dialect=dialect)
+    return interpret_file(path, dialect=dialect, machine=_MACHINES.get(machine_key))
 
 
 @lru_cache(maxsize=64)
-def _load_text(text: str, dialect: str) -> Toolpath:
+def _load_text(text: str, dialect: str, machine_key: str | None) -> Toolpath:
     from cnc_gym.gcode import interpret
 
     digest = hashlib.sha1(text.encode("utf-8")).hexdigest()[:8]
-    return interpret(text, dialect=dialect, file=f"<text-{digest}>")
+    return interpret(text, dialect=dialect, file=f"<text-{digest}>", machine=_MACHINES.get(machine_key))
 
 
 __all__ = ["BUILTIN_PROGRAMS", "PROGRAMS_DIR", "load_program", "program_names", "program_path"]

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from cnc_gym.toolpath.segments import Plane, SegmentKind
 
 if TYPE_CHECKING:
@@ -27,7 +29,11 @@ def _g(x: float) -> float:
 
 
 def toolpath_records(tp: Toolpath) -> list[dict]:
+    """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
+    data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
+    coordinates) with ``rotary_start`` on the rows that move them."""
     records = []
+    rotary = tp.rotary_axes
     for i in range(len(tp)):
         kind = SegmentKind(int(tp.kind[i]))
         rec: dict = {"kind": _KIND_NAMES[kind], "line": int(tp.line[i])}
@@ -40,6 +46,10 @@ def toolpath_records(tp: Toolpath) -> list[dict]:
             rec["end"] = [_r(x) for x in tp.end[i]]
         if kind in (SegmentKind.LINE, SegmentKind.ARC, SegmentKind.NURBS):
             rec["feed"] = _r(tp.feed[i])
+        if rotary and kind in (SegmentKind.LINE, SegmentKind.RAPID):
+            if np.any(tp.rotary_start[i] != tp.rotary_end[i]):
+                rec["rotary_start"] = {a: _r(x) for a, x in zip(rotary, tp.rotary_start[i], strict=True)}
+            rec["rotary_end"] = {a: _r(x) for a, x in zip(rotary, tp.rotary_end[i], strict=True)}
         if kind == SegmentKind.ARC:
             rec["center"] = [_r(x) for x in tp.center[i]]
             rec["plane"] = _PLANE_NAMES[Plane(int(tp.plane[i]))]

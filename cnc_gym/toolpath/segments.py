@@ -102,6 +102,11 @@ class Toolpath:
     ``nurbs`` maps the index of every NURBS row to its exact :class:`NurbsCurve` (read-only mapping); the
     row's ``start``/``end`` are the curve's first/last control points and its ``length`` the curve's arc
     length. A NURBS row is evaluated by arc length like every other row.
+
+    Rotary axes (machines with A/B/C): ``rotary_axes`` names them (``"B"``; ``""`` on a 3-axis path) and
+    ``rotary_start``/``rotary_end`` (n, k) hold each row's start and end angle in degrees, machine
+    coordinates. Only rapids and lines move them (linearly with the row). ``length`` stays the XYZ length;
+    ``rotary_travel`` is the rotary part of the move and ``path_feed`` the resulting XYZ feed.
     """
 
     kind: np.ndarray
@@ -122,6 +127,9 @@ class Toolpath:
     files: tuple[str, ...] = ("<program>",)
     #: exact NURBS curves by segment index (exactly the rows with kind == NURBS).
     nurbs: Mapping[int, NurbsCurve] = field(default_factory=dict)
+    rotary_axes: str = ""
+    rotary_start: np.ndarray | None = None
+    rotary_end: np.ndarray | None = None
     # Derived geometry, filled in __post_init__.
     length: np.ndarray = field(init=False, repr=False)
     planar_length: np.ndarray = field(init=False, repr=False)
@@ -150,12 +158,23 @@ class Toolpath:
                                  f"got {type(curve).__name__}")  # fmt: skip
             length[row] = curve.length
         object.__setattr__(self, "nurbs", _ReadOnlyDict(self.nurbs))
+        k = len(self.rotary_axes)
+        for name in ("rotary_start", "rotary_end"):
+            arr = getattr(self, name)
+            arr = np.zeros((n, k)) if arr is None else np.asarray(arr, dtype=np.float64).reshape(n, k)
+            object.__setattr__(self, name, arr)
+        if k:
+            moved = np.any(self.rotary_start != self.rotary_end, axis=1)
+            bad = moved & (self.kind != SegmentKind.LINE) & (self.kind != SegmentKind.RAPID)
+            if np.any(bad):
+                raise ValueError(f"toolpath row {int(np.flatnonzero(bad)[0])}: only rapids and lines move "
+                                 "rotary axes")  # fmt: skip
         planar = np.where(is_arc, arc_planar, length)
         s_start = np.concatenate(([0.0], np.cumsum(length)))
         object.__setattr__(self, "length", length)
         object.__setattr__(self, "planar_length", planar)
         object.__setattr__(self, "s_start", s_start)
-        for name in (*_FIELDS, "length", "planar_length", "s_start"):
+        for name in (*_FIELDS, "length", "planar_length", "s_start", "rotary_start", "rotary_end"):
             getattr(self, name).flags.writeable = False
 
     # ------------------------------------------------------------------ basics
@@ -168,14 +187,34 @@ class Toolpath:
         return float(self.s_start[-1])
 
     @property
+    def rotary_travel(self) -> np.ndarray:
+        """Length of each row's rotary move, √(ΣΔ²) over the rotary axes, degrees (0 without them)."""
+        if not self.rotary_axes:
+            return np.zeros(len(self))
+        return np.linalg.norm(self.rotary_end - self.rotary_start, axis=1)
+
+    @property
+    def rotary_length(self) -> np.ndarray:
+        """The rotary travel as the feed counts it: degrees as mm, or as inch in a G20 program (so 25.4 mm
+        per degree there), mm. F covers √(length² + rotary_length²) per minute (L981-L995)."""
+        inch = (self.modes & SegmentMode.INCH_PROGRAM) != 0
+        return self.rotary_travel * np.where(inch, 25.4, 1.0)
+
+    @property
     def path_feed(self) -> np.ndarray:
         """Programmed feed along the 3-D path, mm/min.
 
         GSK 25i (manual L1097): on a helix, F is the speed of the arc's projection on the plane, so the
         speed along the helix is F · length / planar_length. Lines and flat arcs: F itself.
+        With rotary axes (L981-L995) F is the rate along the composite vector with degrees counted as mm,
+        so the XYZ feed of a line is F · length / √(length² + rotary_travel²).
         """
         ratio = np.divide(self.length, self.planar_length, out=np.ones_like(self.length),
                           where=self.planar_length > 0)  # fmt: skip
+        if self.rotary_axes:
+            composite = np.hypot(self.length, self.rotary_length)
+            ratio = ratio * np.divide(self.length, composite, out=np.ones_like(self.length),
+                                      where=composite > 0)  # fmt: skip
         return self.feed * ratio
 
     def _rise(self) -> np.ndarray:
@@ -314,10 +353,16 @@ class Toolpath:
 class ToolpathBuilder:
     """Appends segments row by row (plain Python lists: cheap appends) and freezes them into a Toolpath."""
 
-    def __init__(self, files: tuple[str, ...] = ("<program>",)) -> None:
+    def __init__(self, files: tuple[str, ...] = ("<program>",), rotary_axes: str = "",
+                 rotary_position: tuple[float, ...] | None = None) -> None:  # fmt: skip
         self.files = list(files)
         self._rows: dict[str, list] = {name: [] for name in _FIELDS}
         self.nurbs_curves: dict[int, NurbsCurve] = {}
+        # Rotary axes: the start position, then (row, start, end) for every row that moves them (the rows
+        # in between hold the position: filled in by build()).
+        self.rotary_axes = rotary_axes
+        self.rotary_origin = tuple(rotary_position or (0.0,) * len(rotary_axes))
+        self._rotary_moves: list[tuple[int, tuple[float, ...], tuple[float, ...]]] = []
 
     def __len__(self) -> int:
         return len(self._rows["kind"])
@@ -392,6 +437,23 @@ class ToolpathBuilder:
     def dwell(self, position, seconds: float, **kw) -> None:
         self._append(SegmentKind.DWELL, tuple(position), tuple(position), dwell_s=seconds, **kw)
 
+    def move_rotary(self, start: tuple[float, ...], end: tuple[float, ...]) -> None:
+        """The row just appended (a rapid or a line) also moves the rotary axes from ``start`` to ``end``."""
+        self._rotary_moves.append((len(self) - 1, tuple(start), tuple(end)))
+
+    def _rotary_arrays(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        k = len(self.rotary_axes)
+        start = np.empty((n, k))
+        end = np.empty((n, k))
+        position = self.rotary_origin
+        done = 0
+        for row, first, last in self._rotary_moves:
+            start[done:row] = end[done:row] = position
+            start[row], end[row] = first, last
+            position, done = last, row + 1
+        start[done:] = end[done:] = position
+        return start, end
+
     def build(self) -> Toolpath:
         r = self._rows
         dtypes = {
@@ -405,4 +467,7 @@ class ToolpathBuilder:
             if name in ("start", "end", "center"):
                 arr = arr.reshape(-1, 3)
             arrays[name] = arr
-        return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves))
+        rotary_start, rotary_end = self._rotary_arrays(len(self))
+        return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves),
+                        rotary_axes=self.rotary_axes, rotary_start=rotary_start,
+                        rotary_end=rotary_end)  # fmt: skip
