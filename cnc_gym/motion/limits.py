@@ -358,6 +358,9 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
 
         cap = np.minimum(cap, np.where(cutting, rotary_projected("max_feed_deg_min"),
                                        rotary_projected("rapid_deg_min")) / 60.0)  # fmt: skip
+        # P1224 clamps the composite rate (degrees counted as mm), so the XYZ share of it.
+        xyz_share = tp.length[idx] / np.hypot(tp.length[idx], tp.rotary_length[idx])
+        cap = np.minimum(cap, np.where(cutting, ctl.max_feed_mm_min / 60.0 * xyz_share, np.inf))
         base = np.minimum(base, cap)
         acc = np.minimum(acc, np.where(cutting, rotary_projected("max_accel_deg_s2"),
                                        rotary_projected("rapid_accel_deg_s2")))  # fmt: skip

@@ -94,6 +94,10 @@ def test_rotary_axis_limits_cap_the_path():
     limits = build_limits(interpret("G91 G01 X20 B40 F300\n", machine=machine), machine)
     assert limits.seg_f[0, K.F_CAP] * 60 == pytest.approx(50.0)
     assert limits.seg_f[0, K.F_BASE] * 60 == pytest.approx(50.0)
+    # gsk25i: P1224 = 4000 clamps the composite rate: X20 B40 at F20000 → XYZ cap 4000·20/√2000 =
+    # 1789 mm/min, below B's own clamp (P1225 4000 deg/min at 2°/mm: 2000 mm/min).
+    limits = build_limits(interpret("G91 G01 X20 B40 F20000\n", machine=GSK), GSK)
+    assert limits.seg_f[0, K.F_CAP] * 60 == pytest.approx(4000 * 20 / math.sqrt(2000))
     # acceleration and jerk: B's 100 deg/s² and 1000 deg/s³ at 2°/mm give 50 mm/s² and 500 mm/s³
     machine = slow_b(max_accel_deg_s2=100, max_jerk_deg_s3=1000)
     limits = build_limits(interpret("G91 G01 X20 B40 F300\n", machine=machine), machine)
