@@ -206,7 +206,9 @@ def corner(
     ``role``: ``offset`` (both blocks compensated), ``startup`` (``a`` is the start-up line: its start
     has no vector), ``cancel`` (``b`` is the cancel line: it ends without a vector). ``b`` None: no next
     move in the plane within the look-ahead (end of program, G40 without a move): the vector is
-    perpendicular to ``a`` at its end. ``d_b``: b's offset (G41/G42 switch, or a D change, L4471).
+    perpendicular to ``a`` at its end. ``d_b``: b's offset; only a G41/G42 switch (the opposite sign) uses
+    it here: a D change applies from the end vector of the block that carries it (L4480), so b's start
+    vector is computed with the old offset ``d_a`` (an arc then steps radially onto its new offset circle).
     ``startup_type``: ``A`` or ``B`` for outer corners of start-up and cancel (parameter 2602#2 TPH).
 
     Raises :class:`CompensationError` ``comp-no-intersection`` (alarm 33) when an inner corner's offset
@@ -219,9 +221,9 @@ def corner(
     if d_b is None:
         d_b = d_a
     switch = d_a * d_b < 0.0
-    # A D change applies from the end vector of the block that carries it (L4471): a line starts with
-    # the previous offset (a taper), an arc runs on its new offset circle (a connecting move).
-    if not switch and not b.is_arc:
+    # A D change applies from the end vector of the block that carries it (L4480): b's start vector uses
+    # the previous offset (a line tapers to the new one; an arc steps radially onto its new circle).
+    if not switch:
         d_b = d_a
     ta, tb = a.tangent(True), b.tangent(False)
     cross = ta[0] * tb[1] - ta[1] * tb[0]
@@ -282,15 +284,7 @@ def corner(
     # Acute outer corner: extension points r beyond the end of a and r before the start of b along their
     # tangents (two or three extra points, L4452).
     q1 = (va[0] + r * ta[0], va[1] + r * ta[1])
-    q2 = (vb[0] - abs(d_b) * tb[0], vb[1] - abs(d_b) * tb[1])
-    if (q2[0] - q1[0]) * tb[0] + (q2[1] - q1[1]) * tb[1] < -1e-9:
-        # With one offset on both sides the move between the extension points never runs against b; it
-        # does when D grows a lot at the corner (X60, L4574): check (a), interference.
-        raise CompensationError(
-            "cutter compensation interference: the corner move runs against the "
-            "programmed direction of the next block (check (a))",
-            "comp-interference",
-        )
+    q2 = (vb[0] - r * tb[0], vb[1] - r * tb[1])
     if a.is_arc:
         end_a, lead = va, [q1, q2]
     else:
@@ -319,23 +313,30 @@ def arc_sweep_between(center: Point, start: Point, end: Point, programmed_sweep:
     return math.copysign(raw, programmed_sweep)
 
 
-def check_line(element: PlaneElement, start: Point, end: Point, line: int = 0) -> None:
-    """Interference check (a) on a compensated line: its direction within 90° of the programmed one."""
-    pu, pv = element.end[0] - element.start[0], element.end[1] - element.start[1]
-    cu, cv = end[0] - start[0], end[1] - start[1]
-    if pu * cu + pv * cv < -1e-12 * max(1.0, math.hypot(pu, pv) * math.hypot(cu, cv)):
-        raise CompensationError(
-            "cutter compensation interference: the compensated path of this block runs "
-            "against the programmed direction (a groove or step narrower than the tool)",
-            "comp-interference",
-            line,
-        )
+def block_interference(
+    element: PlaneElement, d: float, start: Point, end: Point, as_line: bool = False, line: int = 0
+) -> str | None:
+    """Interference check of one block's compensated movement from ``start`` to ``end`` (Remark 9,
+    L4554-L4580); returns why it interferes, or None.
 
-
-def check_arc(
-    element: PlaneElement, d: float, start: Point, end: Point, line: int = 0
-) -> tuple[float, float]:
-    """Interference checks on a compensated arc; returns (offset radius, compensated sweep)."""
+    (a) the tool-centre path runs 90°-270° against the programmed path: for a line (or an arc turned into
+    a line by the correction, compared with its chord), the dot product of the two directions is negative;
+    for an arc, its offset radius is negative (an inner arc smaller than the offset: the centre runs the
+    other way round). (b) for an arc, the sweep from ``start`` to ``end`` in the programmed direction
+    differs from the programmed sweep by more than 180° (X60: a one-quadrant arc becomes four quadrants).
+    An inner arc whose radius equals the offset raises ``comp-arc-centre`` (alarm 38) at once.
+    """
+    if element.center is None or as_line:
+        pu, pv = element.end[0] - element.start[0], element.end[1] - element.start[1]
+        cu, cv = end[0] - start[0], end[1] - start[1]
+        programmed, compensated = math.hypot(pu, pv), math.hypot(cu, cv)
+        if compensated <= SAME_POINT:
+            return None
+        if programmed <= SAME_POINT:
+            return "check (a): a full circle turned into a line has no direction to keep"
+        if pu * cu + pv * cv < -1e-12 * max(1.0, programmed * compensated):
+            return "check (a): the tool-centre path runs against the programmed direction"
+        return None
     radius = offset_radius(element, d)
     if abs(radius) <= 1e-9:
         raise CompensationError(
@@ -345,23 +346,75 @@ def check_arc(
             line,
         )
     if radius < 0.0:
-        raise CompensationError(
-            f"cutter compensation interference: inner arc radius {element.radius:g} mm is "
-            f"smaller than the offset {abs(d):g} mm",
-            "comp-interference",
-            line,
+        return (
+            f"check (a): inner arc radius {element.radius:g} mm is smaller than the offset {abs(d):g} mm "
+            "(the tool centre would run the other way round)"
         )
     sweep = arc_sweep_between(element.center, start, end, element.sweep)
     if abs(sweep - element.sweep) > math.pi:
-        # Check (b) (L4570-L4580): the tool-centre arc would run (almost) the other way round, or a
-        # one-quadrant arc would become a four-quadrant one.
-        raise CompensationError(
-            "cutter compensation interference: the tool centre arc would run the other "
-            "way round (check (b): sweep differs from the programmed one)",
-            "comp-interference",
-            line,
+        return (
+            f"check (b): the tool-centre arc sweeps {math.degrees(sweep):.1f} deg against the programmed "
+            f"{math.degrees(element.sweep):.1f} deg"
         )
-    return radius, sweep
+    return None
+
+
+def correct_interference(
+    element: PlaneElement,
+    d: float,
+    start_vectors: list[Point],
+    end_vectors: list[Point],
+    line: int = 0,
+) -> tuple[list[Point], list[Point], bool]:
+    """The controller's correction of interference before it alarms (L4582-L4611, seed notes §5.2).
+
+    ``start_vectors``: the tool-centre points at the block's start corner in path order (the first is
+    where the previous block ended, the last where this block's own movement starts); ``end_vectors``:
+    those at its end corner (the first is where this block's movement ends, the last where the next
+    block's own movement starts; the ones between are the next block's extra corner moves). The pair
+    nearest the block (the last start vector, the first end vector) is checked with
+    :func:`block_interference`; an interfering pair is ignored (both vectors dropped) and the next pair
+    out is checked, until a pair does not interfere. The last vector at a corner is never dropped: when
+    only one side can give one up, only that one is dropped (a step smaller than the tool radius
+    machined with an arc: "one vector is ignored and the tool traverses toward the 2nd vector",
+    L4511-L4513); when neither can (a single pair from the start, or interference left after
+    correcting) it is ``comp-interference`` (alarm 41). Once a vector has been dropped an arc block runs
+    as a straight line (L4600).
+
+    Returns the kept start vectors, the kept end vectors and whether an arc now runs as a line.
+    """
+    starts = list(start_vectors)
+    ends = list(end_vectors)
+    as_line = False
+    dropped = 0
+    while True:
+        reason = block_interference(element, d, starts[-1], ends[0], as_line, line)
+        if reason is None:
+            return starts, ends, as_line
+        if len(starts) == 1 and len(ends) == 1:
+            plural = "s" if dropped > 1 else ""
+            after = f" (after ignoring {dropped} corner vector{plural})" if dropped else ""
+            raise CompensationError(
+                f"cutter compensation interference{after}: {reason}", "comp-interference", line
+            )
+        if len(starts) > 1:
+            starts.pop()
+            dropped += 1
+        if len(ends) > 1:
+            ends.pop(0)
+            dropped += 1
+        as_line = True
+
+
+def _circle_point(element: PlaneElement, d: float, toward: Point) -> Point:
+    """The point of the arc's offset circle (radius for ``d``) in the direction of ``toward``."""
+    cu, cv = element.center
+    radius = offset_radius(element, d)
+    du, dv = toward[0] - cu, toward[1] - cv
+    n = math.hypot(du, dv)
+    if n <= SAME_POINT:
+        return element.offset_point(False, d)
+    return (cu + radius * du / n, cv + radius * dv / n)
 
 
 @dataclass(slots=True)
@@ -404,21 +457,22 @@ def compensate(
             c = _cancel_with_direction(element, virtual, d)
         else:
             c = corner(element, nxt, d, role=role, startup_type=startup_type)
-        for q in lead:
+        starts = [tool, *lead]
+        if element.is_arc and _dist(starts[-1], start_b) > SAME_POINT:
+            starts.append(start_b)
+        ends_at = [c.end_a, *c.lead_b]
+        as_line = False
+        if i > 0:
+            starts, ends_at, as_line = correct_interference(element, d, starts, ends_at)
+        for q in starts[1:]:
             out.append(OutputMove(q, block=i))
-        if element.is_arc:
-            if _dist(tool if not lead else lead[-1], start_b) > SAME_POINT:
-                out.append(OutputMove(start_b, block=i))
-            radius, sweep = check_arc(element, d, start_b, c.end_a)
-            del radius
-            out.append(OutputMove(c.end_a, element.center, sweep, block=i))
+        if element.is_arc and not as_line:
+            sweep = arc_sweep_between(element.center, starts[-1], ends_at[0], element.sweep)
+            out.append(OutputMove(ends_at[0], element.center, sweep, block=i))
         else:
-            begin = lead[-1] if lead else tool
-            if i > 0:
-                check_line(element, begin, c.end_a)
-            out.append(OutputMove(c.end_a, block=i))
-        tool = c.end_a
-        lead = c.lead_b
+            out.append(OutputMove(ends_at[0], block=i))
+        tool = ends_at[0]
+        lead = ends_at[1:]
         start_b = c.start_b
     if cancel_last:
         for q in lead:
@@ -812,9 +866,13 @@ class OffsetStage:
         except CompensationError as err:
             err.line = err.line or line
             raise
-        self._emit_block(a, c.end_a)
+        try:
+            rest = self._emit_block(a, [c.end_a, *c.lead_b])
+        except CompensationError as err:
+            err.line = err.line or line
+            raise
         if nxt is not None:
-            nxt.lead = c.lead_b
+            nxt.lead = rest
             nxt.start_b = c.start_b
         self.pending = None
         self._emit_deferred()
@@ -832,7 +890,7 @@ class OffsetStage:
             target = virtual.offset_point(False, a.d)
         else:
             target = nxt.element.offset_point(False, nxt.d)
-        self._emit_block(a, end_a)
+        self._emit_block(a, [end_a])
         sweep = arc_sweep_between(p, end_a, target, 0.0)
         if abs(sweep) > SMOOTH:
             # The short way round the corner point: at an outer corner, the way the path turns.
@@ -868,30 +926,40 @@ class OffsetStage:
             "rapid" if item.kind == "rapid" else "line", (target[0], target[1], target[2]), item.feed
         )
 
-    def _emit_block(self, item: _Item, end: Point) -> None:
-        """Emit a resolved in-plane block: its lead moves, then its element to ``end``."""
+    def _emit_block(self, item: _Item, end_vectors: list[Point]) -> list[Point]:
+        """Emit a resolved in-plane block: its lead moves, then its element to the first of
+        ``end_vectors`` (the tool-centre points at its end corner; the rest are the next block's lead).
+
+        The interference check and its correction (:func:`correct_interference`) run first and may drop
+        vectors at both corners (an arc then runs as a straight line); returns the end corner's vectors
+        that are left for the next block's lead. An arc whose start vector is not on its offset circle
+        (D changed in this block: the start vector keeps the old offset, L4480) steps radially onto it."""
         self._set_machine_context(item.context)
         element = item.element
         line = item.context[0]
         u, v, _w = PLANE_AXES[self.plane]
-        for q in item.lead:
-            self._emit_plane_point(q, item)
         pos = self.machine.position
-        here = (pos[u], pos[v])
-        if item.kind == "arc":
-            start = item.start_b if item.start_b is not None else here
-            if _dist(here, start) > 1e-7:
+        starts = [(pos[u], pos[v]), *item.lead]
+        if item.kind == "arc" and item.start_b is not None and _dist(starts[-1], item.start_b) > 1e-7:
+            starts.append(item.start_b)
+        as_line = False
+        if item.role != "startup":
+            starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors, line)
+        for q in starts[1:]:
+            self._emit_plane_point(q, item)
+        end = end_vectors[0]
+        target = self._with_plane(item.target, end)
+        if item.kind == "arc" and not as_line:
+            start = _circle_point(element, item.d, starts[-1])
+            if _dist(starts[-1], start) > 1e-7:
                 self._emit_plane_point(start, item)
-            radius, sweep = check_arc(element, item.d, start, end, line)
-            del radius
-            target = self._with_plane(item.target, end)
+            sweep = arc_sweep_between(element.center, start, end, element.sweep)
             center = list(target)
             center[u], center[v] = element.center
             self.machine.arc_feed(target, (center[0], center[1], center[2]), self.plane, sweep, item.feed)
-            return
-        if item.role != "startup":
-            check_line(element, here, end, line)
-        self._emit_straight(item.kind, self._with_plane(item.target, end), item.feed)
+        else:
+            self._emit_straight("line" if item.kind == "arc" else item.kind, target, item.feed)
+        return end_vectors[1:]
 
     def _emit_deferred(self) -> None:
         items, self.deferred = self.deferred, []

@@ -400,8 +400,13 @@ def test_g39_outside_offset_mode_is_an_error():
         ("G10 L12 P1 R1\nG01 G41 D1 X10 F100\nG18\n", "comp-plane-change", 37),
         # T4: the tool-centre arc degenerates: radius of an inner arc = the offset (centre = start = end).
         ("G10 L12 P1 R5\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", "comp-arc-centre", 38),
-        # T6: inner arc radius smaller than the tool radius (L4496).
-        ("G10 L12 P1 R6\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", "comp-interference", 41),
+        # T6: inner arc radius smaller than the tool radius (L4496): a quarter fillet R 1 joining +x and
+        # +y tangentially, r = 5 on its centre side. Both joins are smooth, one vector each, so the single
+        # pair cannot be corrected (L4606). (A half-circle dip R 5 with r = 6 used to be here: its 90°
+        # corners give two vectors each and the manual's correction now runs the tool straight over it,
+        # tests/gcode/test_compensation_interference.py.)
+        ("G10 L12 P1 R5\nG00 X-20\nG01 G41 D1 X-10 Y0 F100\nX10\nG03 X11 Y1 I0 J1\nG01 Y10\nG40 X0\n",
+         "comp-interference", 41),
         # T6: a groove narrower than the tool diameter (L4505): 4 mm wide, r = 3.
         # (G41: going down the left side is +x, inside the groove; the walls' offsets x = 13 and x = 11 make
         # the bottom move run backwards.)
@@ -435,36 +440,92 @@ def test_compensation_alarms(text, code, alarm):
     assert err.line > 0
 
 
+def line_circle(point, direction, centre, radius, near):
+    """Intersection of the line point + s·direction (unit) with a circle, the one nearest ``near``:
+    |point + s·t - c|² = R² gives s² + 2 s t·w + |w|² - R² = 0 with w = point - c."""
+    w = (point[0] - centre[0], point[1] - centre[1])
+    half_b = direction[0] * w[0] + direction[1] * w[1]
+    root = math.sqrt(half_b**2 - (w[0] ** 2 + w[1] ** 2 - radius**2))
+    steps = (-half_b - root, -half_b + root)
+    points = [(point[0] + s * direction[0], point[1] + s * direction[1]) for s in steps]
+    return min(points, key=lambda q: math.dist(q, near))
+
+
+def angle_deg(centre, point):
+    return math.degrees(math.atan2(point[1] - centre[1], point[0] - centre[0]))
+
+
+X60 = (
+    "G10 L12 P1 R2.0\nG10 L12 P2 R6.0\nG01 G91 {side} X1000 Y0 D01 F100\nN5 G01 G91 X8000 Y2000 D01\n"
+    "N6 G02 X3200 Y-1600 I-2000 J-8000 D02\nN7 G01 X2000 Y-5000\nG40 X5000\n"
+)
+# In the test coordinates (a start-up block G41/G42 X1000 first): N5 (1, 0) -> P = (9, 2); N6 CW about
+# C = (7, -6), R = |(2, 8)| = 8.246, to Q = (12.2, 0.4) (|(5.2, 6.4)| = R: a one-quadrant arc from 76.0°
+# to 50.9°, sweep -25.1°); N7 along (2, -5). r1 = 2 (D01), r2 = 6 (D02, given in N6: it applies from N6's
+# end vector, L4480, so N6's start vector keeps r1).
+X60_P, X60_C, X60_Q, X60_R = (9.0, 2.0), (7.0, -6.0), (12.2, 0.4), math.hypot(2, 8)
+
+
+def _unit(dx, dy):
+    n = math.hypot(dx, dy)
+    return (dx / n, dy / n)
+
+
 def test_x60_interference_example_as_we_read_it():
-    # L4574-L4580, as printed in 0.001 mm units: (G41) N5 G01 G91 X8000 Y2000 D01; N6 G02 X3200 Y-1600
-    # I-2000 J-8000 D02; N7 G01 X2000 Y-5000; with r1 = 2000 (2 mm), r2 = 6000 (6 mm). The manual says the
-    # one-quadrant arc "extends to four quadrants" (check (b), alarm 41); its figure is lost. We do NOT
-    # reproduce that: with G41 the offset circle of this CW arc is outside (R 8.246 + 6 = 14.246), the
-    # N5/N6 corner is outer (a right turn of 28°) and the arc keeps its quadrant (-32.1° against the
-    # programmed -25.1°). What we compute, by hand (P = (9, 2), the N5/N6 corner):
-    #   N5 ends at its r1 vector P + 2·n, n the left normal of N5's direction (8, 2);
-    #   the curves do not meet near the corner, so a straight move to N6's r2 vector P + 6·u, u the unit
-    #   radial from N6's centre (7, -6) (outward: left of a CW arc);
-    #   N6 on the circle about (7, -6) of radius 8.246 + 6. A start-up block (G41 X1000) comes first.
-    text = (
-        "G10 L12 P1 R2.0\nG10 L12 P2 R6.0\nG01 G91 G41 X1000 Y0 D01 F100\nN5 G01 G91 X8000 Y2000 D01\n"
-        "N6 G02 X3200 Y-1600 I-2000 J-8000 D02\nN7 G01 X2000 Y-5000\nG40 X5000\n"
-    )
-    out = moves(text, dialect=_fanuc_units())
-    p = (9.0, 2.0)
-    n5 = left_normal((1, 0), p)
-    assert close(xy(out[1]), (p[0] + 2 * n5[0], p[1] + 2 * n5[1]))
-    radial = ((p[0] - 7.0) / math.hypot(2, 8), (p[1] + 6.0) / math.hypot(2, 8))
-    assert close(xy(out[2]), (p[0] + 6 * radial[0], p[1] + 6 * radial[1]))
+    # L4574-L4580 as printed, "(G41)": G41 puts the tool on the left, which for this CW arc (and the
+    # right turns at P and Q) is the convex side: both corners are outer, the offset circles grow
+    # (R + r), and the tool-centre arc keeps its quadrant. No alarm; the manual's "four quadrants" needs
+    # the tool on the concave side (next test). By hand:
+    out = moves(X60.format(side="G41"), dialect=_fanuc_units())
+    t5 = _unit(8, 2)
+    n5 = (-t5[1], t5[0])
+    # N5/N6: a right turn of 28° (alpha = 152° >= 90°): the intersection of N5's left offset line (r1)
+    # with N6's offset circle for r1 (R + 2), the one nearest P.
+    i1 = line_circle((X60_P[0] + 2 * n5[0], X60_P[1] + 2 * n5[1]), t5, X60_C, X60_R + 2, X60_P)
+    assert close(xy(out[1]), i1)
+    # N6 steps radially onto its r2 circle (R + 6) and runs on it.
+    radial = _unit(i1[0] - X60_C[0], i1[1] - X60_C[1])
+    assert close(xy(out[2]), (X60_C[0] + (X60_R + 6) * radial[0], X60_C[1] + (X60_R + 6) * radial[1]))
+    assert out[2]["line"] == out[3]["line"] == 5
+    # N6/N7: a right turn of 29° (outer, obtuse): the r2 circle meets N7's left offset line (r2).
+    t7 = _unit(2, -5)
+    n7 = (-t7[1], t7[0])
+    i2 = line_circle((X60_Q[0] + 6 * n7[0], X60_Q[1] + 6 * n7[1]), t7, X60_C, X60_R + 6, X60_Q)
     arc = out[3]
-    assert arc["kind"] == "arc" and close(arc["center"][:2], (7.0, -6.0))
-    assert math.isclose(arc["radius"], math.hypot(2, 8) + 6, abs_tol=1e-6)
-    assert -40.0 < arc["sweep_deg"] < -25.0  # the same quadrant, no four-quadrant growth
+    assert arc["kind"] == "arc" and close(arc["center"][:2], X60_C)
+    assert math.isclose(arc["radius"], X60_R + 6, abs_tol=1e-6)
+    assert close(xy(arc), i2)
+    # Both ends in the first quadrant about C (78.9° to 43.8°): a CW sweep of -35.1°, no wrap round.
+    sweep = angle_deg(X60_C, i2) - angle_deg(X60_C, i1)
+    assert math.isclose(arc["sweep_deg"], sweep, abs_tol=1e-6) and -36 < sweep < -35
+
+
+def test_x60_with_the_tool_on_the_concave_side_is_the_manuals_check_b_alarm():
+    # The manual's claim (the one-quadrant N6 "extends to four quadrants", check (b), alarm 41) holds
+    # when the tool is on the concave side of the hill N5-N6-N7 (G42 here; G41 with negative D is the
+    # same): both corners are inner (intersection points) and the offset circles shrink. By hand:
+    t5 = _unit(8, 2)
+    right5 = (t5[1], -t5[0])
+    # N5/N6 with r1: N5's right offset line meets N6's r1 circle (R - 2 = 6.246) at I1, nearest P.
+    i1 = line_circle((X60_P[0] + 2 * right5[0], X60_P[1] + 2 * right5[1]), t5, X60_C, X60_R - 2, X60_P)
+    # N6/N7 with r2: the r2 circle (R - 6 = 2.246) meets N7's right offset line at I2, nearest Q.
+    t7 = _unit(2, -5)
+    right7 = (t7[1], -t7[0])
+    i2 = line_circle((X60_Q[0] + 6 * right7[0], X60_Q[1] + 6 * right7[1]), t7, X60_C, X60_R - 6, X60_Q)
+    # I1 lies at 71.7° about C, I2 at 79.3°: clockwise from I1 to I2 is -(360 - 7.6)° = -352.4°, against
+    # the programmed -25.1°: the arc would run through all four quadrants. Each corner has one vector,
+    # so there is nothing to ignore (L4606): alarm 41 on N6 (line 5).
+    a1, a2 = angle_deg(X60_C, i1), angle_deg(X60_C, i2)
+    assert 71 < a1 < 72 and 79 < a2 < 80
+    sweep = -(360.0 - (a2 - a1))
+    err = program_error(X60.format(side="G42"), dialect=_fanuc_units())
+    assert (err.code, err.alarm, err.line) == ("comp-interference", 41, 5)
+    assert "check (b)" in str(err) and f"{sweep:.1f}" in str(err)
 
 
 def test_error_names_file_and_line():
-    err = program_error("G10 L12 P1 R6\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", file="part.nc")
-    assert str(err).startswith("part.nc:3:")
+    err = program_error("G10 L12 P1 R5\nG01 G41 D1 X10 F100\nX20\nG03 X21 Y1 J1\nG01 Y10\n", file="part.nc")
+    assert str(err).startswith("part.nc:4:")
 
 
 # ------------------------------------------------------------------------------------------------- API
