@@ -56,6 +56,7 @@ def interpret(
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
     tool_offsets=None,
+    tool_measurement=None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -70,6 +71,10 @@ def interpret(
     "D_wear": {…}}`` or a :class:`~cnc_gym.gcode.offsets.ToolOffsets`; default all zero (G10 L10-L13 and
     #2001…/#10001… set them from the program).
 
+    ``tool_measurement``: G37's simulated measuring instrument and parameters, a
+    :class:`~cnc_gym.gcode.measurement.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
+    "band_mm": 5}`` (H number → work coordinate where the approach-end signal comes; default: exactly at
+    the commanded position, with the manual's standard P2651-P2653).
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
@@ -90,8 +95,8 @@ def interpret(
         folder = None if program_dir is None else str(program_dir)
         options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
         program = Reader(spec, calls).read(text, file)
-        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine,
-                               tool_offsets=tool_offsets).run(options)  # fmt: skip
+        toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
+                               tool_measurement=tool_measurement).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()

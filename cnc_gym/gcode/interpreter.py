@@ -25,6 +25,7 @@ from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, OffsetStack, Transfo
 from cnc_gym.gcode.compensation import ToolCompensation
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
+from cnc_gym.gcode.measurement import ToolMeasurement, do_g37
 from cnc_gym.gcode.reader import split_words
 from cnc_gym.gcode.sysvars import SystemVariables
 from cnc_gym.gcode.transforms import (
@@ -85,7 +86,7 @@ _ACTIONS = {
     "subprogram_call": "_do_subprogram_call", "subprogram_return": "_do_subprogram_return",
     "macro_call": "_do_macro_call", "modal_call_cancel": "_do_modal_call_cancel",
     "cycle": "_do_cycle", "cycle_cancel": "_do_cycle_cancel", "pattern": "_do_pattern",
-    "rigid_tap": "_do_rigid_tap", "g05": "_do_g05", "nurbs": "_do_nurbs",
+    "rigid_tap": "_do_rigid_tap", "g05": "_do_g05", "nurbs": "_do_nurbs", "g37": "_do_g37",
 }  # fmt: skip
 
 
@@ -100,8 +101,9 @@ class Interpreter:
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
                  start: tuple[float, float, float] = (0.0, 0.0, 0.0), machine: MachineConfig | None = None,
-                 tool_offsets=None) -> None:  # fmt: skip
+                 tool_offsets=None, tool_measurement=None) -> None:  # fmt: skip
         self.machine = machine  # reference positions (G27-G30)
+        self.tool_measurement = ToolMeasurement.coerce(tool_measurement)  # G37's simulated instrument
         self.program = program
         self.dialect = dialect
         self.file = program.file
@@ -617,6 +619,10 @@ class Interpreter:
         self.offsets.update()
         self.resync_program_position()
         mark_coordinate_change(self)
+
+    def _do_g37(self, spec: CodeSpec, values: dict) -> None:
+        self.comp.before_machine_move()
+        do_g37(self, spec, values)  # measurement.py
 
     # ------------------------------------------------------------------ NURBS (nurbs.py)
     def _do_g05(self, spec: CodeSpec, values: dict) -> None:

@@ -75,7 +75,7 @@ _G_LIST = [
     _g(29, 0, "g29", step="motion", uses_axes=True),
     _g(30, 0, "g30", step="motion", uses_axes=True, words="P"),
     _g(31, 0, "g31", step="motion", uses_axes=True),
-    _todo(37, 0, "automatic tool length measurement G37", uses_axes=True),
+    _g(37, 0, "g37", step="motion", uses_axes=True),  # automatic tool length measurement (measurement.py)
     # G39 corner arc in cutter compensation (L4646-L4666; compensation.py).
     _g(39, 0, "corner_arc", step="cutter_comp", words="IJK"),
     _g(45, 0, "position_offset", 1, step="cutter_comp"),
