@@ -317,6 +317,20 @@ def test_changing_d_in_offset_mode_applies_from_the_end_vector_of_the_block():
     assert close(out[3], (13.0, 13.0))  # corner (10, 10), up then -x, outer 90° with r = 3
 
 
+def test_changing_d_in_an_arc_block_keeps_the_old_offset_at_its_start_vector():
+    # L4480 for an arc: the arc block carrying D2 starts from the vector of the old offset and ends with
+    # the new one. G42 r1 = 1 along +x to (10, 0), then D2 (r2 = 3) CCW quarter about (10, 10) to
+    # (20, 10): G42 is the outside of a CCW arc (radius 10 + r). The join is tangent: one point, the
+    # arc's start vector with r1, (10, -1). The tool then steps radially onto the r2 circle, (10, -3),
+    # runs on it (radius 13) to the tangent join with the +y line: the end vector with r2, (23, 10).
+    text = "G10 L12 P1 R1\nG10 L12 P2 R3\nG00 X-10\nG01 G42 D1 X0 Y0 F100\nX10\nD2 G03 X20 Y10 J10\nG01 Y20\n"
+    out = moves(text)
+    for got, expected in zip(out[2:6], [(10, -1), (10, -3), (23, 10), (23, 20)], strict=True):
+        assert close(xy(got), expected), out
+    assert out[3]["line"] == out[4]["line"] == 6 and out[3]["kind"] == "line"
+    assert out[4]["kind"] == "arc" and close(out[4]["radius"], 13.0) and close(out[4]["sweep_deg"], 90.0)
+
+
 # ------------------------------------------------------------------------------------------ look-ahead
 def _fanuc_units():
     """The examples copied from Fanuc are printed in 0.001 mm units without decimal points (X50000 = 50 mm,
