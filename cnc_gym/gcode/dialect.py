@@ -151,6 +151,9 @@ class Dialect:
     nurbs_params: NurbsParameters = field(default_factory=NurbsParameters)
     #: G60 modal in group 01 (GSK 1870#0 MDL = 1) instead of one-shot (0, the standard setting).
     g60_modal: bool = False
+    #: The R of a parameter-input block (G10 L50 … G11): a raw integer with its own range (GSK: 8 digits,
+    #: a bit parameter's eight binary digits, L1503), wider than the R address's. None: the R address rule.
+    parameter_input_r: AddressRule | None = None
     #: Whether a dialect that is listed but not built yet (raises on use).
     implemented: bool = True
 

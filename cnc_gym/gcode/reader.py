@@ -185,6 +185,13 @@ class Reader:
                     if rule.point_allowed and not self._fast_rules[letter][2]:
                         lenient[letter] = (rule.low, rule.high, True, rule.unit == "length")
                         self._deferred_letters |= {letter}
+        # The R of a parameter-input block (G10 L50 mode) may exceed the R address's range: such a word
+        # waits too, for transforms.parameter_block (any other block then raises the R rule's error).
+        wide = dialect.parameter_input_r
+        if wide is not None and "R" in lenient:
+            low, high, point, is_length = lenient["R"]
+            lenient["R"] = (min(low, wide.low), max(high, wide.high), point, is_length)
+            self._deferred_letters |= {"R"}
         self._lenient_rules = lenient
 
     def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):

@@ -425,8 +425,14 @@ def parameter_block(interp: Interpreter, block) -> None:
         raise interp.error("inside G10 L50 only parameter blocks N_ R_ / N_ P_ R_ and G11 are allowed "
                            "(L1466-L1517)", "bad-g10")  # fmt: skip
     fields = {}
+    wide = interp.dialect.parameter_input_r
     for word in words:
         letter, text = word[0], word[-1]
+        if text is None and wide is not None and isinstance(word[1], tuple) and word[1][0] == "deferred":
+            text = word[1][2]  # a literal beyond the R address's range (reader.py): the parameter rule's
+            if "." not in text and not wide.low <= float(text) <= wide.high:
+                raise interp.error(f"{letter}{text}: out of range {wide.low:.0f} to {wide.high:.0f}",
+                                   "value-out-of-range", alarm=wide.alarm)  # fmt: skip
         if text is None:
             raise interp.error(f"{letter} of a parameter block takes a plain number (no variable: R has no "
                                "decimal point even from a variable, L1512)", "bad-g10")  # fmt: skip
@@ -489,8 +495,11 @@ def do_g30(interp: Interpreter, spec, values: dict) -> None:
 
 
 def do_g29(interp: Interpreter, spec, values: dict) -> None:
-    """``G29 IP_`` (L2262-L2294): commanded axes rapid to the stored intermediate point, then to IP; in
-    G91, IP is relative to the intermediate point. Other axes stay (L2270)."""
+    """``G29 IP_`` (L2262-L2294): rapid to the stored intermediate point, then to IP; in G91, IP is relative
+    to the intermediate point. An axis not commanded but with an intermediate point stored returns to it
+    and stays there ("the relative intermediate point in the axis doesn't have any move amount", L2270):
+    the reading the manual's example X29 prints, (60, 30), against L2270's last sentence "other axes
+    remain still". Axes with no intermediate point stay where they are (X28)."""
     check_coordinate_command(interp, "G29", reference=True)
     axes = _commanded(interp, values)
     letters = interp.dialect.axes
@@ -498,7 +507,7 @@ def do_g29(interp: Interpreter, spec, values: dict) -> None:
     if missing:
         raise interp.error(f"G29 {''.join(missing)}: no intermediate point stored for that axis (G28/G30 "
                            "first)", "bad-reference", alarm=46)  # fmt: skip
-    middle = tuple(interp.g28_intermediate[a] if a in axes else None for a in range(3))
+    middle = tuple(interp.g28_intermediate)
     interp.move_linear(True, middle)
     s = interp.scale
     if interp.polar is None:

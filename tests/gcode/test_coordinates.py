@@ -122,11 +122,13 @@ def test_worked_example_x28_intermediate_point_is_kept_per_axis_and_read_in_the_
 
 def test_worked_example_x29_g29_in_g91_is_relative_to_the_intermediate_point():
     # L2294: G90 G0 X10 Y10; G91 G28 X20 Y20 → intermediate (30, 30), then the reference (0, 0).
-    # G29 X30 (G91): via (30, ·) to X = 30 + 30 = 60 ("the vector of X axial direction is 60"). Only X is
-    # commanded, so only X moves (L2270 "other axes remain still"): Y stays at the reference, 0. The
-    # manual's "(60, 30)" would need Y to return too, contradicting that sentence: we follow the sentence.
+    # G29 X30 (G91): via (30, 30) to X = 30 + 30 = 60 ("the vector of X axial direction is 60"). Y is not
+    # commanded but has an intermediate point: it returns to it and has no further move amount, so the
+    # end is the manual's printed (60, 30) (L2270's "other axes remain still" is the minority reading; see
+    # transforms.do_g29 and tests/gcode/test_manual_examples.py).
     out = ends("G90 G0 X10 Y10\nG91 G28 X20 Y20\nG29 X30\n")
-    assert out == [[10.0, 10.0, 0.0], [30.0, 30.0, 0.0], [0.0, 0.0, 0.0], [30.0, 0.0, 0.0], [60.0, 0.0, 0.0]]
+    assert out == [[10.0, 10.0, 0.0], [30.0, 30.0, 0.0], [0.0, 0.0, 0.0], [30.0, 30.0, 0.0],
+                   [60.0, 30.0, 0.0]]  # fmt: skip
     # Example 1 (L2292): G91 G28 X1000 Y200 (from the origin); M06; G29 X500 Y-400 → via (1000, 200) to
     # (1500, -200).
     out = ends("G91 G28 X1000 Y200\nM06\nG29 X500 Y-400\n")
@@ -271,3 +273,14 @@ def test_system_variables_read_the_g54_1_number_and_the_g31_skip_position():
     text = ("G10 L20 P5 X1\nG54.1 P5\n#100=#4130\nG54\n#101=#4130\nG01 F100\nG31 X3 Y4\n"
             "#102=#5061\n#103=#5062\nG00 X#102 Y#103 Z#100\nX#101\n")  # fmt: skip
     assert ends(text)[-2:] == [[3.0, 4.0, 5.0], [0.0, 4.0, 5.0]]
+
+
+def test_parameter_input_r_has_its_own_eight_digit_range():
+    # G10 L50's R is the raw parameter value (L1480, L1503): up to 8 digits (a bit parameter's bits 7..0),
+    # beyond the R address's ±999999.9999. Outside parameter input the R address's range still holds.
+    assert ends("G10 L50\nN2501 R10000000\nG11\nG00 X1\n") == [[1.0, 0.0, 0.0]]
+    err = program_error("G10 L50\nN2501 R100000000\nG11\n")
+    assert err.code == "value-out-of-range" and err.alarm == 8 and err.line == 2
+    for text in ("G01 X1 R10000000 F1\n", "G02 X1 R10000000 F1\n"):
+        assert program_error(text).code == "value-out-of-range"
+    assert program_error("G10 L50\nN2501 R10000000.5\nG11\n").code == "decimal-point-not-allowed"

@@ -49,8 +49,6 @@ def test_x3_position_x_to_50_123(text):
     assert close(back, -50.123, 1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason="the reader's R range (±999999.9999, alarm 8) rejects the 8-digit raw "
-                   "bit pattern R10000000 that the manual's G10 L50 example 1 writes (L1507)")
 def test_x16_bit_parameter_as_printed():
     """X16 example 1 (L1503-L1509): ``G10L50; N2501 R 10000000; G11;`` sets bit 7 (LTM) of parameter 2501.
     In parameter input R is the raw integer value of the parameter (no decimal point, L1480); for a bit
@@ -111,8 +109,6 @@ def test_x14_one_shot_and_modal_g60_tables(text, modal):
     ]  # fmt: skip
 
 
-@pytest.mark.xfail(strict=True, reason="the interpreter leaves Y at the reference position (60, 0): it "
-                   "follows L2270 'other axes remain still'; the manual's example says (60, 30) (L2294)")
 def test_x29_g29_returns_uncommanded_axes_to_the_intermediate_point():
     """X29 example 2 (L2292-L2294): ``G90 G0 X10 Y10; G91 G28 X20 Y20; G29 X30;`` — "return the reference
     position via the intermediate point (30, 30)"; then "G29 X30; Return from the reference position (60, 30)

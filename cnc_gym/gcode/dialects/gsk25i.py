@@ -361,6 +361,7 @@ DIALECT = Dialect(
     word_steps=WORD_STEPS,
     axes=_AXES,
     other_axes="ABCUVW",
+    parameter_input_r=AddressRule(-99999999.0, 99999999.0, "integer", point_allowed=False, alarm=8),
     functions=FUNCTIONS,
     alarms=ALARMS,
     integer_is_unit=True,  # 1800#0 DPI standard setting 1: X10 = 10 mm (L684, PARAM-VOL)
