@@ -329,12 +329,15 @@ def block_interference(
     if element.center is None or as_line:
         pu, pv = element.end[0] - element.start[0], element.end[1] - element.start[1]
         cu, cv = end[0] - start[0], end[1] - start[1]
+        dot = pu * cu + pv * cv
+        if dot > 0.0:
+            return None  # the common case, decided without square roots (this runs once per block)
         programmed, compensated = math.hypot(pu, pv), math.hypot(cu, cv)
         if compensated <= SAME_POINT:
             return None
         if programmed <= SAME_POINT:
             return "check (a): a full circle turned into a line has no direction to keep"
-        if pu * cu + pv * cv < -1e-12 * max(1.0, programmed * compensated):
+        if dot < -1e-12 * max(1.0, programmed * compensated):
             return "check (a): the tool-centre path runs against the programmed direction"
         return None
     radius = offset_radius(element, d)
@@ -383,12 +386,14 @@ def correct_interference(
 
     Returns the kept start vectors, the kept end vectors and whether an arc now runs as a line.
     """
+    reason = block_interference(element, d, start_vectors[-1], end_vectors[0], False, line)
+    if reason is None:
+        return start_vectors, end_vectors, False  # no interference: nothing to copy (the common case)
     starts = list(start_vectors)
     ends = list(end_vectors)
     as_line = False
     dropped = 0
     while True:
-        reason = block_interference(element, d, starts[-1], ends[0], as_line, line)
         if reason is None:
             return starts, ends, as_line
         if len(starts) == 1 and len(ends) == 1:
@@ -404,6 +409,7 @@ def correct_interference(
             ends.pop(0)
             dropped += 1
         as_line = True
+        reason = block_interference(element, d, starts[-1], ends[0], as_line, line)
 
 
 def _circle_point(element: PlaneElement, d: float, toward: Point) -> Point:
