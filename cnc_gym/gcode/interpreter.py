@@ -482,6 +482,13 @@ class Interpreter:
         self.incremental = spec.value
 
     def _do_units(self, spec: CodeSpec, values: dict | None = None) -> None:
+        if values is not None and spec.value != self.inch and (
+                len(self.builder) or self.offsets.floating is not None or any(self.offsets.local)):
+            # L2110, L2127: G20/G21 go at the start, before the work coordinate system is set, and must not
+            # switch in the middle of a program (positions and offsets already given would change meaning).
+            raise self.error(f"{spec.name}: inch/metric input cannot switch after the program has moved or "
+                             "set a coordinate system (give it alone at the start, L2110, L2127)",
+                             "units-switch")  # fmt: skip
         self.inch = spec.value
         self.scale = INCH_MM if spec.value else 1.0
         self.increment = self.dialect.least_increment_inch if spec.value else self.dialect.least_increment_mm

@@ -268,3 +268,17 @@ def test_worked_example_x10_arcs_absolute_radius_and_incremental():
             assert arc["feed"] == 300.0 and arc["plane"] == "XY"
             for key, value in want.items():
                 assert close(arc[key], value), (text, key, arc[key], value)
+
+
+def test_x27_g20_before_the_coordinate_system_and_no_switch_later():
+    # X27 (L2110): ``N10 G20; N20 G92 X_ Y_;`` — G20 alone at the start, then the coordinate system is set
+    # in inch: G92 X1 Y2 makes the machine origin read (1 in, 2 in), so X0 Y0 is machine (-25.4, -50.8).
+    out = moves("N10 G20;\nN20 G92 X1 Y2;\nN30 G00 X0 Y0;\n")
+    assert out[0]["end"][:2] == [-25.4, -50.8]
+    # "Inch and metric input must not be switched during a program" (L2127): after a move or a G92/G52
+    # the switch is an error; repeating the mode in force (a safety line "G21 G90 G40") is not a switch.
+    for text in ("G21\nG01 X1 F10\nG20\n", "G92 X1\nG20\n", "G52 X1\nG20 G00 X0\n"):
+        assert program_error(text).code == "units-switch"
+    assert moves("G21\nG01 X1 F10\nG21 G90 G40\nX2\n")[-1]["end"][0] == 2.0
+    # G20 with the first move of the program in one block stays allowed (read first, so all inch).
+    assert moves("G20 G01 X1 F10\n")[0]["end"][0] == pytest.approx(25.4)
