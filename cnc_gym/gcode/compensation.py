@@ -7,7 +7,10 @@ Two layers:
   :func:`corner` the tool-centre points at the junction of two elements (GSK/Fanuc type C, seed notes
   §5.2, manual L4107-L4237): intersection points at inner corners and outer corners of 90° or more,
   extension points (two or three extra points) at outer corners under 90°, start-up and cancel of type A
-  or B. :func:`compensate` runs a whole sequence (start-up line, offset-mode moves, cancel line).
+  or B. :func:`correct_interference` is the interference check (alarm 41) with the manual's correction
+  before it alarms (interfering corner-vector pairs ignored from the inside out, an arc turned into a
+  line, L4554-L4611). :func:`compensate` runs a whole sequence (start-up line, offset-mode moves, cancel
+  line).
 * **The stage** (:class:`OffsetStage`): sits between the interpreter and the
   :class:`~cnc_gym.gcode.canonical.CanonicalMachine` with the same interface (``straight_traverse``,
   ``straight_feed``, ``arc_feed``, ``dwell``, ``position``, context attributes). It receives programmed

@@ -526,7 +526,7 @@ def test_x60_with_the_tool_on_the_concave_side_is_the_manuals_check_b_alarm():
     t7 = _unit(2, -5)
     right7 = (t7[1], -t7[0])
     i2 = line_circle((X60_Q[0] + 6 * right7[0], X60_Q[1] + 6 * right7[1]), t7, X60_C, X60_R - 6, X60_Q)
-    # I1 lies at 71.7° about C, I2 at 79.3°: clockwise from I1 to I2 is -(360 - 7.6)° = -352.4°, against
+    # I1 lies at 71.7° about C, I2 at 79.4°: clockwise from I1 to I2 is -(360 - 7.7)° = -352.3°, against
     # the programmed -25.1°: the arc would run through all four quadrants. Each corner has one vector,
     # so there is nothing to ignore (L4606): alarm 41 on N6 (line 5).
     a1, a2 = angle_deg(X60_C, i1), angle_deg(X60_C, i2)
