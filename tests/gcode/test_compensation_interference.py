@@ -196,6 +196,25 @@ def test_groove_narrower_than_the_tool_has_one_vector_per_corner_and_alarms():
     assert (err.code, err.alarm, err.line) == ("comp-interference", 41, 4)
 
 
+def test_concave_depth_smaller_than_the_offset_alarms_although_nothing_is_overcut():
+    # L4613-L4619, the manual's own false positive: a dip 4 wide and 1 deep, r = 3 above it (G41 along
+    # +x). The tool could pass over it at y = 3 without touching anything, but the bottom's corners are
+    # inner, one vector each: down-then-+x gives x = 10 + 3 with y = -1 + 3, (13, 2); +x-then-up gives
+    # x = 14 - 3, (11, 2). The bottom's move (13, 2) -> (11, 2) runs against +x: alarm 41 on it.
+    err = program_error("G10 L12 P1 R3\nG00 X-10\nG01 G41 D1 X0 Y0 F100\nX10\nY-1\nX14\nY0\nX30\nG40 X40\n")
+    assert (err.code, err.alarm, err.line) == ("comp-interference", 41, 6)
+
+
+def test_a_corrected_helix_runs_as_a_straight_line_in_space():
+    # The dip of test_dip_narrower_than_the_tool_is_bridged_by_a_straight_line as a helix (Z -2 over the
+    # arc): compensation works in the plane only, so the corrected block is one straight move from
+    # (10, 6, 0) to (20, 6, -2).
+    text = "G10 L12 P1 R6\nG00 X-20\nG01 G41 D1 X-10 Y0 F100\nX10\nG03 X20 Y0 Z-2 I5 J0\nG01 X30\nG40 X40\n"
+    corrected = [r for r in moves(text) if r["line"] == 5]
+    assert len(corrected) == 1 and corrected[0]["kind"] == "line"
+    assert close(corrected[0]["start"], (10, 6, 0)) and close(corrected[0]["end"], (20, 6, -2))
+
+
 def test_pure_compensate_applies_the_same_correction():
     # The dip of test_dip_narrower_than_the_tool_is_bridged_by_a_straight_line through compensate(): the
     # start-up line, the +x line, the half circle, the +x line, the cancel line; the same tool path.
