@@ -867,6 +867,11 @@ class Interpreter:
     def to_machine(self, program) -> tuple[float, float, float]:
         """A program point (mm) → machine coordinates through the active chain and the offsets."""
         w = self.chain.apply(program) if self.chain.active else program
+        if self.chain.stages["scaling"] is not None:
+            # L1966 (G51 note 7): scaled results are rounded to the least increment, half up, so a tiny
+            # scaled move may become zero (a block without movement).
+            step = self.increment * self.scale
+            w = tuple(math.floor(c / step + 0.5 + 1e-7) * step for c in w)  # 1e-7: x.5 stored as x.4999…
         o = self.offsets.origin
         return (w[0] + o[0], w[1] + o[1], w[2] + o[2])
 
