@@ -57,6 +57,7 @@ def interpret(
     main_m99: str = "end",
     tool_offsets=None,
     tool_measurement=None,
+    skip_signal=None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -75,6 +76,8 @@ def interpret(
     :class:`~cnc_gym.gcode.measurement.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
     "band_mm": 5}`` (H number → work coordinate where the approach-end signal comes; default: exactly at
     the commanded position, with the manual's standard P2651-P2653).
+    ``skip_signal``: G31's simulated probe, ``{"Z": -5.0}``: a G31 move stops where it first reaches one of
+    these program coordinates (mm); default none (every G31 move completes).
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
@@ -96,7 +99,8 @@ def interpret(
         options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
         program = Reader(spec, calls).read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
-                               tool_measurement=tool_measurement).run(options)  # fmt: skip
+                               tool_measurement=tool_measurement,
+                               skip_signal=skip_signal).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()

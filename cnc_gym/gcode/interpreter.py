@@ -25,7 +25,7 @@ from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, OffsetStack, Transfo
 from cnc_gym.gcode.compensation import ToolCompensation
 from cnc_gym.gcode.dialect import CodeSpec, code_name, gkey
 from cnc_gym.gcode.expressions import _round_to, evaluate
-from cnc_gym.gcode.measurement import ToolMeasurement, do_g37
+from cnc_gym.gcode.measurement import ToolMeasurement, do_g37, skip_signal_surfaces
 from cnc_gym.gcode.reader import split_words
 from cnc_gym.gcode.sysvars import SystemVariables
 from cnc_gym.gcode.transforms import (
@@ -101,9 +101,10 @@ class Interpreter:
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
                  start: tuple[float, float, float] = (0.0, 0.0, 0.0), machine: MachineConfig | None = None,
-                 tool_offsets=None, tool_measurement=None) -> None:  # fmt: skip
+                 tool_offsets=None, tool_measurement=None, skip_signal=None) -> None:  # fmt: skip
         self.machine = machine  # reference positions (G27-G30)
         self.tool_measurement = ToolMeasurement.coerce(tool_measurement)  # G37's simulated instrument
+        self.skip_signal = skip_signal_surfaces(skip_signal, dialect.axes)  # G31's simulated probe
         self.program = program
         self.dialect = dialect
         self.file = program.file

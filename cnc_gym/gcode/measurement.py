@@ -83,6 +83,24 @@ class ToolMeasurement:
                           f"got {type(value).__name__}")  # fmt: skip
 
 
+def skip_signal_surfaces(value: Mapping | None, axes: str) -> dict[str, float]:
+    """G31's simulated skip signal: ``{"X": 60.0}`` — the probe signals when the tool reaches X60
+    (program coordinates, mm); the first surface a G31 move reaches stops it. None: no signal."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise ConfigError(f"skip_signal must be a mapping of axis → coordinate, got {type(value).__name__}")
+    surfaces = {}
+    for letter, coordinate in value.items():
+        if letter not in axes:
+            raise ConfigError(f"skip_signal: {letter!r} is not an axis ({', '.join(axes)})")
+        number = isinstance(coordinate, int | float) and not isinstance(coordinate, bool)
+        if not number or coordinate != coordinate:
+            raise ConfigError(f"skip_signal[{letter!r}] must be a number, got {coordinate!r}")
+        surfaces[letter] = float(coordinate)
+    return surfaces
+
+
 def _parameter(interp: Interpreter, number: int, default: float, unit: float) -> float:
     raw = interp.parameters.raw.get((number, 0))
     return default if raw is None else raw * unit

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.toolpath import PLANE_AXES, Plane
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.interpreter import Interpreter
@@ -541,16 +541,37 @@ def do_g27(interp: Interpreter, spec, values: dict) -> None:
 
 # --------------------------------------------------------------------------- G31, G60
 def do_g31(interp: Interpreter, spec, values: dict) -> None:
-    """``G31 IP_`` (L1383-L1455): a feed move like G01 that stops on the skip signal. The simulation has
-    no skip signal, so the move completes; #5061-#5063 get the block end point (L5486), in work
-    coordinates (``Interpreter.skip_position``, mm). Not allowed with cutter compensation (alarm 36)."""
+    """``G31 IP_`` (L1383-L1455): a feed move like G01 that stops on the skip signal, then the next block
+    runs from there (incremental from the break point; an absolute block moves only its own axes, L1405).
+    The signal is simulated (``Interpreter.skip_signal``: program coordinate → the probe's surface per
+    axis): the move stops where it first reaches one of them; with none reached (or no signal configured)
+    the move completes. #5061-#5063 get the stop point (the block end without a signal, L5486), in work
+    coordinates (``Interpreter.skip_position``, mm). Feed override is disabled on the move (L1398:
+    override, dry run and acc/dec off unless 1940#7 SKF): the segment is flagged OVERRIDE_LOCKED. Not
+    allowed with cutter compensation (alarm 36)."""
     if interp.modal.get(7, 400) != 400:
         raise interp.error("G31 in cutter compensation mode (cancel it with G40 first, L1395)",
                            "g31-in-cutter-compensation", alarm=36)  # fmt: skip
     letters = interp.dialect.axes
     target = interp.resolve_target(*(values.get(letter) for letter in letters))
     if target != (None, None, None):
-        interp.move_linear(False, target)
+        start = interp.program_position
+        full = [start[a] if t is None else t for a, t in enumerate(target)]
+        first = 1.0
+        for letter, surface in interp.skip_signal.items():
+            a = letters.index(letter)
+            travel = full[a] - start[a]
+            if travel and 0.0 <= (surface - start[a]) / travel <= first:
+                first = (surface - start[a]) / travel
+        if first < 1.0:  # the signal stops the move there: every axis at the same fraction (a straight move)
+            target = tuple(start[a] + first * (full[a] - start[a]) for a in range(3))
+        out = interp.out
+        modes = out.modes
+        out.modes = modes | SegmentMode.OVERRIDE_LOCKED | (SegmentMode.EXACT_STOP if first < 1.0 else 0)
+        try:
+            interp.move_linear(False, target)
+        finally:
+            out.modes = modes
     interp.skip_position = interp.program_position
 
 

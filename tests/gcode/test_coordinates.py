@@ -13,7 +13,7 @@ import dataclasses
 import pytest
 from gcode_helpers import close, moves, program_error, records
 
-from cnc_gym.errors import ProgramError
+from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import get_dialect, interpret, read_program
 from cnc_gym.gcode.canonical import rotation_stage
 from cnc_gym.gcode.interpreter import Interpreter
@@ -178,6 +178,30 @@ def test_worked_example_x15_skip_without_a_signal_completes_the_move():
     assert [r["end"] for r in out] == [[100.0, 0.0, 0.0], [100.0, 50.0, 0.0]]
     assert out[0]["kind"] == "line" and out[0]["feed"] == 300.0
     assert ends("G01 F300\nG31 G90 X200\nY100\n") == [[200.0, 0.0, 0.0], [200.0, 100.0, 0.0]]
+
+
+def test_worked_example_x15_with_a_simulated_skip_signal():
+    # The probe's surface at X60 (program coordinates). 1) G31 G91 X100; Y50;: the move stops at X60 (the
+    # signal) and the incremental Y50 runs from the break point: (60, 50). 2) G31 G90 X200; Y100; with the
+    # surface at X150: the absolute Y100 moves Y only, X stays where the signal came: (150, 100)
+    # (L1405-L1414).
+    out = moves("G01 F300\nG31 G91 X100\nY50\n", skip_signal={"X": 60.0})
+    assert [r["end"] for r in out] == [[60.0, 0.0, 0.0], [60.0, 50.0, 0.0]]
+    # The signal stops the axis; override is disabled on a G31 move (L1398).
+    assert out[0]["modes"] == ["exact_stop", "override_locked"] and "modes" not in out[1]
+    got = ends("G01 F300\nG31 G90 X200\nY100\n", skip_signal={"X": 150.0})
+    assert got == [[150.0, 0.0, 0.0], [150.0, 100.0, 0.0]]
+    # A diagonal move stops where it first reaches a surface, all axes at the same fraction; #5061-#5063
+    # hold that point. A surface the move does not reach (Y-3 here) changes nothing.
+    interp = Interpreter(read_program("G01 F100\nG31 X10 Y20 Z-4\n"), get_dialect("gsk25i"),
+                         skip_signal={"Z": -1.0, "Y": -3.0})  # fmt: skip
+    interp.run()
+    assert interp.skip_position == pytest.approx((2.5, 5.0, -1.0))
+    # without a signal configured nothing stops (and the move is still override-locked)
+    assert moves("G31 X5 F100\n")[0]["modes"] == ["override_locked"]
+    for bad in ({"A": 1.0}, {"X": "1"}, {"X": float("nan")}, [1]):
+        with pytest.raises(ConfigError):
+            interpret("G31 X1 F100\n", skip_signal=bad)
 
 
 def test_g31_skip_position_is_the_block_end_in_work_coordinates():
