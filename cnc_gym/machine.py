@@ -81,6 +81,22 @@ class RotaryAxisConfig:
     reference_1_deg: float = 0.0  # G28 reference position (machine coordinate)
 
 
+class RotaryAxes(dict):
+    """Rotary axes by letter: a read-only, hashable mapping (machines are cache keys)."""
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(tuple(self.items()))
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("a machine's rotary axes are read-only")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse  # type: ignore[assignment]
+    __ior__ = _refuse  # type: ignore[assignment]
+
+    def __reduce__(self):
+        return (type(self), (dict(self),))
+
+
 @dataclass(frozen=True)
 class ControllerConfig:
     """Path-level controller parameters."""
@@ -106,7 +122,11 @@ class MachineConfig:
     axes: tuple[AxisConfig, AxisConfig, AxisConfig] = (AxisConfig(), AxisConfig(), AxisConfig())
     source: str = "<defaults>"
     #: Rotary axes by upper-case letter, in A, B, C order (empty: a 3-axis machine).
-    rotary_axes: dict[str, RotaryAxisConfig] = field(default_factory=dict)
+    rotary_axes: RotaryAxes = field(default_factory=RotaryAxes)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.rotary_axes, RotaryAxes):
+            object.__setattr__(self, "rotary_axes", RotaryAxes(self.rotary_axes))
 
     @property
     def rotary_letters(self) -> str:

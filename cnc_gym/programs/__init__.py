@@ -60,10 +60,7 @@ def load_program(program: str | Path, dialect: str = "gsk25i",
     :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``). With ``machine`` the program may
     move the machine's rotary axes and must stay within its travel (see :func:`cnc_gym.gcode.interpret`).
     """
-    key = None
-    if machine is not None:
-        key = repr(machine)  # machines hold a dict (rotary axes): their repr is the hashable cache key
-        _MACHINES[key] = machine
+    key = machine  # machines are frozen and hashable: part of the cache key
     if not isinstance(program, str | Path):
         raise ConfigError(
             f"a program must be a built-in name, a path or G-code text, got {type(program).__name__}"
@@ -93,22 +90,19 @@ def _looks_like_path(program: str) -> bool:
     return Path(program).is_file()
 
 
-_MACHINES: dict[str, MachineConfig] = {}
-
-
 @lru_cache(maxsize=64)
-def _load_file(path: str, dialect: str, mtime: float, machine_key: str | None) -> Toolpath:
+def _load_file(path: str, dialect: str, mtime: float, machine: MachineConfig | None) -> Toolpath:
     from cnc_gym.gcode import interpret_file
 
-    return interpret_file(path, dialect=dialect, machine=_MACHINES.get(machine_key))
+    return interpret_file(path, dialect=dialect, machine=machine)
 
 
 @lru_cache(maxsize=64)
-def _load_text(text: str, dialect: str, machine_key: str | None) -> Toolpath:
+def _load_text(text: str, dialect: str, machine: MachineConfig | None) -> Toolpath:
     from cnc_gym.gcode import interpret
 
     digest = hashlib.sha1(text.encode("utf-8")).hexdigest()[:8]
-    return interpret(text, dialect=dialect, file=f"<text-{digest}>", machine=_MACHINES.get(machine_key))
+    return interpret(text, dialect=dialect, file=f"<text-{digest}>", machine=machine)
 
 
 __all__ = ["BUILTIN_PROGRAMS", "PROGRAMS_DIR", "load_program", "program_names", "program_path"]
