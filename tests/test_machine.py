@@ -165,3 +165,20 @@ def test_missing_file_and_unknown_preset(tmp_path):
 def test_config_error_is_a_project_error():
     with pytest.raises(CncGymError):
         machine_from_dict({"bogus": 1}, source="inline")
+
+
+def test_machines_with_rotary_axes_stay_hashable_and_read_only():
+    # Machines key caches (programs, the classical planner) and travel to vector-env workers by pickle.
+    import pickle
+
+    from cnc_gym.machine import RotaryAxisConfig
+
+    machine = load_machine("gsk25i")
+    assert machine.rotary_letters == "B"
+    assert hash(machine) == hash(load_machine("gsk25i"))
+    assert pickle.loads(pickle.dumps(machine)) == machine
+    with pytest.raises(TypeError):
+        machine.rotary_axes["C"] = RotaryAxisConfig()
+    # a plain dict given to the constructor is frozen too
+    built = MachineConfig(name="m", rotary_axes={"A": RotaryAxisConfig()})
+    assert hash(built) and built.rotary_letters == "A"
