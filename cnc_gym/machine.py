@@ -30,6 +30,7 @@ from typing import Any
 
 from cnc_gym.config import check_keys, configs_dir, read_yaml
 from cnc_gym.errors import ConfigError
+from cnc_gym.frozen import FrozenDict
 
 __all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "RotaryAxisConfig", "configs_dir",
            "load_machine", "machine_names"]  # fmt: skip
@@ -81,20 +82,8 @@ class RotaryAxisConfig:
     reference_1_deg: float = 0.0  # G28 reference position (machine coordinate)
 
 
-class RotaryAxes(dict):
+class RotaryAxes(FrozenDict):
     """Rotary axes by letter: a read-only, hashable mapping (machines are cache keys)."""
-
-    def __hash__(self) -> int:  # type: ignore[override]
-        return hash(tuple(self.items()))
-
-    def _refuse(self, *args, **kwargs):
-        raise TypeError("a machine's rotary axes are read-only")
-
-    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse  # type: ignore[assignment]
-    __ior__ = _refuse  # type: ignore[assignment]
-
-    def __reduce__(self):
-        return (type(self), (dict(self),))
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from enum import IntEnum, IntFlag
 
 import numpy as np
 
+from cnc_gym.frozen import FrozenDict
 from cnc_gym.toolpath.nurbs import NurbsCurve
 
 
@@ -55,19 +56,6 @@ class SegmentMode(IntFlag):
     OVERRIDE_LOCKED = 2  # G63 tapping mode: override fixed at 100 %, no deceleration at block end
     AUTO_CORNER = 4  # G62 automatic corner override
     INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
-
-
-class _ReadOnlyDict(dict):
-    """A dict that refuses changes (unlike a mappingproxy it pickles, e.g. into vector-env workers)."""
-
-    def _refuse(self, *args, **kwargs):
-        raise TypeError("the tool path is immutable")
-
-    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse  # type: ignore[assignment]
-    __ior__ = _refuse  # type: ignore[assignment]
-
-    def __reduce__(self):
-        return (type(self), (dict(self),))
 
 
 _FIELDS = (
@@ -157,7 +145,7 @@ class Toolpath:
                 raise ValueError(f"toolpath row {row}: a NURBS row needs a NurbsCurve, "
                                  f"got {type(curve).__name__}")  # fmt: skip
             length[row] = curve.length
-        object.__setattr__(self, "nurbs", _ReadOnlyDict(self.nurbs))
+        object.__setattr__(self, "nurbs", FrozenDict(self.nurbs))
         k = len(self.rotary_axes)
         for name in ("rotary_start", "rotary_end"):
             arr = getattr(self, name)
