@@ -112,6 +112,27 @@ def _valley(v: float, a: float, jerk: float) -> float:
     return v
 
 
+@njit(cache=True, inline="always")
+def _phases(v: float, a: float, w: float, acc: float,
+            jerk: float) -> tuple[float, float, float, float, float]:  # fmt: skip
+    """Phases of the braking manoeuvre ``brake(v, a, w)`` (the caller has checked _peak(v, a) > w):
+    (t1, j1, t2, a1, t3) = jerk j1 for t1 (to the acceleration a1 ≥ −A), hold a1 for t2, jerk +J for t3 back
+    to zero. Where even ramping the acceleration straight back to zero undershoots w (a < 0), the phases are
+    that ramp alone (t1 = t2 = 0, t3 = −a/J): it crosses w and ends below it."""
+    if a < 0.0 and _valley(v, a, jerk) <= w:
+        return 0.0, jerk, 0.0, a, -a / jerk
+    a1sq = 0.5 * a * a + jerk * (v - w)
+    a1 = -math.sqrt(max(a1sq, 0.0))
+    t2 = 0.0
+    if a1 < -acc:
+        a1 = -acc
+        dv1 = (acc * acc - a * a) / (2.0 * jerk) if a < -acc else (a * a - acc * acc) / (2.0 * jerk)
+        t2 = max((v - w + dv1 - acc * acc / (2.0 * jerk)) / acc, 0.0)
+    if a >= a1:
+        return (a - a1) / jerk, -jerk, t2, a1, -a1 / jerk
+    return (a1 - a) / jerk, jerk, t2, a1, -a1 / jerk
+
+
 @njit(cache=True)
 def brake(v: float, a: float, w: float, acc: float, jerk: float) -> tuple[float, float]:
     """(distance, time) of the time-optimal jerk-limited slow-down from (v, a) to speed ``w`` with a = 0.
@@ -128,23 +149,8 @@ def brake(v: float, a: float, w: float, acc: float, jerk: float) -> tuple[float,
         t = (-a - math.sqrt(disc)) / jerk
         t = max(t, 0.0)
         return v * t + 0.5 * a * t * t + jerk * t * t * t / 6.0, t
-    a1sq = 0.5 * a * a + jerk * (v - w)
-    a1 = -math.sqrt(max(a1sq, 0.0))
-    t2 = 0.0
-    if a1 < -acc:
-        a1 = -acc
-        dv1 = (acc * acc - a * a) / (2.0 * jerk) if a < -acc else (a * a - acc * acc) / (2.0 * jerk)
-        t2 = (v - w + dv1 - acc * acc / (2.0 * jerk)) / acc
-        t2 = max(t2, 0.0)
-    if a >= a1:
-        sign1 = -1.0
-        t1 = (a - a1) / jerk
-    else:
-        sign1 = 1.0
-        t1 = (a1 - a) / jerk
-    t3 = -a1 / jerk
-    d1 = v * t1 + 0.5 * a * t1 * t1 + sign1 * jerk * t1 * t1 * t1 / 6.0
-    v1 = v + a * t1 + 0.5 * sign1 * jerk * t1 * t1
+    t1, j1, t2, a1, t3 = _phases(v, a, w, acc, jerk)
+    d1, v1, _ = _step(v, a, j1, t1)
     d2 = v1 * t2 + 0.5 * a1 * t2 * t2
     v2 = v1 + a1 * t2
     d3 = v2 * t3 + 0.5 * a1 * t3 * t3 + jerk * t3 * t3 * t3 / 6.0
@@ -163,28 +169,12 @@ def brake_step(v: float, a: float, w: float, acc: float, jerk: float,
         h = min(abs(a) / jerk, dt)
         ds, v, a = _step(v, a, -jerk if a > 0.0 else jerk, h)
         return ds + v * (dt - h), v, 0.0 if h < dt else a
-    if a < 0.0 and _valley(v, a, jerk) <= w:
-        t1, sign1, t2, a1, t3 = 0.0, 1.0, 0.0, a, -a / jerk
-    else:
-        a1sq = 0.5 * a * a + jerk * (v - w)
-        a1 = -math.sqrt(max(a1sq, 0.0))
-        t2 = 0.0
-        if a1 < -acc:
-            a1 = -acc
-            dv1 = (acc * acc - a * a) / (2.0 * jerk) if a < -acc else (a * a - acc * acc) / (2.0 * jerk)
-            t2 = max((v - w + dv1 - acc * acc / (2.0 * jerk)) / acc, 0.0)
-        if a >= a1:
-            sign1 = -1.0
-            t1 = (a - a1) / jerk
-        else:
-            sign1 = 1.0
-            t1 = (a1 - a) / jerk
-        t3 = -a1 / jerk
+    t1, j1, t2, _, t3 = _phases(v, a, w, acc, jerk)
     left = dt
     ds = 0.0
     for phase in range(4):
         if phase == 0:
-            h, jj = min(t1, left), sign1 * jerk
+            h, jj = min(t1, left), j1
         elif phase == 1:
             h, jj = min(t2, left), 0.0
         elif phase == 2:
@@ -199,6 +189,44 @@ def brake_step(v: float, a: float, w: float, acc: float, jerk: float,
         if left <= 0.0:
             break
     return ds, v, a
+
+
+@njit(cache=True)
+def reach(v: float, a: float, w: float, level: float, acc: float, jerk: float) -> float:
+    """Distance along the manoeuvre ``brake(v, a, w)`` after which the speed stays at or below ``level``
+    (0 if it never exceeds it, INF if the manoeuvre ends above it).
+
+    With ``w = 0`` this is the time-optimal stop, the lowest speed profile of every admissible motion from
+    (v, a) (|j| ≤ J, |a| ≤ A, no reverse motion): any motion that slows down later or less hard is faster at
+    every instant, hence also at every arc length. So ``reach(v, a, 0, w_p) ≤ d_p`` for every limit point p
+    ahead is necessary and sufficient for a motion that keeps them all to exist (see :func:`_viable`)."""
+    if _peak(v, a, jerk) <= level:
+        return 0.0
+    t1, j1, t2, _, t3 = _phases(v, a, w, acc, jerk)
+    dist = 0.0
+    for phase in range(3):
+        if phase == 0:
+            h, jj = t1, j1
+        elif phase == 1:
+            h, jj = t2, 0.0
+        else:
+            h, jj = t3, jerk
+        if h <= 0.0:
+            continue
+        d, v_end, a_end = _step(v, a, jj, h)
+        if v_end <= level:
+            # The last crossing of the level inside this phase (the speed only falls from there on): the
+            # later root of v + a t + jj t^2/2 = level (jj = -J, after a peak) or the earlier (jj = +J).
+            if jj == 0.0:
+                tau = (v - level) / -a if a < 0.0 else 0.0
+            else:
+                tau = (-a - math.sqrt(max(a * a - 2.0 * jj * (v - level), 0.0))) / jj
+            tau = min(max(tau, 0.0), h)
+            return dist + v * tau + 0.5 * a * tau * tau + jj * tau * tau * tau / 6.0
+        dist += d
+        v, a = v_end, a_end
+    # The manoeuvre ends at w (to rounding): it reaches a level at or above w there.
+    return dist if w <= level else INF
 
 
 @njit(cache=True, inline="always")
@@ -263,16 +291,18 @@ def _delayed_manoeuvre(s: float, v: float, a: float, dt: float, j_pre: float, w:
 
 @njit(cache=True)
 def _pick_manoeuvre(s: float, v: float, a: float, dt: float, acc_b: float, jerk_b: float, cap_now: float,
-                    pts: np.ndarray, n_pts: int, col: int) -> float:  # fmt: skip
-    """Target speed of the braking manoeuvre to follow for one period from a safe state.
+                    pts: np.ndarray, n_pts: int, col: int) -> tuple[float, bool]:  # fmt: skip
+    """Target speed of the braking manoeuvre to follow for one period from a safe state, and whether the
+    state one period along it is certified safe.
 
-    The manoeuvre to the lowest limit ahead always keeps every limit (the safe-set argument), but it may
-    brake for a stop far away. Higher targets are tried first (least braking) and taken if the state one
-    period along them is still safe and no point crossed inside the period is passed too fast."""
+    Higher targets are tried first (least braking) and taken if the state one period along them is still
+    safe and no point crossed inside the period is passed too fast. The lowest limit ahead is tried as well;
+    where no target passes (the certificate is not monotone in the target, nor in the braking jerk, so a
+    state may lose it when the window slides or the jerk grows), the caller falls back to :func:`_rescue`."""
     w_low = _lowest(pts, n_pts, col, cap_now)
-    best = w_low
-    for i in range(-1, n_pts):
-        w = cap_now if i < 0 else pts[i, col]
+    best = -1.0
+    for i in range(-2, n_pts):
+        w = w_low if i == -2 else (cap_now if i < 0 else pts[i, col])
         if w <= best:
             continue
         ds, v1, a1 = brake_step(v, a, w, acc_b, jerk_b, dt)
@@ -289,7 +319,65 @@ def _pick_manoeuvre(s: float, v: float, a: float, dt: float, acc_b: float, jerk_
                 ok = dist <= d * (1.0 + 1e-12) + 1e-12
         if ok:
             best = w
-    return best
+    if best < 0.0:
+        return w_low, False
+    return best, True
+
+
+@njit(cache=True)
+def _viable_after(s: float, v: float, a: float, dt: float, w: float, acc_b: float, jerk_b: float,
+                  cap_now: float, pts: np.ndarray, n_pts: int,
+                  col: int) -> tuple[bool, float, float, float]:  # fmt: skip
+    """One period along the manoeuvre ``brake(v, a, w)``: (does every limit stay reachable?, ds, v', a').
+
+    Points crossed inside the period must be crossed no faster than their limit (along this manoeuvre);
+    for the others the end state must be *viable*: the time-optimal stop from it (the lowest speed profile
+    of all, :func:`reach`) gets below each limit before its point, and stops within the window."""
+    ds, v1, a1 = brake_step(v, a, w, acc_b, jerk_b, dt)
+    cap_tol = cap_now * (1.0 + 1e-12) + 1e-12
+    if _peak(v, a, jerk_b) > cap_tol or _peak(v1, a1, jerk_b) > cap_tol:
+        return False, ds, v1, a1
+    for m in range(n_pts):
+        d = pts[m, 0] - s
+        if d <= ds:
+            dist = reach(v, a, w, pts[m, col], acc_b, jerk_b)
+        else:
+            d -= ds
+            dist = reach(v1, a1, 0.0, pts[m, col], acc_b, jerk_b)
+        if dist > d * (1.0 + 1e-12) + 1e-12:
+            return False, ds, v1, a1
+    return True, ds, v1, a1
+
+
+@njit(cache=True)
+def _rescue(s: float, v: float, a: float, dt: float, acc_b: float, jerk_b: float, cap_now: float,
+            pts: np.ndarray, n_pts: int, col: int) -> tuple[bool, float, float, float]:  # fmt: skip
+    """One period for a state that the braking certificate does not cover but from which every limit is
+    still reachable (is *viable*): along the least-braking manoeuvre ``brake(v, a, w)``, w in [0, lowest
+    limit], after which the state is still viable — bisection, as the manoeuvres to lower targets are
+    slower at every instant. Returns (viable?, ds, v', a'); where even the time-optimal stop (w = 0) does
+    not keep every limit the state was not viable, and that stop is returned (the hardest braking there is).
+
+    Viability is exact (necessary and sufficient) and, unlike the certificate, can only improve when the
+    window slides (a limit rises from the window-end stop to the point's own limit) or the braking A and J
+    grow, so a viable state stays viable: with the hard limits, the caps are never exceeded."""
+    ok, ds, v1, a1 = _viable_after(s, v, a, dt, 0.0, acc_b, jerk_b, cap_now, pts, n_pts, col)
+    if not ok:
+        return False, ds, v1, a1
+    w_low = _lowest(pts, n_pts, col, cap_now)
+    ok, ds_hi, v_hi, a_hi = _viable_after(s, v, a, dt, w_low, acc_b, jerk_b, cap_now, pts, n_pts, col)
+    if ok:
+        return True, ds_hi, v_hi, a_hi
+    lo, hi = 0.0, w_low
+    for _ in range(BISECT_ITERS):
+        mid = 0.5 * (lo + hi)
+        ok, ds_mid, v_mid, a_mid = _viable_after(s, v, a, dt, mid, acc_b, jerk_b, cap_now, pts, n_pts, col)
+        if ok:
+            lo = mid
+            ds, v1, a1 = ds_mid, v_mid, a_mid
+        else:
+            hi = mid
+    return True, ds, v1, a1
 
 
 @njit(cache=True, inline="always")
@@ -645,6 +733,8 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     cap_hard = seg_f[k, F_CAP]
     cap_soft = _target(seg_f, seg_i, k, mode, ov, rapid_ov, cmd)
     manoeuvre = False
+    rescued = False  # ds, v1, a1 of this period already computed by _rescue
+    ds, v1, a1 = 0.0, v, a
     w_follow = 0.0
     m_cap = cap_hard
     m_col = 1
@@ -664,42 +754,56 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
         # Safe, but no constant jerk keeps it so (the braking switches inside this period): follow a
         # braking manoeuvre exactly for one period (see _pick_manoeuvre).
         manoeuvre = True
-        w_follow = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+        w_follow, certified = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
         j = min(j_track, j_hi)  # what the period would do before braking
         m_cap = cap_soft
         m_col = 2
+        if not certified:
+            rescued, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+            if not rescued:
+                _, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+            rescued = True
     else:
-        # The operator's target cannot be met any more (override turned down): slow down as fast as
-        # the jerk allows without undershooting the lowest violated target ...
-        floor = INF
-        ds_lo, v_lo, a_lo = _step(v, a, j_lo, dt)
-        top_lo = max(_peak(v_lo, a_lo, jerk_b), _tick_top(v, a, j_lo, dt, v_lo))
-        if top_lo > cap_soft:
-            floor = min(cap_soft, cap_final)
-        for i in range(n_pts):
-            d = pts[i, 0] - s - ds_lo
-            if d <= 0.0:
-                if top_lo > pts[i, 2]:
-                    floor = min(floor, pts[i, 2])
-            else:
-                dist, _ = brake(v_lo, a_lo, pts[i, 2], acc_b, jerk_b)
-                if dist > d:
-                    floor = min(floor, pts[i, 2])
-        if floor >= INF:
-            floor = min(cap_soft, cap_final)
-        j = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, floor)
-        j = max(j, min(_track_jerk(v, a, floor, jerk_b, dt), j_hi))
-        # ... but never faster than the hard (geometric) limits allow.
-        if not _upper_ok(j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
-            if _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
-                j = _largest_upper(j_lo, j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
-            else:
-                manoeuvre = True
-                w_follow = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
-                m_cap = cap_hard
-                m_col = 1
+        # The certificate is lost. Where every soft limit is still reachable (it was lost to the window
+        # sliding or to the braking jerk growing, not to the override), keep them all (see _rescue).
+        rescued, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+        if not rescued:
+            # The operator's target cannot be met any more (override turned down): slow down as fast as
+            # the jerk allows without undershooting the lowest violated target ...
+            floor = INF
+            ds_lo, v_lo, a_lo = _step(v, a, j_lo, dt)
+            top_lo = max(_peak(v_lo, a_lo, jerk_b), _tick_top(v, a, j_lo, dt, v_lo))
+            if top_lo > cap_soft:
+                floor = min(cap_soft, cap_final)
+            for i in range(n_pts):
+                d = pts[i, 0] - s - ds_lo
+                if d <= 0.0:
+                    if top_lo > pts[i, 2]:
+                        floor = min(floor, pts[i, 2])
+                else:
+                    dist, _ = brake(v_lo, a_lo, pts[i, 2], acc_b, jerk_b)
+                    if dist > d:
+                        floor = min(floor, pts[i, 2])
+            if floor >= INF:
+                floor = min(cap_soft, cap_final)
+            j = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, floor)
+            j = max(j, min(_track_jerk(v, a, floor, jerk_b, dt), j_hi))
+            # ... but never faster than the hard (geometric) limits allow.
+            if not _upper_ok(j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
+                if _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
+                    j = _largest_upper(j_lo, j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+                else:
+                    manoeuvre = True
+                    w_follow, certified = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+                    m_cap = cap_hard
+                    m_col = 1
+                    if not certified:
+                        _, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+                        rescued = True
 
-    if manoeuvre:
+    if rescued:
+        j = (a1 - a) / dt  # the period's mean jerk (the manoeuvre may switch inside it)
+    elif manoeuvre:
         ds, v1, a1 = _delayed_manoeuvre(s, v, a, dt, j, w_follow, acc_b, jerk_b, m_cap, pts, n_pts, m_col)
         j = (a1 - a) / dt
     else:

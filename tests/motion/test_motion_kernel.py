@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from cnc_gym.motion.kernel import brake, brake_step, reach_speed
+from cnc_gym.motion.kernel import brake, brake_step, reach, reach_speed
 
 A, J = 3000.0, 30000.0  # A²/J = 300 mm/s
 
@@ -89,3 +89,69 @@ def test_brake_is_monotone_in_speed_and_acceleration():
         d0, _ = brake(v, a, w, A, J)
         assert brake(v + 1.0, a, w, A, J)[0] >= d0 - 1e-12
         assert brake(v, min(a + 50.0, A), w, A, J)[0] >= d0 - 1e-12
+
+
+def _simulated_reach(v, a, w, level, acc, jerk, dt=2e-6):
+    """Distance after which the speed stays ≤ level, by following brake_step in tiny periods (the manoeuvre
+    itself is checked against the closed forms above): the arc length at the last period that ended above
+    the level, interpolated inside that period."""
+    _, time = brake(v, a, w, acc, jerk)
+    s, last = 0.0, 0.0 if v <= level else None
+    t = 0.0
+    while t < time + 10 * dt or a != 0.0:  # (where the ramp crosses w, brake's time ends at the crossing)
+        ds, v_next, a = brake_step(v, a, w, acc, jerk, dt)
+        if v > level >= v_next:  # crossed down inside this period: linear interpolation is within ds
+            last = s + ds * (v - level) / (v - v_next)
+        elif v_next > level:
+            last = None
+        s += ds
+        v = v_next
+        t += dt
+    return math.inf if last is None else last
+
+
+@pytest.mark.parametrize(("v", "a", "w", "level"), [
+    (100.0, 0.0, 0.0, 50.0), (100.0, 0.0, 0.0, 0.0), (100.0, 0.0, 20.0, 60.0), (100.0, 0.0, 20.0, 20.0),
+    (150.0, 800.0, 0.0, 151.0), (150.0, 800.0, 0.0, 140.0), (400.0, 2000.0, 0.0, 30.0),
+    (80.0, -1500.0, 10.0, 50.0), (150.0, -2900.0, 0.0, 5.0), (60.0, -1800.0, 20.0, 10.0),
+    (100.0, 0.0, 20.0, 10.0),
+])  # fmt: skip
+def test_reach_matches_the_manoeuvre_followed_period_by_period(v, a, w, level):
+    # reach(v, a, w, level): arc length along brake(v, a, w) after which the speed stays ≤ level. Checked
+    # against the manoeuvre integrated in 2 µs periods (the crossing interpolated inside its period).
+    got = reach(v, a, w, level, A, J)
+    if level == w:  # the speed lands on w tangentially: the whole manoeuvre's distance
+        assert got == pytest.approx(brake(v, a, w, A, J)[0], rel=1e-12)
+        return
+    expected = _simulated_reach(v, a, w, level, A, J)
+    if math.isinf(expected):  # the manoeuvre ends above the level: never reached (kernel.INF)
+        assert got >= 1e299
+    else:
+        assert got == pytest.approx(expected, rel=1e-8, abs=1e-9)
+
+
+def test_the_braking_certificate_is_not_monotone_but_the_stop_envelope_is():
+    # Why the controller needs the viability test (kernel._rescue): the certificate brake(v, a, w) ≤ d is
+    # not monotone in the target nor in the jerk, so a state can lose it when the look-ahead window slides
+    # (the window-end stop w = 0 becomes the point's own limit) or when the braking jerk grows.
+    # From 100 mm/s (a = 0, triangular): stopping takes 100·√(100/J); slowing to 5 takes 105·√(95/J), more.
+    assert brake(100.0, 0.0, 5.0, A, J)[0] == pytest.approx(105 * math.sqrt(95 / J))
+    assert brake(100.0, 0.0, 5.0, A, J)[0] > brake(100.0, 0.0, 0.0, A, J)[0]
+    # Decelerating, just too fast to land on w by ramping the acceleration back at J: with J the speed
+    # crosses w early (and ends below it); a larger jerk lands exactly on w, later (hypothesis found this).
+    v, a, w = 8.22410562873622, -62.67835610993302, 8.163760203385865
+    assert brake(v, a, w, 3000.0, 32521.16)[0] < 0.01530 < brake(v, a, w, 3000.0, 33617.74)[0]
+    # The time-optimal stop is the lowest speed profile of all, so the distance after which it stays below
+    # any level falls when A or J grow and lies below every other manoeuvre's.
+    rng = np.random.default_rng(1)
+    for _ in range(2000):
+        v = rng.uniform(0, 500)
+        a = rng.uniform(-A, A)
+        if a < 0 and v - a * a / (2 * J) < 0:
+            continue
+        level = rng.uniform(0, v + 50)
+        w = rng.uniform(0, level)
+        d0 = reach(v, a, 0.0, level, A, J)
+        assert d0 <= reach(v, a, w, level, A, J) * (1 + 1e-12) + 1e-12
+        assert reach(v, a, 0.0, level, A, J * rng.uniform(1, 3)) <= d0 * (1 + 1e-12) + 1e-12
+        assert reach(v, a, 0.0, level, A * rng.uniform(1, 3), J) <= d0 * (1 + 1e-12) + 1e-12
