@@ -11,7 +11,7 @@ from motion_checks import check_run, crossing_speeds
 
 from cnc_gym.errors import CncGymError, ProgramError
 from cnc_gym.machine import load_machine, machine_from_dict
-from cnc_gym.motion import ActionError, Controller
+from cnc_gym.motion import ActionError, Controller, MotionChunk
 from cnc_gym.toolpath import Plane, SegmentMode, ToolpathBuilder
 
 VMC = load_machine("vmc-small")  # A = 3000 mm/s², J = 30000 mm/s³ per axis, corner step 600 mm/min
@@ -33,6 +33,11 @@ def single_line(length: float, feed: float, direction=(1.0, 0.0, 0.0), **kw):
     end = tuple(length * np.asarray(direction) / np.linalg.norm(direction))
     b.line((0, 0, 0), end, feed=feed, line=1, **kw)
     return b.build()
+
+
+def concat_chunks(parts: list) -> MotionChunk:
+    return MotionChunk(*(np.concatenate([getattr(c, f) for c in parts]) for f in (
+        "time_s", "position", "path_s", "speed", "accel", "jerk", "segment", "cutting")))  # fmt: skip
 
 
 def finish_time(controller: Controller, **kw) -> tuple[float, object]:
@@ -288,6 +293,65 @@ def test_no_lookahead_stops_at_every_block_end():
     chunk = c.run_to_end()
     speeds, _ = crossing_speeds(chunk, np.array([10.0]))
     assert speeds[0] == 0.0
+
+
+NO_LOOKAHEAD = machine_from_dict({
+    "name": "nolook", "controller": {"lookahead_blocks": 1},
+    "axis_defaults": {"max_accel_mm_s2": 3000, "max_jerk_mm_s3": 30000, "corner_step_mm_min": 600},
+})  # fmt: skip
+
+
+def test_g63_tapping_mode_runs_on_through_block_ends_at_f_whatever_the_knob():
+    # GSK manual L6423: in G63 "tool is not decelerated at the end point of a block, but the next block is
+    # executed. When G63 is specified, feedrate override and feed hold are invalid." Without look-ahead
+    # (P1409 = 0) a G64 block ends at rest; a tapping-mode block runs on into the next one where the limits
+    # allow. Two collinear 10 mm Z blocks at F 1200 (20 mm/s), A 3000, J 30000 (20 < A²/J = 300).
+    m = NO_LOOKAHEAD
+
+    def pair(modes):
+        b = ToolpathBuilder()
+        b.line((0, 0, 0), (0, 0, -10), feed=1200, line=1, modes=modes)
+        b.line((0, 0, -10), (0, 0, -20), feed=1200, line=2, modes=modes)
+        return Controller(b.build(), m, in_position_check=False)
+
+    tapping, cutting = pair(SegmentMode.OVERRIDE_LOCKED), pair(SegmentMode.NONE)
+    assert not tapping.junction_limits()["stop"][1] and cutting.junction_limits()["stop"][1]
+    # G64: two rest-to-rest moves, each L/V + 2√(V/J) (triangular acceleration), crossing at 0.
+    t_cut, chunk = finish_time(cutting)
+    assert t_cut == pytest.approx(2 * (10 / 20 + 2 * math.sqrt(20 / 30000)), abs=DT)
+    assert crossing_speeds(chunk, np.array([10.0]))[0][0] == 0.0
+    # G63: one 20 mm move at F, through the junction at F, whatever the knob (0 = feed hold, 2 = 200 %).
+    expected = 20 / 20 + 2 * math.sqrt(20 / 30000)
+    for knob in (0.0, 1.0, 2.0):
+        tapping.reset()
+        parts = [tapping.advance(50, override=knob)]
+        while not tapping.finished:
+            parts.append(tapping.advance(50, override=knob))
+        chunk = concat_chunks(parts)
+        done = int(np.argmax(chunk.speed[1:] == 0.0)) + 1  # the period that comes to rest at the end
+        assert chunk.time_s[done] == pytest.approx(expected, abs=DT)
+        assert np.max(chunk.speed) == pytest.approx(20.0)
+        assert crossing_speeds(chunk, np.array([10.0]))[0][0] == pytest.approx(20.0)
+        check_run(tapping, chunk)
+
+
+def test_only_the_end_of_a_tapping_block_runs_on():
+    # Without look-ahead: G64 → G63 stops (the G64 block decelerates at its end), G63 → G64 and G63 → G63
+    # run on (the G63 block does not). A reversal inside tapping mode still obeys the corner step: 180° on
+    # Z is |Δu_z| = 2, v ≤ 600/60/2 = 5 mm/s.
+    m = NO_LOOKAHEAD
+    lock = SegmentMode.OVERRIDE_LOCKED
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (0, 0, -5), feed=1200, line=1)
+    b.line((0, 0, -5), (0, 0, -10), feed=1200, line=2, modes=lock)
+    b.line((0, 0, -10), (0, 0, -15), feed=1200, line=3, modes=lock)
+    b.line((0, 0, -15), (0, 0, -10), feed=1200, line=4, modes=lock)
+    b.line((0, 0, -10), (0, 0, -5), feed=1200, line=5)
+    c = Controller(b.build(), m, in_position_check=False)
+    junctions = c.junction_limits()
+    assert list(junctions["stop"]) == [True, True, False, False, False, True]
+    assert junctions["limit_mm_s"][3] == pytest.approx(5.0)
+    check_run(c, c.run_to_end())
 
 
 # ---------------------------------------------------------------------------------------------- lookahead
