@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
@@ -13,6 +15,7 @@ from cnc_gym.machine import load_machine, machine_from_dict
 from cnc_gym.motion import Controller
 from cnc_gym.motion import kernel as K
 from cnc_gym.motion.limits import build_limits, rest_to_rest_time
+from cnc_gym.toolpath import SegmentKind
 
 GSK = load_machine("gsk25i")  # B axis: 4000 deg/min clamp, A = 2777.78 deg/s², J = 347222 deg/s³
 
@@ -140,3 +143,29 @@ def test_env_runs_a_rotary_program_and_counts_its_time():
     move2 = 20 / v + 2 * math.sqrt(v / (347222.0 / 2))
     assert result.cycle_time_s == pytest.approx(move1 + move2, abs=0.05)
     assert result.contour_error_max_mm < 1e-9  # a straight X move: no contour error
+
+
+word = st.sampled_from(["X", "Y", "Z", "B"])
+number = st.integers(-400, 400).map(lambda v: v / 4)
+
+
+@settings(max_examples=40, deadline=None)
+@given(blocks=st.lists(st.tuples(st.sampled_from(["G00", "G01", ""]), st.sampled_from(["G90", "G91", ""]),
+                                 st.dictionaries(word, number, min_size=1, max_size=3)),
+                       min_size=1, max_size=6))  # fmt: skip
+def test_random_rotary_programs_run_to_the_end_within_the_composite_time(blocks):
+    """Random G00/G01 programs with B words: interpretation succeeds, the controller finishes, and every
+    feed move takes at least its composite length over F (degrees counted as mm), never less."""
+    lines = ["F600"]
+    for motion, distance, words in blocks:
+        axes = " ".join(f"{k}{v:g}" for k, v in words.items())
+        lines.append(" ".join(x for x in (motion, distance, axes) if x))
+    tp = interpret("\n".join(lines) + "\n", machine=GSK)
+    controller = Controller(tp, GSK, in_position_check=False)
+    chunk = controller.run_to_end(max_ticks=2_000_000)
+    assert controller.finished and np.all(np.isfinite(chunk.position))
+    feed_moves = tp.kind == SegmentKind.LINE
+    composite = np.hypot(tp.length, tp.rotary_length)[feed_moves]
+    lower_bound = float(np.sum(composite / np.minimum(tp.feed[feed_moves], 4000.0))) * 60.0
+    elapsed = float(chunk.time_s[-1]) if len(chunk) else 0.0  # a program that never moves has no periods
+    assert elapsed >= lower_bound - 1e-9
