@@ -104,7 +104,7 @@ def cases() -> dict[str, list[tuple[str, int | None]]]:
             code, alarm = case.elts[1], case.elts[2]
             assert isinstance(code, ast.Constant) and isinstance(code.value, str), ast.unparse(case)
             assert (isinstance(alarm, ast.Constant) and isinstance(alarm.value, int | None)) or (
-                isinstance(alarm, ast.Name) and alarm.id == "_"), ast.unparse(case)  # fmt: skip
+                isinstance(alarm, ast.Name) and alarm.id == "NO_ALARM"), ast.unparse(case)  # fmt: skip
             entries.append((code.value, alarm.value if isinstance(alarm, ast.Constant) else None))
         assert key.value not in parsed, f"CASES names {key.value} twice"
         parsed[key.value] = entries

@@ -11,8 +11,8 @@ Conditions the manual says are alarms and the interpreter does not check are the
 at the end ("missing check" in the index): when the check is built they XPASS, strict xfail turns that into a
 failure, and the marker and the index row are updated together.
 
-tests/gcode/test_examples_index.py's sibling, tests/gcode/test_alarms_index.py, checks that every key of
-``CASES`` is a row of the index that cites ``test_manual_alarm``, and the other way round.
+tests/gcode/test_alarms_index.py checks that every key of ``CASES`` is a row of the index that cites
+``test_manual_alarm`` (and the other way round), and that the row's codes and alarms are those of its cases.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from cnc_gym.gcode.dialects.gsk25i import DIALECT
 from cnc_gym.machine import machine_from_dict
 
 FILE = "alarm.nc"
-_ = None  # "no alarm number": the alarm list has none for the condition, or we map none (see the index)
+NO_ALARM = None  # the alarm list has no number for the condition, or we map none (see the index)
 
 # row -> [(program, our error code, GSK alarm number or None, line of the error)]
 CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
@@ -53,7 +53,7 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     ],
     "E6": [("N1234567 G00 X1\n", "value-out-of-range", 16, 1)],  # N beyond 999999 (alarm 16)
     # Deviation: the manual's default is "the later one wins" (L503); we raise (the AD2 = 1 behaviour).
-    "E7": [("G00 X1 X2\n", "duplicate-word", _, 1)],
+    "E7": [("G00 X1 X2\n", "duplicate-word", NO_ALARM, 1)],
     "E8": [
         ("G00 X1\nG12 X1\n", "unknown-code", 10, 2),  # G12 is not in the G-code table (L905)
         ("G22\n", "not-implemented", 10, 1),  # a GSK code without a function here (stored stroke check 2)
@@ -79,26 +79,30 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     "M5": [("G17 G02 X10 K5 F100\n", "arc-bad-offset", 21, 1)],  # K is the normal axis of G17
     "M6": [("G04 P-1\n", "bad-dwell", 18, 1), ("G04 X-1\n", "bad-dwell", 18, 1)],  # L1319
     "M7": [("G10 L12 P1 R1\nG41 D1 G01 X10 F100\nG31 X20\n", "g31-in-cutter-compensation", 36, 3)],  # L1395
-    "M8": [("G01 X10 ,R2 F100\nG00 Y10\n", "bad-corner", _, 2)],  # the next move must be G01-G03 (L1631)
-    "M9": [("G01 X1 ,L5 F100\nY10\n", "bad-corner", _, 2)],  # chamfer 5 on a 1 mm block (L1637)
+    "M8": [("G01 X10 ,R2 F100\nG00 Y10\n", "bad-corner", NO_ALARM, 2)],  # next move G01-G03 only (L1631)
+    "M9": [("G01 X1 ,L5 F100\nY10\n", "bad-corner", NO_ALARM, 2)],  # chamfer 5 on a 1 mm block (L1637)
     "M10": [
-        ("G01 X10 ,R2 F100\nG92 X0\nY10\n", "bad-corner", _, 2),  # G92 in between (L1633)
-        ("G01 X10 ,R2 F100\nG68 X0 Y0 R10\nY10\n", "bad-corner", _, 3),  # G68 in between (L1646)
-        ("G16\nG01 X10 Y0 ,R2 F100\nX10 Y90\n", "bad-corner", _, 2),  # polar mode (L1864)
+        ("G01 X10 ,R2 F100\nG92 X0\nY10\n", "bad-corner", NO_ALARM, 2),  # G92 in between (L1633)
+        ("G01 X10 ,R2 F100\nG68 X0 Y0 R10\nY10\n", "bad-corner", NO_ALARM, 3),  # G68 in between (L1646)
+        ("G16\nG01 X10 Y0 ,R2 F100\nX10 Y90\n", "bad-corner", NO_ALARM, 2),  # polar mode (L1864)
     ],
     "M11": [
         # The first control point (11, 0) is not the current position (10, 0) (L1293).
         ("G05 P10000\nG00 X10 Y0 Z0\nG06.2 P3 K0 X11 Y0 F600\nK0 X10 Y10 R0.7\nK0 X0 Y10\nK1\nK1\nK1\n",
-         "nurbs-start-point", _, 3),
+         "nurbs-start-point", NO_ALARM, 3),
         # Rank P5 is outside 2-4 (L1233).
         ("G05 P10000\nG00 X10 Y0 Z0\nG06.2 P5 K0 X10 Y0 F600\nK0 X10 Y10 R0.7\nK0 X0 Y10\nK1\nK1\nK1\n",
-         "nurbs-bad-rank", _, 3),
+         "nurbs-bad-rank", NO_ALARM, 3),
     ],
-    "M14": [("G27 X10\n", "reference-check-failed", 46, 1)],  # X10 is not the reference position (L2202)
-    "M16": [("G68 X0 Y0 R30\nG18\n", "plane-change-in-rotation", _, 2)],  # L2039
+    "M14": [
+        ("G27 X10\n", "reference-check-failed", 46, 1),  # X10 is not the reference position (L2202)
+        ("G30 P5 X0\n", "bad-reference", 46, 1),  # reference positions 2-4 only
+        ("G29 X0\n", "bad-reference", 46, 1),  # no intermediate point stored by G28/G30
+    ],
+    "M16": [("G68 X0 Y0 R30\nG18\n", "plane-change-in-rotation", NO_ALARM, 2)],  # L2039
     "M17": [
-        ("G68 X0 Y0 R30\nG92 X0\n", "forbidden-in-rotation", _, 2),  # L2041
-        ("G68 X0 Y0 R30\nG28 X0\n", "forbidden-in-rotation", _, 2),
+        ("G68 X0 Y0 R30\nG92 X0\n", "forbidden-in-rotation", NO_ALARM, 2),  # L2041
+        ("G68 X0 Y0 R30\nG28 X0\n", "forbidden-in-rotation", NO_ALARM, 2),
     ],
     "M18": [
         ("G51 X0 Y0 P2\nG55\n", "forbidden-in-scaling", 109, 2),  # L1935
@@ -108,12 +112,13 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     "M20": [("G54.1 P49\n", "bad-offset-number", 30, 1), ("G54.1 P0\n", "bad-offset-number", 30, 1)],  # L2185
     # ------------------------------------------------------------------ §9.3 data input
     "D1": [("G10 L50 X1\nG11\n", "bad-g10", 31, 1)],  # G10 alone in its block (L1496)
-    "D2": [("G10 L50\nN1860 R361000\nG11\n", "bad-parameter", _, 2)],  # rotation angle 361.000° (L1498)
+    "D2": [("G10 L50\nN1860 R361000\nG11\n", "bad-parameter", NO_ALARM, 2)],  # angle 361.000° (L1498)
     "D3": [("G81 X0 Y0 Z-5 R1 F10\nG10 L2 P1 X0\n", "cycle-not-allowed", 61, 2)],  # L1500
     "D4": [("G10 L2 P7 X10\n", "bad-g10", 31, 1), ("G10 L20 P49 X1\n", "bad-g10", 31, 1)],
     "D5": [
         ("G10 L10 P1 R1000\n", "bad-offset-value", 32, 1),  # geometry beyond ±999.999 mm (L4688)
         ("G10 L11 P1 R100\n", "bad-offset-value", 32, 1),  # wear beyond ±99.999 mm
+        ("#10001=100\n", "bad-offset-value", 32, 1),  # the same through the offset variables (H01 wear)
     ],
     "D6": [
         ("G01 X1 D257 F100\n", "value-out-of-range", 30, 1),  # D00-D256
@@ -143,9 +148,14 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     "C7": [
         ("G124 X0 Y0 R5 Z-5 I4 J2 P1 K1 F10\n", "cycle-argument", 61, 1),  # no drilling G code (L5069)
         ("G124 G81 X0 Y0 R5 Z-5 I4 P1 K1 F10\n", "cycle-argument", 216, 1),  # J missing (L5077)
+        ("G125 X0 Y0 R5 Z-5 I4 J2 P1 K1 F10\n", "cycle-argument", 61, 1),
+        ("G125 G81 X0 Y0 R5 Z-5 I4 P1 K1 F10\n", "cycle-argument", 216, 1),
     ],
     # U omitted with a 5 mm tool radius (D1 = 5): U < tool radius (L3676).
-    "C8": [("G10 L12 P1 R5\nG132 X0 Y0 Z-5 R2 I50 J40 D1 L8 Q5 F100\n", "cycle-argument", 211, 2)],
+    "C8": [
+        ("G10 L12 P1 R5\nG132 X0 Y0 Z-5 R2 I50 J40 D1 L8 Q5 F100\n", "cycle-argument", 211, 2),
+        ("G10 L12 P1 R5\nG133 X0 Y0 Z-5 R2 I50 J40 D1 L8 Q5 F100\n", "cycle-argument", 211, 2),
+    ],
     "C9": [("G110 X0 Y0 Z-5 R2 Q2 L8 W2 V1 D1 F100\n", "cycle-argument", 215, 1)],  # I missing (§4.8)
     # ------------------------------------------------------------------ §9.5 compensation
     "T1": [("G10 L12 P1 R1\nG41 D1 G02 X10 Y0 R5 F100\n", "comp-arc-startup", 34, 2)],  # L4117
@@ -161,8 +171,8 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
         ("H01\nG37 Z200 H01\n", "g37-h-in-block", 80, 2),  # L4727
         ("G37 Z200\n", "g37-no-h", 80, 1),
     ],
-    "T10": [("G41 D1\nG45 G01 X10 F100\n", "position-offset-in-comp", _, 2)],  # L4825
-    "T11": [("G02 G43 H1 X10 Y0 Z5 R5 F100\n", "length-helical", _, 1)],  # L1103
+    "T10": [("G41 D1\nG45 G01 X10 F100\n", "position-offset-in-comp", NO_ALARM, 2)],  # L4825
+    "T11": [("G02 G43 H1 X10 Y0 Z5 R5 F100\n", "length-helical", NO_ALARM, 1)],  # L1103
     # ------------------------------------------------------------------ §9.6 macros and subprograms
     "S1": [("M98 P4321\n", "program-not-found", 59, 1), ("G65 P4321\n", "program-not-found", 59, 1),
            ("M98\n", "missing-program-number", 76, 1)],
@@ -176,7 +186,7 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     ],
     "S5": [("#1=[[[[[[1]]]]]]\n", "bracket-nesting", 209, 1)],  # six levels; at most five (L5593)
     "S6": [("#1=1/0\n", "division-by-zero", 208, 1), ("#1=5 MOD 0\n", "division-by-zero", 208, 1)],
-    "S7": [("#1=SQRT[-1]\n", "math-domain", _, 1)],  # L5704
+    "S7": [("#1=SQRT[-1]\n", "math-domain", NO_ALARM, 1)],  # L5704
     # Deviation (docs/gcode.md "Macros and subprograms"): the bound is ±1e47 (L6386), not L5219's ±999999.
     "S8": [("#1=10000000*10000000*10000000*10000000*10000000*10000000*10000000\n", "overflow", 102, 1)],
     "S9": [
@@ -192,7 +202,7 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     # ------------------------------------------------------------------ alarm-list classes §9 lacks
     "L2": [("123\n", "bad-character", 9, 1)],  # 4 ADDRESS NOT FOUND: a number without an address
     "L5": [("IF[#1]GOTO5\n", "bad-expression", 206, 1)],  # 49 CAN NOT JUDGE: a condition with no comparison
-    "L8": [("G68 X0 Y0 R361\n", "bad-rotation-angle", _, 1)],  # 57 ANGLE PARAMETER ERROR (probable)
+    "L8": [("G68 X0 Y0 R361\n", "bad-rotation-angle", NO_ALARM, 1)],  # 57 ANGLE PARAMETER ERROR (probable)
     "L10": [("O1\nM99\nO1\nM99\n", "duplicate-program", 73, 3)],  # 73 PROGRAM NUMBER ALREADY IN USE
     "L11": [("O10000\n", "value-out-of-range", 74, 1)],  # 74 ILLEGAL PROGRAM NUMBER: O is 4 digits (L401)
     "L15": [("WHILE[1LT2]DO4\nEND4\n", "do-end", 96, 1)],  # 97 ILLEGAL CYCLE NUMBER: DO 1-3 (L5712)
