@@ -124,6 +124,9 @@ class Dialect:
     #: Largest start/end radius difference of an I/J/K arc, mm (GSK P1810); 0 disables the check.
     arc_radius_tolerance_mm: float = 0.01
     max_words_per_block: int = 32
+    #: Longest literal word, address letter included (GSK alarm 13 "A UNIT CHARACTER STRING EXCEEDS 16");
+    #: words holding an expression are not limited.
+    max_word_length: int = 16
     max_m_per_block: int = 3
     #: M-code groups (codes of one group may not share a block): group name → M keys.
     m_groups: Mapping[str, frozenset[int]] = field(default_factory=dict)

@@ -35,9 +35,16 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect, MacroCalls
 
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
-# Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".".
-_PLAIN_BLOCK = re.compile(r"(?:[A-Z][-+]?[0-9.]+)+")
+# Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".". The plain-block
+# pattern is built per reader (_plain_block_pattern) so that it admits only words within the dialect's
+# length limit (GSK alarm 13, notes §9 E1): a longer literal falls to the scanner, which names it
+# (``word-too-long``), and the hot path pays nothing for the check.
 _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
+
+
+def _plain_block_pattern(max_word_length: int) -> re.Pattern:
+    n = max_word_length - 1  # characters after the address letter
+    return re.compile(rf"(?:[A-Z](?:[-+][0-9.]{{1,{n - 1}}}|[0-9.]{{1,{n}}}))+")
 _SPACES = re.compile(r"[ \t\r\f\v]+")
 _NUMBER_AT = re.compile(_NUMBER)
 _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
@@ -156,6 +163,8 @@ class Reader:
         self._decimals = max(0, round(-_log10(dialect.least_increment_mm)))
         self._increment = dialect.least_increment_mm
         self._max_words = dialect.max_words_per_block
+        self._max_word_length = dialect.max_word_length
+        self._plain_pattern = _plain_block_pattern(dialect.max_word_length)
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
@@ -223,7 +232,7 @@ class Reader:
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
                         text_block = _SPACES.sub("", text_block)
-                    if _PLAIN_BLOCK.fullmatch(text_block):
+                    if self._plain_pattern.fullmatch(text_block):
                         blocks.append(self._plain_block(text_block, line_no))
                         continue
                 blocks.extend(self.read_line(stripped, line_no))
@@ -307,7 +316,7 @@ class Reader:
 
     # ------------------------------------------------------------------ block
     def read_block(self, text: str, line: int) -> Block | None:
-        if _PLAIN_BLOCK.fullmatch(text):
+        if self._plain_pattern.fullmatch(text):
             return self._plain_block(text, line)
         return self._scan_block(text, line)
 
@@ -336,8 +345,8 @@ class Reader:
                     value = float(digits)
                 if not low <= value <= high:
                     self._literal(letter, digits, rules[letter], line)  # raises with the right code
-            except ValueError:
-                raise self.error(f"bad number {letter}{digits}", "bad-number", line) from None
+            except ValueError:  # "1.2.3", ".": alarm 7 ILLEGAL USE OF DECIMAL POINT
+                raise self.error(f"bad number {letter}{digits}", "bad-number", line, alarm=7) from None
             except ProgramError:
                 if (self._mentions_call(text) or self._code_rules(text) is not None
                         or letter in self._deferred_letters):  # fmt: skip
@@ -539,6 +548,11 @@ class Reader:
                 words.append((letter, value, text_digits))
                 continue
             if not ("A" <= c <= "Z"):
+                if c.isdigit() or c == ".":  # alarm 4 ADDRESS NOT FOUND
+                    raise self.error(f"a number without an address at {text[pos:pos + 8]!r}",
+                                     "missing-address", line, pos + 1)  # fmt: skip
+                if c in "+-":  # alarm 6 ILLEGAL USE OF NEGATIVE SIGN
+                    raise self.error(f"sign {c!r} not at the start of a number", "bad-sign", line, pos + 1)
                 raise self.error(f"illegal character {c!r}", "bad-character", line, pos + 1)
             keyword = self._keyword(text, pos)
             if keyword:
@@ -671,7 +685,7 @@ class Reader:
         m = int(digits)
         if not 1 <= m <= 3:
             raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (L5712)", "do-end", line,
-                             start + 1)  # fmt: skip
+                             start + 1, alarm=97)  # fmt: skip  # alarm 97 ILLEGAL CYCLE NUMBER
         return m
 
     def _keyword(self, text: str, pos: int) -> str | None:
@@ -696,8 +710,13 @@ class Reader:
             if end < len(text) and (text[end] == "." or text[end].isdigit()):
                 bad = _NUMBER_AT.match(text, end)
                 tail = text[end : (bad.end() if bad else end + 1)]
-                raise self.error(f"bad number {letter}{match.group()}{tail}", "bad-number", line, start)
+                # alarm 7 ILLEGAL USE OF DECIMAL POINT (a second point), else 8 ILLEGAL DATA
+                raise self.error(f"bad number {letter}{match.group()}{tail}", "bad-number", line, start,
+                                 alarm=7 if "." in tail else None)  # fmt: skip
             digits = match.group()
+            if len(digits) >= self._max_word_length:  # the address letter makes it one character longer
+                raise self.error(f"{letter}{digits}: a word is at most {self._max_word_length} characters "
+                                 f"({len(digits) + 1})", "word-too-long", line, start)  # fmt: skip
             return self._literal(letter, digits, rule, line), digits, end
         sign = ""
         if pos < len(text) and text[pos] in "+-":
@@ -711,9 +730,10 @@ class Reader:
                 node = ("neg", node)
             return node, None, parser.pos
         if sign:
-            raise self.error(f"{letter}{sign}: sign without a number", "bad-number", line, start)
+            raise self.error(f"{letter}{sign}: sign without a number", "bad-sign", line, start)  # alarm 6
         if c == "." or c.isdigit():
-            raise self.error(f"bad number after {letter}", "bad-number", line, start)
+            raise self.error(f"bad number after {letter}", "bad-number", line, start,
+                             alarm=7 if c == "." else None)  # fmt: skip
         raise self.error(f"address {letter} has no value", "missing-value", line, start)
 
     def _assignment(self, text: str, pos: int, line: int) -> tuple[tuple, int]:

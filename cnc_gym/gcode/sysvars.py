@@ -285,7 +285,9 @@ class SystemVariables:
                     number,
                     (value or 0.0) * self._scale,
                     wear=wear,
-                    error=lambda message, code: self._error(message, code),
+                    # alarm 29 ILLEGAL OFFSET VALUE (32 is the G10 form's "… IN G10")
+                    error=lambda message, code: self._error(message, code,
+                                                            29 if code == "bad-offset-value" else None),
                 )
                 return
         if 2500 <= index <= 2906:

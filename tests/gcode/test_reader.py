@@ -89,10 +89,12 @@ def test_o_and_n_must_lead_the_block():
 @pytest.mark.parametrize(
     ("text", "code", "alarm"),
     [
-        ("G01 X1.2.3 F100\n", "bad-number", 8),
-        ("G01 X. F100\n", "bad-number", 8),
+        ("G01 X1.2.3 F100\n", "bad-number", 7),  # 7 ILLEGAL USE OF DECIMAL POINT
+        ("G01 X. F100\n", "bad-number", 7),
         ("G01 X F100\n", "missing-value", 5),
-        ("G01 X- F100\n", "bad-number", 8),
+        ("G01 X- F100\n", "bad-sign", 6),  # 6 ILLEGAL USE OF NEGATIVE SIGN
+        ("G01 X1-2 F100\n", "bad-sign", 6),
+        ("123\n", "missing-address", 4),  # 4 ADDRESS NOT FOUND
         ("G01 X10 F100 $\n", "bad-character", 9),
         ("G01 X10 F100 (unclosed\n", "unclosed-comment", None),
         ("G01 X10 F100 )\n", "bad-character", 9),

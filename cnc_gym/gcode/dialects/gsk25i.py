@@ -289,6 +289,7 @@ FUNCTIONS = {
 # --------------------------------------------------------------------------- alarms (Appendix B)
 ALARMS = {
     "missing-value": 5,
+    "missing-address": 4,
     "bad-sign": 6,
     "decimal-point-not-allowed": 7,
     "bad-number": 8,
@@ -298,6 +299,7 @@ ALARMS = {
     "not-implemented": 10,
     "missing-feed": 11,
     "too-many-words": 12,
+    "word-too-long": 13,
     "unsupported-axis": 15,
     "bad-dwell": 18,
     "arc-radius-mismatch": 20,
