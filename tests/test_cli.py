@@ -113,7 +113,7 @@ def test_machine_travel_limits_are_checked(tmp_path, capsys):
     # A circle whose ends are inside but whose far side is not: centre (60, 0), radius 50 reaches X 110.
     circle = write(tmp_path, "G00 X10\nG01 Z0 F100\nG02 I50\n", "circle.nc")
     status, out, err = run_main(["trace", circle, "--machine", str(machine)], capsys)
-    assert status == 2 and out == "" and err.startswith(f"{circle}:3: X110.0000")
+    assert status == 2 and out == "" and err.startswith(f"{circle}:3: OVER TRAVEL:+1: X110.0000")
     # ... a CW quarter arc from 180° to 90° about (60, 0) stays inside (the CCW way round would not).
     inside_arc = write(tmp_path, "G00 X10\nG02 X60 Y50 I50 F100\n", "arc.nc")
     assert run_main(["trace", inside_arc, "--machine", str(machine)], capsys)[0] == 0

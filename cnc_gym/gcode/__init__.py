@@ -176,8 +176,9 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
     """Stored stroke check: every point of the path within each axis's [min, max] travel.
 
     Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
-    270° in the plane). The first offending segment is reported (GSK alarms 170-181 have no fixed axis
-    order in the manual, so no alarm number is given).
+    270° in the plane). The first offending segment is reported, with the operation volume's stored
+    stroke limit 1 alarm: 500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side
+    (n = the axis number, L7250).
     """
     n = len(toolpath)
     if not n:
@@ -211,6 +212,8 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
         row, axis, value = first
         file, line = toolpath.source(row)
         name = "XYZ"[axis]
-        raise ProgramError(f"{name}{value:.4f} (machine) is beyond the travel limit {low[axis]:g} .. "
-                           f"{high[axis]:g} of machine {machine.name}", code="travel-limit", file=file,
-                           line=line)  # fmt: skip
+        side = "+" if value > high[axis] else "-"
+        raise ProgramError(f"OVER TRAVEL:{side}{axis + 1}: {name}{value:.4f} (machine) is beyond the travel "
+                           f"limit {low[axis]:g} .. {high[axis]:g} of machine {machine.name}",
+                           code="travel-limit", file=file, line=line,
+                           alarm=500 if side == "+" else 501)  # fmt: skip

@@ -236,13 +236,15 @@ def test_manual_alarm(row, program, code, alarm, line):
 
 def test_m21_stroke_limit_names_the_block_that_leaves_the_travel():
     """M21 (OP-VOL L7250): a move beyond the stored stroke limit is an alarm. Here: a machine with X/Y/Z
-    travel -100..100 mm; line 2 ends at X150, line 3 never runs. GSK numbers it 170-181 (soft limit) or
-    500-503 (stroke limit 1/2); `travel-limit` has no number (see the index)."""
+    travel -100..100 mm; line 2 ends at X150, line 3 never runs. The travel is stored stroke limit 1: alarm
+    500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side (n = axis number)."""
     machine = machine_from_dict({"name": "tiny", "axis_defaults": {"min_position_mm": -100,
                                                                    "max_position_mm": 100}})  # fmt: skip
     err = program_error("G00 X50\nG00 X150\nG00 X0\n", file=FILE, machine=machine)
-    assert (err.code, err.alarm, err.file, err.line) == ("travel-limit", None, FILE, 2)
-    assert "X150.0000" in err.message
+    assert (err.code, err.alarm, err.file, err.line) == ("travel-limit", 500, FILE, 2)
+    assert err.message.startswith("OVER TRAVEL:+1") and "X150.0000" in err.message
+    err = program_error("G00 Y-50\nG00 Y-150\n", file=FILE, machine=machine)
+    assert (err.alarm, err.line) == (501, 2) and err.message.startswith("OVER TRAVEL:-2")
     # An arc whose ends are inside but whose far side is not: centre (60, 0), radius 50 reaches X 110.
     err = program_error("G00 X10\nG01 Z0 F100\nG02 I50\n", file=FILE, machine=machine)
     assert (err.code, err.line) == ("travel-limit", 3)
