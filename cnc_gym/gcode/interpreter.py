@@ -58,7 +58,7 @@ _ARC_WORDS = frozenset("IJKR")
 _G60_MODAL = 60  # ``Interpreter.motion`` while G60 is the modal group-01 code (1870#0 MDL = 1)
 _PATH_MODES = {
     "exact_stop": SegmentMode.EXACT_STOP,
-    "tapping": SegmentMode.OVERRIDE_LOCKED,
+    "tapping": SegmentMode.OVERRIDE_LOCKED | SegmentMode.TAPPING_MODE,
     "auto_corner": SegmentMode.AUTO_CORNER,
     "cutting": SegmentMode.NONE,
 }

@@ -408,10 +408,10 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         mode_change = rapid_prev | (tp.kind[nxt] == SegmentKind.RAPID)
         aux_change = (tp.tool[prev] != tp.tool[nxt]) | (tp.spindle_rpm[prev] != tp.spindle_rpm[nxt])
         # Without look-ahead every block ends at rest — but the pieces of one NURBS block are one block, and
-        # a block in tapping mode (G63, OVERRIDE_LOCKED) "is not decelerated at the end point of a block, but
+        # a block in tapping mode (G63, TAPPING_MODE) "is not decelerated at the end point of a block, but
         # the next block is executed" (manual L6423): it runs on as in G64 with look-ahead.
-        locked_prev = (modes[prev] & SegmentMode.OVERRIDE_LOCKED) != 0
-        no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt) & ~locked_prev
+        tapping_prev = (modes[prev] & SegmentMode.TAPPING_MODE) != 0
+        no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt) & ~tapping_prev
         stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead
         wait[1:n] = has_exact | mode_change | aux_change
     hard[stop] = 0.0

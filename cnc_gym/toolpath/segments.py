@@ -53,9 +53,10 @@ class SegmentMode(IntFlag):
 
     NONE = 0
     EXACT_STOP = 1  # G09 one-shot or G61 modal: stop with in-position check at the block end
-    OVERRIDE_LOCKED = 2  # G63 tapping mode: override fixed at 100 %, no deceleration at block end
+    OVERRIDE_LOCKED = 2  # feed override fixed at 100 % (G63, tapping cycles, G31, #3004 bit 1)
     AUTO_CORNER = 4  # G62 automatic corner override
     INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
+    TAPPING_MODE = 16  # G63 tapping mode: no deceleration at block end (with OVERRIDE_LOCKED)
 
 
 _FIELDS = (

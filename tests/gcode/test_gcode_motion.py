@@ -54,8 +54,9 @@ def test_spindle_tool_and_coolant_are_recorded():
 
 def test_path_mode_flags_reach_the_segments():
     tp = interpret("G61 G01 X1 F100\nG64 X2\nG63 X3\nG62 X4\n")
+    g63 = SegmentMode.OVERRIDE_LOCKED | SegmentMode.TAPPING_MODE
     assert [SegmentMode(int(m)) for m in tp.modes] == [
-        SegmentMode.EXACT_STOP, SegmentMode.NONE, SegmentMode.OVERRIDE_LOCKED, SegmentMode.AUTO_CORNER,
+        SegmentMode.EXACT_STOP, SegmentMode.NONE, g63, SegmentMode.AUTO_CORNER,
     ]  # fmt: skip
 
 

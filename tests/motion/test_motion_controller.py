@@ -314,7 +314,9 @@ def test_g63_tapping_mode_runs_on_through_block_ends_at_f_whatever_the_knob():
         b.line((0, 0, -10), (0, 0, -20), feed=1200, line=2, modes=modes)
         return Controller(b.build(), m, in_position_check=False)
 
-    tapping, cutting = pair(SegmentMode.OVERRIDE_LOCKED), pair(SegmentMode.NONE)
+    tapping, cutting = pair(SegmentMode.OVERRIDE_LOCKED | SegmentMode.TAPPING_MODE), pair(SegmentMode.NONE)
+    # The override lock alone (G31, tapping cycles, #3004 bit 1) does not run on: it is G63's mode that does.
+    assert pair(SegmentMode.OVERRIDE_LOCKED).junction_limits()["stop"][1]
     assert not tapping.junction_limits()["stop"][1] and cutting.junction_limits()["stop"][1]
     # G64: two rest-to-rest moves, each L/V + 2√(V/J) (triangular acceleration), crossing at 0.
     t_cut, chunk = finish_time(cutting)
@@ -340,7 +342,7 @@ def test_only_the_end_of_a_tapping_block_runs_on():
     # run on (the G63 block does not). A reversal inside tapping mode still obeys the corner step: 180° on
     # Z is |Δu_z| = 2, v ≤ 600/60/2 = 5 mm/s.
     m = NO_LOOKAHEAD
-    lock = SegmentMode.OVERRIDE_LOCKED
+    lock = SegmentMode.OVERRIDE_LOCKED | SegmentMode.TAPPING_MODE  # G63
     b = ToolpathBuilder()
     b.line((0, 0, 0), (0, 0, -5), feed=1200, line=1)
     b.line((0, 0, -5), (0, 0, -10), feed=1200, line=2, modes=lock)
