@@ -16,7 +16,7 @@ import numpy as np
 from cnc_gym.errors import CncGymError
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion import kernel as K
-from cnc_gym.motion.limits import PathLimits, build_limits
+from cnc_gym.motion.limits import PathLimits, build_limits, rest_to_rest_position
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 
@@ -37,6 +37,8 @@ class MotionChunk:
     jerk        (n,)      tangential jerk applied during the period, mm/s^3
     segment     (n,)      index of the toolpath segment (a dwell's index while dwelling)
     cutting     (n,)      True on lines and arcs, False on rapids and dwells
+    rotary      (n, k)    rotary axes' reference, machine degrees, in ``toolpath.rotary_axes`` order
+                          (None on a tool path without rotary axes)
     ==========  ========  =======================================================================
     """
 
@@ -48,6 +50,7 @@ class MotionChunk:
     jerk: np.ndarray
     segment: np.ndarray
     cutting: np.ndarray
+    rotary: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.time_s)
@@ -106,6 +109,13 @@ class Controller:
         self._scratch = np.zeros((window + 2, 3))
         self._st_f = np.zeros(K.N_STATE_F)
         self._st_i = np.zeros(K.N_STATE_I, dtype=np.int64)
+        # Rotary axes: each period's angles follow from its row (linear in path_s on a move, the hold's own
+        # jerk-limited profile on a rotary-only move, counted in periods since the hold began).
+        self._rotary = None
+        if toolpath.rotary_axes:
+            holds = self.limits.rotary_holds
+            self._rotary = {int(row): tuple(profile) for row, *profile in holds}
+        self._hold = (-1, 0)  # (toolpath row of the rotary-only move under way, periods so far)
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -126,6 +136,7 @@ class Controller:
         if self._n_seg:
             self._st_f[K.S_S] = self.limits.pt_f[0, K.P_S]
         self._last_position = self._rest_position_now()
+        self._hold = (-1, 0)
 
     def _rest_position_now(self) -> np.ndarray:
         if self._n_seg:
@@ -208,7 +219,10 @@ class Controller:
         # Fast path for the common call (plain int and floats in range); anything else is validated below.
         if (type(n_ticks) is int and n_ticks >= 0 and feed_mm_min is None and type(override) is float
                 and 0.0 <= override <= self.max_override and rapid_override == 1.0):  # fmt: skip
-            return _chunk(self._advance_raw(n_ticks, override))
+            chunk = _chunk(self._advance_raw(n_ticks, override))
+            if self._rotary is not None:
+                chunk.rotary = self._rotary_reference(chunk)
+            return chunk
         if isinstance(n_ticks, bool) or not isinstance(n_ticks, int | np.integer) or n_ticks < 0:
             raise ActionError(f"n_ticks must be a non-negative integer, got {n_ticks!r}")
         if feed_mm_min is not None:
@@ -226,7 +240,10 @@ class Controller:
         rapid = _finite(rapid_override, "rapid_override")
         if not 0.0 <= rapid <= 1.0:
             raise ActionError(f"rapid_override must be within 0..1, got {rapid_override!r}")
-        return _chunk(self._advance_raw(int(n_ticks), knob, rapid, mode, cmd))
+        chunk = _chunk(self._advance_raw(int(n_ticks), knob, rapid, mode, cmd))
+        if self._rotary is not None:
+            chunk.rotary = self._rotary_reference(chunk)
+        return chunk
 
     def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
                      cmd: float = 0.0, stop_when_done: bool = False,
@@ -258,7 +275,34 @@ class Controller:
             parts.append(self._advance_raw(chunk, knob, stop_when_done=True, wait=False))
             done += chunk
         out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
-        return _chunk(out)
+        chunk = _chunk(out)
+        if self._rotary is not None:
+            chunk.rotary = self._rotary_reference(chunk)
+        return chunk
+
+    def _rotary_reference(self, chunk: MotionChunk) -> np.ndarray:
+        """The rotary axes' angles at the end of each period of ``chunk`` (call once per chunk, in order)."""
+        tp = self.toolpath
+        rows = chunk.segment
+        start, end = tp.rotary_start[rows], tp.rotary_end[rows]
+        length = tp.length[rows]
+        # On a move: the share of the row's XYZ length covered (the axes move linearly with the row).
+        share = np.divide(chunk.path_s - tp.s_start[rows], length, out=np.ones(len(rows)), where=length > 0)
+        share = np.clip(share, 0.0, 1.0)
+        hold_row, done = self._hold
+        # The reference only moves forward, so a rotary-only row's periods are contiguous in the chunk.
+        for row in np.unique(rows).tolist():
+            profile = self._rotary.get(row)
+            if profile is None:
+                continue
+            at = np.flatnonzero(rows == row)
+            first = done if row == hold_row else 0
+            periods = first + np.arange(1, len(at) + 1)
+            _seconds, travel, speed, accel, jerk = profile
+            share[at] = rest_to_rest_position(periods * self.dt, travel, speed, accel, jerk) / travel
+            hold_row, done = row, int(periods[-1])
+        self._hold = (hold_row, done)
+        return start + (end - start) * share[:, None]
 
     # ------------------------------------------------------------------ observations
     def lookahead(self, horizon_mm: float, n_points: int) -> LookaheadFeatures:

@@ -29,7 +29,7 @@ lowest acceleration bound and jerk from each point to the next mandatory stop (t
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
@@ -57,6 +57,9 @@ class PathLimits:
     dwell_f: np.ndarray  # (m, 5): seconds, toolpath index, x, y, z
     curve_f: np.ndarray  # (r, 6): NURBS table, point and unit tangent per sample
     rest_position: np.ndarray  # (3,) where the reference rests when there is no motion at all
+    #: Rotary-only moves (timed holds of the XYZ reference): toolpath row, seconds, and the profile's
+    #: travel (deg), speed (deg/s), acceleration, jerk, one row each (m, 6).
+    rotary_holds: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
 
 
 def rest_to_rest_time(distance: np.ndarray, speed: np.ndarray, accel: np.ndarray,
@@ -78,6 +81,45 @@ def rest_to_rest_time(distance: np.ndarray, speed: np.ndarray, accel: np.ndarray
     return np.where(d <= 0, 0.0, np.where(cruise >= 0, 2.0 * ramp + cruise / v, 2.0 * peak_ramp))
 
 
+def rest_to_rest_position(t: np.ndarray, distance: np.ndarray, speed: np.ndarray, accel: np.ndarray,
+                          jerk: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Position at time ``t`` along the move :func:`rest_to_rest_time` times (vectorised; clipped to
+    [0, distance] outside the move). The profile: a jerk-limited ramp to the peak speed (jerk j for T_j,
+    acceleration a_p for T_a, jerk −j for T_j), a cruise at ``speed`` if there is room, and the mirror
+    image of the ramp down to rest (the move is point-symmetric about its middle)."""
+    t, d, v, a, j = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (t, distance, speed, accel,
+                                                                                 jerk)))  # fmt: skip
+    total = rest_to_rest_time(d, v, a, j)
+    # Peak speed: ``speed`` if two ramps fit, otherwise the one rest_to_rest_time solved for.
+    full = np.where(v >= a * a / j, v / a + a / j, 2.0 * np.sqrt(v / j))
+    cruising = d - v * full >= 0
+    peak_full = 0.5 * a * (np.sqrt((a / j) ** 2 + 4.0 * d / a) - a / j)
+    peak = np.where(cruising, v, np.where(peak_full >= a * a / j, peak_full,
+                                          np.cbrt((d * np.sqrt(j) / 2.0) ** 2)))  # fmt: skip
+    t_jerk = np.where(peak >= a * a / j, a / j, np.sqrt(peak / j))
+    t_hold = np.where(peak >= a * a / j, peak / a - a / j, 0.0)
+    a_peak = j * t_jerk
+    ramp_time = 2.0 * t_jerk + t_hold
+    ramp_distance = 0.5 * peak * ramp_time
+
+    def ramp(tau: np.ndarray) -> np.ndarray:  # distance after tau of the ramp up (0 ≤ tau ≤ ramp_time)
+        x1, v1 = j * t_jerk**3 / 6.0, 0.5 * j * t_jerk**2
+        rising = j * tau**3 / 6.0
+        u = tau - t_jerk
+        holding = x1 + v1 * u + 0.5 * a_peak * u * u
+        left = ramp_time - tau  # the last jerk phase, mirrored from the end of the ramp
+        easing = ramp_distance - (peak * left - j * left**3 / 6.0)
+        return np.where(tau <= t_jerk, rising, np.where(tau <= t_jerk + t_hold, holding, easing))
+
+    tt = np.clip(t, 0.0, total)
+    up = ramp(np.minimum(tt, ramp_time))
+    cruise_end = total - ramp_time
+    middle = ramp_distance + peak * (tt - ramp_time)
+    down = d - ramp(np.clip(total - tt, 0.0, ramp_time))
+    out = np.where(tt <= ramp_time, up, np.where(tt <= cruise_end, middle, down))
+    return np.where(d <= 0, 0.0, np.clip(out, 0.0, d))
+
+
 def _rotary_rates(tp: Toolpath, machine: MachineConfig) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Per toolpath row, the rotary axes' degrees per mm of XYZ path (n, k), and their limits (k,) each."""
     letters = tp.rotary_axes
@@ -94,11 +136,12 @@ def _rotary_rates(tp: Toolpath, machine: MachineConfig) -> tuple[np.ndarray, dic
     return rates, limits
 
 
-def _rotary_only_seconds(tp: Toolpath, machine: MachineConfig, rows: np.ndarray,
-                         limits: dict[str, np.ndarray]) -> np.ndarray:  # fmt: skip
-    """Duration of rotary-only moves (no XYZ travel): the fastest jerk-limited move along the rotary
-    vector at F (deg/min: the composite rate with no linear part, L981-L995) or the rapid rate, each axis's
-    speed, acceleration and jerk limit projected on the vector. Timed at 100 % override."""
+def _rotary_only_profiles(tp: Toolpath, machine: MachineConfig, rows: np.ndarray,
+                          limits: dict[str, np.ndarray]) -> np.ndarray:  # fmt: skip
+    """Rotary-only moves (no XYZ travel), one row each: toolpath row, seconds, travel, speed, acceleration,
+    jerk. Each is the fastest jerk-limited move along the rotary vector at F (deg/min: the composite rate
+    with no linear part, L981-L995) or the rapid rate, each axis's speed, acceleration and jerk limit
+    projected on the vector. Timed at 100 % override."""
     delta = np.abs(tp.rotary_end[rows] - tp.rotary_start[rows])
     travel = np.linalg.norm(delta, axis=1)
     share = delta / travel[:, None]  # |direction component| per axis
@@ -115,7 +158,8 @@ def _rotary_only_seconds(tp: Toolpath, machine: MachineConfig, rows: np.ndarray,
     speed = np.where(rapid, projected("rapid_deg_min"), np.nan_to_num(feed)) / 60.0
     accel = np.where(rapid, projected("rapid_accel_deg_s2"), projected("max_accel_deg_s2"))
     jerk = np.where(rapid, projected("rapid_jerk_deg_s3"), projected("max_jerk_deg_s3"))
-    return rest_to_rest_time(travel, speed, accel, jerk)
+    seconds = rest_to_rest_time(travel, speed, accel, jerk)
+    return np.column_stack((rows, seconds, travel, speed, accel, jerk))
 
 
 def _max_abs_trig(theta0: np.ndarray, sweep: np.ndarray, offset: float) -> np.ndarray:
@@ -294,6 +338,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         kind == SegmentKind.NURBS)
     rows = np.flatnonzero(moving & (tp.length > MIN_LENGTH_MM))
     rotary_only = np.flatnonzero(moving & (tp.length <= MIN_LENGTH_MM) & (tp.rotary_travel > 0))
+    rotary_holds = np.zeros((0, 6))
     held = kind == SegmentKind.DWELL
     held[rotary_only] = True
     # Pieces: one per line/arc/rapid; a NURBS curve is cut into pieces of equal arc length, each with the
@@ -428,7 +473,8 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         dwell_f[: len(dwell_rows), 0] = tp.dwell_s[dwell_rows]
         if len(rotary_only):
             at = np.searchsorted(dwell_rows, rotary_only)
-            dwell_f[at, 0] = _rotary_only_seconds(tp, machine, rotary_only, _rotary_rates(tp, machine)[1])
+            rotary_holds = _rotary_only_profiles(tp, machine, rotary_only, _rotary_rates(tp, machine)[1])
+            dwell_f[at, 0] = rotary_holds[:, 1]
         dwell_f[: len(dwell_rows), 1] = dwell_rows
         dwell_f[: len(dwell_rows), 2:5] = tp.start[dwell_rows]
 
@@ -494,4 +540,5 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     for arr in (seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f):
         arr.flags.writeable = False
     return PathLimits(seg_f=np.ascontiguousarray(seg_f), seg_i=seg_i, pt_f=pt_f, pt_i=pt_i,
-                      dwell_f=dwell_f, curve_f=np.ascontiguousarray(curve_f), rest_position=rest)  # fmt: skip
+                      dwell_f=dwell_f, curve_f=np.ascontiguousarray(curve_f), rest_position=rest,
+                      rotary_holds=rotary_holds)  # fmt: skip

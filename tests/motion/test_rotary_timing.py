@@ -14,7 +14,7 @@ from cnc_gym.gcode import interpret
 from cnc_gym.machine import load_machine, machine_from_dict
 from cnc_gym.motion import Controller
 from cnc_gym.motion import kernel as K
-from cnc_gym.motion.limits import build_limits, rest_to_rest_time
+from cnc_gym.motion.limits import build_limits, rest_to_rest_position, rest_to_rest_time
 from cnc_gym.toolpath import SegmentKind
 
 GSK = load_machine("gsk25i")  # B axis: 4000 deg/min clamp, A = 2777.78 deg/s², J = 347222 deg/s³
@@ -169,3 +169,83 @@ def test_random_rotary_programs_run_to_the_end_within_the_composite_time(blocks)
     lower_bound = float(np.sum(composite / np.minimum(tp.feed[feed_moves], 4000.0))) * 60.0
     elapsed = float(chunk.time_s[-1]) if len(chunk) else 0.0  # a program that never moves has no periods
     assert elapsed >= lower_bound - 1e-9
+
+
+def sampled_profile(peak: float, accel: float, jerk: float, cruise_s: float, times: np.ndarray,
+                    dt: float = 1e-3) -> np.ndarray:  # fmt: skip
+    """Position at ``times`` of the jerk-limited rest-to-rest move peaking at ``peak`` with ``cruise_s``
+    seconds at that speed, integrated step by step (independent of the closed form; each step stays inside
+    one phase, where the cubic step is exact)."""
+    if peak >= accel * accel / jerk:
+        t_jerk, t_hold = accel / jerk, peak / accel - accel / jerk
+    else:
+        t_jerk, t_hold = math.sqrt(peak / jerk), 0.0
+    phases = [(jerk, t_jerk), (0.0, t_hold), (-jerk, t_jerk), (0.0, cruise_s), (-jerk, t_jerk), (0.0, t_hold),
+              (jerk, t_jerk)]  # fmt: skip
+    edges = np.cumsum([0.0] + [d for _, d in phases])
+    out = np.empty(len(times))
+    a = v = x = t = 0.0
+    order = np.argsort(times)
+    for k, target in enumerate(np.asarray(times)[order]):
+        while t < target - 1e-15:
+            phase = min(int(np.searchsorted(edges, t, side="right")) - 1, len(phases) - 1)
+            j = phases[phase][0]
+            h = min(dt, target - t, edges[phase + 1] - t) if phase + 1 < len(edges) else min(dt, target - t)
+            h = max(h, 1e-15)
+            x += v * h + a * h * h / 2 + j * h**3 / 6
+            v += a * h + j * h * h / 2
+            a += j * h
+            t += h
+        out[order[k]] = x
+    return out
+
+
+@pytest.mark.parametrize(("distance", "speed"), [(0.5, 20.0), (2.0, 3.0), (30.0, 20.0)])
+def test_rest_to_rest_position_follows_the_integrated_profile(distance, speed):
+    # a = 100, j = 1000 (a²/j = 10): a short move that never reaches `speed`, a cruise below a²/j, and a
+    # cruise above it; the closed-form position against step-by-step integration of the same jerk phases.
+    accel, jerk = 100.0, 1000.0
+    total = float(rest_to_rest_time(distance, speed, accel, jerk))
+    times = np.linspace(0.0, total, 23)
+    got = rest_to_rest_position(times, distance, speed, accel, jerk)
+    # the peak and cruise the closed form must have used, found independently by bisection on v·T(v) = d
+    def ramp(v):
+        return v / accel + accel / jerk if v >= accel * accel / jerk else 2 * math.sqrt(v / jerk)
+
+    if speed * ramp(speed) <= distance:
+        peak, cruise = speed, (distance - speed * ramp(speed)) / speed
+    else:
+        lo, hi = 0.0, speed
+        for _ in range(200):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if mid * ramp(mid) < distance else (lo, mid)
+        peak, cruise = lo, 0.0
+    want = sampled_profile(peak, accel, jerk, cruise, times)
+    assert np.allclose(got, want, atol=1e-6 * distance)
+    assert got[0] == 0.0 and got[-1] == pytest.approx(distance)
+
+
+def test_controller_outputs_the_rotary_reference():
+    # X8 on gsk25i, then a rapid back: B follows the hold's own profile while X, Y, Z rest, then turns 2°
+    # per mm of X during the combined move, then rapids by -10°.
+    tp = interpret("G91 G01 B90.0 F300;\nG91 G01 X20.0 B40.0 F300.0;\nG00 B-10\n", machine=GSK)
+    controller = Controller(tp, GSK, in_position_check=False)
+    chunk = controller.run_to_end()
+    b = chunk.rotary[:, 0]
+    hold = chunk.segment == 0
+    periods = np.arange(1, int(hold.sum()) + 1) * GSK.controller.interpolation_period_s
+    assert np.allclose(b[hold], rest_to_rest_position(periods, 90.0, 5.0, 2777.78, 347222.0))
+    assert np.all(chunk.position[hold] == 0.0) and b[hold][-1] == pytest.approx(90.0)
+    combined = chunk.segment == 1
+    assert np.allclose(b[combined], 90.0 + 2.0 * chunk.position[combined, 0])
+    assert b[-1] == pytest.approx(120.0) and np.all(np.isfinite(b))
+    # advancing in small chunks gives the same reference (the hold's progress carries over)
+    controller.reset()
+    parts = []
+    while not controller.finished:
+        parts.append(controller.advance(7, override=1.0))
+    stepped = np.concatenate([p.rotary[:, 0] for p in parts])
+    assert np.allclose(stepped[: len(b)], b[: len(stepped)])
+    # a 3-axis tool path has no rotary reference
+    plain = Controller(interpret("G01 X1 F100\n"), GSK, in_position_check=False)
+    assert plain.advance(5, override=1.0).rotary is None
