@@ -15,14 +15,13 @@ from __future__ import annotations
 import ast
 import functools
 import re
-from pathlib import Path
 
 import pytest
+from doc_tables import NODE, ROOT, module_tests, parse_table
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 
-ROOT = Path(__file__).resolve().parents[2]
 INDEX = ROOT / "docs" / "gsk25i_alarms.md"
 MANUAL_ALARMS = "tests/gcode/test_manual_alarms.py"
 CASES_TEST = "test_manual_alarm"
@@ -33,31 +32,10 @@ ALARM_LIST = [f"L{n}" for n in range(1, 26)]
 ROWS = SECTION_9 + ALARM_LIST
 HEADER = ["#", "Condition", "Manual line", "GSK alarm", "Our code", "Our alarm", "Status", "Note"]
 KINDS = ("tested", "missing check", "deviation", "not applicable", "rejected")
-NODE = re.compile(r"`(tests/[\w/]+\.py)::(\w+)`")
 CODE = re.compile(r"`(G\d+(?:\.\d)?)`")
 ERROR_CODE = re.compile(r"`([a-z0-9]+(?:-[a-z0-9]+)*)`")
 LINES = re.compile(r"-|(OP-VOL )?L\d+(-L\d+)?(, L\d+(-L\d+)?)*")
 NONE = "—"
-
-
-def split_row(line: str) -> list[str]:
-    cells = re.split(r"(?<!\\)\|", line.strip())[1:-1]
-    return [cell.strip().replace("\\|", "|") for cell in cells]
-
-
-def parse_table(text: str) -> tuple[list[str], list[dict[str, str]]]:
-    """The alarms table: its column names and one dict per row (cells stripped)."""
-    lines = text.splitlines()
-    start = next(i for i, line in enumerate(lines) if line.startswith("| # |"))
-    header = split_row(lines[start])
-    table = []
-    for line in lines[start + 2:]:
-        if not line.startswith("|"):
-            break
-        cells = split_row(line)
-        assert len(cells) == len(header), f"wrong number of cells: {line}"
-        table.append(dict(zip(header, cells, strict=True)))
-    return header, table
 
 
 @functools.cache
@@ -69,14 +47,6 @@ def rows() -> list[dict[str, str]]:
 
 def row_of(row_id: str) -> dict[str, str]:
     return next(row for row in rows() if row["#"] == row_id)
-
-
-@functools.cache
-def functions_in(path: str) -> dict[str, ast.FunctionDef]:
-    """Module-level test functions of a test file, by parsing it."""
-    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
-    return {node.name: node for node in tree.body
-            if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}  # fmt: skip
 
 
 def is_strict_xfail(function: ast.FunctionDef) -> bool:
@@ -121,7 +91,7 @@ def status_kind(status: str) -> str:
     # Nothing but test nodes and separators: a typo in a node would otherwise hide in the text.
     assert NODE.sub("", status).replace(",", "").strip() == "", f"stray text in a status: {status!r}"
     xfails = [name for path, name in NODE.findall(status)
-              if path == MANUAL_ALARMS and is_strict_xfail(functions_in(path)[name])]  # fmt: skip
+              if path == MANUAL_ALARMS and is_strict_xfail(module_tests(path)[name])]  # fmt: skip
     return "missing check" if xfails else "tested"
 
 
@@ -174,15 +144,15 @@ def test_rows_are_well_formed():
 def test_every_referenced_test_exists(row_id):
     for path, name in NODE.findall(row_of(row_id)["Status"]):
         assert (ROOT / path).is_file(), f"{row_id}: {path} does not exist"
-        assert name in functions_in(path), f"{row_id}: {path} has no test function {name}"
+        assert name in module_tests(path), f"{row_id}: {path} has no test function {name}"
 
 
 def test_every_strict_xfail_of_the_manual_alarms_is_indexed():
     """A missing check (strict xfail) in test_manual_alarms.py is named by a row, so the LEAD finds it."""
-    xfails = {name for name, fn in functions_in(MANUAL_ALARMS).items() if is_strict_xfail(fn)}
+    xfails = {name for name, fn in module_tests(MANUAL_ALARMS).items() if is_strict_xfail(fn)}
     named = {name for row in rows() for path, name in NODE.findall(row["Status"]) if path == MANUAL_ALARMS}
     assert xfails <= named, sorted(xfails - named)
-    assert named <= set(functions_in(MANUAL_ALARMS)), sorted(named - set(functions_in(MANUAL_ALARMS)))
+    assert named <= set(module_tests(MANUAL_ALARMS)), sorted(named - set(module_tests(MANUAL_ALARMS)))
 
 
 @pytest.mark.parametrize("row_id", ROWS)

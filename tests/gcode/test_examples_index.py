@@ -8,44 +8,21 @@ table no longer add up. Test nodes are found by parsing the test files (no pytes
 
 from __future__ import annotations
 
-import ast
 import functools
 import re
-from pathlib import Path
 
 import pytest
+from doc_tables import NODE, ROOT, module_tests, parse_table
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 
-ROOT = Path(__file__).resolve().parents[2]
 INDEX = ROOT / "docs" / "gsk25i_examples.md"
 EXAMPLES = [f"X{n}" for n in range(1, 81)]
 # Examples whose feature is still being built may be marked pending; none is now (X8, X27 and X61 were the
 # last, with rotary axes, G37 and the G20 ordering).
 MAY_BE_PENDING: set[str] = set()
-NODE = re.compile(r"`(tests/[\w/]+\.py)::(\w+)`")
 CODE = re.compile(r"`(G\d+(?:\.\d)?)`")
-
-
-def parse_table(text: str) -> tuple[list[str], list[dict[str, str]]]:
-    """The examples table: its column names and one dict per row (cells stripped, ``\\|`` unescaped)."""
-    lines = text.splitlines()
-    start = next(i for i, line in enumerate(lines) if line.startswith("| # |"))
-    header = split_row(lines[start])
-    rows = []
-    for line in lines[start + 2:]:
-        if not line.startswith("|"):
-            break
-        cells = split_row(line)
-        assert len(cells) == len(header), f"wrong number of cells: {line}"
-        rows.append(dict(zip(header, cells, strict=True)))
-    return header, rows
-
-
-def split_row(line: str) -> list[str]:
-    cells = re.split(r"(?<!\\)\|", line.strip())[1:-1]
-    return [cell.strip().replace("\\|", "|") for cell in cells]
 
 
 @functools.cache
@@ -57,14 +34,6 @@ def rows() -> list[dict[str, str]]:
 
 def row_of(example: str) -> dict[str, str]:
     return next(row for row in rows() if row["#"] == example)
-
-
-@functools.cache
-def functions_in(path: str) -> frozenset[str]:
-    """Module-level test function names of a test file, by parsing it."""
-    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
-    functions = (node for node in tree.body if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef))
-    return frozenset(node.name for node in functions if node.name.startswith("test_"))
 
 
 def status_kind(status: str) -> str:
@@ -100,7 +69,7 @@ def test_every_referenced_test_exists(example):
     status = row_of(example)["Status"]
     for path, name in NODE.findall(status):
         assert (ROOT / path).is_file(), f"{example}: {path} does not exist"
-        assert name in functions_in(path), f"{example}: {path} has no test function {name}"
+        assert name in module_tests(path), f"{example}: {path} has no test function {name}"
 
 
 def test_no_example_is_left_pending():
@@ -139,4 +108,4 @@ def test_every_new_example_test_is_indexed():
     """Each test in test_manual_examples.py is there for an example, so the table must name it."""
     path = "tests/gcode/test_manual_examples.py"
     named = {name for row in rows() for p, name in NODE.findall(row["Status"]) if p == path}
-    assert functions_in(path) <= named, sorted(functions_in(path) - named)
+    assert set(module_tests(path)) <= named, sorted(set(module_tests(path)) - named)

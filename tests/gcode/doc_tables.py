@@ -1,0 +1,41 @@
+"""Helpers of the tests that check the docs' index tables (worked examples, alarms) against the tests."""
+
+from __future__ import annotations
+
+import ast
+import functools
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+#: A test node as the tables write it: `tests/<path>.py::<function>`.
+NODE = re.compile(r"`(tests/[\w/]+\.py)::(\w+)`")
+
+
+def split_row(line: str) -> list[str]:
+    """The cells of one Markdown table row (``\\|`` inside a cell is a literal bar)."""
+    cells = re.split(r"(?<!\\)\|", line.strip())[1:-1]
+    return [cell.strip().replace("\\|", "|") for cell in cells]
+
+
+def parse_table(text: str) -> tuple[list[str], list[dict[str, str]]]:
+    """The first table whose header starts ``| # |``: its column names and one dict per row."""
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("| # |"))
+    header = split_row(lines[start])
+    table = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        cells = split_row(line)
+        assert len(cells) == len(header), f"wrong number of cells: {line}"
+        table.append(dict(zip(header, cells, strict=True)))
+    return header, table
+
+
+@functools.cache
+def module_tests(path: str) -> dict[str, ast.FunctionDef]:
+    """Module-level test functions of a test file (relative to the repository), by parsing it."""
+    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
+    return {node.name: node for node in tree.body
+            if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}  # fmt: skip
