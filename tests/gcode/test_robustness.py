@@ -18,15 +18,16 @@ WORDS = st.sampled_from([
 ])  # fmt: skip
 
 
-def _check(text: str) -> None:
+def _check(text: str, **options) -> None:
     try:
-        tp = interpret(text)
+        tp = interpret(text, **options)
     except ProgramError as err:
         assert err.code and "\n" not in str(err)
         return
     for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
         assert np.all(np.isfinite(getattr(tp, name))), name
-    assert np.all(np.isfinite(tp.feed[tp.kind != 0]) | (tp.kind == 3))  # rapids and dwells carry NaN feed
+    assert np.all(np.isfinite(tp.feed) | (tp.kind == 0) | (tp.kind == 3))  # rapids and dwells carry NaN feed
+    assert np.all(np.isfinite(tp.rotary_start)) and np.all(np.isfinite(tp.rotary_end))
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -39,6 +40,23 @@ def test_random_characters(text):
 @given(st.lists(WORDS, max_size=30).map(" ".join))
 def test_random_word_soup(text):
     _check(text)
+
+
+# The machine-dependent paths: rotary axis B (gsk25i preset), G37 with a simulated instrument, G31 with a
+# simulated probe, and the travel check.
+MACHINE_WORDS = st.sampled_from([
+    "G00", "G01", "G02", "G90", "G91", "G92", "G53", "G28", "G31", "G37", "G41", "G40", "G20", "G21", "H1",
+    "D1", "B", "B45", "B-3.5", "X", "X10", "Y-5", "Z-2", "Z200", "F300", "F0", "R5", "M30", "\n", "\n",
+])  # fmt: skip
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(MACHINE_WORDS, max_size=30).map(" ".join), st.floats(-300, 300))
+def test_random_machine_programs(text, signal):
+    from cnc_gym.machine import load_machine
+
+    _check(text, machine=load_machine("gsk25i"), skip_signal={"X": signal},
+           tool_measurement={"signal_at": {1: signal}, "decel_mm": 10.0, "band_mm": 5.0})  # fmt: skip
 
 
 @settings(max_examples=200, deadline=None)
