@@ -16,8 +16,12 @@ from cnc_gym.envs.task import ACTION_MODES, RewardWeights, load_task, resolve_re
 from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig, load_machine
 from cnc_gym.motion import ActionError  # one error type for bad actions, env and controller alike
+from cnc_gym.motion import kernel as _kernel
 from cnc_gym.programs import load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
+
+# Columns of the controller's rows (Controller.advance_rows) the step reads.
+_O_X, _O_Z1, _O_SEG = _kernel.O_X, _kernel.O_Z + 1, _kernel.O_SEG
 
 #: Scalar observation entries, in order (the look-ahead block follows them).
 SCALAR_FEATURES = (
@@ -285,8 +289,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._v_ref = self.max_feed_mm_min / 60.0
         self._a_ref = max(self.machine.axis_array("max_accel_mm_s2"))
         self._max_lag_mm = self._v_ref / min(self.machine.axis_array("kv_1_s"))
-        self.lookahead_mm = float(lookahead_mm)
+        horizon = float(lookahead_mm) if isinstance(lookahead_mm, int | float) else math.nan
+        if isinstance(lookahead_mm, bool) or not math.isfinite(horizon) or horizon <= 0:
+            raise ConfigError(f"lookahead_mm must be a positive number, got {lookahead_mm!r}")
+        if (isinstance(lookahead_points, bool) or not isinstance(lookahead_points, int | np.integer)
+                or lookahead_points < 1):  # fmt: skip
+            raise ConfigError(f"lookahead_points must be a positive integer, got {lookahead_points!r}")
+        self.lookahead_mm = horizon
         self.lookahead_points = int(lookahead_points)
+        self._lookahead_horizon = horizon
         self._max_episode_steps_arg = max_episode_steps
 
         # Programs: interpreted once (cached by cnc_gym.programs), controllers built lazily per program.
@@ -450,12 +461,13 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         controller = self.controller
         n = self.ticks_per_step
         if not controller.finished:
+            # The kernel's rows, not a MotionChunk: the step needs only positions and segments.
             if self.action_mode == "override":
-                chunk = controller.advance(n, override=(knob + 1.0) * 0.5 * self.max_override)
+                rows = controller.advance_rows(n, override=(knob + 1.0) * 0.5 * self.max_override)
             else:
-                chunk = controller.advance(n, feed_mm_min=(knob + 1.0) * 0.5 * self.max_feed_mm_min)
-            reference = chunk.position
-            segment = chunk.segment
+                rows = controller.advance_rows(n, feed_mm_min=(knob + 1.0) * 0.5 * self.max_feed_mm_min)
+            reference = rows[:, _O_X:_O_Z1]
+            segment = rows[:, _O_SEG].astype(np.int64)
             if len(reference) < n:  # the program ended inside this step: hold the end point
                 reference = np.concatenate((reference, np.repeat(reference[-1:], n - len(reference), axis=0)))
                 segment = np.concatenate((segment, np.repeat(segment[-1:], n - len(segment))))
@@ -525,7 +537,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         # look-ahead blocks (one numpy ufunc each cost more than the whole call).
         raw = self._raw
         controller = self.controller
-        features = controller.lookahead(self.lookahead_mm, self.lookahead_points)
+        # (speed limit, curvature, turn angle, feed, [distance to stop]) rows; arguments checked in __init__
+        ahead = controller.lookahead_rows(self._lookahead_horizon, self.lookahead_points)
         raw[0] = controller.speed
         raw[1] = controller.accel
         raw[2] = controller.override_applied
@@ -534,10 +547,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         raw[5] = self._last_error_step
         raw[6] = self._last_error_now
         raw[7] = controller.path_s
-        raw[8] = features.distance_to_stop_mm
-        return _assemble_observation(raw, features.speed_limit_mm_s, features.curvature_1_mm,
-                                     features.turn_angle_rad, features.programmed_feed_mm_s,
-                                     self._obs_scale, self._obs_low, self._obs_high)  # fmt: skip
+        raw[8] = ahead[4, 0]
+        return _assemble_observation(raw, ahead[0], ahead[1], ahead[2], ahead[3], self._obs_scale,
+                                     self._obs_low, self._obs_high)  # fmt: skip
 
     def _info(self, step_error_mm: float, cost: float) -> dict[str, Any]:
         controller = self.controller

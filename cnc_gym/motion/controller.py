@@ -216,13 +216,26 @@ class Controller:
         """Run ``n_ticks`` interpolation periods with the override knob at ``override`` (0..max_override)
         or, in 'feed' action mode, with ``feed_mm_min`` commanded instead of F × override (still clamped by
         every limit). ``rapid_override`` (0..1) scales rapids. Returns the reference of these periods."""
+        chunk = _chunk(self.advance_rows(n_ticks, override, rapid_override, feed_mm_min=feed_mm_min))
+        if self._rotary is not None:
+            chunk.rotary = self._rotary_reference(chunk)
+        return chunk
+
+    def advance_rows(
+        self,
+        n_ticks: int,
+        override: float | None = None,
+        rapid_override: float = 1.0,
+        *,
+        feed_mm_min: float | None = None,
+    ) -> np.ndarray:
+        """:meth:`advance` without the :class:`MotionChunk`: the kernel's rows (n, ``kernel.N_OUT``), columns
+        ``kernel.O_T``, ``O_X..O_Z``, ``O_S``, ``O_V``, ``O_A``, ``O_J``, ``O_SEG`` (float), ``O_CUT`` — for
+        hot loops such as the env's step (no rotary reference)."""
         # Fast path for the common call (plain int and floats in range); anything else is validated below.
         if (type(n_ticks) is int and n_ticks >= 0 and feed_mm_min is None and type(override) is float
                 and 0.0 <= override <= self.max_override and rapid_override == 1.0):  # fmt: skip
-            chunk = _chunk(self._advance_raw(n_ticks, override))
-            if self._rotary is not None:
-                chunk.rotary = self._rotary_reference(chunk)
-            return chunk
+            return self._advance_raw(n_ticks, override)
         if isinstance(n_ticks, bool) or not isinstance(n_ticks, int | np.integer) or n_ticks < 0:
             raise ActionError(f"n_ticks must be a non-negative integer, got {n_ticks!r}")
         if feed_mm_min is not None:
@@ -240,10 +253,7 @@ class Controller:
         rapid = _finite(rapid_override, "rapid_override")
         if not 0.0 <= rapid <= 1.0:
             raise ActionError(f"rapid_override must be within 0..1, got {rapid_override!r}")
-        chunk = _chunk(self._advance_raw(int(n_ticks), knob, rapid, mode, cmd))
-        if self._rotary is not None:
-            chunk.rotary = self._rotary_reference(chunk)
-        return chunk
+        return self._advance_raw(int(n_ticks), knob, rapid, mode, cmd)
 
     def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
                      cmd: float = 0.0, stop_when_done: bool = False,
@@ -312,14 +322,19 @@ class Controller:
             raise ActionError(f"horizon_mm must be positive, got {horizon_mm!r}")
         if isinstance(n_points, bool) or not isinstance(n_points, int | np.integer) or n_points < 1:
             raise ActionError(f"n_points must be a positive integer, got {n_points!r}")
+        out = self.lookahead_rows(horizon, int(n_points))
+        return LookaheadFeatures(out[0], out[1], out[2], out[3], float(out[4, 0]))
+
+    def lookahead_rows(self, horizon_mm: float, n_points: int) -> np.ndarray:
+        """:meth:`lookahead` without checks or the record, for hot loops that validated their arguments
+        once: rows speed limit, curvature, turn angle, programmed feed, and [distance to stop, …], (5, n)."""
         lim = self.limits
         k = int(self._st_i[K.K_SEG])
         done = self._st_i[K.K_PHASE] == K.PHASE_DONE
         if self._n_seg and k >= self._n_seg:
             k = self._n_seg - 1
-        out = K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, k, float(self._st_f[K.S_S]),
-                                 bool(done), horizon, int(n_points))  # fmt: skip
-        return LookaheadFeatures(out[0], out[1], out[2], out[3], float(out[4, 0]))
+        return K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, k, float(self._st_f[K.S_S]),
+                                  bool(done), horizon_mm, n_points)  # fmt: skip
 
     # ------------------------------------------------------------------ introspection (tests, planners)
     def segment_limits(self) -> dict[str, np.ndarray]:

@@ -251,6 +251,10 @@ def test_scalar_and_python_float_actions_are_accepted(circle_env):
         ({"programs": []}, "at least one"),
         ({"programs": ["nosuchprogram"]}, "unknown program"),
         ({"machine": "nosuchmachine"}, "unknown machine"),
+        ({"lookahead_mm": 0.0}, "lookahead_mm"),
+        ({"lookahead_mm": float("nan")}, "lookahead_mm"),
+        ({"lookahead_points": 0}, "lookahead_points"),
+        ({"lookahead_points": 2.5}, "lookahead_points"),
     ],
 )
 def test_bad_configuration_is_a_config_error(kwargs, match):
