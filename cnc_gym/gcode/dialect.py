@@ -110,7 +110,8 @@ class Dialect:
     word_steps: Mapping[str, str]
     #: Linear axes of the machine, in order; the toolpath is XYZ.
     axes: str = "XYZ"
-    #: Axis letters the controller knows but this machine model lacks (rejected by name).
+    #: Other axis letters the controller knows: A/B/C are rotary axes where the machine preset has them
+    #: (``rotary_axes``), the rest are rejected by name (``unsupported-axis``).
     other_axes: str = "ABCUVW"
     #: Expression functions: name → (number of arguments, function on floats).
     functions: Mapping[str, tuple[int, Callable[..., float]]] = field(default_factory=dict)
