@@ -33,6 +33,15 @@ def parse_table(text: str) -> tuple[list[str], list[dict[str, str]]]:
     return header, table
 
 
+def check_ids(ids: list[str], expected: list[str]) -> None:
+    """The table has each expected id exactly once, nothing else, in the expected order."""
+    missing = [x for x in expected if x not in ids]
+    doubled = sorted({x for x in ids if ids.count(x) > 1})
+    unknown = [x for x in ids if x not in expected]
+    assert not missing and not doubled and not unknown, (missing, doubled, unknown)
+    assert ids == expected  # in order, so a reader finds them
+
+
 @functools.cache
 def module_tests(path: str) -> dict[str, ast.FunctionDef]:
     """Module-level test functions of a test file (relative to the repository), by parsing it."""

@@ -17,7 +17,7 @@ import functools
 import re
 
 import pytest
-from doc_tables import NODE, ROOT, module_tests, parse_table
+from doc_tables import NODE, ROOT, check_ids, module_tests, parse_table
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
@@ -117,12 +117,7 @@ def our_alarms(row: dict[str, str]) -> set[int]:
 
 
 def test_every_condition_has_exactly_one_row_in_order():
-    ids = [row["#"] for row in rows()]
-    missing = [x for x in ROWS if x not in ids]
-    doubled = sorted({x for x in ids if ids.count(x) > 1})
-    unknown = [x for x in ids if x not in ROWS]
-    assert not missing and not doubled and not unknown, (missing, doubled, unknown)
-    assert ids == ROWS  # in order, so a reader finds them
+    check_ids([row["#"] for row in rows()], ROWS)
 
 
 def test_rows_are_well_formed():

@@ -12,7 +12,7 @@ import functools
 import re
 
 import pytest
-from doc_tables import NODE, ROOT, module_tests, parse_table
+from doc_tables import NODE, ROOT, check_ids, module_tests, parse_table
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
@@ -48,12 +48,7 @@ def status_kind(status: str) -> str:
 
 
 def test_every_example_has_exactly_one_row():
-    numbers = [row["#"] for row in rows()]
-    missing = [x for x in EXAMPLES if x not in numbers]
-    doubled = sorted({x for x in numbers if numbers.count(x) > 1})
-    unknown = [x for x in numbers if x not in EXAMPLES]
-    assert not missing and not doubled and not unknown, (missing, doubled, unknown)
-    assert numbers == EXAMPLES  # in order, so a reader finds them
+    check_ids([row["#"] for row in rows()], EXAMPLES)
 
 
 def test_rows_are_well_formed():
