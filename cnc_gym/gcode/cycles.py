@@ -187,9 +187,7 @@ def drill_steps(code: int, hole: Vec, w: int, initial: float, r_level: float, bo
     if code in (82, 87, 88, 89, 76) and dwell_s > 0:
         steps.append(("dwell", dwell_s))
     if code == 76:
-        if not params.no_m05_before_orient:
-            steps.append(("spindle", 0))
-        steps.append(("orient",))
+        steps.extend(_oriented_stop(params))
         shifted = (hole[0] + shift[0], hole[1] + shift[1], hole[2] + shift[2])
         steps.append(_shift_move(at(shifted, w, bottom), shift_feed))
         steps.append(("rapid", at(shifted, w, retract)))
@@ -219,6 +217,11 @@ def drill_steps(code: int, hole: Vec, w: int, initial: float, r_level: float, bo
     return steps
 
 
+def _oriented_stop(params: CycleParameters) -> list[Step]:
+    """Spindle stop (unless 2000#6 M5B) and oriented stop, before a G76/G87 shift."""
+    return [("orient",)] if params.no_m05_before_orient else [("spindle", 0), ("orient",)]
+
+
 def _shift_move(target: Vec, shift_feed: float | None) -> Step:
     """A G76/G87 shift or shift back: rapid (Q form) or linear at F (SIJ form, L2618)."""
     return ("rapid", target) if shift_feed is None else ("feed", target, shift_feed, False)
@@ -232,9 +235,7 @@ def _back_boring(hole: Vec, w: int, initial: float, r_level: float, top: float, 
     at = _at
     shifted = (hole[0] + shift[0], hole[1] + shift[1], hole[2] + shift[2])
     steps: list[Step] = []
-    if not params.no_m05_before_orient:
-        steps.append(("spindle", 0))
-    steps.append(("orient",))
+    steps.extend(_oriented_stop(params))
     steps.append(_shift_move(at(shifted, w, initial), shift_feed))
     steps.append(("rapid", at(shifted, w, r_level)))
     steps.append(_shift_move(at(hole, w, r_level), shift_feed))
@@ -242,9 +243,7 @@ def _back_boring(hole: Vec, w: int, initial: float, r_level: float, top: float, 
     steps.append(("feed", at(hole, w, top), feed, False))
     if dwell_s > 0:
         steps.append(("dwell", dwell_s))
-    if not params.no_m05_before_orient:
-        steps.append(("spindle", 0))
-    steps.append(("orient",))
+    steps.extend(_oriented_stop(params))
     steps.append(_shift_move(at(shifted, w, top), shift_feed))
     steps.append(("rapid", at(shifted, w, initial)))
     steps.append(_shift_move(at(hole, w, initial), shift_feed))
