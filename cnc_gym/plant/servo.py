@@ -217,7 +217,15 @@ class ServoPlant:
 
     Attributes (all ``(n_envs, 3)``, mm and mm/s): ``position``, ``velocity``, ``following_error``
     (raw reference − actual at the last sample), ``reference`` (last raw reference).
+
+    The plant interface the env relies on (any backend provides it): ``n_envs``, ``reset(position,
+    env=None)``, ``step(reference (n_envs, n, 3)) → actual``, ``settled(tolerance) → (n_envs,) bool``.
+    This backend also has ``compiled_step``: its state arrays (``_state``, ``_history``, ``_velocity``,
+    with :func:`step_env` and :func:`settled_env`) can be stepped inside the env's fused kernel.
     """
+
+    #: The env's fused kernel may step this plant's arrays directly (see the class docstring).
+    compiled_step = True
 
     def __init__(
         self,
@@ -243,6 +251,8 @@ class ServoPlant:
         self._env_models: list[tuple[AxisKey, ...]] | None = None
         self._lifted: dict[int, np.ndarray] = {}
         self._lifted4: dict[int, np.ndarray] = {}  # the same as (3, 1 or n_envs, rows, cols), for the kernel
+        #: Counts changes of the gains (set_kv_scale), for callers that keep values derived from them.
+        self.model_version = 0
         # Internal layout is axis-major so that one batched matmul over axes serves every env.
         self._state = np.zeros((3, _N_STATES, self.n_envs))
         self._history = np.zeros((3, self._n_hist, self.n_envs))  # last raw references
@@ -296,6 +306,7 @@ class ServoPlant:
         if not np.all(np.isfinite(scale)) or np.any(scale <= 0):
             raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
         self._lifted4.clear()
+        self.model_version += 1
         new_scale = self._kv_scale.copy()
         for e in envs:
             new_scale[e] = scale[e]
@@ -344,15 +355,18 @@ class ServoPlant:
         return _lifted_axes(models, self._n_hist, self.filter_samples, n_ticks)
 
     # ------------------------------------------------------------------ public API
-    def reset(self, position: np.ndarray) -> None:
-        """Put every axis at rest at ``position`` ((n_envs, 3) or (3,)); the reference history too."""
-        pos = np.broadcast_to(np.asarray(position, dtype=float), (self.n_envs, 3))
+    def reset(self, position: np.ndarray, env: int | None = None) -> None:
+        """Put every axis at rest at ``position`` ((n_envs, 3) or (3,)); the reference history too. With
+        ``env``, only that env (``position`` (3,))."""
+        envs = slice(None) if env is None else slice(int(env), int(env) + 1)
+        n = self.n_envs if env is None else 1
+        pos = np.broadcast_to(np.asarray(position, dtype=float), (n, 3))
         if not np.all(np.isfinite(pos)):
             raise ValueError("plant reset position must be finite")
-        self._state[:] = 0.0
-        self._state[:, 0, :] = pos.T
-        self._history[:] = pos.T[:, None, :]
-        self._velocity[:] = 0.0
+        self._state[:, :, envs] = 0.0
+        self._state[:, 0, envs] = pos.T
+        self._history[:, :, envs] = pos.T[:, None, :]
+        self._velocity[:, envs] = 0.0
 
     def step(self, reference: np.ndarray) -> np.ndarray:
         """Advance by one sample per reference row and return the actual positions, same shape.
