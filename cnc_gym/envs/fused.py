@@ -520,6 +520,17 @@ def _run_parallel(bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, act
 
 
 @njit(cache=True, nogil=True)
+def _clip_actions(actions, out) -> bool:
+    """``out`` = ``actions`` (N,) clipped to [-1, 1]; False (``out`` untouched) if one is not finite."""
+    for e in range(actions.shape[0]):
+        if not math.isfinite(actions[e]):
+            return False
+    for e in range(actions.shape[0]):
+        out[e] = min(max(actions[e], -1.0), 1.0)
+    return True
+
+
+@njit(cache=True, nogil=True)
 def _finish_modular(e, bank_f, bank_i, sf, si, settled, reference, actual, error, hints, out, s_before, obs,
                     work_f) -> None:  # fmt: skip
     _, _, _, _, _, ahead = _work(work_f, e, bank_i[CI_TICKS], bank_i[CI_WINDOW], bank_i[CI_POINTS])
@@ -534,8 +545,10 @@ def _reset_modular(e, bank_f, bank_i, sf, si, obs, work_f) -> None:
 
 
 # ------------------------------------------------------------------------------------------ the batch
-#: Batches of at least this many envs step in parallel threads by default (numba's thread pool).
+#: Batches of at least this many envs step in numba's threads by default, where numba has at least
+#: PARALLEL_MIN_THREADS threads (on two cores, shared, the threads' hand-offs cost more than they save).
 PARALLEL_MIN_ENVS = 16
+PARALLEL_MIN_THREADS = 4
 
 
 class FeedrateBatch:
@@ -544,8 +557,8 @@ class FeedrateBatch:
     ``config`` keys: ``ticks_per_step``, ``tolerance_mm``, ``in_position_mm``, ``max_override``,
     ``max_feed_mm_min``, ``lookahead_mm``, ``lookahead_points``, ``feed_mode`` (bool), ``window_back_mm``.
     ``parallel``: step the envs in numba's threads (None: from :data:`PARALLEL_MIN_ENVS` envs on, when
-    numba has more than one thread). ``plant``: the plant backend (default: the LTI :class:`ServoPlant`;
-    one whose ``compiled_step`` is False runs the modular step).
+    numba has at least :data:`PARALLEL_MIN_THREADS` threads). ``plant``: the plant backend (default: the
+    LTI :class:`ServoPlant`; one whose ``compiled_step`` is False runs the modular step).
     """
 
     def __init__(self, n_envs: int, machine: MachineConfig, config: dict[str, Any], obs_spec: ObservationSpec,
@@ -571,7 +584,8 @@ class FeedrateBatch:
         self.plant = ServoPlant(machine, n_envs=self.n_envs) if plant is None else plant
         self.fused = bool(getattr(self.plant, "compiled_step", False))
         if parallel is None:
-            parallel = self.n_envs >= PARALLEL_MIN_ENVS and numba.config.NUMBA_NUM_THREADS > 1
+            threads = numba.config.NUMBA_NUM_THREADS
+            parallel = self.n_envs >= PARALLEL_MIN_ENVS and threads >= PARALLEL_MIN_THREADS
         self._run = _run_parallel if parallel else _run_serial
         self.parallel = bool(parallel)
         # State (see the layout constants) and scratch.
@@ -584,6 +598,7 @@ class FeedrateBatch:
         self.work_i = np.zeros((self.n_envs, self.ticks), dtype=np.int64)
         self._window, self._points = window, points
         self._controllers: list[dict[int, Controller]] = [{} for _ in range(self.n_envs)]
+        self._names = np.empty(0, dtype=object)  # program names by bank index, for the infos
 
     # ------------------------------------------------------------------------------ programs
     def add_program(self, name: str, toolpath: Toolpath, time_fraction: float, max_episode_steps: int) -> int:
@@ -623,6 +638,11 @@ class FeedrateBatch:
             self._call(stepping=False)
         else:
             self._modular(np.asarray(envs, dtype=np.int64))
+
+    def set_actions(self, actions: np.ndarray) -> bool:
+        """Put ``actions`` ((N,) float64) clipped to [-1, 1] in :attr:`actions`; False (nothing changed) if
+        one is not finite."""
+        return bool(_clip_actions(actions, self.actions))
 
     def step(self, actions: np.ndarray | None = None) -> None:
         """Step every env (those flagged with I_RESET are reset instead) with ``actions`` (N,), knob values
@@ -743,33 +763,75 @@ class FeedrateBatch:
 
     def infos(self) -> dict[str, np.ndarray]:
         """Every env's info as one (N,) array per key (``program`` an object array)."""
-        f = self.state_f.copy()
-        i = self.state_i.copy()
-        samples = i[:, I_SAMPLES]
-        rms = np.sqrt(np.divide(f[:, F_ERROR_SQ_SUM], samples, out=np.zeros(self.n_envs), where=samples > 0))
-        names = np.empty(len(self.bank.programs), dtype=object)
-        names[:] = [p.name for p in self.bank.programs]
-        return {
-            "cycle_time_s": i[:, I_TICKS] * self.period_s,
-            "contour_error_mm": f[:, F_SIGNAL + SIG_ERROR_STEP],
-            "contour_error_max_mm": f[:, F_ERROR_MAX],
-            "contour_error_rms_mm": rms,
-            "tolerance_mm": np.full(self.n_envs, self.config["tolerance_mm"]),
-            "violations": i[:, I_VIOLATIONS],
-            "violation_length_mm": f[:, F_VIOLATION_LENGTH],
-            "violation_time_s": f[:, F_VIOLATION_TIME],
-            "cost": f[:, F_SIGNAL + SIG_VIOLATED],
-            "line": i[:, I_LINE],
-            "override": f[:, F_SIGNAL + SIG_OVERRIDE],
-            "feed_mm_min": f[:, F_SIGNAL + SIG_SPEED] * 60.0,
-            "path_s": f[:, F_CTRL + K.S_S],
-            "progress": f[:, F_SIGNAL + SIG_PROGRESS],
-            "program": names[i[:, I_PROGRAM]],
-            "steps": i[:, I_STEPS],
-        }
+        return self.gather()[4]
+
+    def gather(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray], int]:
+        """The last step's observations, rewards, terminated and truncated flags, infos (as
+        :meth:`infos`) and the number of envs whose episode ended: fresh arrays, from one compiled call."""
+        obs, rewards, terminated, truncated, info_f, info_i, ended = _gather(
+            self.state_f, self.state_i, self.observations, self.period_s, self.config["tolerance_mm"])
+        infos = dict(zip(_INFO_FLOAT_KEYS, info_f, strict=True))
+        infos.update(zip(_INFO_INT_KEYS, info_i, strict=True))
+        if len(self._names) != len(self.bank.programs):
+            self._names = np.array([p.name for p in self.bank.programs] + [None], dtype=object)[:-1]
+        infos["program"] = self._names[self.state_i[:, I_PROGRAM]]
+        return obs, rewards, terminated, truncated, infos, int(ended)
+
+
+_INFO_FLOAT_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm",
+                    "tolerance_mm", "violation_length_mm", "violation_time_s", "cost", "override",
+                    "feed_mm_min", "path_s", "progress")  # fmt: skip
+_INFO_INT_KEYS = ("violations", "line", "steps")
+
+
+@njit(cache=True, nogil=True)
+def _gather(sf, si, observations, period_s, tolerance_mm):
+    """Fresh output arrays of a batch step (see FeedrateBatch.gather): info rows in _INFO_FLOAT_KEYS and
+    _INFO_INT_KEYS order, one column per env."""
+    n = sf.shape[0]
+    obs = observations.copy()
+    rewards = np.empty(n)
+    terminated = np.empty(n, dtype=np.bool_)
+    truncated = np.empty(n, dtype=np.bool_)
+    info_f = np.empty((len(_INFO_FLOAT_KEYS), n))
+    info_i = np.empty((len(_INFO_INT_KEYS), n), dtype=np.int64)
+    ended = 0
+    for e in range(n):
+        rewards[e] = sf[e, F_REWARD]
+        terminated[e] = si[e, I_TERMINATED] != 0
+        truncated[e] = si[e, I_TRUNCATED] != 0
+        ended += terminated[e] or truncated[e]
+        samples = si[e, I_SAMPLES]
+        info_f[0, e] = si[e, I_TICKS] * period_s
+        info_f[1, e] = sf[e, F_SIGNAL + SIG_ERROR_STEP]
+        info_f[2, e] = sf[e, F_ERROR_MAX]
+        info_f[3, e] = math.sqrt(sf[e, F_ERROR_SQ_SUM] / samples) if samples else 0.0
+        info_f[4, e] = tolerance_mm
+        info_f[5, e] = sf[e, F_VIOLATION_LENGTH]
+        info_f[6, e] = sf[e, F_VIOLATION_TIME]
+        info_f[7, e] = sf[e, F_SIGNAL + SIG_VIOLATED]
+        info_f[8, e] = sf[e, F_SIGNAL + SIG_OVERRIDE]
+        info_f[9, e] = sf[e, F_SIGNAL + SIG_SPEED] * 60.0
+        info_f[10, e] = sf[e, F_CTRL + K.S_S]
+        info_f[11, e] = sf[e, F_SIGNAL + SIG_PROGRESS]
+        info_i[0, e] = si[e, I_VIOLATIONS]
+        info_i[1, e] = si[e, I_LINE]
+        info_i[2, e] = si[e, I_STEPS]
+    return obs, rewards, terminated, truncated, info_f, info_i, ended
 
 
 #: Info keys, in the order of :meth:`FeedrateBatch.info`.
 INFO_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm",
              "tolerance_mm", "violations", "violation_length_mm", "violation_time_s", "cost", "line",
              "override", "feed_mm_min", "path_s", "progress", "program", "steps")  # fmt: skip
+
+
+def _dependencies() -> None:
+    from cnc_gym.numba_cache import refresh_on_change
+    from cnc_gym.plant import servo
+    from cnc_gym.toolpath import nearest
+
+    refresh_on_change(__name__, [K, servo, C, nearest])
+
+
+_dependencies()  # the compiled step links the controller, plant and meter kernels: drop it when they change

@@ -3,7 +3,7 @@
 ``gymnasium.vector.SyncVectorEnv`` over N ``gymnasium.make`` copies steps them one by one, each through
 three wrappers, and merges their info dicts key by key. This class runs the N episodes in one
 :class:`~cnc_gym.envs.fused.FeedrateBatch`: one numba call per step moves every env (in numba's threads
-from 16 envs on, where numba has more than one), and the infos are read from the batch's state arrays.
+from 16 envs on, where numba has at least four), and the infos are read from the batch's state arrays.
 Semantics are those of ``SyncVectorEnv`` in its default next-step autoreset mode, so the two give the
 same numbers: the step after an episode ends resets that env (its program drawn with its own generator)
 and returns its first observation, reward 0 and no termination. ``reset(seed=s)`` seeds env i with
@@ -29,14 +29,14 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from cnc_gym.envs.feedrate import FeedrateEnv
-from cnc_gym.envs.fused import F_REWARD, I_PROGRAM, I_RESET, I_TERMINATED, I_TRUNCATED
+from cnc_gym.envs.fused import I_PROGRAM, I_RESET
 from cnc_gym.errors import ConfigError
 from cnc_gym.motion import ActionError
 
 
 class FeedrateVectorEnv(gym.vector.VectorEnv):
     """``num_envs`` Feedrate-v0 episodes (keyword arguments as :class:`FeedrateEnv`'s). ``parallel``: step
-    them in numba's threads (default: from 16 envs on, when numba has more than one thread)."""
+    them in numba's threads (default: from 16 envs on, when numba has at least 4 threads)."""
 
     metadata: ClassVar[dict[str, Any]] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
@@ -59,6 +59,7 @@ class FeedrateVectorEnv(gym.vector.VectorEnv):
         self._mask = np.ones(num_envs, dtype=bool)
         self._mask.flags.writeable = False  # shared by every "_key" entry
         self._started = False
+        self._ended = 0  # envs whose episode ended on the last step (reset on the next)
 
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
@@ -92,17 +93,17 @@ class FeedrateVectorEnv(gym.vector.VectorEnv):
             programs.append(self.task.program_slot(self.batch, pick))
         self.batch.reset(envs, programs)
         self._autoreset[envs] = False
+        self._ended = int(np.count_nonzero(self._autoreset))
         self._started = True
 
     def set_actions(self, actions: Any) -> None:
         """Check ``actions`` ((N, 1) or (N,), finite) and put them, clipped to [-1, 1], in the batch."""
-        knobs = np.asarray(actions, dtype=np.float64)
-        if knobs.shape not in ((self.num_envs, 1), (self.num_envs,)):
+        knobs = actions if type(actions) is np.ndarray and actions.dtype == np.float64 else np.asarray(
+            actions, dtype=np.float64)  # fmt: skip
+        if knobs.shape != (self.num_envs, 1) and knobs.shape != (self.num_envs,):
             raise ValueError(f"actions must have shape ({self.num_envs}, 1), got {knobs.shape}")
-        knobs = knobs.reshape(self.num_envs)
-        if not np.all(np.isfinite(knobs)):
+        if not self.batch.set_actions(knobs.reshape(self.num_envs)):
             raise ActionError(f"actions must be finite, got {actions!r}")
-        np.clip(knobs, -1.0, 1.0, out=self.batch.actions)
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         if not self._started:
@@ -110,20 +111,22 @@ class FeedrateVectorEnv(gym.vector.VectorEnv):
         batch = self.batch
         self.set_actions(actions)
         # Next-step autoreset: the envs whose episode ended last step are reset in this call instead.
-        for i in np.flatnonzero(self._autoreset):
-            batch.state_i[i, I_RESET] = 1
-            slot = self.task.program_slot(batch, self.task.draw_program(self._rngs[i]))
-            batch.state_i[i, I_PROGRAM] = slot
+        if self._ended:
+            for i in np.flatnonzero(self._autoreset):
+                batch.state_i[i, I_RESET] = 1
+                slot = self.task.program_slot(batch, self.task.draw_program(self._rngs[i]))
+                batch.state_i[i, I_PROGRAM] = slot
         batch.step()
-        rewards = batch.state_f[:, F_REWARD].copy()
-        terminated = batch.state_i[:, I_TERMINATED].astype(bool)
-        truncated = batch.state_i[:, I_TRUNCATED].astype(bool)
-        np.logical_or(terminated, truncated, out=self._autoreset)
-        return batch.observations.copy(), rewards, terminated, truncated, self._infos()
+        obs, rewards, terminated, truncated, infos, self._ended = batch.gather()
+        if self._ended:
+            np.logical_or(terminated, truncated, out=self._autoreset)
+        return obs, rewards, terminated, truncated, self._with_masks(infos)
 
     def _infos(self) -> dict[str, Any]:
-        """The batch's infos, with Gymnasium's ``_key`` masks."""
-        infos = self.batch.infos()
+        return self._with_masks(self.batch.infos())
+
+    def _with_masks(self, infos: dict[str, np.ndarray]) -> dict[str, Any]:
+        """Gymnasium's ``_key`` masks beside every key."""
         out: dict[str, Any] = {}
         for key, values in infos.items():
             out[key] = values

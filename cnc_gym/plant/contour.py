@@ -333,3 +333,13 @@ def pack_contour(tp: Toolpath, window_back: int, window_back_mm: float) -> Conto
         first = np.minimum(first, by_mm)
     return ContourTables(seg_class, axes.reshape(n, 3), np.ascontiguousarray(geometry),
                          np.ascontiguousarray(first, dtype=np.int64), nurbs_f, nurbs_i)  # fmt: skip
+
+
+def _dependencies() -> None:
+    from cnc_gym.numba_cache import refresh_on_change
+    from cnc_gym.toolpath import nearest
+
+    refresh_on_change(__name__, [nearest])
+
+
+_dependencies()  # the meter links the compiled helix and NURBS searches: drop it when they change
