@@ -15,7 +15,6 @@ traceback.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 
@@ -70,7 +69,9 @@ def cmd_trace(args: argparse.Namespace) -> int:
                               block_skip=frozenset(args.block_skip),
                               program_dir=args.program_dir)  # fmt: skip
     # The whole program is interpreted before anything is printed: an error leaves stdout empty.
-    text = "".join(json.dumps(record) + "\n" for record in toolpath.to_records())
+    from cnc_gym.toolpath.records import toolpath_jsonl
+
+    text = toolpath_jsonl(toolpath)
     try:
         sys.stdout.write(text)
         sys.stdout.flush()
