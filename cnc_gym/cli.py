@@ -2,10 +2,12 @@
 
     cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...] [--program-dir DIR]
     cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png] [--no-progress]
+    cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 ``trace`` prints the canonical tool path as JSON Lines (the contract in DESIGN.md: ``kind``, ``line``,
 ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run`` simulates the
-program through controller and plant (implemented in :mod:`cnc_gym.runner`).
+program through controller and plant (implemented in :mod:`cnc_gym.runner`). ``bench`` benchmarks
+policies on a suite or your programs (:mod:`cnc_gym.benchmark.cli`).
 
 Every error a user can cause ends the command with exit status 2 and one line on stderr (for a program:
 ``FILE:LINE: message [code]``); nothing is printed on stdout once an error has occurred, and never a
@@ -48,6 +50,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--plot", metavar="FILE.png", help="save a plot of path, contour error and feed")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.set_defaults(func=cmd_run)
+
+    from cnc_gym.benchmark.cli import register as register_bench  # all bench code: cnc_gym/benchmark/
+
+    register_bench(sub)
     return parser
 
 
