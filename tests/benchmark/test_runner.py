@@ -137,12 +137,9 @@ class _Knob:
 
     def act(self, observation, info):
         self.step += 1
-        left = self.step
-        for steps, override in self.pieces:
-            if left <= steps:
-                break
-            left -= steps
-        return np.array([override - 1.0], dtype=np.float32)
+        ends = np.cumsum([steps for steps, _ in self.pieces])
+        piece = min(int(np.searchsorted(ends, self.step)), len(self.pieces) - 1)
+        return np.array([self.pieces[piece][1] - 1.0], dtype=np.float32)
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -43,7 +43,8 @@ def test_split_sizes_and_held_out_family(suite):
 def test_every_file_matches_the_manifest_and_the_suite_hash(suite):
     for e in suite.entries:
         assert hashlib.sha256(e.path.read_bytes()).hexdigest() == e.sha256, e.name
-    programs = [{"name": e.name, "split": e.split, "family": e.family, "sha256": e.sha256} for e in suite.entries]
+    programs = [{"name": e.name, "split": e.split, "family": e.family, "sha256": e.sha256}
+                for e in suite.entries]
     assert suite_digest(programs) == suite.sha256
 
 
@@ -57,8 +58,10 @@ def test_tiers_come_from_the_measured_properties(suite):
     tiers = {e.tier for e in suite.programs("test")}
     assert tiers == {"easy", "medium", "hard"}
     # The rule itself: points per property at the documented thresholds.
-    easy = {"max_turn_deg": 10.0, "median_segment_mm": 5.0, "max_curvature_1_mm": 0.01, "max_feed_mm_min": 1000}
-    hard = {"max_turn_deg": 150.0, "median_segment_mm": 0.1, "max_curvature_1_mm": 2.0, "max_feed_mm_min": 5000}
+    easy = {"max_turn_deg": 10.0, "median_segment_mm": 5.0, "max_curvature_1_mm": 0.01,
+            "max_feed_mm_min": 1000}
+    hard = {"max_turn_deg": 150.0, "median_segment_mm": 0.1, "max_curvature_1_mm": 2.0,
+            "max_feed_mm_min": 5000}
     assert tier_of(easy) == "easy" and tier_of(hard) == "hard"
     assert set(TIER_THRESHOLDS) == set(easy)
 
