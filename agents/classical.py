@@ -54,6 +54,7 @@ from numba import njit
 
 from agents.base import override_action, require_override_mode
 from cnc_gym.machine import MachineConfig
+from cnc_gym.motion import kernel as K
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, Toolpath
 
 # Speeds are searched in mm/s up to this bound (far above any cutting feed).
@@ -314,10 +315,39 @@ def _hold_caps(node_s: np.ndarray, node_cap: np.ndarray, where: np.ndarray, cap:
             k += 1
 
 
-def _tangents(toolpath: Toolpath, s: np.ndarray, side: float) -> np.ndarray:
-    """Unit tangent just after (side > 0) or just before (side < 0) arc length ``s``."""
-    eps = 1e-7 * max(1.0, float(toolpath.total_length))
-    return toolpath.evaluate(np.clip(s + side * eps, 0.0, toolpath.total_length))[1]
+@njit(cache=True)
+def _piece_tangents(seg_f: np.ndarray, seg_i: np.ndarray,
+                    curve_f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Unit tangent at the start and at the end of every motion piece of the controller's tables: chords
+    of lines and rapids, arcs and helices from their angles, NURBS pieces from their sample table."""
+    n = seg_f.shape[0]
+    t0 = np.zeros((n, 3))
+    t1 = np.zeros((n, 3))
+    for k in range(n):
+        if seg_i[k, K.I_TABLE] >= 0:  # NURBS piece: first and last sample of its table
+            first = seg_i[k, K.I_TABLE]
+            last = first + seg_i[k, K.I_NSAMP] - 1
+            for a in range(3):
+                t0[k, a] = curve_f[first, 3 + a]
+                t1[k, a] = curve_f[last, 3 + a]
+        elif seg_i[k, K.I_KIND] == K.KIND_ARC:
+            r, sweep, rise = seg_f[k, K.F_RADIUS], seg_f[k, K.F_SWEEP], seg_f[k, K.F_RISE]
+            u, v, w = seg_i[k, K.I_PU], seg_i[k, K.I_PV], seg_i[k, K.I_PW]
+            theta = seg_f[k, K.F_ANG0]
+            du, dv = -r * math.sin(theta) * sweep, r * math.cos(theta) * sweep
+            norm = math.sqrt(du * du + dv * dv + rise * rise)
+            t0[k, u], t0[k, v], t0[k, w] = du / norm, dv / norm, rise / norm
+            theta += sweep
+            du, dv = -r * math.sin(theta) * sweep, r * math.cos(theta) * sweep
+            t1[k, u], t1[k, v], t1[k, w] = du / norm, dv / norm, rise / norm
+        else:
+            dx = seg_f[k, K.F_EX] - seg_f[k, K.F_SX]
+            dy = seg_f[k, K.F_EY] - seg_f[k, K.F_SY]
+            dz = seg_f[k, K.F_EZ] - seg_f[k, K.F_SZ]
+            norm = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-300)
+            t0[k, 0], t0[k, 1], t0[k, 2] = dx / norm, dy / norm, dz / norm
+            t1[k] = t0[k]
+    return t0, t1
 
 
 def _signed_turn(u_in: np.ndarray, u_out: np.ndarray) -> np.ndarray:
@@ -335,7 +365,6 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: Any = N
     ``limits``: the controller's static tables (:func:`cnc_gym.motion.limits.build_limits`), computed
     here when not given (an env's controller already holds them).
     """
-    from cnc_gym.motion import kernel as K
     from cnc_gym.motion.limits import build_limits
 
     lim = limits if limits is not None else build_limits(toolpath, machine)
@@ -377,7 +406,8 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: Any = N
     point_cap = np.full(n + 1, np.inf)
     turn = np.zeros(n + 1)
     if len(q):
-        u_in, u_out = _tangents(toolpath, pt_f[q, K.P_S], -1.0), _tangents(toolpath, pt_f[q, K.P_S], +1.0)
+        t_start, t_end = _piece_tangents(seg_f, seg_i, lim.curve_f)
+        u_in, u_out = t_end[q - 1], t_start[q]
         turn[q] = _signed_turn(u_in, u_out)
         corner = np.abs(turn[q]) >= math.radians(CORNER_DEG)
         c = corner_error_per_speed(tables, u_in[corner], u_out[corner])
