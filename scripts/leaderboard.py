@@ -4,6 +4,7 @@
     .venv/bin/python scripts/leaderboard.py docs/results/cnc-bench-v1-test.jsonl [more.jsonl ...]
     .venv/bin/python scripts/leaderboard.py docs/results/cnc-bench-v1-test.jsonl --check   # CI: up to date?
     .venv/bin/python scripts/leaderboard.py RECORDS.jsonl --print                          # to stdout only
+    .venv/bin/python scripts/leaderboard.py RECORDS.jsonl --plot docs/images/benchmark     # and the plots
 
 Records from several files (people, runs, an RL agent's ``cnc-gym bench --policy model.zip --json``)
 merge into one table when they share suite, split and machine. See cnc_gym/benchmark/leaderboard.py.
@@ -28,12 +29,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--doc", default=str(DOC), help="document to update (default docs/benchmark.md)")
     parser.add_argument("--check", action="store_true", help="exit 1 if the document's table is out of date")
     parser.add_argument("--print", action="store_true", help="print the table, touch no file")
+    parser.add_argument("--plot", metavar="DIR", help="also write pareto.png and families.png into DIR")
     args = parser.parse_args(argv)
     try:
         from cnc_gym.benchmark.leaderboard import render_markdown, replace_between_markers, update_document
         from cnc_gym.benchmark.runner import read_jsonl
 
-        table = render_markdown(read_jsonl(args.records), args.records)
+        records = read_jsonl(args.records)
+        table = render_markdown(records, args.records)
+        if args.plot:
+            from cnc_gym.benchmark.plots import write_plots
+
+            first = records[0]
+            write_plots(records, args.plot, title=f"{first['suite']} {first['split']}")
         if args.print:
             print(table, end="")
             return 0
