@@ -277,16 +277,40 @@ def arc_caps(tables: ServoTables, radius_mm: np.ndarray, plane: np.ndarray, erro
 
 def corner_error_per_speed(tables: ServoTables, u_in: np.ndarray, u_out: np.ndarray) -> np.ndarray:
     """c(u_in, u_out) per junction (mm per mm/s): the corner model of the module docstring, (m,)."""
-    t = tables.ramp_t[None, :, None]  # (1, k, 1)
-    e = tables.ramp_error.T[None, :, :]  # (1, k, 3)
-    lag = tables.lag_s[None, None, :]
-    a, b = u_in[:, None, :], u_out[:, None, :]
-    y = t * b - lag * a - (b - a) * e  # actual point per unit speed, corner at the origin (m, k, 3)
-    along_out = np.maximum(np.sum(y * b, axis=2, keepdims=True), 0.0)
-    d_out = np.linalg.norm(y - along_out * b, axis=2)
-    along_in = np.minimum(np.sum(y * a, axis=2, keepdims=True), 0.0)
-    d_in = np.linalg.norm(y - along_in * a, axis=2)
-    return np.max(np.minimum(d_in, d_out), axis=1)
+    return _corner_errors(np.ascontiguousarray(u_in, dtype=np.float64),
+                          np.ascontiguousarray(u_out, dtype=np.float64), tables.ramp_t,
+                          np.ascontiguousarray(tables.ramp_error.T), tables.lag_s)  # fmt: skip
+
+
+@njit(cache=True)
+def _corner_errors(u_in: np.ndarray, u_out: np.ndarray, t: np.ndarray, e: np.ndarray,
+                   lag: np.ndarray) -> np.ndarray:  # fmt: skip
+    """For each corner, max over t of the distance of y(t) = t·b − lag∘a − (b − a)∘E(t) from the two legs
+    {−α·a} and {β·b} (α, β ≥ 0): the actual point per unit speed, the corner at the origin."""
+    m = u_in.shape[0]
+    out = np.zeros(m)
+    y = np.zeros(3)
+    for j in range(m):
+        worst = 0.0
+        for k in range(t.shape[0]):
+            along_in = 0.0
+            along_out = 0.0
+            for c in range(3):
+                y[c] = t[k] * u_out[j, c] - lag[c] * u_in[j, c] - (u_out[j, c] - u_in[j, c]) * e[k, c]
+                along_in += y[c] * u_in[j, c]
+                along_out += y[c] * u_out[j, c]
+            along_in = min(along_in, 0.0)  # nearest point of the incoming leg
+            along_out = max(along_out, 0.0)  # ... and of the outgoing leg
+            d_in = 0.0
+            d_out = 0.0
+            for c in range(3):
+                d_in += (y[c] - along_in * u_in[j, c]) ** 2
+                d_out += (y[c] - along_out * u_out[j, c]) ** 2
+            d = math.sqrt(min(d_in, d_out))
+            if d > worst:
+                worst = d
+        out[j] = worst
+    return out
 
 
 # --------------------------------------------------------------------------------------------- planner
@@ -298,21 +322,6 @@ NODE_SPACING_MM = 0.5
 
 #: How long after a corner its cap holds, in loop time constants 1/Kv (the transient's peak comes later).
 HOLD_TIME_CONSTANTS = 3.0
-
-
-@njit(cache=True)
-def _hold_caps(node_s: np.ndarray, node_cap: np.ndarray, where: np.ndarray, cap: np.ndarray,
-               distance: np.ndarray) -> None:  # fmt: skip
-    """node_cap = min(node_cap, cap[i]) on nodes in [where[i], where[i] + distance[i]] (both sorted)."""
-    start = 0
-    for i in range(len(where)):
-        while start < len(node_s) and node_s[start] < where[i] - 1e-9:
-            start += 1
-        k = start
-        while k < len(node_s) and node_s[k] <= where[i] + distance[i]:
-            if cap[i] < node_cap[k]:
-                node_cap[k] = cap[i]
-            k += 1
 
 
 @njit(cache=True)
@@ -413,51 +422,99 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: Any = N
         c = corner_error_per_speed(tables, u_in[corner], u_out[corner])
         point_cap[q[corner]] = np.where(c > 1e-12, target / np.maximum(c, 1e-12), _SPEED_CEILING_MM_S)
         turn[q[corner]] = 0.0  # corners are the corner model's: leave them out of the chain curvature
-    # ---- schedule points: every junction, plus points inside moves longer than NODE_SPACING_MM
-    extra = np.maximum(np.ceil(length / NODE_SPACING_MM).astype(np.int64) - 1, 0)
-    rows = np.repeat(np.arange(n), extra + 1)
-    j = np.arange(len(rows)) - np.repeat(np.cumsum(extra + 1) - (extra + 1), extra + 1)
-    node_s = np.concatenate((s0[rows] + j * length[rows] / (extra[rows] + 1), [s0[-1] + length[-1]]))
-    node_piece = np.concatenate((rows, [n - 1]))
-    node_cap = piece_cap[node_piece].copy()
-    at_point = np.concatenate((j == 0, [True]))
-    point_of_node = np.where(at_point, np.concatenate((rows, [n])), -1)
-    node_cap[at_point] = np.minimum(node_cap[at_point], point_cap[point_of_node[at_point]])
-    before = np.maximum(point_of_node - 1, 0)
-    node_cap[at_point] = np.minimum(node_cap[at_point], np.where(point_of_node[at_point] > 0,
-                                                                 piece_cap[before[at_point]], np.inf))
-    # ---- a corner's error peaks after the reference has turned (the servo's transient): hold its cap
-    # over the distance covered in HOLD_TIME_CONSTANTS loop time constants after it
-    corners = np.flatnonzero(np.isfinite(point_cap))
-    if len(corners):
-        hold_s = HOLD_TIME_CONSTANTS / float(np.min(np.array(machine.axis_array("kv_1_s"))))
-        _hold_caps(node_s, node_cap, pt_f[corners, K.P_S], point_cap[corners], point_cap[corners] * hold_s)
-    # ---- chain curvature: net turn over a window around each node, arc model at that curvature
-    seg_len = np.concatenate(([length[0]], np.maximum(length[:-1], length[1:]), [length[-1]]))
-    window = np.maximum(1.0, 2.5 * seg_len[np.minimum(np.maximum(point_of_node, 0), n)])
-    window = np.where(at_point, window, np.maximum(1.0, 2.5 * length[node_piece]))
-    cum = np.cumsum(turn)  # net turn up to and including each point
-    point_s = pt_f[:, K.P_S]
-    lo = np.searchsorted(point_s, node_s - window / 2, side="left") - 1
-    hi = np.searchsorted(point_s, node_s + window / 2, side="right") - 1
-    net = np.abs(cum[np.clip(hi, 0, n)] - np.where(lo >= 0, cum[np.clip(lo, 0, n)], 0.0))
-    chain = (net > 1e-9) & cutting[node_piece]
-    if np.any(chain):
-        kappa = net[chain] / window[chain]
-        flat = np.zeros(int(chain.sum()), dtype=np.int64)  # chains: the XY plane's arc model
-        node_cap[chain] = np.minimum(node_cap[chain], arc_caps(tables, 1.0 / kappa, flat, target))
-    # ---- reachable speeds, then the knob
-    node_feed = feed[node_piece]
+    # ---- schedule points, corner holds, chain curvature, the scan and the knob: one compiled pass
+    hold_s = HOLD_TIME_CONSTANTS / float(min(machine.axis_array("kv_1_s")))
     accel = float(min(machine.axis_array("max_accel_mm_s2")))
     jerk = float(min(machine.axis_array("max_jerk_mm_s3")))
-    slew = float(ctl.override_slew_per_s) * node_feed
-    accel_eff = np.maximum(np.where(node_feed > 0, np.minimum(accel, slew), accel), 1e-3)
-    finite = np.where(np.isfinite(node_cap), node_cap, _SPEED_CEILING_MM_S)
-    speed = bidirectional_scan(node_s, finite, accel_eff, jerk)
-    override = np.full(len(node_s), top)
-    fed = cutting[node_piece] & (node_feed > 0)
-    override[fed] = np.clip(speed[fed] / node_feed[fed], 0.0, top)
+    node_s, node_cap, speed, override = _schedule_nodes(
+        s0, length, cutting, feed, piece_cap, point_cap, turn, np.ascontiguousarray(pt_f[:, K.P_S]), hold_s,
+        tables.arc_omega, tables.arc_error[0], target, top, accel, jerk, float(ctl.override_slew_per_s))
     return Schedule(s=node_s, cap_mm_s=node_cap, speed_mm_s=speed, override=override)
+
+
+@njit(cache=True)
+def _schedule_nodes(s0, length, cutting, feed, piece_cap, point_cap, turn, point_s, hold_s, arc_omega,
+                    arc_table, target, top, accel, jerk, slew_per_s):  # fmt: skip
+    """Schedule points (every junction, and inside moves every NODE_SPACING_MM at most) with their caps:
+    the move's cap, the junction's corner cap (held over ``cap·hold_s`` of travel after it), the chain
+    curvature's arc cap (XY plane model); then the jerk-limited scan and the knob per point."""
+    n = len(s0)
+    count = np.empty(n, dtype=np.int64)
+    total = 1
+    for k in range(n):
+        count[k] = max(math.ceil(length[k] / NODE_SPACING_MM), 1)
+        total += count[k]
+    node_s = np.empty(total)
+    piece = np.empty(total, dtype=np.int64)
+    point = np.full(total, -1, dtype=np.int64)  # the junction a point sits on, -1 inside a move
+    i = 0
+    for k in range(n):
+        for j in range(count[k]):
+            node_s[i] = s0[k] + j * length[k] / count[k]
+            piece[i] = k
+            if j == 0:
+                point[i] = k
+            i += 1
+    node_s[i], piece[i], point[i] = s0[n - 1] + length[n - 1], n - 1, n
+    cap = np.empty(total)
+    for i in range(total):
+        cap[i] = piece_cap[piece[i]]
+        q = point[i]
+        if q >= 0:
+            cap[i] = min(cap[i], point_cap[q])
+            if q > 0:
+                cap[i] = min(cap[i], piece_cap[q - 1])
+    # Corner holds.
+    start = 0
+    for q in range(n + 1):
+        if not math.isfinite(point_cap[q]):
+            continue
+        while start < total and node_s[start] < point_s[q] - 1e-9:
+            start += 1
+        k = start
+        while k < total and node_s[k] <= point_s[q] + point_cap[q] * hold_s:
+            cap[k] = min(cap[k], point_cap[q])
+            k += 1
+    # Chain curvature: net turn over a window around each point.
+    cum = np.cumsum(turn)
+    for i in range(total):
+        if not cutting[piece[i]]:
+            continue
+        q = point[i]
+        if q >= 0:
+            near = length[0] if q == 0 else (length[n - 1] if q == n else max(length[q - 1], length[q]))
+        else:
+            near = length[piece[i]]
+        window = max(1.0, 2.5 * near)
+        lo = np.searchsorted(point_s, node_s[i] - window / 2, side="left") - 1
+        hi = np.searchsorted(point_s, node_s[i] + window / 2, side="right") - 1
+        net = abs(cum[min(max(hi, 0), n)] - (cum[min(lo, n)] if lo >= 0 else 0.0))
+        if net <= 1e-9:
+            continue
+        radius = window / net
+        per_mm = target / radius
+        if per_mm >= arc_table[-1]:
+            continue
+        if per_mm < arc_table[0]:  # below the table the error grows at least linearly with ω
+            omega = arc_omega[0] * per_mm / max(arc_table[0], 1e-300)
+        else:
+            omega = np.interp(per_mm, arc_table, arc_omega)
+        cap[i] = min(cap[i], omega * radius)
+    # Reachable speeds, then the knob.
+    accel_at = np.empty(total)
+    finite = np.empty(total)
+    for i in range(total):
+        f = feed[piece[i]]
+        accel_at[i] = max(min(accel, slew_per_s * f) if f > 0 else accel, 1e-3)
+        finite[i] = cap[i] if math.isfinite(cap[i]) else _SPEED_CEILING_MM_S
+    speed = finite.copy()
+    _scan(node_s, speed, accel_at, jerk)
+    override = np.full(total, top)
+    for i in range(total):
+        f = feed[piece[i]]
+        if cutting[piece[i]] and f > 0:
+            override[i] = min(max(speed[i] / f, 0.0), top)
+    return node_s, cap, speed, override
 
 
 class ClassicalPlanner:
