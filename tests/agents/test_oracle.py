@@ -79,3 +79,14 @@ def test_oracle_uses_override_above_100_percent_where_geometry_allows():
     assert result.override.max() > 1.2
     assert result.override.min() < 1.0
     env.close()
+
+
+def test_planning_shows_a_bar_when_asked_and_nothing_otherwise(capsys):
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["circle"], machine="vmc-small")
+    env.reset(seed=0)
+    OraclePlanner(progress=True).reset(env)
+    assert "oracle: planning circle" in capsys.readouterr().err
+    env.reset(seed=0)
+    OraclePlanner().reset(env)  # progress=None: a bar only when stderr is a terminal (not under pytest)
+    assert capsys.readouterr().err == ""
+    env.close()
