@@ -536,13 +536,7 @@ class ClassicalPlanner:
         self._lead_s = 0.03
 
     def reset(self, env: Any) -> None:
-        require_override_mode(env, self.name)
-        base = env.unwrapped
-        toolpath: Toolpath = base.toolpath
-        machine: MachineConfig = base.machine
-        period = float(getattr(base, "control_period_s", 0.01))
-        self._max_override = float(machine.controller.max_override)
-        self._lead_s = self.reaction_time_s if self.reaction_time_s is not None else 2.0 * period + 0.01
+        base, toolpath, machine, _ = knob_setup(self, env)
         key = (id(toolpath), machine, self.margin)
         cached = self._cache.get(key)
         if cached is not None and cached[0] is toolpath:
@@ -558,6 +552,19 @@ class ClassicalPlanner:
         return override_action(override_at(self.schedule, float(info.get("path_s", 0.0)),
                                            float(info.get("feed_mm_min", 0.0)), self._lead_s),
                                self._max_override)  # fmt: skip
+
+
+def knob_setup(planner: Any, env: Any) -> tuple[Any, Toolpath, MachineConfig, float]:
+    """What a schedule-following planner reads from a just-reset env (the unwrapped env, its tool path,
+    machine and control period); sets the planner's knob range and reaction lead (``reaction_time_s``, or
+    two control periods + 10 ms)."""
+    require_override_mode(env, planner.name)
+    base = env.unwrapped
+    period = float(getattr(base, "control_period_s", 0.01))
+    planner._max_override = float(base.machine.controller.max_override)
+    lead = planner.reaction_time_s
+    planner._lead_s = lead if lead is not None else 2.0 * period + 0.01
+    return base, base.toolpath, base.machine, period
 
 
 def override_at(schedule: Schedule | None, path_s: float, feed_mm_min: float, lead_s: float) -> float:

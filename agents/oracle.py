@@ -53,8 +53,15 @@ from typing import Any
 
 import numpy as np
 
-from agents.base import override_action, require_override_mode
-from agents.classical import _SPEED_CEILING_MM_S, Schedule, ServoErrorModel, bidirectional_scan, override_at
+from agents.base import override_action
+from agents.classical import (
+    _SPEED_CEILING_MM_S,
+    Schedule,
+    ServoErrorModel,
+    bidirectional_scan,
+    knob_setup,
+    override_at,
+)
 from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
@@ -96,13 +103,7 @@ class OraclePlanner:
 
     # ------------------------------------------------------------------ policy protocol
     def reset(self, env: Any) -> None:
-        require_override_mode(env, self.name)
-        base = env.unwrapped
-        toolpath: Toolpath = base.toolpath
-        machine: MachineConfig = base.machine
-        period = float(getattr(base, "control_period_s", 0.01))
-        self._max_override = float(machine.controller.max_override)
-        self._lead_s = self.reaction_time_s if self.reaction_time_s is not None else 2.0 * period + 0.01
+        base, toolpath, machine, period = knob_setup(self, env)
         key = (id(toolpath), machine, period, self.margin, self.refine_iterations, self.raise_rounds)
         cached = self._cache.get(key)
         if cached is not None and cached[0] is toolpath:

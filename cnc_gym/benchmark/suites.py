@@ -264,17 +264,14 @@ def tier_of(properties: dict[str, float]) -> str:
 def is_feasible(text: str, machine, dialect: str) -> bool:
     """True when some override of :data:`FEASIBILITY_OVERRIDES` finishes the program with no contour
     error above tolerance (zero violation length), with no step budget to speak of."""
+    from agents import ConstantOverride
+    from cnc_gym.benchmark.runner import run_one_episode
     from cnc_gym.envs.feedrate import FeedrateEnv
 
     env = FeedrateEnv(programs=[text], dialect=dialect, machine=machine, max_episode_steps=10_000_000)
     for override in FEASIBILITY_OVERRIDES:
-        env.reset(seed=0)
-        action = np.array([2.0 * override / env.max_override - 1.0], dtype=np.float32)
-        while True:
-            _, _, terminated, truncated, info = env.step(action)
-            if terminated or truncated:
-                break
-        if terminated and info["violation_length_mm"] == 0.0:
+        info, _, _, finished = run_one_episode(env, ConstantOverride(override), 0)
+        if finished and info["violation_length_mm"] == 0.0:
             return True
     return False
 
