@@ -25,10 +25,10 @@ def test_shipped_ppo_config_loads():
     [
         ("total_timestep: 10\n", "unknown key total_timestep"),
         ("ppo: {learning_rat: 0.1}\n", "unknown key ppo.learning_rat"),
-        ("env: {programs: star}\n", "env.programs must be a non-empty list"),
+        ("env: {programs: []}\n", "env.programs must name at least one program"),
         ("ppo: {learning_rate: '3e-4'}\n", "ppo.learning_rate must be a number"),
         ("n_envs: 2.5\n", "n_envs must be an integer"),
-        ("n_envs: 0\n", "n_envs must be positive"),
+        ("n_envs: 0\n", r"n_envs must be an integer in \[1, 256\], got 0"),
         ("ppo: {gamma: 1.5}\n", "gamma"),
         ("progress_bar: yes please\n", "progress_bar must be true or false"),
         ("- a\n- b\n", "must be a mapping"),
