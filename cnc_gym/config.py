@@ -81,11 +81,12 @@ class Invalid(Exception):
 
 # ---------------------------------------------------------------------------------------------- specs
 def _fmt(x: float) -> str:
+    """A bound or default as people (and YAML) write it: ``0.002``, ``15000``, ``1e6``, ``1e-6``."""
     if isinstance(x, int):
         return str(x)
     if x.is_integer() and abs(x) < 1e5:
         return str(int(x))
-    return f"{x:g}"
+    return re.sub(r"e\+?(-?)0*(\d)", r"e\1\2", f"{x:g}")
 
 
 @dataclass(frozen=True)
@@ -385,7 +386,7 @@ def markdown_table(cls: type, prefix: str = "") -> str:
             default = "see below"
         else:
             value = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
-            default = "null" if value is None else f"`{_default_text(value)}`"
+            default = "null" if value is None else f"`{_default_text(value) or chr(34) * 2}`"
         meaning = spec.doc + (f" *Range:* {spec.why}" if spec.why else "")
         rows.append(f"| `{prefix}{key}` | {default} | {spec.allowed()} | {meaning} |")
     return "\n".join(rows)

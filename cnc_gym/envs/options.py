@@ -14,7 +14,6 @@ everywhere. :func:`parse_action` is the env's check of an action (real numbers o
 from __future__ import annotations
 
 import math
-import numbers
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -127,7 +126,8 @@ class MachineRef(Spec):
 
 
 class RewardRef(Spec):
-    """Reward weights: None (the default task's), a task YAML path, a dict of weights or RewardWeights."""
+    """Reward weights: None (the default task's), a task YAML path, a dict of weights or RewardWeights
+    (None is one of its values, not "optional")."""
 
     def _parse(self, raw: Any) -> Any:
         if raw is None or isinstance(raw, str | os.PathLike | dict | RewardWeights):
@@ -149,7 +149,7 @@ class EnvArguments:
     machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
     action_mode: str = declared(ACTION_MODE, "override")
     control_period_s: float = declared(CONTROL_PERIOD, 0.01)
-    reward: Any = declared(RewardRef(optional=True, doc="weights (None: configs/tasks/default.yaml)"))  # noqa: RUF009
+    reward: Any = declared(RewardRef(doc="reward weights (None: configs/tasks/default.yaml)"))  # noqa: RUF009
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
     lookahead_mm: float = number(
@@ -195,7 +195,7 @@ def reset_choice(options: Any) -> int | str | Path | None:
     choice = options.get("program")
     if choice is None or isinstance(choice, str | Path):
         return choice
-    if isinstance(choice, numbers.Integral) and not isinstance(choice, bool | np.bool_):
+    if isinstance(choice, int | np.integer) and not isinstance(choice, bool | np.timedelta64):
         return int(choice)
     raise ConfigError(f"reset: options['program'] must be a name, path, text or index, got {shown(choice)}")
 
@@ -212,8 +212,8 @@ def parse_action(action: Any) -> float:
     """
     if isinstance(action, bool | np.bool_):
         raise ActionError(f"action must be a real number, got {shown(action)}")
-    if isinstance(action, numbers.Integral):  # exact, so 10**400 clips to 1 instead of overflowing
-        return float(min(max(int(action), -1), 1))
+    if type(action) is int:  # exact, so 10**400 clips to 1 instead of overflowing a float
+        return float(min(max(action, -1), 1))
     if isinstance(action, str | bytes):
         raise ActionError(f"action must be a real number, got {shown(action)}")
     try:
