@@ -73,10 +73,12 @@ def main(argv: list[str] | None = None) -> int:
                 path.write_text(new)
     missing = sorted(set(TABLES) - set(found))
     if missing:
-        print(f"config_docs: no block for table(s) {', '.join(missing)} in {', '.join(DOCS)}", file=sys.stderr)
+        where = ", ".join(DOCS)
+        print(f"config_docs: no block for table(s) {', '.join(missing)} in {where}", file=sys.stderr)
         return 1
     if stale and args.check:
-        print(f"config_docs: stale table(s) in {', '.join(stale)}; run scripts/config_docs.py", file=sys.stderr)
+        stale_docs = ", ".join(stale)
+        print(f"config_docs: stale table(s) in {stale_docs}; run scripts/config_docs.py", file=sys.stderr)
         return 1
     for doc in stale:
         print(f"rewrote {doc}")
