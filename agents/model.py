@@ -295,6 +295,9 @@ def _build(family: type, observation_space: Any, action_space: Any, kwargs: dict
     """The policy, built from known classes and plain values, with exactly the file's weights."""
     n_weights = sum(int(v.numel()) for v in weights.values())
     _check_size(kwargs.get("net_arch"), math.prod(observation_space.shape), n_weights)
+    # Acting needs no optimizer: the policy gets a stand-in (a torch optimizer's first use imports
+    # torch's compiler, seconds of start-up for nothing); the file's optimizer choice is checked above.
+    kwargs = {**kwargs, "optimizer_class": _NoOptimizer, "optimizer_kwargs": {}}
     try:
         policy = family(observation_space, action_space, lambda _: 0.0, **kwargs)
     except (TypeError, ValueError, AssertionError, KeyError) as exc:
@@ -307,6 +310,13 @@ def _build(family: type, observation_space: Any, action_space: Any, kwargs: dict
         raise _Refused(f"its weights do not fit the policy its data describes ({first})") from None
     policy.set_training_mode(False)
     return policy
+
+
+class _NoOptimizer:
+    """Stands in for the training optimizer a policy builds; a loaded policy only acts."""
+
+    def __init__(self, params: Any, **kwargs: Any) -> None:
+        self.param_groups: list[dict[str, Any]] = []
 
 
 def _check_size(net_arch: Any, n_inputs: int, n_weights: int) -> None:
