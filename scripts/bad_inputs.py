@@ -113,6 +113,13 @@ MACHINES: list[tuple[str, str | bytes]] = [
     ("5000 nested [", "a: " + "[" * 5000 + "]" * 5000 + "\n"),
     ("alias bomb in description", _BOMB),
 ]
+#: (case, machine preset text) of valid machines at the edges of the ranges, run through ``cnc-gym run``.
+EDGES = [
+    ("finest: 0.1 ms period, 0.5 s filter, 5000 blocks",
+     "controller: {interpolation_period_s: 1.0e-4, post_filter_s: 0.5, lookahead_blocks: 5000}\n"),
+    ("slowest: 100 mm/min feeds and rapids",
+     "controller: {max_feed_mm_min: 100}\naxis_defaults: {rapid_mm_min: 100, max_feed_mm_min: 100}\n"),
+]
 #: (case, training config text or None for the shipped one, extra arguments) for ``scripts/train.py``.
 TRAINING: list[tuple[str, str | None, list[str]]] = [
     ("learning_rate NaN", "ppo: {learning_rate: .nan}\n", []),
@@ -152,6 +159,11 @@ def cases(folder: Path) -> list[Case]:
         path = folder / f"machine{i}.yaml"
         path.write_bytes(content if isinstance(content, bytes) else content.encode())
         out.append(Case(f"machine {name}", [*run, "--machine", str(path)]))
+    # Valid machines at the edges of the ranges: they must run, within bounded time and memory.
+    for name, content in EDGES:
+        path = folder / f"edge-{len(out)}.yaml"
+        path.write_text(content)
+        out.append(Case(f"edge: {name}", [*run, "--machine", str(path), "--json"], "ok"))
     for i, (name, content, extra) in enumerate(TRAINING):
         config = "configs/train/ppo.yaml"
         if content is not None:
