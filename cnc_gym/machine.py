@@ -57,7 +57,7 @@ __all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "RotaryAxisConfig"
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
 
-# Why the ranges are what they are (shared by the keys of one kind).
+# Ranges shared by the keys of one kind, each with its reason (one place to change a kind's range).
 _RATE_WHY = ("100 mm/min is below any machine's rapid rate or feed clamp (slower rates make an episode "
              "last hours of simulated time); 1 000 m/min is far above the fastest machines (about 200).")
 _ACCEL_WHY = ("0.0001 g to 100 g: real axes reach about 0.1-5 g; values far outside make the planner's "
@@ -66,25 +66,41 @@ _JERK_WHY = "real axes run at 10^3-10^7 mm/s³; values far outside make the plan
 _TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double precision."
 
 
+_ROTARY_WHY = "as the linear axes', with degrees counted as mm (the feed rule above)."
+
+
+def _rate(default: float, doc: str, unit: str = "mm/min", why: str = _RATE_WHY) -> Any:
+    return number(default, 100, 1e6, unit=unit, doc=doc, why=why)
+
+
+def _accel(default: float, doc: str, unit: str = "mm/s²", why: str = _ACCEL_WHY) -> Any:
+    return number(default, 1, 1e6, unit=unit, doc=doc, why=why)
+
+
+def _jerk(default: float, doc: str, unit: str = "mm/s³", why: str = _JERK_WHY) -> Any:
+    return number(default, 10, 1e9, unit=unit, doc=doc, why=why)
+
+
+def _position(default: float, doc: str, unit: str = "mm", why: str = _TRAVEL_WHY) -> Any:
+    return number(default, -1e6, 1e6, unit=unit, doc=doc, why=why)
+
+
+def _corner_step(default: float, unit: str = "mm/min") -> Any:
+    return number(default, 0, 1e6, unit=unit, doc="largest velocity step of this axis at a block junction "
+                  "(P1227)", why="0 stops at every corner; the upper end as the rates'.")  # fmt: skip
+
+
 @dataclass(frozen=True)
 class AxisConfig:
     """One linear axis: kinematic limits used by the controller and servo parameters used by the plant."""
 
-    rapid_mm_min: float = number(30000.0, 100, 1e6, unit="mm/min", why=_RATE_WHY,
-                                 doc="rapid traverse rate (P1226)")  # fmt: skip
-    max_feed_mm_min: float = number(15000.0, 100, 1e6, unit="mm/min", why=_RATE_WHY,
-                                    doc="per-axis cutting-feed clamp (P1225)")  # fmt: skip
-    max_accel_mm_s2: float = number(5000.0, 1, 1e6, unit="mm/s²", why=_ACCEL_WHY,
-                                    doc="cutting acceleration; GSK: 2·P1225/(2·P1480 + P1481)")  # fmt: skip
-    max_jerk_mm_s3: float = number(50000.0, 10, 1e9, unit="mm/s³", why=_JERK_WHY,
-                                   doc="cutting jerk; GSK: 2·A/P1481")  # fmt: skip
-    rapid_accel_mm_s2: float = number(5000.0, 1, 1e6, unit="mm/s²", why=_ACCEL_WHY,
-                                      doc="rapid acceleration; GSK: 2·P1226/(2·P1410 + P1411)")  # fmt: skip
-    rapid_jerk_mm_s3: float = number(50000.0, 10, 1e9, unit="mm/s³", why=_JERK_WHY,
-                                     doc="rapid jerk; GSK: 2·A_rapid/P1411")  # fmt: skip
-    corner_step_mm_min: float = number(
-        1000.0, 0, 1e6, unit="mm/min", why="0 stops at every corner; the upper end as the rates'.",
-        doc="largest velocity step of this axis at a block junction (P1227)")  # fmt: skip
+    rapid_mm_min: float = _rate(30000.0, "rapid traverse rate (P1226)")
+    max_feed_mm_min: float = _rate(15000.0, "per-axis cutting-feed clamp (P1225)")
+    max_accel_mm_s2: float = _accel(5000.0, "cutting acceleration; GSK: 2·P1225/(2·P1480 + P1481)")
+    max_jerk_mm_s3: float = _jerk(50000.0, "cutting jerk; GSK: 2·A/P1481")
+    rapid_accel_mm_s2: float = _accel(5000.0, "rapid acceleration; GSK: 2·P1226/(2·P1410 + P1411)")
+    rapid_jerk_mm_s3: float = _jerk(50000.0, "rapid jerk; GSK: 2·A_rapid/P1411")
+    corner_step_mm_min: float = _corner_step(1000.0)
     kv_1_s: float = number(40.0, 1, 2000, unit="1/s", doc="position-loop gain Kv",
                            why="real drives run at 10-500 1/s.")  # fmt: skip
     feedforward: float = number(0.0, 0, 1, doc="velocity feed-forward fraction")
@@ -95,18 +111,12 @@ class AxisConfig:
     velocity_loop_damping: float = number(
         0.7, 0.05, 5, doc="velocity-loop damping ratio ζ",
         why="real loops are tuned to 0.3-1.5; extreme values break the plant's discretisation.")  # fmt: skip
-    min_position_mm: float = number(-1e6, -1e6, 1e6, unit="mm", why=_TRAVEL_WHY,
-                                    doc="travel limit − (stored stroke check 1)")  # fmt: skip
-    max_position_mm: float = number(1e6, -1e6, 1e6, unit="mm", why=_TRAVEL_WHY,
-                                    doc="travel limit + (stored stroke check 1)")  # fmt: skip
-    reference_1_mm: float = number(0.0, -1e6, 1e6, unit="mm", why=_TRAVEL_WHY,
-                                   doc="reference position 1 (G28/G27), machine coordinates")  # fmt: skip
-    reference_2_mm: float = number(0.0, -1e6, 1e6, unit="mm", why=_TRAVEL_WHY,
-                                   doc="reference position 2 (G30 P2; GSK P1051)")  # fmt: skip
-    reference_3_mm: float = number(0.0, -1e6, 1e6, unit="mm", why=_TRAVEL_WHY,
-                                   doc="reference position 3 (G30 P3; GSK P1052)")  # fmt: skip
-    reference_4_mm: float = number(0.0, -1e6, 1e6, unit="mm", why=_TRAVEL_WHY,
-                                   doc="reference position 4 (G30 P4; GSK P1053)")  # fmt: skip
+    min_position_mm: float = _position(-1e6, "travel limit − (stored stroke check 1)")
+    max_position_mm: float = _position(1e6, "travel limit + (stored stroke check 1)")
+    reference_1_mm: float = _position(0.0, "reference position 1 (G28/G27), machine coordinates")
+    reference_2_mm: float = _position(0.0, "reference position 2 (G30 P2; GSK P1051)")
+    reference_3_mm: float = _position(0.0, "reference position 3 (G30 P3; GSK P1052)")
+    reference_4_mm: float = _position(0.0, "reference position 4 (G30 P4; GSK P1053)")
 
     def config_problems(self) -> Iterator[tuple[str, str]]:
         """Rules across keys: ``(key, problem)``."""
@@ -130,20 +140,14 @@ class RotaryAxisConfig:
     vector √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01 runs at F deg/min.
     """
 
-    rapid_deg_min: float = number(3600.0, 100, 1e6, unit="deg/min", doc="rapid traverse rate (P1226)",
-                                  why="as the linear axes' rates, with degrees for mm.")  # fmt: skip
-    max_feed_deg_min: float = number(3600.0, 100, 1e6, unit="deg/min", doc="cutting-feed clamp (P1225)",
-                                     why="as the linear axes' rates, with degrees for mm.")  # fmt: skip
-    max_accel_deg_s2: float = number(1800.0, 1, 1e6, unit="deg/s²", doc="cutting acceleration",
-                                     why=_ACCEL_WHY)  # fmt: skip
-    max_jerk_deg_s3: float = number(18000.0, 10, 1e9, unit="deg/s³", doc="cutting jerk", why=_JERK_WHY)
-    rapid_accel_deg_s2: float = number(1800.0, 1, 1e6, unit="deg/s²", doc="rapid acceleration",
-                                       why=_ACCEL_WHY)  # fmt: skip
-    rapid_jerk_deg_s3: float = number(18000.0, 10, 1e9, unit="deg/s³", doc="rapid jerk", why=_JERK_WHY)
-    corner_step_deg_min: float = number(1000.0, 0, 1e6, unit="deg/min",
-                                        doc="largest velocity step at a block junction (P1227)")  # fmt: skip
-    reference_1_deg: float = number(0.0, -1e6, 1e6, unit="deg", doc="G28 reference position (machine "
-                                    "coordinate)")  # fmt: skip
+    rapid_deg_min: float = _rate(3600.0, "rapid traverse rate (P1226)", "deg/min", _ROTARY_WHY)
+    max_feed_deg_min: float = _rate(3600.0, "cutting-feed clamp (P1225)", "deg/min", _ROTARY_WHY)
+    max_accel_deg_s2: float = _accel(1800.0, "cutting acceleration", "deg/s²", _ROTARY_WHY)
+    max_jerk_deg_s3: float = _jerk(18000.0, "cutting jerk", "deg/s³", _ROTARY_WHY)
+    rapid_accel_deg_s2: float = _accel(1800.0, "rapid acceleration", "deg/s²", _ROTARY_WHY)
+    rapid_jerk_deg_s3: float = _jerk(18000.0, "rapid jerk", "deg/s³", _ROTARY_WHY)
+    corner_step_deg_min: float = _corner_step(1000.0, "deg/min")
+    reference_1_deg: float = _position(0.0, "G28 reference position (machine coordinate)", "deg", _ROTARY_WHY)
 
 
 class RotaryAxes(FrozenDict):
@@ -163,16 +167,14 @@ class ControllerConfig:
         32, 0, 5000, integer=True, doc="look-ahead window in motion blocks (P1409); 0 or 1: every block "
         "ends at rest", why="current controllers look ahead at most a few thousand blocks; the planner's "
         "memory and work per period grow with the window.")  # fmt: skip
-    max_feed_mm_min: float = number(15000.0, 100, 1e6, unit="mm/min", why=_RATE_WHY,
-                                    doc="composite cutting-feed clamp after override (P1224)")  # fmt: skip
+    max_feed_mm_min: float = _rate(15000.0, "composite cutting-feed clamp after override (P1224)")
     max_override: float = number(
         2.0, 0.1, 10, doc="feed-override knob range: 2.0 = 0 … 200 %",
         why="real knobs end at 120-254 %; up to 10× for experiments.")  # fmt: skip
     override_slew_per_s: float = number(
         10.0, 0.01, 10000, unit="1/s", doc="how fast the applied override follows the knob",
         why="from 100 s for the whole range to a step within one period.")  # fmt: skip
-    max_centripetal_accel_mm_s2: float = number(5000.0, 1, 1e6, unit="mm/s²", why=_ACCEL_WHY,
-                                                doc="arc acceleration limit (P1442)")  # fmt: skip
+    max_centripetal_accel_mm_s2: float = _accel(5000.0, "arc acceleration limit (P1442)")
     chord_tolerance_mm: float = number(
         0.001, 1e-6, 1, unit="mm", doc="arc control accuracy at the interpolation period (P1472)",
         why="1 nm (finer than any scale) to 1 mm.")  # fmt: skip

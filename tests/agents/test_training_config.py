@@ -33,34 +33,7 @@ def test_shipped_ppo_config_loads():
         ("progress_bar: yes please\n", "progress_bar must be true or false"),
         ("- a\n- b\n", "must be a mapping"),
         ("ppo: [1\n", "invalid YAML"),
-    ],
-)
-def test_config_errors(tmp_path, text, message):
-    path = tmp_path / "bad.yaml"
-    path.write_text(text)
-    with pytest.raises(ConfigError, match=message) as err:
-        load_config(path)
-    assert str(path) in str(err.value)
-
-
-def test_missing_config_file(tmp_path):
-    with pytest.raises(ConfigError, match="cannot read"):
-        load_config(tmp_path / "nope.yaml")
-
-
-def test_progress_bonus_is_no_longer_a_training_key(tmp_path):
-    # The progress term moved into the env's reward (configs/tasks/default.yaml: progress); a training
-    # config that still asks for the old wrapper must fail loudly rather than be silently ignored.
-    path = tmp_path / "old.yaml"
-    path.write_text("progress_bonus: 10.0\n")
-    with pytest.raises(ConfigError, match="progress_bonus"):
-        load_config(path)
-
-
-# Every training reproducer of issue 17 (item 3): one ConfigError line naming the file and the key.
-@pytest.mark.parametrize(
-    ("text", "message"),
-    [
+        # Every training reproducer of issue 17 (item 3).
         ("ppo: {learning_rate: .nan}\n", "ppo.learning_rate must be finite, got nan"),
         ("ppo: {gamma: .inf}\n", "ppo.gamma must be finite"),
         ("ppo: {clip_range: .nan}\n", "ppo.clip_range must be finite, got nan"),
@@ -85,12 +58,26 @@ def test_progress_bonus_is_no_longer_a_training_key(tmp_path):
         ("env: 5\n", "'env' must be a mapping"),
     ],
 )
-def test_training_reproducers_are_one_line(tmp_path, text, message):
+def test_config_errors(tmp_path, text, message):
     path = tmp_path / "bad.yaml"
     path.write_text(text)
     with pytest.raises(ConfigError, match=message) as err:
         load_config(path)
-    assert str(err.value).startswith(f"{path}: ") and "\n" not in str(err.value)
+    assert str(err.value).startswith(f"{path}:") and "\n" not in str(err.value)
+
+
+def test_missing_config_file(tmp_path):
+    with pytest.raises(ConfigError, match="cannot read"):
+        load_config(tmp_path / "nope.yaml")
+
+
+def test_progress_bonus_is_no_longer_a_training_key(tmp_path):
+    # The progress term moved into the env's reward (configs/tasks/default.yaml: progress); a training
+    # config that still asks for the old wrapper must fail loudly rather than be silently ignored.
+    path = tmp_path / "old.yaml"
+    path.write_text("progress_bonus: 10.0\n")
+    with pytest.raises(ConfigError, match="progress_bonus"):
+        load_config(path)
 
 
 def _main(argv):
