@@ -66,7 +66,7 @@ _JERK_WHY = "real axes run at 10^3-10^7 mm/s³; values far outside make the plan
 _TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double precision."
 
 
-_ROTARY_WHY = "as the linear axes', with degrees counted as mm (the feed rule above)."
+_ROTARY_WHY = "as the linear axes', degrees counting as mm (the GSK rotary feed rule)."
 
 
 def _rate(default: float, doc: str, unit: str = "mm/min", why: str = _RATE_WHY) -> Any:
