@@ -95,7 +95,9 @@ def load_sb3_model(path: str | Path) -> LoadedModel:
         with zipfile.ZipFile(path) as archive:
             data_bytes = _member(archive, "data", MAX_DATA_BYTES)
             weights_bytes = _member(archive, "policy.pth", MAX_WEIGHTS_BYTES)
-            version = _member(archive, "_stable_baselines3_version", 100, required=False) or b"?"
+            version = b"?"
+            if "_stable_baselines3_version" in archive.namelist():
+                version = _member(archive, "_stable_baselines3_version", 100)
     except _Refused as exc:
         raise ModelError(f"{name}: {exc}") from None
     except Exception as exc:  # zipfile.BadZipFile, zlib.error, encrypted or unsupported members, OSError
@@ -120,11 +122,9 @@ class _Refused(Exception):
     """Why a model is refused (the loader adds the file name)."""
 
 
-def _member(archive: zipfile.ZipFile, member: str, limit: int, required: bool = True) -> bytes | None:
+def _member(archive: zipfile.ZipFile, member: str, limit: int) -> bytes:
     if member not in archive.namelist():
-        if required:
-            raise _Refused(f"not a Stable-Baselines3 model (no {member!r} in the zip)")
-        return None
+        raise _Refused(f"not a Stable-Baselines3 model (no {member!r} in the zip)")
     with archive.open(member) as f:
         content = f.read(limit + 1)  # bounded whatever the header claims (a zip bomb stops here)
     if len(content) > limit:
@@ -225,8 +225,8 @@ def _policy_kwargs(data: dict[str, Any], family: type) -> dict[str, Any]:
         "optimizer_class": {str(c): c for c in optimizers},
         "features_extractor_class": {str(FlattenExtractor): FlattenExtractor},
     }
-    fixed = {"self", "observation_space", "action_space", "lr_schedule"}
-    allowed = set(inspect.signature(family.__init__).parameters) - fixed
+    fixed = {"observation_space", "action_space", "lr_schedule"}
+    allowed = set(inspect.signature(family).parameters) - fixed
     kwargs: dict[str, Any] = {}
     for key, value in recorded.items():
         if key not in allowed:

@@ -113,6 +113,9 @@ class Spec:
         text = self._allowed()
         return f"null or {text}" if self.optional else text
 
+    def _allowed(self) -> str:
+        return "any value"
+
 
 @dataclass(frozen=True)
 class Number(Spec):
@@ -385,7 +388,8 @@ def markdown_table(cls: type, prefix: str = "") -> str:
         if isinstance(spec, Section):
             default = "see below"
         else:
-            value = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
+            factory = f.default_factory
+            value = factory() if callable(factory) else f.default
             default = "null" if value is None else f"`{_default_text(value) or chr(34) * 2}`"
         meaning = spec.doc + (f" *Range:* {spec.why}" if spec.why else "")
         rows.append(f"| `{prefix}{key}` | {default} | {spec.allowed()} | {meaning} |")

@@ -164,11 +164,11 @@ def cases(folder: Path) -> list[Case]:
         path = folder / f"edge-{len(out)}.yaml"
         path.write_text(content)
         out.append(Case(f"edge: {name}", [*run, "--machine", str(path), "--json"], "ok"))
-    for i, (name, content, extra) in enumerate(TRAINING):
+    for i, (name, train_text, extra) in enumerate(TRAINING):
         config = "configs/train/ppo.yaml"
-        if content is not None:
+        if train_text is not None:
             config = str(folder / f"train{i}.yaml")
-            Path(config).write_text(content.replace("{folder}", str(folder)))
+            Path(config).write_text(train_text.replace("{folder}", str(folder)))
         argv = [PY, "scripts/train.py", "--no-progress", "--config", config, *extra]
         out.append(Case(f"train {name}", argv))
     out += [Case(f"env {name}", _env_call(code), expect) for name, code, expect in ENV]
