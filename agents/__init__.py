@@ -8,7 +8,7 @@
                        (machine parameters and its own servo model; never runs the env)
 ``oracle``             :class:`~agents.oracle.OraclePlanner`: simulate-and-correct on copies of the
                        exact env; an oracle, not deployable
-a path (``*.zip``)     :class:`~agents.model.ModelPolicy`, an SB3 model loaded with SB3's loader
+a path (``*.zip``)     :class:`~agents.model.ModelPolicy`, an SB3 model rebuilt without unpickling
 ``module:callable``    your own policy: ``callable`` in importable ``module`` is a Policy, or is
                        called with no arguments to make one (a class or a factory), or is a plain
                        function ``act(observation, info) -> action``
