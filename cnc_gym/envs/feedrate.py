@@ -199,6 +199,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     - **Termination**: the controller has finished the program (reference at rest at the end, dwells
       done) and every axis is within the in-position width (``in_position_mm``).
+    - A program without motion (nothing but modal codes, spindle or tool commands, ``M30``; or an empty
+      file) terminates on the first step with reward 0 and ``cycle_time_s`` 0.
     - **Truncation**: after ``max_episode_steps`` control steps (default: 5 × ``T_nominal`` / ``dt`` plus
       one second to settle), e.g. when the knob is held at 0.
 
@@ -458,6 +460,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         knob = self._parse_action(action)
         self._knob = knob
+        if not len(self.toolpath):  # a program without motion (only M30, or empty): done at once, in 0 s
+            self._steps += 1
+            return self._observe(), 0.0, True, False, self._info(0.0, 0.0)
         controller = self.controller
         n = self.ticks_per_step
         if not controller.finished:
