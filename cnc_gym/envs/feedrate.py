@@ -17,7 +17,7 @@ from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig, load_machine
 from cnc_gym.motion import ActionError  # one error type for bad actions, env and controller alike
 from cnc_gym.motion import kernel as _kernel
-from cnc_gym.programs import load_program
+from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 # Columns of the controller's rows (Controller.advance_rows) the step reads.
@@ -206,7 +206,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Arguments
 
-    ``programs`` (built-in names, paths or G-code text; None = the default task's set), ``dialect``,
+    ``programs`` (one program or a list: built-in names, paths, G-code text, ``ProgramText`` or interpreted
+    ``Program``\ s, by the rule of :mod:`cnc_gym.programs`; None = the default task's set), ``dialect``,
     ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
     of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
     ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
@@ -231,7 +232,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        programs: Sequence[str | Path] | str | Path | None = None,
+        programs: Sequence[ProgramLike] | ProgramLike | None = None,
         dialect: str = "gsk25i",
         machine: str | Path | MachineConfig = "vmc-small",
         action_mode: str = "override",
@@ -305,7 +306,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         # Programs: interpreted once (cached by cnc_gym.programs), controllers built lazily per program.
         if programs is None:
             programs = load_task("default").programs
-        elif isinstance(programs, str | Path):
+        elif isinstance(programs, PROGRAM_TYPES):
             programs = [programs]
         if len(programs) == 0:
             raise ConfigError("programs must name at least one program")
@@ -378,7 +379,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             if not 0 <= index_or_name < len(self._programs):
                 raise ConfigError(f"program index {index_or_name} out of range 0..{len(self._programs) - 1}")
             name, toolpath = self._programs[int(index_or_name)]
-        elif isinstance(index_or_name, str | Path):
+        elif isinstance(index_or_name, PROGRAM_TYPES):
             found = [p for p in self._programs if p[0] == index_or_name]
             name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine)
         else:
