@@ -151,7 +151,8 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         bar_format = "{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}"
         desc = str(info.get("program", "program"))
         bar = tqdm(total=100, desc=desc, file=sys.stderr, leave=False, bar_format=bar_format)
-    projection_due = time.perf_counter() + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
+    started = time.perf_counter()
+    projection_due = started + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
     try:
         while not (terminated or truncated):
             action = policy.act(observation, info)
@@ -165,9 +166,10 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
                 if bar is not None:
                     bar.n = round(100 * float(info.get("progress", 0.0)))
                     bar.refresh()
-                if time.perf_counter() >= projection_due:
+                now = time.perf_counter()
+                if now >= projection_due:
                     projection_due = math.inf
-                    _project_wall_time(log, info, nominal, max_time_s, _PROJECTION_AFTER_WALL_S)
+                    _project_wall_time(log, info, nominal, max_time_s, now - started)
             if max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9:
                 stopped_at_max_time = True
                 break
@@ -234,7 +236,7 @@ def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_ti
                        wall_s: float) -> None:  # fmt: skip
     """One stderr line when the run, at its speed so far, will take long in wall-clock time."""
     simulated = float(info.get("cycle_time_s", 0.0))
-    if simulated <= 0:
+    if simulated <= 0 or wall_s <= 0:
         return
     target = nominal if max_time_s is None else min(nominal, max_time_s)
     remaining = (target - simulated) * wall_s / simulated
@@ -366,50 +368,55 @@ def feed_limits(results: list[RunResult]) -> tuple[float, float]:
 
 
 def plot_run(result: RunResult, path: str | Path, *, feed_range: tuple[float, float] | None = None) -> Path:
-    """Save the run's plot (PNG, PDF or SVG by the suffix) and return its path.
-
-    The XY path coloured by the feed run there (rapids thin grey; the part the run did not reach dashed),
-    XZ and YZ views when the program cuts in Z (more than plunges), and the contour error over time as a
-    max envelope per time bin with the tolerance line. ``feed_range`` fixes the colour scale, so that
-    plots of several runs compare (see :func:`feed_limits`).
-    """
-    import matplotlib
-
-    from cnc_gym.envs.render import plot_error_envelope, plot_path_views, wants_z_views
-
-    matplotlib.use("Agg")
+    """Save the run's plot (:func:`run_figure`; PNG, PDF or SVG by the suffix) and return its path."""
     import matplotlib.pyplot as plt
 
     path = Path(path)
     if path.suffix.lower() not in PLOT_FORMATS:
         raise CncGymError(f"{path}: unknown plot format; use {', '.join(PLOT_FORMATS)}")
-    z_views = wants_z_views(result.path_xyz, result.cutting)
-    if z_views:
+    fig = run_figure(result, feed_range=feed_range)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
+    except OSError as exc:
+        raise CncGymError(f"{path}: cannot write plot: {exc.strerror or exc}") from None
+    finally:
+        plt.close(fig)
+    return path
+
+
+def run_figure(result: RunResult, *, feed_range: tuple[float, float] | None = None):
+    """The run's matplotlib figure (Agg; close it with ``plt.close``).
+
+    The XY path coloured by the feed run there (rapids thin grey; the part the run did not reach dashed),
+    XZ and YZ views when the program cuts in Z (more than plunges), and the contour error over time as a
+    max envelope per time bin with the tolerance line. A truncated run says so in the figure's title.
+    ``feed_range`` fixes the colour scale, so that plots of several runs compare (:func:`feed_limits`).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cnc_gym.envs.render import plot_error_envelope, plot_path_views, wants_z_views
+
+    if wants_z_views(result.path_xyz, result.cutting):
         fig, axes = plt.subplots(2, 2, figsize=(12, 9.5), constrained_layout=True)
         ax_xy, ax_err, ax_xz, ax_yz = axes.ravel()
         views = {"XY": ax_xy, "XZ": ax_xz, "YZ": ax_yz}
     else:
         fig, (ax_xy, ax_err) = plt.subplots(1, 2, figsize=(12, 5.2), constrained_layout=True)
         views = {"XY": ax_xy}
-    try:
-        plot_path_views(fig, views, result.path_xyz, result.cutting, result.path_feed_mm_min, feed_range)
-        ax_xy.set_title(f"{result.program}: tool path coloured by feed")
-        plot_error_envelope(ax_err, result.time_s, result.contour_error_mm, result.tolerance_mm,
-                            bin_s=_bin_seconds(result))  # fmt: skip
-        ax_err.set_title(f"{result.policy}: cycle {result.cycle_time_s:.2f} s, "
-                         f"{result.violations} violations")  # fmt: skip
-        if not result.finished:
-            why = "--max-time" if result.stopped_by == MAX_TIME else "step budget"
-            fig.suptitle(f"truncated ({why}) at {result.cycle_time_s:g} s, {100 * result.progress:.0f} % of "
-                         "the path: the numbers cover the part run", color="C3", fontsize=12)  # fmt: skip
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fig.savefig(path, dpi=110)
-        except OSError as exc:
-            raise CncGymError(f"{path}: cannot write plot: {exc.strerror or exc}") from None
-    finally:
-        plt.close(fig)
-    return path
+    plot_path_views(fig, views, result.path_xyz, result.cutting, result.path_feed_mm_min, feed_range)
+    ax_xy.set_title(f"{result.program}: tool path coloured by feed")
+    plot_error_envelope(ax_err, result.time_s, result.contour_error_mm, result.tolerance_mm,
+                        bin_s=_bin_seconds(result))  # fmt: skip
+    ax_err.set_title(f"{result.policy}: cycle {result.cycle_time_s:.2f} s, {result.violations} violations")
+    if not result.finished:
+        why = "--max-time" if result.stopped_by == MAX_TIME else "step budget"
+        fig.suptitle(f"truncated ({why}) at {result.cycle_time_s:g} s, {100 * result.progress:.0f} % of the "
+                     "path: the numbers cover the part run", color="C3", fontsize=12)  # fmt: skip
+    return fig
 
 
 def _bin_seconds(result: RunResult) -> float:

@@ -188,8 +188,10 @@ class EpisodeRenderer:
                 fig.colorbar(lines, ax=ax_path, label="contour error (mm)", fraction=0.046, pad=0.04)
             ax_path.plot(xy[-1, 0], xy[-1, 1], "o", color="k", ms=4)
             t = np.cumsum(series["samples"]) * env.interpolation_period_s
-            ax_err.plot(t, error * 1000.0, color="C0", lw=1.0, drawstyle="steps-pre")
-        ax_err.axhline(tol * 1000.0, color="C3", ls="--", lw=1.0, label=f"tolerance {tol * 1000:g} µm")
+            bin_s = self._samples.width * env.interpolation_period_s
+            plot_error_envelope(ax_err, t, error, tol, bin_s=bin_s, fontsize=7)
+        else:
+            plot_error_envelope(ax_err, np.zeros(0), np.zeros(0), tol, fontsize=7)
         ax_path.set_aspect("equal", adjustable="datalim")
         ax_path.set_title(f"{env.program_name}: tool path", fontsize=9)
         ax_path.set_xlabel("X (mm)", fontsize=8)
@@ -197,7 +199,6 @@ class EpisodeRenderer:
         ax_err.set_title(f"contour error, max {env._error_max_mm * 1000:.1f} µm", fontsize=9)
         ax_err.set_xlabel("time (s)", fontsize=8)
         ax_err.set_ylabel("µm", fontsize=8)
-        ax_err.legend(fontsize=7, loc="upper right")
         for ax in (ax_path, ax_err):
             ax.tick_params(labelsize=7)
         fig.tight_layout()
@@ -221,7 +222,7 @@ def _norm(vmin: float, vmax: float):
 #: Views of the path: (horizontal axis, vertical axis) indices into XYZ.
 _VIEW_AXES = {"XY": (0, 1), "XZ": (0, 2), "YZ": (1, 2)}
 #: Z-only cutting moves longer than this share of the cutting length call for side views (drilling).
-_Z_ONLY_SHARE = 0.2
+_Z_ONLY_SHARE = 0.5
 #: Depth span (mm) of the XY-moving cutting moves above which the part is cut at several depths or in 3-D.
 _DEPTH_SPAN_MM = 0.01
 
@@ -282,6 +283,8 @@ def plot_path_views(fig, views: dict, xyz: np.ndarray, cutting: np.ndarray, feed
             ax.add_collection(lines)
             coloured = coloured or lines
             ax.autoscale()
+        else:
+            ax.text(0.5, 0.5, "no motion in this program", transform=ax.transAxes, ha="center")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(f"{label[0]} (mm)")
         ax.set_ylabel(f"{label[1]} (mm)")
@@ -303,7 +306,7 @@ def _stretches(points: np.ndarray, pieces: np.ndarray) -> np.ndarray:
 
 
 def plot_error_envelope(ax, t_end_s: np.ndarray, error_mm: np.ndarray, tolerance_mm: float,
-                        bin_s: float = 0.0) -> None:  # fmt: skip
+                        bin_s: float = 0.0, fontsize: float | None = None) -> None:  # fmt: skip
     """Contour error over time as a max envelope: bin k (ending at ``t_end_s[k]``, the first starting at
     0) drawn at its largest error, filled below, with the tolerance line; the legend sits under the axes
     so it never hides the line."""
@@ -311,7 +314,7 @@ def plot_error_envelope(ax, t_end_s: np.ndarray, error_mm: np.ndarray, tolerance
     if len(t_end_s):
         x = np.concatenate(([0.0], t_end_s))
         y = np.concatenate((error_mm[:1], error_mm)) * 1000.0
-        what = f"max per {bin_s * 1000:.0f} ms" if bin_s > 0 else "max per step"
+        what = f"max per {bin_s * 1000:.0f} ms" if bin_s > 0 else "max per bin"
         ax.fill_between(x, y, step="pre", color="C0", alpha=0.3, lw=0)
         ax.step(x, y, where="pre", color="C0", lw=0.8, label=f"contour error ({what})")
         top = max(tol_um, float(np.max(y)))
@@ -321,5 +324,5 @@ def plot_error_envelope(ax, t_end_s: np.ndarray, error_mm: np.ndarray, tolerance
     ax.set_ylim(0.0, 1.12 * top)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("contour error (µm)")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False, fontsize=fontsize)
 
