@@ -223,3 +223,19 @@ def test_one_line_gcode_with_a_slash_is_text_not_a_path(capsys):
     assert status == 0 and out == ""
     status, out, err = run_main(["trace", "examples/no-such-part"], capsys)
     assert status == 2 and out == "" and "not a built-in" in err and "nor an existing file" in err
+
+
+def test_docs_cli_matches_the_code():
+    # docs/cli.md is derived from these constants; a change to one without the other fails here.
+    from cnc_gym.envs.render import DEFAULT_MAX_BINS
+    from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS
+    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PLOT_FORMATS
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
+    for key in JSON_KEYS:
+        assert f"`{key}`" in text, key
+    assert f"default {DEFAULT_MAX_BLOCKS:,}" in text
+    assert f"at most {DEFAULT_MAX_BINS} time bins" in text
+    assert f"exceeds {LONG_RUN_NOTICE_S / 60:g} minutes" in text
+    assert f"| {EXIT_TRUNCATED} | `run` only: truncated" in text
+    assert all(f"`{suffix}`" in text for suffix in PLOT_FORMATS)
