@@ -273,3 +273,20 @@ def test_a_plot_that_cannot_be_written_is_reported_as_a_write_error(capsys, tmp_
     captured = capsys.readouterr()
     assert status == 2 and captured.out == "" and len(captured.err.splitlines()) == 1
     assert "cannot read" not in captured.err and "plot" in captured.err
+
+
+def test_drilled_holes_show_as_dots_seen_from_above():
+    from pathlib import Path
+
+    from matplotlib.collections import PathCollection
+
+    drill = Path(__file__).resolve().parents[1] / "examples" / "drill.nc"
+    result = simulate(drill)
+    fig = run_figure(result)
+    try:
+        ax_xy = fig.axes[0]
+        dots = [c for c in ax_xy.collections if isinstance(c, PathCollection)]
+        assert len(dots) == 1 and len(dots[0].get_offsets()) == 6  # six holes
+        assert {ax.get_title() for ax in fig.axes} >= {"XZ view", "YZ view"}
+    finally:
+        plt.close(fig)

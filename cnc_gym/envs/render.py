@@ -281,6 +281,15 @@ def plot_path_views(fig, views: dict, xyz: np.ndarray, cutting: np.ndarray, feed
             lines = LineCollection(segments[reached], cmap="viridis", norm=norm, linewidths=2)
             lines.set_array(feed[reached])
             ax.add_collection(lines)
+            # Cuts straight into the view (drilling seen from above) are points: mark each place once, in
+            # the colour of the largest feed cut there.
+            end_on = reached & (np.hypot(*(pts[1:] - pts[:-1]).T) <= 1e-9)
+            if np.any(end_on):
+                spots, where = np.unique(np.round(pts[:-1][end_on], 6), axis=0, return_inverse=True)
+                spot_feed = np.zeros(len(spots))
+                np.maximum.at(spot_feed, where.ravel(), feed[end_on])
+                ax.scatter(spots[:, 0], spots[:, 1], c=spot_feed, cmap="viridis", norm=norm, s=36, zorder=3,
+                           edgecolors="k", linewidths=0.5)  # fmt: skip
             coloured = coloured or lines
             ax.autoscale()
         else:
