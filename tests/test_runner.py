@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import json
 import math
+from pathlib import Path
 
 import gymnasium
 import matplotlib.pyplot as plt
@@ -276,8 +277,6 @@ def test_a_plot_that_cannot_be_written_is_reported_as_a_write_error(capsys, tmp_
 
 
 def test_drilled_holes_show_as_dots_seen_from_above():
-    from pathlib import Path
-
     from matplotlib.collections import PathCollection
 
     drill = Path(__file__).resolve().parents[1] / "examples" / "drill.nc"
