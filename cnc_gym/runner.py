@@ -229,7 +229,7 @@ def _check_max_time(max_time_s: float | None) -> None:
     if isinstance(max_time_s, bool) or not isinstance(max_time_s, int | float) or not (
         math.isfinite(max_time_s) and max_time_s > 0
     ):
-        raise ConfigError(f"max time must be a positive number of seconds, got {max_time_s!r}")
+        raise ConfigError(f"--max-time (max_time_s) must be a positive number of seconds, got {max_time_s!r}")
 
 
 def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_time_s: float | None,

@@ -174,7 +174,7 @@ def test_long_programs_are_announced_and_projected(monkeypatch):
 
 @pytest.mark.parametrize("bad", [0, -1.0, math.nan, math.inf, "5"])
 def test_bad_max_time_is_a_config_error(bad):
-    with pytest.raises(CncGymError, match="max time"):
+    with pytest.raises(CncGymError, match="max_time_s"):
         simulate("star", max_time_s=bad)
 
 
