@@ -17,7 +17,7 @@ What a program argument may be (``load_program``, the env's ``programs=``, ``cnc
 PROGRAM``) — one rule, :func:`resolve_program`:
 
 =======================  ===================================================================================
-``Path``                 a program file (it must exist and not be a folder; ``/dev/null`` is an empty program)
+``Path``, ``PathLike``   a program file (it must exist and not be a folder; ``/dev/null``: an empty program)
 :class:`ProgramText`     G-code text, never taken for a name or a path
 :class:`Program`         an already interpreted program (what :func:`load_program` returns), used as is
 ``str``                  in this order: a built-in name; G-code text if it has a line break; a file if it
@@ -34,6 +34,7 @@ time is part of the key, so an edited file is read again).
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from dataclasses import dataclass
 from functools import lru_cache
@@ -80,8 +81,8 @@ class Program(NamedTuple):
 
 
 #: Everything a program argument may be (see the module docstring for the rule).
-ProgramLike = str | Path | ProgramText | Program
-PROGRAM_TYPES = (str, Path, ProgramText, Program)
+ProgramLike = str | os.PathLike | ProgramText | Program
+PROGRAM_TYPES = (str, os.PathLike, ProgramText, Program)
 
 
 @dataclass(frozen=True)
@@ -106,12 +107,12 @@ def program_path(name: str) -> Path:
     return PROGRAMS_DIR / f"{name}.nc"
 
 
-def resolve_program(program: str | Path | ProgramText) -> ProgramSource:
+def resolve_program(program: str | os.PathLike | ProgramText) -> ProgramSource:
     """Apply the rule of the module docstring: a built-in, a file or text. Raises ConfigError otherwise."""
     if isinstance(program, ProgramText):
         return ProgramSource("text", program.name or _text_name(program.text), text=program.text)
-    if isinstance(program, Path):
-        return _file_source(program)
+    if isinstance(program, os.PathLike):
+        return _file_source(Path(program))
     if not isinstance(program, str):
         raise ConfigError(
             "a program must be a built-in name, a path, G-code text or a ProgramText, "
