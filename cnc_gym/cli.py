@@ -117,8 +117,8 @@ def cmd_trace(args: argparse.Namespace) -> int:
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)
-    if source.kind == "text":
-        toolpath = interpret(source.text, file=f"<{source.name}>", **options)
+    if source.path is None:  # text
+        toolpath = interpret(source.text or "", file=f"<{source.name}>", **options)
     else:
         toolpath = interpret_file(source.path, **options)
     # The whole program is interpreted before anything is printed: an error leaves stdout empty.

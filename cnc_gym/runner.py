@@ -167,7 +167,7 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
                     bar.n = round(100 * float(info.get("progress", 0.0)))
                     bar.refresh()
                 now = time.perf_counter()
-                if now >= projection_due:
+                if log is not None and now >= projection_due:
                     projection_due = math.inf
                     _project_wall_time(log, info, nominal, max_time_s, now - started)
             if max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9:

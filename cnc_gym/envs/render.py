@@ -19,6 +19,9 @@ import numpy as np
 from cnc_gym.errors import ConfigError
 
 if TYPE_CHECKING:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     from cnc_gym.envs.feedrate import FeedrateEnv
 
 _FIG_SIZE_IN = (8.0, 4.0)
@@ -143,8 +146,8 @@ class EpisodeRenderer:
         self._samples = BinnedSeries({"x": "last", "y": "last", "z": "last", "error": "max"}, max_bins)
         self._path_xy: np.ndarray | None = None
         self._path_key: int | None = None
-        self._figure = None
-        self._canvas = None
+        self._figure: Figure | None = None
+        self._canvas: FigureCanvasAgg | None = None
 
     def clear(self) -> None:
         self._samples.clear()
@@ -165,16 +168,17 @@ class EpisodeRenderer:
         from matplotlib.collections import LineCollection
         from matplotlib.figure import Figure
 
-        if self._figure is None:
+        if self._figure is None or self._canvas is None:
             self._figure = Figure(figsize=_FIG_SIZE_IN, dpi=_DPI)
             self._canvas = FigureCanvasAgg(self._figure)
-        if self._path_key != id(env.toolpath):
+        if self._path_xy is None or self._path_key != id(env.toolpath):
             self.start(env)
-        fig = self._figure
+        fig, canvas, path_xy = self._figure, self._canvas, self._path_xy
+        assert path_xy is not None  # start() sets it
         fig.clf()
         ax_path, ax_err = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.1, 1.0]})
         tol = self.tolerance_mm
-        ax_path.plot(self._path_xy[:, 0], self._path_xy[:, 1], color="0.75", lw=2.5, label="programmed")
+        ax_path.plot(path_xy[:, 0], path_xy[:, 1], color="0.75", lw=2.5, label="programmed")
         if self._samples.count:
             series = self._samples.arrays()
             error = series["error"]
@@ -182,7 +186,8 @@ class EpisodeRenderer:
             if len(xy) > 1:
                 # Colour each sample by its contour error: green within tolerance, red at 2× tolerance.
                 segments = np.stack((xy[:-1], xy[1:]), axis=1)
-                lines = LineCollection(segments, cmap="RdYlGn_r", norm=_norm(0.0, 2.0 * tol), lw=1.2)
+                lines = LineCollection(segments, cmap="RdYlGn_r", norm=_norm(0.0, 2.0 * tol),  # type: ignore[arg-type]
+                                       lw=1.2)  # (an (n, 2, 2) array is a valid sequence of segments)
                 lines.set_array(error[1:])
                 ax_path.add_collection(lines)
                 fig.colorbar(lines, ax=ax_path, label="contour error (mm)", fraction=0.046, pad=0.04)
@@ -202,8 +207,8 @@ class EpisodeRenderer:
         for ax in (ax_path, ax_err):
             ax.tick_params(labelsize=7)
         fig.tight_layout()
-        self._canvas.draw()
-        return np.asarray(self._canvas.buffer_rgba())[:, :, :3].copy()
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
 
     def close(self) -> None:
         if self._figure is not None:

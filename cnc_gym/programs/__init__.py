@@ -91,8 +91,8 @@ class ProgramSource:
 
     kind: Literal["builtin", "file", "text"]
     name: str
-    path: Path | None = None  # builtin, file
-    text: str | None = None  # text
+    path: Path | None = None  # builtin and file (None for text)
+    text: str | None = None  # text (None for builtin and file)
 
 
 def program_names() -> list[str]:
@@ -147,12 +147,11 @@ def load_program(program: ProgramLike, dialect: str = "gsk25i",
         return program
     source = resolve_program(program)
     key = machine  # machines are frozen and hashable: part of the cache key
-    if source.kind == "text":
-        return Program(source.name, _load_text(source.text, source.name, dialect, key, max_blocks))
-    path = source.path
+    if source.path is None:  # text
+        return Program(source.name, _load_text(source.text or "", source.name, dialect, key, max_blocks))
     # The modification time is part of the cache key so an edited file is read again.
-    mtime = 0.0 if source.kind == "builtin" else path.stat().st_mtime
-    return Program(source.name, _load_file(str(path.resolve()), dialect, mtime, key, max_blocks))
+    mtime = 0.0 if source.kind == "builtin" else source.path.stat().st_mtime
+    return Program(source.name, _load_file(str(source.path.resolve()), dialect, mtime, key, max_blocks))
 
 
 def _file_source(path: Path) -> ProgramSource:
