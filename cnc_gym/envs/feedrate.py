@@ -18,7 +18,7 @@ from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig, load_machine
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.motion import kernel as _kernel
-from cnc_gym.programs import load_program
+from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 # Columns of the controller's rows (Controller.advance_rows) the step reads.
@@ -200,12 +200,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     - **Termination**: the controller has finished the program (reference at rest at the end, dwells
       done) and every axis is within the in-position width (``in_position_mm``).
+    - A program without motion (nothing but modal codes, spindle or tool commands, ``M30``; or an empty
+      file) terminates on the first step with reward 0 and ``cycle_time_s`` 0.
     - **Truncation**: after ``max_episode_steps`` control steps (default: 5 × ``T_nominal`` / ``dt`` plus
       one second to settle), e.g. when the knob is held at 0.
 
     ## Arguments
 
-    ``programs`` (built-in names, paths or G-code text; None = the default task's set), ``dialect``,
+    ``programs`` (one program or a list: built-in names, paths, G-code text, ``ProgramText`` or interpreted
+    ``Program``\ s, by the rule of :mod:`cnc_gym.programs`; None = the default task's set), ``dialect``,
     ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
     of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
     ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
@@ -232,7 +235,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        programs: Sequence[str | Path] | str | Path | None = None,
+        programs: Sequence[ProgramLike] | ProgramLike | None = None,
         dialect: str = "gsk25i",
         machine: str | Path | MachineConfig = "vmc-small",
         action_mode: str = "override",
@@ -346,7 +349,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             if not 0 <= index_or_name < len(self._programs):
                 raise ConfigError(f"program index {index_or_name} out of range 0..{len(self._programs) - 1}")
             name, toolpath = self._programs[int(index_or_name)]
-        elif isinstance(index_or_name, str | Path):
+        elif isinstance(index_or_name, PROGRAM_TYPES):
             found = [p for p in self._programs if p[0] == index_or_name]
             name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine)
         else:
@@ -418,6 +421,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         knob = self._parse_action(action)
         self._knob = knob
+        if not len(self.toolpath):  # a program without motion (only M30, or empty): done at once, in 0 s
+            self._steps += 1
+            return self._observe(), 0.0, True, False, self._info(0.0, 0.0)
         controller = self.controller
         n = self.ticks_per_step
         if not controller.finished:
