@@ -407,7 +407,7 @@ def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, h
     sum_sq = 0.0
     n_cut = 0
     violation_length = 0.0
-    violation_time = 0.0
+    n_over = 0
     s_prev = s_before
     for t in range(ticks):
         x = error[t]
@@ -419,10 +419,11 @@ def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, h
         # samples is the sum over cutting samples; only the count needs the cutting test.
         if 0 <= h < n_rows and seg_class[h] != C.SKIP:
             n_cut += 1
-        if x > tolerance:
+        if x > tolerance:  # per servo sample: the reference's path advance and time while over tolerance
             violation_length += out[t, K.O_S] - s_prev
-            violation_time += cfg_f[CF_PERIOD]
+            n_over += 1
         s_prev = out[t, K.O_S]
+    violation_time = n_over * cfg_f[CF_PERIOD]
     dx = reference[ticks - 1, 0] - actual[ticks - 1, 0]
     dy = reference[ticks - 1, 1] - actual[ticks - 1, 1]
     dz = reference[ticks - 1, 2] - actual[ticks - 1, 2]
@@ -469,6 +470,24 @@ def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, h
 
 
 @njit(cache=True, nogil=True)
+def _no_motion_step(e, bank_f, bank_i, sf, si, obs, ahead) -> None:
+    """The step of a program without motion (only modal codes, M30, or nothing): done at once, in 0 s,
+    with reward 0."""
+    (seg_f, pt_f, _, _, _, _, scalars, _, pt_i, _, _, _, _, _, _) = _program(bank_f, bank_i, si[e, I_PROGRAM])
+    si[e, I_STEPS] += 1
+    sf[e, F_REWARD] = 0.0
+    si[e, I_TERMINATED] = 1
+    si[e, I_TRUNCATED] = 0
+    _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs)
+
+
+@njit(cache=True, nogil=True)
+def _no_motion_modular(e, bank_f, bank_i, sf, si, obs, work_f) -> None:
+    _, _, _, _, _, ahead = _work(work_f, e, bank_i[CI_TICKS], bank_i[CI_WINDOW], bank_i[CI_POINTS])
+    _no_motion_step(e, bank_f, bank_i, sf, si, obs, ahead)
+
+
+@njit(cache=True, nogil=True)
 def _run_env(e, bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions, obs, work_f, work_i,
              stepping) -> None:  # fmt: skip
     """One env's part of a batch call: reset it (row flag I_RESET), or step it (if ``stepping``)."""
@@ -486,6 +505,9 @@ def _run_env(e, bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actio
         return
     knob = actions[e]
     sf[e, F_SIGNAL + SIG_KNOB] = knob
+    if counts[_N_ROWS] == 0:
+        _no_motion_step(e, bank_f, bank_i, sf, si, obs, ahead)
+        return
     s_before = sf[e, F_CTRL + K.S_S]
     _reference(e, bank_f, bank_i, sf, si, knob, seg_f, pt_f, dwell_f, curve_f, seg_i, pt_i, scalars, out,
                reference, hints, pts)  # fmt: skip
@@ -675,11 +697,13 @@ class FeedrateBatch:
             rows = np.zeros((self.n_envs, ticks, K.N_OUT))
             s_before = sf[:, F_CTRL + K.S_S].copy()
             feed_mode = bool(self.config["feed_mode"])
+            no_motion = np.zeros(self.n_envs, dtype=bool)
             for e in range(self.n_envs):
                 knob = float(self.actions[e])
                 sf[e, F_SIGNAL + SIG_KNOB] = knob
                 controller = self.controller(e)
-                if si[e, I_RESET]:
+                no_motion[e] = not si[e, I_RESET] and len(self.program(e).toolpath) == 0
+                if si[e, I_RESET] or no_motion[e]:
                     reference[e] = sf[e, F_LAST_REF : F_LAST_REF + 3]
                 elif not controller.finished:
                     if feed_mode:
@@ -701,6 +725,9 @@ class FeedrateBatch:
             settled = self.plant.settled(self.config["in_position_mm"])
             for e in range(self.n_envs):
                 if si[e, I_RESET]:
+                    continue
+                if no_motion[e]:  # (its plant was stepped at rest, where it stays)
+                    _no_motion_modular(e, bank_f, bank_i, sf, si, self.observations, self.work_f)
                     continue
                 controller = self.controller(e)
                 if controller.waiting_in_position and settled[e]:
