@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from cnc_gym.envs.fused import SIGNALS, FeedrateBatch, ObservationSpec, RewardSpec
+from cnc_gym.envs.fused import FeedrateBatch, ObservationSpec, RewardSpec
 from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
@@ -87,14 +87,9 @@ def observation_spec_v0(lookahead_points: int, v_ref: float, a_ref: float, max_o
         "turn_angle": ("none", 0.0, 1 / math.pi, 1),
         "programmed_feed": ("none", 0.0, 1 / v_ref, 2),
     }
-    entries = []
-    for feature in SCALAR_FEATURES:
-        signal, scale, low, high = scalars[feature]
-        entries.append(("signal", SIGNALS.index(signal), "none", 0.0, scale, low, high))
-    for row in LOOKAHEAD_FEATURES:
-        transform, param, scale, high = blocks[row]
-        entries += [(row, j, transform, param, scale, 0, high) for j in range(lookahead_points)]
-    return ObservationSpec(tuple(entries))
+    signals = tuple(scalars[feature] for feature in SCALAR_FEATURES)
+    lookahead = tuple((row, *blocks[row][:3], 0.0, blocks[row][3]) for row in LOOKAHEAD_FEATURES)
+    return ObservationSpec(signals, lookahead, lookahead_points)
 
 
 def reward_spec_v0(weights: RewardWeights) -> RewardSpec:

@@ -8,10 +8,10 @@ at every servo sample, the statistics, the reward, the end of the episode and th
 flagged for a reset are reset in the same call instead (Gymnasium's next-step autoreset).
 
 The observation and the reward are declared, not coded: the kernel computes a vector of named per-step
-*signals* (:data:`SIGNALS`) and assembles the observation from an :class:`ObservationSpec` (per entry: a
-signal or a look-ahead value, a transform, a scale, bounds) and the reward from a :class:`RewardSpec`
-(a weighted sum of transformed signals). A new env version defines its own specs (and, if it needs one,
-adds a signal here) without copying the kernel.
+*signals* (:data:`SIGNALS`) and assembles the observation from an :class:`ObservationSpec` (signals and
+blocks of look-ahead values, each with a transform, a scale and bounds) and the reward from a
+:class:`RewardSpec` (a weighted sum of transformed signals). A new env version defines its own specs (and,
+if it needs one, adds a signal here) without copying the kernel.
 
 Each program is packed once (:class:`PackedProgram`: the controller's limit tables, the contour meter's
 tables, the per-program constants) and all programs of a batch are concatenated into one float and one
@@ -79,7 +79,14 @@ _F_ACC = F_SIGNAL + len(SIGNALS)
 (F_ERROR_MAX, F_ERROR_SQ_SUM, F_REWARD, F_VIOLATION_LENGTH, F_VIOLATION_TIME,
  F_KV_MIN) = range(_F_ACC, _F_ACC + 6)  # fmt: skip
 F_LAST_REF = _F_ACC + 6  # x, y, z of the last reference (held while the program is finished)
-N_STATE_F = F_LAST_REF + 3
+# The step's outputs, written by the kernel for Python to read in one go: reward, terminated, truncated,
+# then the info values in OUTPUT_INFO_KEYS order (integers as floats: exact).
+F_OUT = F_LAST_REF + 3
+OUTPUT_INFO_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm",
+                    "tolerance_mm", "violations", "violation_length_mm", "violation_time_s", "cost", "line",
+                    "override", "feed_mm_min", "path_s", "progress", "steps")  # fmt: skip
+_OUT_INT = tuple(3 + i for i, key in enumerate(OUTPUT_INFO_KEYS) if key in ("violations", "line", "steps"))
+N_STATE_F = F_OUT + 3 + len(OUTPUT_INFO_KEYS)
 # Int state, one row per env: the controller's state vector, then the episode's counters and flags.
 I_CTRL = 0  # kernel.N_STATE_I columns
 (I_PROGRAM, I_STEPS, I_TICKS, I_VIOLATIONS, I_SAMPLES, I_LAST_SEGMENT, I_LINE, I_TERMINATED, I_TRUNCATED,
@@ -98,42 +105,55 @@ _DIR_STRIDE = 2 * (len(_FLOAT_TABLES) + len(_INT_TABLES))
 # Config (shared by every env), at the start of the bank: floats then ints.
 (CF_TOLERANCE, CF_IN_POSITION, CF_MAX_OVERRIDE, CF_MAX_FEED, CF_HORIZON, CF_PERIOD) = range(6)
 N_CONFIG_F = 6
-(CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_REWARD, CI_PROGRAMS,
- CI_OBS_AT, CI_REWARD_AT) = range(10)  # fmt: skip
-N_CONFIG_I = 10
-# Observation spec rows (floats): source (SIGNAL or a look-ahead row + 1), index, transform, parameter,
-# scale, low, high. Reward spec rows: signal, transform, parameter, weight.
-OBS_SIGNAL = 0
+(CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_OBS_BLOCKS, CI_REWARD, CI_PROGRAMS,
+ CI_OBS_AT, CI_BLOCKS_AT, CI_REWARD_AT) = range(12)  # fmt: skip
+N_CONFIG_I = 12
+# Observation spec rows (floats): per signal entry: signal, scale, low, high; per look-ahead block: row,
+# transform, parameter, scale, low, high. Reward spec rows: signal, transform, parameter, weight.
 T_NONE, T_SATURATE, T_CAPPED_SQUARE = 0, 1, 2  # transforms: x, xp/(1 + xp), min(x, p)²
-_OBS_COLS, _REWARD_COLS = 7, 4
+_OBS_COLS, _BLOCK_COLS, _REWARD_COLS = 4, 6, 4
 
 
 @dataclass(frozen=True)
 class ObservationSpec:
-    """The observation, entry by entry: ``(source, index, transform, parameter, scale, low, high)``.
+    """The observation: ``signals`` entries then ``lookahead`` blocks, in order.
 
-    ``source`` is ``"signal"`` (``index`` into :data:`SIGNALS`) or a look-ahead row name
-    (:data:`LOOKAHEAD_ROWS`, ``index`` the point); ``transform`` ``"none"`` or ``"saturate"``
-    (x·p / (1 + x·p)). The entry is ``clip(transform(x) · scale, low, high)`` as float32, 0 where NaN.
+    A signal entry ``(name, scale, low, high)`` is one of :data:`SIGNALS`; a look-ahead block ``(row,
+    transform, parameter, scale, low, high)`` is ``points`` entries, a row of :data:`LOOKAHEAD_ROWS` at
+    each point ahead, ``transform`` ``"none"`` or ``"saturate"`` (x·p / (1 + x·p)). Each entry is
+    ``clip(transform(x) · scale, low, high)`` as float32, 0 where NaN.
     """
 
-    entries: tuple[tuple[str, int, str, float, float, float, float], ...]
+    signals: tuple[tuple[str, float, float, float], ...]
+    lookahead: tuple[tuple[str, str, float, float, float, float], ...]
+    points: int
 
-    def table(self) -> np.ndarray:
-        rows = []
-        for source, index, transform, param, scale, low, high in self.entries:
-            code = OBS_SIGNAL if source == "signal" else 1 + LOOKAHEAD_ROWS.index(source)
-            rows.append((code, index, {"none": T_NONE, "saturate": T_SATURATE}[transform], param, scale, low,
-                         high))  # fmt: skip
-        return np.array(rows, dtype=np.float64).reshape(-1, _OBS_COLS)
+    def tables(self) -> tuple[np.ndarray, np.ndarray]:
+        """The signal rows (n, 4) and the block rows (m, 6) of the kernel."""
+        rows = [(SIGNALS.index(name), scale, low, high) for name, scale, low, high in self.signals]
+        codes = {"none": T_NONE, "saturate": T_SATURATE}
+        blocks = [(LOOKAHEAD_ROWS.index(row), codes[transform], param, scale, low, high)
+                  for row, transform, param, scale, low, high in self.lookahead]  # fmt: skip
+        return (np.array(rows, dtype=np.float64).reshape(-1, _OBS_COLS),
+                np.array(blocks, dtype=np.float64).reshape(-1, _BLOCK_COLS))  # fmt: skip
+
+    @property
+    def size(self) -> int:
+        return len(self.signals) + len(self.lookahead) * self.points
+
+    def _bounds(self, column: int) -> np.ndarray:
+        values = [entry[column] for entry in self.signals]
+        for block in self.lookahead:
+            values += [block[column + 2]] * self.points
+        return np.array(values, dtype=np.float32)
 
     @property
     def low(self) -> np.ndarray:
-        return np.array([e[5] for e in self.entries], dtype=np.float32)
+        return self._bounds(2)
 
     @property
     def high(self) -> np.ndarray:
-        return np.array([e[6] for e in self.entries], dtype=np.float32)
+        return self._bounds(3)
 
 
 @dataclass(frozen=True)
@@ -188,10 +208,11 @@ class ProgramBank:
     """The config, the observation and reward tables and every program's tables in one float and one int
     array (see :func:`_program`); rebuilt when a program is added."""
 
-    def __init__(self, config_f: np.ndarray, config_i: np.ndarray, obs_table: np.ndarray,
+    def __init__(self, config_f: np.ndarray, config_i: np.ndarray, obs_tables: tuple[np.ndarray, np.ndarray],
                  reward_table: np.ndarray) -> None:  # fmt: skip
         self.config_f, self.config_i = config_f, config_i
-        self.obs_table, self.reward_table = obs_table, reward_table
+        self.obs_table, self.block_table = obs_tables
+        self.reward_table = reward_table
         self.programs: list[PackedProgram] = []
         self.floats = np.zeros(0)
         self.ints = np.zeros(0, dtype=np.int64)
@@ -202,7 +223,7 @@ class ProgramBank:
         return len(self.programs) - 1
 
     def _pack(self) -> None:
-        head_f = [self.config_f, self.obs_table.ravel(), self.reward_table.ravel()]
+        head_f = [self.config_f, self.obs_table.ravel(), self.block_table.ravel(), self.reward_table.ravel()]
         n_head_f = sum(len(x) for x in head_f)
         n_head_i = N_CONFIG_I + _DIR_STRIDE * len(self.programs)
         floats, ints = list(head_f), []
@@ -221,7 +242,8 @@ class ProgramBank:
         config_i = self.config_i.copy()
         config_i[CI_PROGRAMS] = len(self.programs)
         config_i[CI_OBS_AT] = len(self.config_f)
-        config_i[CI_REWARD_AT] = len(self.config_f) + self.obs_table.size
+        config_i[CI_BLOCKS_AT] = config_i[CI_OBS_AT] + self.obs_table.size
+        config_i[CI_REWARD_AT] = config_i[CI_BLOCKS_AT] + self.block_table.size
         self.floats = np.concatenate(floats)
         self.ints = np.concatenate([config_i, directory.ravel(), *ints])
 
@@ -241,7 +263,7 @@ def _int_table(bank_f, bank_i, p, t, n_cols):
     return bank_i[start : start + rows * n_cols].reshape((rows, n_cols))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _program(bank_f, bank_i, p):
     """Views of program p's tables (see _FLOAT_TABLES, _INT_TABLES)."""
     seg_f = _float_table(bank_f, bank_i, p, 0, K.N_SEG_F)
@@ -263,7 +285,7 @@ def _program(bank_f, bank_i, p):
             first_back, nurbs_i, lines, counts)  # fmt: skip
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _work(work_f, e, ticks, window, points):
     """Env e's scratch rows: controller output (ticks, N_OUT), reference and actual (ticks, 3), contour error
     (ticks,), the controller's point buffer (window + 2, 3) and the look-ahead block (5, points)."""
@@ -290,7 +312,7 @@ def work_size(ticks: int, window: int, points: int) -> int:
 
 @njit(cache=True, nogil=True)
 def _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs) -> None:
-    """The look-ahead block, the observation signals and the observation row of env e."""
+    """The look-ahead block, the observation signals, the observation row and the outputs of env e."""
     cfg_f = bank_f[:N_CONFIG_F]
     st_f = sf[e, F_CTRL : F_CTRL + K.N_STATE_F]
     st_i = si[e, I_CTRL : I_CTRL + K.N_STATE_I]
@@ -302,19 +324,59 @@ def _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs) 
     sig[SIG_OVERRIDE] = 1.0 if st_f[K.S_OV] < 0.0 else st_f[K.S_OV]
     sig[SIG_PATH_FRACTION] = st_f[K.S_S] * scalars[_S_INV_LENGTH]
     sig[SIG_DISTANCE_TO_STOP] = ahead[4, 0]
-    at = bank_i[CI_OBS_AT]
-    for i in range(bank_i[CI_OBS]):
-        row = at + i * _OBS_COLS
-        source = int(bank_f[row])
-        index = int(bank_f[row + 1])
-        x = sig[index] if source == OBS_SIGNAL else ahead[source - 1, index]
-        if int(bank_f[row + 2]) == T_SATURATE:
-            kl = x * bank_f[row + 3]
-            x = kl / (kl + 1.0)
-        x *= bank_f[row + 4]
-        if x != x:  # a NaN from upstream would poison a policy
-            x = 0.0
-        obs[e, i] = min(max(x, bank_f[row + 5]), bank_f[row + 6])
+    row = bank_f[bank_i[CI_OBS_AT] :]
+    n_signals = bank_i[CI_OBS]
+    for i in range(n_signals):
+        x = sig[int(row[4 * i])] * row[4 * i + 1]
+        obs[e, i] = _clip(x, row[4 * i + 2], row[4 * i + 3])
+    block = bank_f[bank_i[CI_BLOCKS_AT] :]
+    n_points = ahead.shape[1]
+    at = n_signals
+    for b in range(bank_i[CI_OBS_BLOCKS]):
+        values = ahead[int(block[6 * b])]
+        saturate = int(block[6 * b + 1]) == T_SATURATE
+        param, scale, low, high = block[6 * b + 2], block[6 * b + 3], block[6 * b + 4], block[6 * b + 5]
+        for j in range(n_points):
+            x = values[j]
+            if saturate:
+                kl = x * param
+                x = kl / (kl + 1.0)
+            obs[e, at + j] = _clip(x * scale, low, high)
+        at += n_points
+    _write_outputs(e, bank_f, sf, si)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _clip(x, low, high):
+    """An observation entry: NaN from upstream becomes 0 (it would poison a policy), then clipped."""
+    if x != x:
+        x = 0.0
+    return min(max(x, low), high)
+
+
+@njit(cache=True, nogil=True)
+def _write_outputs(e, bank_f, sf, si) -> None:
+    """The step's outputs block of env e (see F_OUT), from its state."""
+    out = sf[e, F_OUT:]
+    samples = si[e, I_SAMPLES]
+    out[0] = sf[e, F_REWARD]
+    out[1] = si[e, I_TERMINATED]
+    out[2] = si[e, I_TRUNCATED]
+    out[3] = si[e, I_TICKS] * bank_f[CF_PERIOD]
+    out[4] = sf[e, F_SIGNAL + SIG_ERROR_STEP]
+    out[5] = sf[e, F_ERROR_MAX]
+    out[6] = math.sqrt(sf[e, F_ERROR_SQ_SUM] / samples) if samples else 0.0
+    out[7] = bank_f[CF_TOLERANCE]
+    out[8] = si[e, I_VIOLATIONS]
+    out[9] = sf[e, F_VIOLATION_LENGTH]
+    out[10] = sf[e, F_VIOLATION_TIME]
+    out[11] = sf[e, F_SIGNAL + SIG_VIOLATED]
+    out[12] = si[e, I_LINE]
+    out[13] = sf[e, F_SIGNAL + SIG_OVERRIDE]
+    out[14] = sf[e, F_SIGNAL + SIG_SPEED] * 60.0
+    out[15] = sf[e, F_CTRL + K.S_S]
+    out[16] = sf[e, F_SIGNAL + SIG_PROGRESS]
+    out[17] = si[e, I_STEPS]
 
 
 @njit(cache=True, nogil=True)
@@ -394,10 +456,10 @@ def _reference(e, bank_f, bank_i, sf, si, knob, seg_f, pt_f, dwell_f, curve_f, s
 
 @njit(cache=True, nogil=True)
 def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, hints, out, s_before, obs,
-                 ahead) -> None:  # fmt: skip
-    """After the plant and the contour meter: statistics, reward, end of episode and observation of env e."""
-    (seg_f, pt_f, dwell_f, _, _, _, scalars, seg_i, pt_i, seg_class, _, _, _, lines, counts) = _program(
-        bank_f, bank_i, si[e, I_PROGRAM])
+                 ahead, seg_f, pt_f, dwell_f, scalars, seg_i, pt_i, seg_class, lines,
+                 counts) -> None:  # fmt: skip
+    """After the plant and the contour meter: statistics, reward, end of episode and observation of env e
+    (on the tables of its program)."""
     cfg_f = bank_f[:N_CONFIG_F]
     tolerance = cfg_f[CF_TOLERANCE]
     ticks = error.shape[0]
@@ -498,7 +560,7 @@ def _run_env(e, bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actio
     hints = work_i[e]
     p = si[e, I_PROGRAM]
     (seg_f, pt_f, dwell_f, curve_f, geometry, nurbs_f, scalars, seg_i, pt_i, seg_class, axes, first_back,
-     nurbs_i, _, counts) = _program(bank_f, bank_i, p)  # fmt: skip
+     nurbs_i, lines, counts) = _program(bank_f, bank_i, p)  # fmt: skip
     if si[e, I_RESET]:
         _reset_plant(e, scalars[_S_START : _S_START + 3], plant_x, plant_h, plant_v)
         _reset_episode(e, bank_f, bank_i, sf, si, obs, ahead)
@@ -521,7 +583,7 @@ def _run_env(e, bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actio
     C.measure_kernel(actual, hints, seg_class, axes, geometry, first_back, nurbs_f, nurbs_i,
                      bank_i[CI_WINDOW_AHEAD], error)  # fmt: skip
     _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, hints, out, s_before, obs,
-                 ahead)
+                 ahead, seg_f, pt_f, dwell_f, scalars, seg_i, pt_i, seg_class, lines, counts)
 
 
 @njit(cache=True, nogil=True)
@@ -556,8 +618,10 @@ def _clip_actions(actions, out) -> bool:
 def _finish_modular(e, bank_f, bank_i, sf, si, settled, reference, actual, error, hints, out, s_before, obs,
                     work_f) -> None:  # fmt: skip
     _, _, _, _, _, ahead = _work(work_f, e, bank_i[CI_TICKS], bank_i[CI_WINDOW], bank_i[CI_POINTS])
+    (seg_f, pt_f, dwell_f, _, _, _, scalars, seg_i, pt_i, seg_class, _, _, _, lines,
+     counts) = _program(bank_f, bank_i, si[e, I_PROGRAM])  # fmt: skip
     _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, hints, out, s_before, obs,
-                 ahead)
+                 ahead, seg_f, pt_f, dwell_f, scalars, seg_i, pt_i, seg_class, lines, counts)
 
 
 @njit(cache=True, nogil=True)
@@ -599,10 +663,11 @@ class FeedrateBatch:
         config_f = np.array([config["tolerance_mm"], config["in_position_mm"], config["max_override"],
                              config["max_feed_mm_min"], config["lookahead_mm"], self.period_s])  # fmt: skip
         config_i = np.zeros(N_CONFIG_I, dtype=np.int64)
-        config_i[[CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_REWARD]] = (
-            self.ticks, points, int(bool(config["feed_mode"])), 8, window, len(obs_spec.entries),
-            len(reward_spec.terms))  # fmt: skip
-        self.bank = ProgramBank(config_f, config_i, obs_spec.table(), reward_spec.table())
+        config_i[[CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_OBS_BLOCKS,
+                  CI_REWARD]] = (
+            self.ticks, points, int(bool(config["feed_mode"])), 8, window, len(obs_spec.signals),
+            len(obs_spec.lookahead), len(reward_spec.terms))  # fmt: skip
+        self.bank = ProgramBank(config_f, config_i, obs_spec.tables(), reward_spec.table())
         self.plant = ServoPlant(machine, n_envs=self.n_envs) if plant is None else plant
         self.fused = bool(getattr(self.plant, "compiled_step", False))
         if parallel is None:
@@ -614,20 +679,25 @@ class FeedrateBatch:
         self.state_f = np.zeros((self.n_envs, N_STATE_F))
         self.state_i = np.zeros((self.n_envs, N_STATE_I), dtype=np.int64)
         self._plant_version = -1  # the plant's gains are read into the state before the first call
-        self.observations = np.zeros((self.n_envs, len(obs_spec.entries)), dtype=np.float32)
+        self._args: tuple = ()  # the compiled call's arrays, rebuilt when the bank or the plant changes
+        self._args_bank: np.ndarray | None = None
+        self.observations = np.zeros((self.n_envs, obs_spec.size), dtype=np.float32)
         self.actions = np.zeros(self.n_envs)
         self.work_f = np.zeros((self.n_envs, work_size(self.ticks, window, points)))
         self.work_i = np.zeros((self.n_envs, self.ticks), dtype=np.int64)
         self._window, self._points = window, points
         self._controllers: list[dict[int, Controller]] = [{} for _ in range(self.n_envs)]
         self._names = np.empty(0, dtype=object)  # program names by bank index, for the infos
+        self._out_rows = [self.state_f[e, F_OUT:] for e in range(self.n_envs)]  # views, read every step
 
     # ------------------------------------------------------------------------------ programs
     def add_program(self, name: str, toolpath: Toolpath, time_fraction: float, max_episode_steps: int) -> int:
         """Pack a program into the bank; returns its index."""
         program = PackedProgram.build(name, toolpath, self.machine, self.window_back_mm, time_fraction,
                                       max_episode_steps)  # fmt: skip
-        return self.bank.add(program)
+        index = self.bank.add(program)
+        self._names = np.array([p.name for p in self.bank.programs] + [None], dtype=object)[:-1]
+        return index
 
     def find_program(self, name: str, toolpath: Toolpath) -> int | None:
         """The bank index of a program already packed (same name, same tool path object), else None."""
@@ -678,12 +748,15 @@ class FeedrateBatch:
 
     def _call(self, stepping: bool) -> None:
         plant = self.plant
-        if plant.model_version != self._plant_version:  # gains changed (ServoPlant.set_kv_scale)
+        if plant.model_version != self._plant_version or self._args_bank is not self.bank.floats:
+            # gains changed (ServoPlant.set_kv_scale), or a program joined the bank
             self._plant_version = plant.model_version
             self.state_f[:, F_KV_MIN] = plant.kv_min
-        self._run(self.bank.floats, self.bank.ints, self.state_f, self.state_i, plant._state, plant._history,
-                  plant._velocity, plant._lifted4_matrix(self.ticks), self.actions, self.observations,
-                  self.work_f, self.work_i, stepping)  # fmt: skip
+            self._args_bank = self.bank.floats
+            self._args = (self.bank.floats, self.bank.ints, self.state_f, self.state_i, plant._state,
+                          plant._history, plant._velocity, plant._lifted4_matrix(self.ticks), self.actions,
+                          self.observations, self.work_f, self.work_i)  # fmt: skip
+        self._run(*self._args, stepping)
 
     def _modular(self, reset_only: np.ndarray | None) -> None:
         """The step through the Controller, plant and meter objects (see the module docstring)."""
@@ -759,34 +832,16 @@ class FeedrateBatch:
     # ------------------------------------------------------------------------------ info
     def outcome(self, env: int) -> tuple[float, bool, bool, dict[str, Any]]:
         """Reward, terminated, truncated and info of env ``env``'s last step."""
-        f = self.state_f[env].tolist()
-        i = self.state_i[env].tolist()
-        return f[F_REWARD], bool(i[I_TERMINATED]), bool(i[I_TRUNCATED]), self._info(f, i)
+        out = self._out_rows[env].tolist()
+        for i in _OUT_INT:
+            out[i] = int(out[i])
+        info = dict(zip(OUTPUT_INFO_KEYS, out[3:], strict=False))  # (the lengths match by construction)
+        info["program"] = self._names[int(self.state_i[env, I_PROGRAM])]
+        return out[0], out[1] != 0.0, out[2] != 0.0, info
 
     def info(self, env: int) -> dict[str, Any]:
         """The env's info dict (see FeedrateEnv's docstring)."""
-        return self._info(self.state_f[env].tolist(), self.state_i[env].tolist())
-
-    def _info(self, f: list[float], i: list[int]) -> dict[str, Any]:
-        samples = i[I_SAMPLES]
-        return {
-            "cycle_time_s": i[I_TICKS] * self.period_s,
-            "contour_error_mm": f[F_SIGNAL + SIG_ERROR_STEP],
-            "contour_error_max_mm": f[F_ERROR_MAX],
-            "contour_error_rms_mm": math.sqrt(f[F_ERROR_SQ_SUM] / samples) if samples else 0.0,
-            "tolerance_mm": self.config["tolerance_mm"],
-            "violations": i[I_VIOLATIONS],
-            "violation_length_mm": f[F_VIOLATION_LENGTH],
-            "violation_time_s": f[F_VIOLATION_TIME],
-            "cost": f[F_SIGNAL + SIG_VIOLATED],
-            "line": i[I_LINE],
-            "override": f[F_SIGNAL + SIG_OVERRIDE],
-            "feed_mm_min": f[F_SIGNAL + SIG_SPEED] * 60.0,
-            "path_s": f[F_CTRL + K.S_S],
-            "progress": f[F_SIGNAL + SIG_PROGRESS],
-            "program": self.bank.programs[i[I_PROGRAM]].name,
-            "steps": i[I_STEPS],
-        }
+        return self.outcome(env)[3]
 
     def infos(self) -> dict[str, np.ndarray]:
         """Every env's info as one (N,) array per key (``program`` an object array)."""
@@ -795,62 +850,44 @@ class FeedrateBatch:
     def gather(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray], int]:
         """The last step's observations, rewards, terminated and truncated flags, infos (as
         :meth:`infos`) and the number of envs whose episode ended: fresh arrays, from one compiled call."""
-        obs, rewards, terminated, truncated, info_f, info_i, ended = _gather(
-            self.state_f, self.state_i, self.observations, self.period_s, self.config["tolerance_mm"])
-        infos = dict(zip(_INFO_FLOAT_KEYS, info_f, strict=True))
-        infos.update(zip(_INFO_INT_KEYS, info_i, strict=True))
-        if len(self._names) != len(self.bank.programs):
-            self._names = np.array([p.name for p in self.bank.programs] + [None], dtype=object)[:-1]
+        obs, rewards, terminated, truncated, info_f, info_i, ended = _gather(self.state_f, self.observations)
+        infos = dict(zip(OUTPUT_INFO_KEYS, info_f, strict=True))
+        infos.update(zip(_OUT_INT_KEYS, info_i, strict=True))
         infos["program"] = self._names[self.state_i[:, I_PROGRAM]]
         return obs, rewards, terminated, truncated, infos, int(ended)
 
 
-_INFO_FLOAT_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm",
-                    "tolerance_mm", "violation_length_mm", "violation_time_s", "cost", "override",
-                    "feed_mm_min", "path_s", "progress")  # fmt: skip
-_INFO_INT_KEYS = ("violations", "line", "steps")
+_OUT_INT_KEYS = tuple(OUTPUT_INFO_KEYS[i - 3] for i in _OUT_INT)
 
 
 @njit(cache=True, nogil=True)
-def _gather(sf, si, observations, period_s, tolerance_mm):
-    """Fresh output arrays of a batch step (see FeedrateBatch.gather): info rows in _INFO_FLOAT_KEYS and
-    _INFO_INT_KEYS order, one column per env."""
+def _gather(sf, observations):
+    """Fresh output arrays of a batch step (see FeedrateBatch.gather) from the envs' output blocks: info
+    rows in OUTPUT_INFO_KEYS order (the integer ones as int64), one column per env."""
     n = sf.shape[0]
     obs = observations.copy()
     rewards = np.empty(n)
     terminated = np.empty(n, dtype=np.bool_)
     truncated = np.empty(n, dtype=np.bool_)
-    info_f = np.empty((len(_INFO_FLOAT_KEYS), n))
-    info_i = np.empty((len(_INFO_INT_KEYS), n), dtype=np.int64)
+    n_info = len(OUTPUT_INFO_KEYS)
+    info_f = np.empty((n_info, n))
+    info_i = np.empty((len(_OUT_INT), n), dtype=np.int64)
     ended = 0
     for e in range(n):
-        rewards[e] = sf[e, F_REWARD]
-        terminated[e] = si[e, I_TERMINATED] != 0
-        truncated[e] = si[e, I_TRUNCATED] != 0
+        out = sf[e, F_OUT:]
+        rewards[e] = out[0]
+        terminated[e] = out[1] != 0.0
+        truncated[e] = out[2] != 0.0
         ended += terminated[e] or truncated[e]
-        samples = si[e, I_SAMPLES]
-        info_f[0, e] = si[e, I_TICKS] * period_s
-        info_f[1, e] = sf[e, F_SIGNAL + SIG_ERROR_STEP]
-        info_f[2, e] = sf[e, F_ERROR_MAX]
-        info_f[3, e] = math.sqrt(sf[e, F_ERROR_SQ_SUM] / samples) if samples else 0.0
-        info_f[4, e] = tolerance_mm
-        info_f[5, e] = sf[e, F_VIOLATION_LENGTH]
-        info_f[6, e] = sf[e, F_VIOLATION_TIME]
-        info_f[7, e] = sf[e, F_SIGNAL + SIG_VIOLATED]
-        info_f[8, e] = sf[e, F_SIGNAL + SIG_OVERRIDE]
-        info_f[9, e] = sf[e, F_SIGNAL + SIG_SPEED] * 60.0
-        info_f[10, e] = sf[e, F_CTRL + K.S_S]
-        info_f[11, e] = sf[e, F_SIGNAL + SIG_PROGRESS]
-        info_i[0, e] = si[e, I_VIOLATIONS]
-        info_i[1, e] = si[e, I_LINE]
-        info_i[2, e] = si[e, I_STEPS]
+        for k in range(n_info):
+            info_f[k, e] = out[3 + k]
+        for j in range(len(_OUT_INT)):
+            info_i[j, e] = int(out[_OUT_INT[j]])
     return obs, rewards, terminated, truncated, info_f, info_i, ended
 
 
 #: Info keys, in the order of :meth:`FeedrateBatch.info`.
-INFO_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm",
-             "tolerance_mm", "violations", "violation_length_mm", "violation_time_s", "cost", "line",
-             "override", "feed_mm_min", "path_s", "progress", "program", "steps")  # fmt: skip
+INFO_KEYS = (*OUTPUT_INFO_KEYS, "program")
 
 
 def _dependencies() -> None:

@@ -168,16 +168,32 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
         py = points[i, 1]
         pz = points[i, 2]
         best = np.inf
+        # Lines and flat arcs, the point's own segment first: then an arc whose circle is farther than the
+        # best so far (the lower bound leaves a margin for rounding) needs no angle.
+        if LINE <= seg_class[own] <= FLAT_ARC and first <= own < last:
+            iu, iv, iw = axes[own, 0], axes[own, 1], axes[own, 2]
+            best = _line_or_arc_d2(seg_class[own], geometry[own], iu, iv, iw, px, py, pz, points[i, iu],
+                                   points[i, iv], points[i, iw])  # fmt: skip
         for s in range(first, last):
             c = seg_class[s]
-            if LINE <= c <= FLAT_ARC:
+            if c == LINE:
+                d2 = _line_or_arc_d2(c, geometry[s], 0, 1, 2, px, py, pz, px, py, pz)
+            elif c == FLAT_ARC:
+                g = geometry[s]
                 pu = points[i, axes[s, 0]]
                 pv = points[i, axes[s, 1]]
                 pw = points[i, axes[s, 2]]
-                d2 = _line_or_arc_d2(c, geometry[s], axes[s, 0], axes[s, 1], axes[s, 2], px, py, pz, pu, pv,
-                                     pw)  # fmt: skip
-                if d2 < best:
-                    best = d2
+                du = pu - g[0]
+                dv = pv - g[1]
+                dw = pw - g[2]
+                off = math.sqrt(du * du + dv * dv) - g[3]
+                if off * off + dw * dw > best * (1.0 + 1e-9):
+                    continue
+                d2 = _line_or_arc_d2(c, g, axes[s, 0], axes[s, 1], axes[s, 2], px, py, pz, pu, pv, pw)
+            else:
+                continue
+            if d2 < best:
+                best = d2
         if curved:
             # Helices and NURBS, the point's own segment first (usually the nearest: the others then fail
             # their lower bound).

@@ -180,3 +180,19 @@ def test_violation_length_and_time_add_up_per_sample():
     # Bounded by the cycle time and by the path: a violation is a part of both.
     assert info["violation_time_s"] <= info["cycle_time_s"]
     assert info["violation_length_mm"] <= env.toolpath.total_length
+
+
+def test_a_program_without_motion_ends_at_once_on_both_paths():
+    # Only modal codes and M30: the first step terminates, in 0 s, with reward 0; batched beside a program
+    # that moves, the other env runs on.
+    text = "G90 G21 G17\nM30\n"
+    for env in (FeedrateEnv(programs=[text]), ReferenceEnv(programs=[text])):
+        env.reset(seed=0)
+        obs, reward, terminated, truncated, info = env.step(np.array([0.5], dtype=np.float32))
+        assert (reward, terminated, truncated) == (0.0, True, False)
+        assert info["cycle_time_s"] == 0.0 and info["steps"] == 1 and obs[3] == pytest.approx(0.5)
+    envs = FeedrateVectorEnv(2, programs=[text, "circle"])
+    envs.reset(seed=0, options=None)
+    envs.reset_envs([0, 1], [None, None], [{"program": text}, {"program": "circle"}])
+    _, rewards, terminated, _, infos = envs.step(np.zeros((2, 1), dtype=np.float32))
+    assert terminated.tolist() == [True, False] and rewards[0] == 0.0 and infos["cycle_time_s"][1] == 0.01
