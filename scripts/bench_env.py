@@ -256,7 +256,7 @@ def main(argv: list[str] | None = None) -> int:
         for n in args.envs:
             for parallel in modes:
                 venv = FeedrateVectorEnv(n, parallel=parallel, **kwargs)
-                steps = max(20, args.steps // n)
+                steps = max(50, args.steps // n)
                 r = against_pendulum(venv, run_vector, steps, n, args.repeats)
                 threads = "threads" if venv.batch.parallel else "serial"
                 venv.close()

@@ -13,7 +13,8 @@ SB3's ``make_vec_env("cnc_gym/Feedrate-v0", n_envs, seed=..., env_kwargs=..., ve
 
 Infos: at an episode's end a dict with the episode's totals (the env's info keys),
 ``terminal_observation`` and ``TimeLimit.truncated``; on other steps a read-only mapping with the same
-keys, filled from the batch only when read (SB3 looks for ``"episode"`` in every info every step).
+keys, its values taken when the step ends but made Python numbers only when read (SB3 looks for
+``"episode"`` in every info every step).
 """
 
 from __future__ import annotations
@@ -26,23 +27,21 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
-from cnc_gym.envs.fused import F_REWARD, I_TERMINATED, I_TRUNCATED, INFO_KEYS
+from cnc_gym.envs.fused import INFO_KEYS
 from cnc_gym.envs.vector import FeedrateVectorEnv
 
 
 class _StepInfos:
-    """One step's infos of every env, read from the batch on first use."""
+    """One step's infos of every env (arrays taken when the step ends), for :class:`StepInfo`."""
 
-    __slots__ = ("_arrays", "_batch")
+    __slots__ = ("_arrays",)
 
-    def __init__(self, batch) -> None:
-        self._batch = batch
-        self._arrays: dict[str, np.ndarray] | None = None
+    def __init__(self, arrays: dict[str, np.ndarray]) -> None:
+        self._arrays = arrays
 
     def value(self, key: str, env: int) -> Any:
-        if self._arrays is None:
-            self._arrays = self._batch.infos()
-        return self._arrays[key][env].item() if key != "program" else self._arrays[key][env]
+        value = self._arrays[key][env]
+        return value if key == "program" else value.item()
 
 
 class StepInfo(Mapping):
@@ -95,15 +94,12 @@ class FeedrateSB3VecEnv(VecEnv):
         venv, batch = self.venv, self.venv.batch
         venv.set_actions(self._actions)
         batch.step()
-        obs = batch.observations.copy()
-        rewards = batch.state_f[:, F_REWARD].astype(np.float32)
-        terminated = batch.state_i[:, I_TERMINATED].astype(bool)
-        truncated = batch.state_i[:, I_TRUNCATED].astype(bool)
+        obs, rewards, terminated, truncated, arrays, n_ended = batch.gather()
         dones = terminated | truncated
-        step_infos = _StepInfos(batch)
+        step_infos = _StepInfos(arrays)
         infos: list[Any] = [StepInfo(step_infos, i) for i in range(self.num_envs)]
-        ended = np.flatnonzero(dones).tolist()
-        if ended:
+        if n_ended:
+            ended = np.flatnonzero(dones).tolist()
             for i in ended:  # the episode's totals, then a reset in this same step (SB3's convention)
                 infos[i] = batch.info(i)
                 infos[i]["terminal_observation"] = obs[i].copy()
@@ -113,7 +109,7 @@ class FeedrateSB3VecEnv(VecEnv):
             obs[ended] = batch.observations[ended]
             for i in ended:
                 self.reset_infos[i] = batch.info(i)
-        return obs, rewards, dones, infos
+        return obs, rewards.astype(np.float32), dones, infos
 
     def close(self) -> None:
         self.venv.close()

@@ -280,6 +280,12 @@ def nurbs_table(curve, offset: int = 0) -> tuple[np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _take(table, at, size):
+    """The next ``size`` values of a flat table from ``at``, and where the following block starts."""
+    return table[at : at + size], at + size
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _dot3(a, i, x0, x1, x2) -> float:
     """(a[3i], a[3i+1], a[3i+2]) · (x0, x1, x2)."""
     return a[3 * i] * x0 + a[3 * i + 1] * x1 + a[3 * i + 2] * x2
@@ -320,33 +326,20 @@ def nurbs_distance2(tab_f, header, p0, p1, p2, bound2) -> float:
     if gap > 0.0 and gap * gap >= bound2:
         return math.inf
     o += _NURBS_HEADER_F
-    poly = tab_f[o : o + spans * k * 12]
-    o += spans * k * 12
-    breaks = tab_f[o : o + spans - 1]
-    o += spans - 1
-    mid = tab_f[o : o + spans]
-    o += spans
-    inv_half = tab_f[o : o + spans]
-    o += spans
-    sample_t = tab_f[o : o + n]
-    o += n
-    rel_t = tab_f[o : o + 3 * n]
-    o += 3 * n
-    rel_sq = tab_f[o : o + n]
-    o += n
-    d1_right = tab_f[o : o + 3 * n]
-    o += 3 * n
-    d1_left = tab_f[o : o + 3 * n]
-    o += 3 * n
-    rel_d1_right = tab_f[o : o + n]
-    o += n
-    rel_d1_left = tab_f[o : o + n]
-    o += n
-    span_centre = tab_f[o : o + 3 * spans]
-    o += 3 * spans
-    span_centre_sq = tab_f[o : o + spans]
-    o += spans
-    span_radius = tab_f[o : o + spans]
+    poly, o = _take(tab_f, o, spans * k * 12)
+    breaks, o = _take(tab_f, o, spans - 1)
+    mid, o = _take(tab_f, o, spans)
+    inv_half, o = _take(tab_f, o, spans)
+    sample_t, o = _take(tab_f, o, n)
+    rel_t, o = _take(tab_f, o, 3 * n)
+    rel_sq, o = _take(tab_f, o, n)
+    d1_right, o = _take(tab_f, o, 3 * n)
+    d1_left, o = _take(tab_f, o, 3 * n)
+    rel_d1_right, o = _take(tab_f, o, n)
+    rel_d1_left, o = _take(tab_f, o, n)
+    span_centre, o = _take(tab_f, o, 3 * spans)
+    span_centre_sq, o = _take(tab_f, o, spans)
+    span_radius, o = _take(tab_f, o, spans)
     rel_sq_p = r0 * r0 + r1 * r1 + r2 * r2
 
     # The samples searched (all, or those of the spans not pruned) and whether neighbours are adjacent.

@@ -3,12 +3,15 @@
 Rapids, lines (some with G09 exact stops), arcs and helices in the three planes (G17/G18/G19, I/J/K
 centres, some full circles), dwells (G04 X), cubic NURBS blocks (G05 P10000 / G06.2) and short polyline
 runs. Coordinates are printed with 4 decimals; every arc's end point is computed from its centre so the
-interpreter's radius check passes. The programs stay within ±200 mm of the origin.
+interpreter's radius check passes. The programs stay within ±200 mm of the origin. :func:`bench_program`
+gives the benchmark's helix- and NURBS-rich programs.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -107,13 +110,11 @@ def random_gcode(rng: np.random.Generator, n_blocks: int, *, helix_p: float = 0.
     return "\n".join(lines) + "\n"
 
 
-def helix_rich_gcode(turns: int = 12, radius: float = 8.0, pitch: float = 0.5, feed: float = 3000.0) -> str:
-    """A helical bore: ``turns`` full G03 helix turns of ``pitch`` mm in Z, one block per half turn."""
-    lines = ["G90 G21 G17", f"G00 X{_fmt(radius)} Y0 Z1", "G01 Z0 F600"]
-    z = 0.0
-    for k in range(2 * turns):
-        z -= pitch / 2
-        x = -radius if k % 2 == 0 else radius
-        lines.append(f"G03 X{_fmt(x)} Y0 Z{_fmt(z)} I{_fmt(x)} J0 F{feed:.0f}")
-    lines += ["G00 Z5", "M30"]
-    return "\n".join(lines) + "\n"
+def bench_program(family: str) -> str:
+    """The benchmark's program of a family (``helix``: a helical bore; ``nurbs``: a chain of cubic curves),
+    from ``scripts/bench_env.py``, so that the tests run what the benchmark times."""
+    path = Path(__file__).resolve().parents[2] / "scripts" / "bench_env.py"
+    spec = importlib.util.spec_from_file_location("bench_env", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.FAMILIES[family]()[0]

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from random_gcode import helix_rich_gcode, random_gcode
+from random_gcode import bench_program, random_gcode
 
 from cnc_gym.envs.feedrate import FeedrateEnv
 from cnc_gym.envs.vector import FeedrateVectorEnv
@@ -73,12 +73,13 @@ def test_reference_env_takes_the_modular_step():
 
 @pytest.mark.parametrize("mode", ["override", "feed"])
 def test_builtins_same_as_the_reference_path(mode):
-    # Whole episodes of every built-in (and a helical bore) under a random knob, each ending in a termination.
+    # Whole episodes of every built-in, a helical bore and a chain of NURBS under a random knob, each ending
+    # in a termination.
     rng = np.random.default_rng(0)
-    for program in (*BUILTIN_PROGRAMS, helix_rich_gcode(turns=3)):
+    for program in (*BUILTIN_PROGRAMS, bench_program("helix"), bench_program("nurbs")):
         fused = FeedrateEnv(programs=[program], action_mode=mode)
         reference = ReferenceEnv(programs=[program], action_mode=mode)
-        assert assert_same_run(fused, reference, knob_schedule(rng, 900)) >= 1
+        assert assert_same_run(fused, reference, knob_schedule(rng, 3000)) >= 1
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

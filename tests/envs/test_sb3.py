@@ -24,12 +24,12 @@ def test_same_transitions_as_make_vec_env():
                              vec_env_cls=DummyVecEnv)
     batched = make_sb3_vec_env(4, seed=3, env_kwargs=kwargs)
     np.testing.assert_array_equal(reference.reset(), batched.reset())
-    rng = np.random.default_rng(0)
+    actions = np.random.default_rng(0).uniform(-1, 1, (100, 4, 1)).astype(np.float32)
+    steps_r = [reference.step(a) for a in actions]
+    steps_b = [batched.step(a) for a in actions]
     ends = 0
-    for t in range(100):
-        actions = rng.uniform(-1, 1, (4, 1)).astype(np.float32)
-        out_r, out_b = reference.step(actions), batched.step(actions)
-        for a, b in zip(out_r[:3], out_b[:3], strict=True):
+    for t, (out_r, out_b) in enumerate(zip(steps_r, steps_b, strict=True)):
+        for a, b in zip(out_r[:3], out_b[:3], strict=True):  # observations, rewards, dones
             np.testing.assert_array_equal(a, b, err_msg=f"step {t}")
         for info_r, info_b in zip(out_r[3], out_b[3], strict=True):
             for key in ("cycle_time_s", "contour_error_mm", "violations", "program", "steps", "line"):
