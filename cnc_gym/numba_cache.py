@@ -22,18 +22,19 @@ def refresh_on_change(module_name: str, dependencies: list[ModuleType]) -> None:
     module = sys.modules[module_name]
     dispatchers = [f for f in vars(module).values()
                    if isinstance(f, CPUDispatcher) and f.py_func.__module__ == module_name]  # fmt: skip
-    cached = [f for f in dispatchers if hasattr(f._cache, "_cache_path")]
-    if not cached:
+    caches = [cache for cache in (getattr(f, "_cache", None) for f in dispatchers)
+              if hasattr(cache, "_cache_path")]  # (a function without a disk cache has a null one)
+    if not caches:
         return
     digest = hashlib.sha256()
     for path in sorted({Path(m.__file__) for m in dependencies if m.__file__}):
         digest.update(path.read_bytes())
-    stamp = Path(cached[0]._cache._cache_path) / f"{module_name}.deps"
+    stamp = Path(caches[0]._cache_path) / f"{module_name}.deps"
     try:
         if stamp.exists() and stamp.read_text() == digest.hexdigest():
             return
-        for function in cached:
-            function._cache.flush()
+        for cache in caches:
+            cache.flush()
         stamp.write_text(digest.hexdigest())
     except OSError:  # a read-only cache: numba compiles in memory then
         pass

@@ -255,13 +255,14 @@ def main(argv: list[str] | None = None) -> int:
         modes = {"auto": [None], "on": [True], "off": [False], "both": [False, True]}[args.parallel]
         for n in args.envs:
             for parallel in modes:
-                venv = FeedrateVectorEnv(n, parallel=parallel, **kwargs)
+                # (parallel=None is the env's default rule: not passed, so that older versions run too)
+                venv = FeedrateVectorEnv(n, **kwargs, **({} if parallel is None else {"parallel": parallel}))
                 steps = max(50, args.steps // n)
                 r = against_pendulum(venv, run_vector, steps, n, args.repeats)
-                threads = "threads" if venv.batch.parallel else "serial"
+                threads = bool(getattr(getattr(venv, "batch", None), "parallel", False))
                 venv.close()
-                show(f"FeedrateVectorEnv({n}) {threads} [{family}]", r)
-                result["vector"].append({"envs": n, "parallel": venv.batch.parallel, "family": family, **r})
+                show(f"FeedrateVectorEnv({n}) {'threads' if threads else 'serial'} [{family}]", r)
+                result["vector"].append({"envs": n, "parallel": threads, "family": family, **r})
     result["build_vector_64_s"] = build_time(64)
     print(f"FeedrateVectorEnv(64) construction: {result['build_vector_64_s']:.3f} s (compiled code cached)")
     if args.profile:

@@ -393,6 +393,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         if self.render_mode is None:
             gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
             return None
+        assert self._renderer is not None  # built with render_mode "rgb_array"
         return self._renderer.draw(self)
 
     def close(self) -> None:

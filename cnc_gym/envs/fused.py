@@ -671,7 +671,7 @@ class FeedrateBatch:
         self.plant = ServoPlant(machine, n_envs=self.n_envs) if plant is None else plant
         self.fused = bool(getattr(self.plant, "compiled_step", False))
         if parallel is None:
-            threads = numba.config.NUMBA_NUM_THREADS
+            threads = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
             parallel = self.n_envs >= PARALLEL_MIN_ENVS and threads >= PARALLEL_MIN_THREADS
         self._run = _run_parallel if parallel else _run_serial
         self.parallel = bool(parallel)
@@ -756,7 +756,7 @@ class FeedrateBatch:
             self._args = (self.bank.floats, self.bank.ints, self.state_f, self.state_i, plant._state,
                           plant._history, plant._velocity, plant._lifted4_matrix(self.ticks), self.actions,
                           self.observations, self.work_f, self.work_i)  # fmt: skip
-        self._run(*self._args, stepping)
+        self._run(*self._args, stepping)  # type: ignore[call-arg]
 
     def _modular(self, reset_only: np.ndarray | None) -> None:
         """The step through the Controller, plant and meter objects (see the module docstring)."""

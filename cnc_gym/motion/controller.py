@@ -113,7 +113,8 @@ class Controller:
         own_state = state is None
         if state is None:
             state = (np.zeros(K.N_STATE_F), np.zeros(K.N_STATE_I, dtype=np.int64))
-        self._st_f, self._st_i = state
+        self._st_f: np.ndarray = state[0]
+        self._st_i: np.ndarray = state[1]
         # Rotary axes: each period's angles follow from its row (linear in path_s on a move, the hold's own
         # jerk-limited profile on a rotary-only move, counted in periods since the hold began).
         self._rotary = None
@@ -276,15 +277,16 @@ class Controller:
             parts.append(self._advance_raw(chunk, knob, stop_when_done=True, wait=False))
             done += chunk
         out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
-        chunk = _chunk(out)
+        result = _chunk(out)
         if self._rotary is not None:
-            chunk.rotary = self._rotary_reference(chunk)
-        return chunk
+            result.rotary = self._rotary_reference(result)
+        return result
 
     def _rotary_reference(self, chunk: MotionChunk) -> np.ndarray:
         """The rotary axes' angles at the end of each period of ``chunk`` (call once per chunk, in order)."""
         tp = self.toolpath
         rows = chunk.segment
+        assert tp.rotary_start is not None and tp.rotary_end is not None and self._rotary is not None
         start, end = tp.rotary_start[rows], tp.rotary_end[rows]
         length = tp.length[rows]
         # On a move: the share of the row's XYZ length covered (the axes move linearly with the row).

@@ -295,7 +295,7 @@ class ServoPlant:
             scale = np.broadcast_to(scale, (self.n_envs, 3)) if scale.ndim <= 1 else scale
             if scale.shape != (self.n_envs, 3):
                 raise ValueError(f"kv_scale must be (3,) or (n_envs={self.n_envs}, 3), got {scale.shape}")
-            envs = range(self.n_envs)
+            envs: list[int] = list(range(self.n_envs))
         else:
             if scale.shape != (3,):
                 raise ValueError(f"kv_scale for one env must be (3,), got {scale.shape}")

@@ -60,6 +60,7 @@ def _record(tp: Toolpath, i: int) -> dict:
     if kind in (SegmentKind.LINE, SegmentKind.ARC, SegmentKind.NURBS):
         rec["feed"] = _r(tp.feed[i])
     if rotary and kind in (SegmentKind.LINE, SegmentKind.RAPID):
+        assert tp.rotary_start is not None and tp.rotary_end is not None  # a path with rotary axes has both
         if np.any(tp.rotary_start[i] != tp.rotary_end[i]):
             rec["rotary_start"] = {a: _r(x) for a, x in zip(rotary, tp.rotary_start[i], strict=True)}
         rec["rotary_end"] = {a: _r(x) for a, x in zip(rotary, tp.rotary_end[i], strict=True)}
