@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from cnc_gym.errors import CncGymError
 
 EXIT_USAGE = 2
-DIALECTS = ("gsk25i", "h4cm", "syntec", "azmc1")
+DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
 
 
 def build_parser() -> argparse.ArgumentParser:

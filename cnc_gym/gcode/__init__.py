@@ -3,9 +3,11 @@
     toolpath = interpret(text, dialect="gsk25i", file="part.nc")
     toolpath = interpret_file("part.nc")
 
-Read (:mod:`~cnc_gym.gcode.reader`) → check and execute (:mod:`~cnc_gym.gcode.interpreter`) → canonical
-output (:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. Dialects are data
-(:mod:`~cnc_gym.gcode.dialect`, :mod:`cnc_gym.gcode.dialects`). See docs/gcode.md.
+Read (the dialect's lexer, ``lang/fanuc/reader.py`` for the Fanuc family) → check and execute (the core,
+:mod:`~cnc_gym.gcode.interpreter`, with the dialect's actions and hooks) → canonical output
+(:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. A dialect is a folder of tables
+and hooks (:mod:`cnc_gym.gcode.dialects`) on a language family (:mod:`cnc_gym.gcode.lang`); the contract
+between them and the core is :mod:`~cnc_gym.gcode.dialect`. See docs/gcode.md and docs/dialects.md.
 """
 
 from __future__ import annotations
@@ -17,17 +19,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
-from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS, FlowOptions
-from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, MacroCalls, get_dialect
+from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.interpreter import Interpreter
-from cnc_gym.gcode.reader import Program, Reader
+from cnc_gym.gcode.program import Program
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS, FlowOptions, MacroCalls
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
     from cnc_gym.toolpath import Toolpath
 
-__all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "Reader", "get_dialect", "interpret",
+__all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "get_dialect", "interpret",
            "interpret_file", "read_program"]  # fmt: skip
 
 
@@ -41,7 +43,8 @@ def _skip_switches(block_skip) -> frozenset[int]:
 
 def read_program(text: str, *, dialect: str | Dialect = "gsk25i", file: str = "<program>") -> Program:
     """Read phase only: text → blocks (syntax errors raise ProgramError)."""
-    return Reader(get_dialect(dialect)).read(text, file)
+    spec = get_dialect(dialect)
+    return spec.language.reader(spec, None).read(text, file)
 
 
 def interpret(
@@ -58,6 +61,7 @@ def interpret(
     tool_offsets=None,
     tool_measurement=None,
     skip_signal=None,
+    units: str | None = None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -80,6 +84,9 @@ def interpret(
     these program coordinates (mm); default none (every G31 move completes).
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
+    ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (the controller parameter a
+    machine sets; shop programs for inch machines often carry no G20); the program's own G20/G21 still
+    rules. Default: the dialect's power-on code (G21 on the GSK 25i and ``fanuc``).
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
@@ -97,10 +104,12 @@ def interpret(
             raise ConfigError(f"max_blocks must be a positive integer, got {max_blocks!r}")
         folder = None if program_dir is None else str(program_dir)
         options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
-        program = Reader(spec, calls).read(text, file)
+        if units is not None and units not in ("mm", "inch"):
+            raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
+        program = spec.language.reader(spec, calls).read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
-                               tool_measurement=tool_measurement,
-                               skip_signal=skip_signal).run(options)  # fmt: skip
+                               tool_measurement=tool_measurement, skip_signal=skip_signal,
+                               units=units).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()
@@ -120,7 +129,7 @@ def interpret_file(
     """Interpret a program file (errors name the path). An unreadable file raises OSError.
 
     ``options``: as :func:`interpret` (``max_blocks``, ``program_dir`` — default the file's folder —,
-    ``macro_calls``, ``main_m99``, ``tool_offsets``).
+    ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
     """
     path = Path(path)
     raw = path.read_bytes()
@@ -153,7 +162,7 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
         if isinstance(number, bool) or not isinstance(number, int) or not 1 <= number <= 9999:
             raise ConfigError(f"macro_calls[{what}]: program number {number!r} is not 1..9999")
 
-    reserved = {"g_macro": {0, 65, 66, 67}, "m_macro": {0, 1, 2, 30, 98, 99}, "m_sub": {0, 1, 2, 30, 98, 99}}
+    reserved = _reserved_codes(dialect)
     for kind in ("g_macro", "m_macro", "m_sub"):
         table = getattr(calls, kind)
         if len(table) > 10:
@@ -170,6 +179,16 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
     if calls.t_sub is not None:
         program(calls.t_sub, "t_sub")
     return calls
+
+
+def _reserved_codes(dialect: Dialect) -> dict[str, set[int]]:
+    """Codes that cannot call a program: G00 and the macro-call codes (G65-G67); the stop and call M codes
+    (M00-M02, M30, M98, M99). Found in the dialect's tables by action."""
+    g_codes = {key // 10 for key, spec in dialect.gcodes.items() if key % 10 == 0 and (
+        spec.action in ("macro_call", "modal_call_cancel") or (spec.action == "motion" and spec.value == 0))}
+    m_codes = {key // 10 for key, spec in dialect.mcodes.items()
+               if spec.action in ("stop", "subprogram_call", "subprogram_return")}  # fmt: skip
+    return {"g_macro": g_codes, "m_macro": m_codes, "m_sub": m_codes}
 
 
 def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:

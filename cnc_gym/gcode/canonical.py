@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, ToolpathBuilder
 
@@ -28,6 +29,7 @@ IDENTITY: Mat = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 _PLANE_AXES = {int(p): axes for p, axes in PLANE_AXES.items()}
 _ARC = SegmentKind.ARC
 ZERO: Vec = (0.0, 0.0, 0.0)
+TWO_PI = 2.0 * math.pi
 
 
 def mat_mul(a: Mat, b: Mat) -> Mat:
@@ -147,6 +149,124 @@ class TransformChain:
         similar = abs(a * a + c * c - b * b - d * d) < 1e-12 and abs(a * b + c * d) < 1e-12
         return a, b, c, d, m[w][w], similar
 
+
+
+class PolarState:
+    """G16 polar input: the plane's first axis word is the radius, the second the angle (degrees, CCW
+    from the first axis's + direction). GSK 25i programming manual §3.6 (polar coordinate command).
+
+    * radius word in G90: the origin is the work zero; in G91: the origin is the current position;
+    * angle word in G90: the angle itself; in G91: added to the last angle;
+    * an omitted radius or angle keeps the last one (with the last origin), so ``G91 Y120`` steps round
+      the same circle;
+    * the plane's normal axis is an ordinary Cartesian word.
+    """
+
+    def __init__(self, program_position, plane: Plane) -> None:
+        u, v, _ = _PLANE_AXES[int(plane)]
+        # Start from the current point seen from the work zero.
+        self.origin = (0.0, 0.0)
+        self.radius = math.hypot(program_position[u], program_position[v])
+        self.angle_deg = math.degrees(math.atan2(program_position[v], program_position[u]))
+
+    def resolve(self, words, plane: Plane, scale: float, incremental: bool, position) -> tuple:
+        """Program-unit words (x, y, z; None = absent) → program target in mm (None = not commanded), with
+        ``plane``'s axes as (radius, angle), from the program ``position``."""
+        u, v, w = _PLANE_AXES[int(plane)]
+        s = scale
+        p = position
+        out: list[float | None] = [None, None, None]
+        radius_word, angle_word = words[u], words[v]
+        if radius_word is not None or angle_word is not None:
+            if radius_word is not None:
+                self.origin = (p[u], p[v]) if incremental else (0.0, 0.0)
+                self.radius = radius_word * s
+            if angle_word is not None:
+                self.angle_deg = self.angle_deg + angle_word if incremental else angle_word
+            a = math.radians(self.angle_deg)
+            out[u] = self.origin[0] + self.radius * math.cos(a)
+            out[v] = self.origin[1] + self.radius * math.sin(a)
+        normal = words[w]
+        if normal is not None:
+            out[w] = p[w] + normal * s if incremental else normal * s
+        return tuple(out)
+
+
+class MapError(ValueError):
+    """An arc the transform chain cannot map (``code``: the stable error code)."""
+
+    def __init__(self, message: str, code: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+def map_arc(chain: TransformChain, plane: Plane, sweep: float, start_m: Vec,
+            mapped) -> tuple[Vec, Vec, float]:  # fmt: skip
+    """An arc given in program coordinates → (end, centre, sweep) in machine coordinates.
+
+    ``start_m``: the machine start point; ``mapped()`` gives the machine images of the program end and
+    centre (the centre's normal coordinate set to the start's). The chain is affine and keeps the arc's
+    plane (G68 rotates only in the selected plane, and a plane change in G68 mode is an error). With equal
+    in-plane factors the image of the circle is a circle: the sweep keeps its size and flips its sign
+    under a mirror (G02 ↔ G03). With unequal factors the controller traces no ellipse (GSK 25i programming
+    manual §3.15, note 5; the figures are lost): we keep the mapped centre and the mapped start, so the
+    radius is the mapped start's distance from the mapped centre, and move the mapped end radially onto
+    that circle; a full circle stays a full circle. Raises :class:`MapError`.
+    """
+    u, v, w = _PLANE_AXES[int(plane)]
+    shape = chain.plane_map(plane)
+    if shape is None:
+        raise MapError(f"an arc in the {plane.name} plane while G68 rotates another plane",
+                       "plane-change-in-rotation")  # fmt: skip
+    a, b, c, d, _, similar = shape
+    mirror = a * d - b * c < 0
+    end_image, centre_image = mapped()
+    end_m = list(end_image)
+    centre_m = list(centre_image)
+    centre_m[w] = start_m[w]
+    centre = (centre_m[0], centre_m[1], centre_m[2])
+    if similar:
+        return (end_m[0], end_m[1], end_m[2]), centre, -sweep if mirror else sweep
+    radius = math.hypot(start_m[u] - centre_m[u], start_m[v] - centre_m[v])
+    full = abs(abs(sweep) - TWO_PI) < 1e-12
+    ccw = (sweep > 0) != mirror
+    if full:
+        end_m[u], end_m[v] = start_m[u], start_m[v]
+        return (end_m[0], end_m[1], end_m[2]), centre, TWO_PI if ccw else -TWO_PI
+    r_end = math.hypot(end_m[u] - centre_m[u], end_m[v] - centre_m[v])
+    if radius < 1e-9 or r_end < 1e-9:
+        raise MapError("the scaled arc has radius 0", "arc-impossible")
+    k = radius / r_end
+    end_m[u] = centre_m[u] + (end_m[u] - centre_m[u]) * k
+    end_m[v] = centre_m[v] + (end_m[v] - centre_m[v]) * k
+    a0 = math.atan2(start_m[v] - centre_m[v], start_m[u] - centre_m[u])
+    a1 = math.atan2(end_m[v] - centre_m[v], end_m[u] - centre_m[u])
+    turned = (a1 - a0) % TWO_PI if ccw else -((a0 - a1) % TWO_PI)
+    return (end_m[0], end_m[1], end_m[2]), centre, turned
+
+
+class Output(Protocol):
+    """The output stage the interpreter moves: :class:`CanonicalMachine`, or a stage in front of it that
+    has the same interface (cutter compensation's)."""
+
+    position: Vec
+    rotary: tuple[float, ...]
+    rotary_next: tuple[float, ...] | None
+    line: int
+    file_index: int
+    modes: SegmentMode
+    tool: int
+    spindle_rpm: float
+
+    def straight_traverse(self, target: Vec) -> None: ...
+
+    def straight_feed(self, target: Vec, feed: float) -> None: ...
+
+    def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None: ...
+
+    def nurbs_feed(self, curve, feed: float) -> None: ...
+
+    def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None: ...
 
 class OffsetStack:
     """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them).

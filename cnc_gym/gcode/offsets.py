@@ -158,32 +158,3 @@ def apply_g10(offsets: ToolOffsets, kind: int, number: float | None, value_mm: f
     if value_mm is None:
         raise error(f"G10 L{kind} needs R (the offset value)", "missing-value")
     offsets.set(letter, number, value_mm, wear=wear, incremental=incremental, error=error)
-
-
-@dataclass(frozen=True)
-class CompensationSettings:
-    """A controller's tool compensation parameters (a :class:`~cnc_gym.gcode.dialect.Dialect` field).
-
-    ``tool_length_type``: ``A`` (the offset always on Z) or ``B`` (on the axis normal to the plane of the
-    G43/G44 block); GSK 2600#1 TLB, standard setting 1 = B. ``startup_type``: ``A`` or ``B`` start-up and
-    cancel at outer corners (GSK "2602#2 TPH", not in the parameter volume; Fanuc's standard is A, and the
-    manual's worked example describes A: "offset by the radius vertical to the next block", L4083).
-    ``d_is_diameter``: 2601#7 ODI (see the module docstring). ``offset_count``: H/D numbers 0..count.
-    """
-
-    tool_length_type: str = "B"
-    startup_type: str = "A"
-    d_is_diameter: bool = False
-    offset_count: int = 256
-    geometry_limit_mm: float = 999.999
-    wear_limit_mm: float = 99.999
-
-    def new_offsets(self, initial: Mapping | ToolOffsets | None = None) -> ToolOffsets:
-        """A fresh offset memory with these limits, filled from ``initial`` (as ToolOffsets.from_mapping)."""
-        return ToolOffsets.from_mapping(
-            initial,
-            count=self.offset_count,
-            geometry_limit_mm=self.geometry_limit_mm,
-            wear_limit_mm=self.wear_limit_mm,
-            d_is_diameter=self.d_is_diameter,
-        )

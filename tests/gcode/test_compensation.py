@@ -2,7 +2,8 @@
 
 Expected tool-centre paths are worked out by hand in each test with the small closed forms below (offset
 lines as ``n·p = c``, line/line, line/circle and circle/circle intersections), written independently of
-``cnc_gym.gcode.compensation``. G41 puts the tool on the left of the direction of travel, G42 on the right;
+``cnc_gym.gcode.lang.fanuc.compensation``. G41 puts the tool on the left of the direction of travel, G42 on
+the right;
 D holds the radius (the examples' reading, notes §5.2 [CONFLICT]).
 """
 
@@ -614,7 +615,7 @@ def test_mirror_image_interchanges_g41_and_g42():
 def test_pure_compensate_function_gives_the_interpreter_path():
     # compensation.compensate() runs the same corner rules on plane elements without the interpreter:
     # the X57 contour as elements (start, end, centre, signed sweep) gives the same tool-centre points.
-    from cnc_gym.gcode.compensation import PlaneElement, compensate
+    from cnc_gym.gcode.lang.fanuc.compensation import PlaneElement, compensate
 
     def arc(start, end, center, ccw):
         a0 = math.atan2(start[1] - center[1], start[0] - center[0])

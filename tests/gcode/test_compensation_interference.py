@@ -12,7 +12,7 @@ smaller than the tool radius, L4511-L4513); when neither side has one (a single 
 interference left after correcting) it is alarm 41.
 
 Every expected path below is worked out by hand (offset lines and circles, their intersections) in the
-comments, independently of ``cnc_gym.gcode.compensation``.
+comments, independently of ``cnc_gym.gcode.lang.fanuc.compensation``.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import get_dialect, interpret
-from cnc_gym.gcode.compensation import (
+from cnc_gym.gcode.lang.fanuc.compensation import (
     CompensationError,
     PlaneElement,
     block_interference,

@@ -67,7 +67,8 @@ def test_work_system_errors(text, code, alarm):
 def test_g54_1_is_recorded_for_the_system_variables():
     interp = Interpreter(read_program("G10 L20 P7 X3\nG54.1 P7\n"), get_dialect("gsk25i"))
     interp.run()
-    assert interp.extra_wcs == 7 and interp.offsets.active_wcs == 6 + 6  # G54..G59 are 0..5, P1 is 6
+    st = interp.state
+    assert st.extra_wcs == 7 and st.offsets.active_wcs == 6 + 6  # G54..G59 are 0..5, P1 is 6
     assert interp.program_position == (-3.0, 0.0, 0.0)
 
 
@@ -78,10 +79,10 @@ def test_worked_example_x16_parameter_input_blocks_are_parsed_and_stored():
     # (a known gap, see docs/gcode.md); a bit parameter within it is stored the same way.
     interp = Interpreter(read_program("G10L50\nN1082 P3 R4500\nN1082 P4 R120\nN2501 R999999\nG11\nG00 X1\n"),
                          get_dialect("gsk25i"))  # fmt: skip
-    interp.parameters.raw.clear()
+    interp.state.parameters.raw.clear()
     toolpath = interp.run()
-    assert interp.parameters.raw == {(1082, 3): 4500, (1082, 4): 120, (2501, 0): 999999}
-    assert not interp.parameter_input and len(toolpath) == 1  # G11 closed the mode; X1 ran
+    assert interp.state.parameters.raw == {(1082, 3): 4500, (1082, 4): 120, (2501, 0): 999999}
+    assert interp.state.block_hook is None and len(toolpath) == 1  # G11 closed the mode; X1 ran
 
 
 @pytest.mark.parametrize(
@@ -196,7 +197,7 @@ def test_worked_example_x15_with_a_simulated_skip_signal():
     interp = Interpreter(read_program("G01 F100\nG31 X10 Y20 Z-4\n"), get_dialect("gsk25i"),
                          skip_signal={"Z": -1.0, "Y": -3.0})  # fmt: skip
     interp.run()
-    assert interp.skip_position == pytest.approx((2.5, 5.0, -1.0))
+    assert interp.state.skip_position == pytest.approx((2.5, 5.0, -1.0))
     # without a signal configured nothing stops (and the move is still override-locked)
     assert moves("G31 X5 F100\n")[0]["modes"] == ["override_locked"]
     for bad in ({"A": 1.0}, {"X": "1"}, {"X": float("nan")}, [1]):
@@ -208,12 +209,12 @@ def test_g31_skip_position_is_the_block_end_in_work_coordinates():
     # L5486: with no skip the variables #5061.. get the block end point (work coordinates).
     interp = Interpreter(read_program("G10 L2 P1 X10\nG54 G01 F100\nG31 X5 Y7\n"), get_dialect("gsk25i"))
     interp.run()
-    assert interp.skip_position == (5.0, 7.0, 0.0)
+    assert interp.state.skip_position == (5.0, 7.0, 0.0)
 
 
 def test_g31_is_an_alarm_in_cutter_compensation():
     interp = Interpreter(read_program("G31 X5 F100\n"), get_dialect("gsk25i"))
-    interp.modal[7] = 410  # G41 in force (the compensation module sets the modal table)
+    interp.state.modal[7] = 410  # G41 in force (the compensation module sets the modal table)
     with pytest.raises(ProgramError) as info:
         interp.run()
     assert info.value.code == "g31-in-cutter-compensation" and info.value.alarm == 36
@@ -258,27 +259,27 @@ def test_path_modes_g61_to_g64_reach_the_segments():
 # --------------------------------------------------------------------------- the seam
 def test_seam_move_linear_and_program_position_follow_the_chain():
     interp = Interpreter(read_program(""), get_dialect("gsk25i"))
-    interp.offsets.wcs[0] = [100.0, 0.0, 0.0]
-    interp.offsets.update()
-    interp.chain.set("rotation", rotation_stage(Plane.XY, (0.0, 0.0, 0.0), 90.0))
+    interp.state.offsets.wcs[0] = [100.0, 0.0, 0.0]
+    interp.state.offsets.update()
+    interp.state.chain.set("rotation", rotation_stage(Plane.XY, (0.0, 0.0, 0.0), 90.0))
     interp.set_transform_state()
-    interp.feed = 500.0
+    interp.state.feed = 500.0
     interp.move_linear(False, (10.0, None, 5.0))
     # program (10, 0, 5) → rotated (0, 10, 5) → + G54 (100, 0, 0)
-    assert close(interp.out.position, [100.0, 10.0, 5.0])
+    assert close(interp.state.out.position, [100.0, 10.0, 5.0])
     assert close(interp.program_position, [10.0, 0.0, 5.0])
     assert close(interp.to_machine((0.0, 10.0, 0.0)), [90.0, 0.0, 0.0])
 
 
 def test_seam_tool_length_vector_is_added_after_the_transforms_and_kept_by_g92():
     interp = Interpreter(read_program(""), get_dialect("gsk25i"))
-    interp.chain.set("scaling", None)
-    interp.offsets.tool_length[2] = 25.0  # what G43 H_ will write (compensation module)
-    interp.offsets.update()
+    interp.state.chain.set("scaling", None)
+    interp.state.offsets.tool_length[2] = 25.0  # what G43 H_ will write (compensation module)
+    interp.state.offsets.update()
     interp.move_linear(True, (None, None, 0.0))
-    assert interp.out.position == (0.0, 0.0, 25.0) and interp.program_position == (0.0, 0.0, 0.0)
-    interp.offsets.set_floating(2, interp.out.position[2], 7.0)  # G92 Z7 with the length active
-    interp.offsets.update()
+    assert interp.state.out.position == (0.0, 0.0, 25.0) and interp.program_position == (0.0, 0.0, 0.0)
+    interp.state.offsets.set_floating(2, interp.state.out.position[2], 7.0)  # G92 Z7 with the length active
+    interp.state.offsets.update()
     assert interp.program_position == (0.0, 0.0, 7.0)
 
 
@@ -286,10 +287,10 @@ def test_seam_without_transforms_keeps_the_machine_position_of_omitted_axes():
     # L1550: an omitted axis does not move when the work system changes (the plain path).
     interp = Interpreter(read_program(""), get_dialect("gsk25i"))
     interp.move_linear(True, (1.0, 2.0, 3.0))
-    interp.offsets.wcs[0] = [10.0, 10.0, 10.0]
-    interp.offsets.update()
+    interp.state.offsets.wcs[0] = [10.0, 10.0, 10.0]
+    interp.state.offsets.update()
     interp.move_linear(True, (5.0, None, None))
-    assert interp.out.position == (15.0, 2.0, 3.0)
+    assert interp.state.out.position == (15.0, 2.0, 3.0)
 
 
 def test_system_variables_read_the_g54_1_number_and_the_g31_skip_position():

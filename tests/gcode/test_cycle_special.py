@@ -1,4 +1,5 @@
-"""Hole patterns G120-G125, face milling G126/G127 and the pocket/boss cycles G110-G137 (cycles.py), plus
+"""Hole patterns G120-G125, face milling G126/G127 and the pocket/boss cycles G110-G137 (dialects/gsk25i:
+patterns.py, pockets.py), plus
 a property test: random cycle blocks give a ProgramError or a finite tool path that keeps the level rules.
 
 The pocket figures are lost (notes §4.4-§4.8, examples X47-X54 are quality C): those tests check the
@@ -18,14 +19,8 @@ from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
-from cnc_gym.gcode.cycles import (
-    CYCLE_WORDS,
-    PATTERN_WORDS,
-    check_pocket,
-    pattern_holes,
-    pocket_steps,
-    rectangle_holes,
-)
+from cnc_gym.gcode.dialects.gsk25i.patterns import PATTERN_WORDS, pattern_holes, rectangle_holes
+from cnc_gym.gcode.dialects.gsk25i.pockets import POCKET_WORDS, check_pocket, pocket_steps
 from cnc_gym.toolpath import SegmentKind
 
 
@@ -303,7 +298,7 @@ def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, 
     """Pocket, boss, pattern and face-milling blocks with random words: a ProgramError, or a finite path
     that stays within the bottom and the start height (D1 = 4)."""
     number = int(code[1:])
-    allowed = set("XYZ") | set(CYCLE_WORDS.get(number, "") or PATTERN_WORDS[number])
+    allowed = set("XYZ") | set(POCKET_WORDS.get(number, "") or PATTERN_WORDS[number])
     words = {k: v for k, v in words.items() if k in allowed}  # mostly well-formed: reach the geometry
     for letter in "LKPD":
         if letter in words:

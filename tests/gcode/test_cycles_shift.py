@@ -28,9 +28,9 @@ from hypothesis import strategies as st
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import interpret, read_program
-from cnc_gym.gcode.cycles import CycleParameters
 from cnc_gym.gcode.dialects.gsk25i import DIALECT
 from cnc_gym.gcode.interpreter import Interpreter
+from cnc_gym.gcode.settings import CycleParameters
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
 SIJ = replace(DIALECT, cycle_params=replace(DIALECT.cycle_params, shift_by_ij=True))
@@ -197,9 +197,10 @@ def test_g87_variant_i_feed_hold_then_operator_retract():
         ("dwell", 1.0), ("dwell", 0.0), ("rapid", (300, -250, -120)),
         ("rapid", (300, -550, -120)), ("line", (300, -550, -150)),   # already at R: no move to R
         ("dwell", 1.0), ("dwell", 0.0), ("rapid", (300, -550, 0))]  # fmt: skip
-    assert [stop for stop in interp.stops if stop[1] == "feed_hold"] == [(2, "feed_hold"), (3, "feed_hold")]
+    holds = [stop for stop in interp.state.stops if stop[1] == "feed_hold"]
+    assert holds == [(2, "feed_hold"), (3, "feed_hold")]
     assert float(tp.spindle_rpm[5]) == 0.0 and float(tp.spindle_rpm[6]) == 500.0  # stopped, then CW
-    assert interp.spindle_orients == 0  # no oriented stop in variant I
+    assert interp.state.spindle_orients == 0  # no oriented stop in variant I
 
 
 def test_g87_variant_i_needs_z_below_r_and_variant_ii_above():

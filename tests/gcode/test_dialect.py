@@ -13,8 +13,8 @@ from cnc_gym.gcode.dialect import CodeSpec, gkey
 GSK = get_dialect("gsk25i")
 
 
-def test_registry_names_the_four_dialects_of_design_md():
-    assert set(DIALECT_MODULES) == {"gsk25i", "h4cm", "syntec", "azmc1"}
+def test_registry_names_the_seed_dialects_and_fanuc():
+    assert set(DIALECT_MODULES) == {"gsk25i", "fanuc", "h4cm", "syntec", "azmc1"}
     assert get_dialect(GSK) is GSK
 
 

@@ -55,10 +55,10 @@ def test_x16_bit_parameter_as_printed():
     parameter the eight digits are the bits 7..0, so 10000000 is a legal value and must be stored as is.
     (Example 2 of the same page runs in test_coordinates.py.)"""
     interp = Interpreter(read_program("G10L50\nN2501 R 10000000\nG11\nG00 X1\n"), get_dialect("gsk25i"))
-    interp.parameters.raw.clear()
+    interp.state.parameters.raw.clear()
     toolpath = interp.run()
-    assert interp.parameters.raw == {(2501, 0): 10000000}
-    assert not interp.parameter_input and len(toolpath) == 1
+    assert interp.state.parameters.raw == {(2501, 0): 10000000}
+    assert interp.state.block_hook is None and len(toolpath) == 1
 
 
 def test_x20_g92_sets_the_current_position():

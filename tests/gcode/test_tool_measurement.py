@@ -6,7 +6,7 @@ import pytest
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import interpret
-from cnc_gym.gcode.measurement import ToolMeasurement
+from cnc_gym.gcode.settings import ToolMeasurement
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
 # X61 (L4771-L4781), then two probes that print the H01 wear (#10001) and geometry (#11001) as X and Y.

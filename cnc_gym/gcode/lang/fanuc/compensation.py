@@ -30,10 +30,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.offsets import ToolOffsets
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
+
+if TYPE_CHECKING:
+    from cnc_gym.gcode.codes import CodeSpec
+    from cnc_gym.gcode.dialect import Seam
 
 Point = tuple[float, float]
 Vec = tuple[float, float, float]
@@ -988,230 +992,258 @@ class OffsetStage:
 
 
 # ====================================================================== interpreter glue
+# The actions and hooks of tool compensation. The state is ``core.state.comp`` (CompensationState): the
+# offset memory, the D and H numbers, the G40-G42 and G43/G44/G49 modes, and the OffsetStage, installed in
+# place of the output stage the first time a program needs it (plain programs keep the direct path).
 
 
-def _incremental(interp) -> bool:
+def _incremental(core: Seam) -> bool:
     """G91 in force for this block's move: G90/G91 of the block have not run yet at the compensation
     steps (order of execution), but the raw modal table already holds them."""
-    key = interp.modal.get(3)
-    return interp.incremental if key is None else key == 910
+    roles = core.dialect.roles
+    key = core.state.modal.get(roles.distance_group)  # type: ignore[arg-type]
+    return core.state.incremental if key is None else key == roles.incremental
 
 
 _LETTERS = "XYZ"
 _IJK = "IJK"
 
 
-class ToolCompensation:
-    """The interpreter's tool compensation state and actions (called from a few hooks in interpreter.py).
+def install(core: Seam) -> OffsetStage:
+    """The compensation stage, put in front of the output the first time it is needed."""
+    st = core.state
+    comp = st.comp
+    if comp.stage is None:
+        comp.stage = OffsetStage(st.out, startup_type=comp.settings.startup_type, alarms=core.dialect.alarms)
+        st.out = comp.stage
+        st.block_listeners.append(before_block)
+    return comp.stage
 
-    Holds the offset memory (:class:`~cnc_gym.gcode.offsets.ToolOffsets`), the selected D and H
-    numbers, the G40/G41/G42 and G43/G44/G49 modes, and installs the :class:`OffsetStage` in place of the
-    interpreter's canonical machine the first time a program needs it (plain programs keep the direct
-    path). Holds no reference to the interpreter (it is passed in), so no reference cycle.
-    """
 
-    def __init__(self, dialect, tool_offsets=None) -> None:
-        self.settings = dialect.compensation
-        self.offsets: ToolOffsets = self.settings.new_offsets(tool_offsets)
-        self.d_number = 0
-        self.h_number = 0
-        self.side = 0  # +1 G41, -1 G42, 0 G40
-        self.plane = Plane.XY  # plane of the G41/G42 in force
-        self.length_sign = 0  # +1 G43, -1 G44, 0 G49
-        self.length_axis = 2
-        self.stage: OffsetStage | None = None
-        # G28/G30 cancel the tool length vector at the intermediate point (L3897): the cancelled part per
-        # axis, restored by the next block that commands that axis (``restore_length``), or None.
-        self.length_restore: list[float] | None = None
+def before_block(core: Seam, values: dict) -> None:
+    """Each block once the stage is installed: the look-ahead counts blocks; after G28/G30 the tool
+    length vector comes back with the next block that commands its axis."""
+    comp = core.state.comp
+    comp.stage.begin_block()
+    if comp.length_restore is not None:  # the tool length vector after G28/G30 (L3897)
+        restore_length(core, values)
 
-    # ------------------------------------------------------------------ helpers
-    def install(self, interp) -> OffsetStage:
-        if self.stage is None:
-            self.stage = OffsetStage(
-                interp.out, startup_type=self.settings.startup_type, alarms=interp.dialect.alarms
-            )
-            interp.out = self.stage
-        return self.stage
 
-    def signed_offset(self, interp) -> float:
-        """The signed compensation offset (left +) for the D and G41/G42 in force.
+def signed_offset(core: Seam) -> float:
+    """The signed compensation offset (left +) for the D and G41/G42 in force.
 
-        A mirror image in the plane (G51.1, or G51 with one negative factor) interchanges G41 and G42, so
-        the machine path is the mirror image of the compensated programmed path (Fanuc's rule; GSK's
-        manual is silent). The stage sees the mirrored moves, hence the sign. Scaling never scales the
-        offset."""
-        if not self.side:
-            return 0.0
-        sign = 1.0
-        chain = interp.chain
-        if chain.active:
-            u, v, _w = PLANE_AXES[self.plane if self.side else interp.plane]
-            a = chain.linear
-            if a[u][u] * a[v][v] - a[u][v] * a[v][u] < 0.0:
-                sign = -1.0
-        return sign * self.side * self.offsets.radius(self.d_number)
+    A mirror image in the plane (G51.1, or G51 with one negative factor) interchanges G41 and G42, so
+    the machine path is the mirror image of the compensated programmed path (Fanuc's rule; GSK's
+    manual is silent). The stage sees the mirrored moves, hence the sign. Scaling never scales the
+    offset."""
+    st = core.state
+    comp = st.comp
+    if not comp.side:
+        return 0.0
+    sign = 1.0
+    chain = st.chain
+    if chain.active:
+        u, v, _w = PLANE_AXES[comp.plane if comp.side else st.plane]
+        a = chain.linear
+        if a[u][u] * a[v][v] - a[u][v] * a[v][u] < 0.0:
+            sign = -1.0
+    return sign * comp.side * comp.offsets.radius(comp.d_number)
 
-    def _direction(self, interp, values: dict) -> Point | None:
-        u, v, _w = PLANE_AXES[interp.plane]
-        iu, iv = values.get(_IJK[u]), values.get(_IJK[v])
-        if iu is None and iv is None:
-            return None
-        du, dv = (iu or 0.0) * interp.scale, (iv or 0.0) * interp.scale
-        if du == 0.0 and dv == 0.0:
-            raise interp.error("the I/J/K direction is zero", "comp-bad-direction")
-        return (du, dv)
 
-    # ------------------------------------------------------------------ words
-    def words(self, interp, values: dict) -> None:
-        """D and H words: select the offset numbers (D and H are modal, L4468, L3887)."""
-        if "D" in values:
-            self.d_number = int(values["D"])
-            if self.side and self.stage is not None:
-                # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
-                self.stage.set_cutter(self.signed_offset(interp), self.plane)
-        if "H" in values:
-            self.length_restore = None  # an H in G43/G44 mode sets the vector afresh
-            self.h_number = int(values["H"])
-            if self.length_sign:
-                self._apply_length(interp, values)
+def _direction(core: Seam, values: dict) -> Point | None:
+    st = core.state
+    u, v, _w = PLANE_AXES[st.plane]
+    iu, iv = values.get(_IJK[u]), values.get(_IJK[v])
+    if iu is None and iv is None:
+        return None
+    du, dv = (iu or 0.0) * st.scale, (iv or 0.0) * st.scale
+    if du == 0.0 and dv == 0.0:
+        raise core.error("the I/J/K direction is zero", "comp-bad-direction")
+    return (du, dv)
 
-    # ------------------------------------------------------------------ G40 / G41 / G42
-    def cutter(self, interp, spec, values: dict) -> None:
-        side = int(spec.value)
-        if side:
-            if self.side and interp.plane != self.plane:
-                raise interp.error(
-                    "G41/G42: the plane changed in cutter compensation mode", "comp-plane-change"
-                )
-            self.side = side
-            self.plane = interp.plane
-            stage = self.install(interp)
-            stage.set_cutter(self.signed_offset(interp), self.plane)
-            return
-        self.side = 0
-        direction = self._direction(interp, values)
-        if self.stage is not None:
-            self.stage.set_cutter(0.0, self.plane, cancel_direction=direction)
 
-    def check_plane(self, interp, plane) -> None:
-        """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (L4175)."""
-        if self.side and plane != self.plane:
-            raise interp.error(
-                f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with G40 first)",
-                "comp-plane-change",
-            )
+# ---------------------------------------------------------------------- D and H words
+def offset_words(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """D and H words: select the offset numbers (D and H are modal, L4468, L3887); D and H in one block
+    are one item."""
+    if spec.name == "D" or "D" not in values:
+        words(core, values)
 
-    def corner_arc(self, interp, spec, values: dict) -> None:
-        """G39 [I_J_]: corner arc of the compensation radius (L4646-L4666); only in offset mode."""
-        if not self.side or self.stage is None or not self.stage.active:
-            raise interp.error(
-                "G39 is only allowed in cutter compensation mode (G41/G42 after start-up)", "g39-without-comp"
-            )
-        self.stage.corner_arc(self._direction(interp, values), interp.feed)
 
-    # ------------------------------------------------------------------ G43 / G44 / G49
-    def length(self, interp, spec, values: dict) -> None:
-        self.length_restore = None  # G43/G44/G49 set the vector afresh (after a G28/G30 cancel too)
-        sign = int(spec.value)
-        if sign and not any(letter in values for letter in _LETTERS):
-            raise interp.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
-        if interp.modal.get(1) in (20, 30):  # G02/G03 in force: an arc block with the normal axis is a helix
-            u, v, w = PLANE_AXES[interp.plane]
-            arc_words = ("IJK"[u], "IJK"[v], "R", _LETTERS[u], _LETTERS[v])
-            if _LETTERS[w] in values and any(letter in values for letter in arc_words):
-                raise interp.error(
-                    f"{spec.name} cannot be given in a helical block (L1103)", "length-helical"
-                )
-        self.length_sign = sign
-        if sign:
-            self.length_axis = 2 if self.settings.tool_length_type == "A" else PLANE_AXES[interp.plane][2]
-        self._apply_length(interp, values)
+def words(core: Seam, values: dict) -> None:
+    comp = core.state.comp
+    if "D" in values:
+        comp.d_number = int(values["D"])
+        if comp.side and comp.stage is not None:
+            # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
+            comp.stage.set_cutter(signed_offset(core), comp.plane)
+    if "H" in values:
+        comp.length_restore = None  # an H in G43/G44 mode sets the vector afresh
+        comp.h_number = int(values["H"])
+        if comp.length_sign:
+            _apply_length(core, values)
 
-    def cancel_length_at_intermediate(self, interp, axes) -> None:
-        """G28/G30 reached the intermediate point: the tool length vector of the commanded axes is cancelled
-        (L3897: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
-        G43/G44). The next block commanding the axis restores it (:meth:`restore_length`)."""
-        vector = interp.offsets.tool_length
-        cancelled = [vector[a] if a in axes else 0.0 for a in range(3)]
-        if not any(cancelled):
-            return
-        interp.offsets.tool_length = [vector[a] - cancelled[a] for a in range(3)]
-        interp.offsets.update()
-        restore = self.length_restore or [0.0, 0.0, 0.0]
-        self.length_restore = [restore[a] + cancelled[a] for a in range(3)]
-        self.install(interp)  # its per-block hook (interpreter.execute) lets the restore see the next blocks
 
-    def restore_length(self, interp, values: dict) -> None:
-        """At the start of a block after G28/G30: the cancelled vector of each axis the block commands comes
-        back, and the block's move of that axis carries it (in G90 and G91 alike: ``length_pending``)."""
-        restore = self.length_restore
-        axes = [a for a in range(3) if restore[a] and _LETTERS[a] in values]
-        if not axes:
-            return
-        vector = list(interp.offsets.tool_length)
-        delta = [0.0, 0.0, 0.0]
-        for a in axes:
-            vector[a] += restore[a]
-            delta[a] = restore[a]
-            restore[a] = 0.0
-        if not any(restore):
-            self.length_restore = None
-        interp.offsets.tool_length = vector
-        interp.offsets.update()
-        if not interp._transformed and self.stage is not None:
-            # The programmed position moves with the vector, so an incremental move adds to the restored
-            # position and an absolute one goes to program + offsets + vector (the transformed path keeps
-            # its program position and gets this from the origin by itself).
-            self.stage.length_pending = (delta[0], delta[1], delta[2])
+# ---------------------------------------------------------------------- G40 / G41 / G42
+def cutter(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G41/G42 (cutter compensation left/right) and G40 (cancel, optional I/J direction)."""
+    st = core.state
+    comp = st.comp
+    side = int(spec.value)  # type: ignore[call-overload]
+    if side:
+        if comp.side and st.plane != comp.plane:
+            raise core.error("G41/G42: the plane changed in cutter compensation mode", "comp-plane-change")
+        comp.side = side
+        comp.plane = st.plane
+        stage = install(core)
+        stage.set_cutter(signed_offset(core), comp.plane)
+        return
+    comp.side = 0
+    direction = _direction(core, values)
+    if comp.stage is not None:
+        comp.stage.set_cutter(0.0, comp.plane, cancel_direction=direction)
 
-    def _apply_length(self, interp, values: dict) -> None:
-        """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the
-        next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (L3913)."""
-        new = [0.0, 0.0, 0.0]
-        if self.length_sign:
-            new[self.length_axis] = self.length_sign * self.offsets.length(self.h_number)
-        old = interp.offsets.tool_length
-        if new == list(old):
-            return
-        delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
-        interp.offsets.tool_length = new
-        interp.offsets.update()
-        if (
-            _incremental(interp)
-            and not interp._transformed
-            and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
-        ):
-            # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
-            # transformed path does this by itself (its program position ignores the machine's).
-            stage = self.install(interp)
-            stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
 
-    # ------------------------------------------------------------------ G45-G48
-    def position_offset(self, interp, spec, values: dict) -> None:
-        """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
-        value (L4785-L4862). Not in G41/G42 mode (L4825); ignored in canned-cycle mode (L4839)."""
-        if self.side:
-            raise interp.error(
-                f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
-                "position-offset-in-comp",
-            )
-        cycle = getattr(interp, "cycle", None)
-        if cycle is not None and getattr(cycle, "code", None):
-            return
-        axes = frozenset(a for a in range(3) if _LETTERS[a] in values)
-        amount = self.offsets.position_offset(self.d_number)
-        self.install(interp).set_position_offset(int(spec.value), amount, axes, _incremental(interp))
+def check_plane(core: Seam, plane) -> None:
+    """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (L4175)."""
+    comp = core.state.comp
+    if comp.side and plane != comp.plane:
+        raise core.error(f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with G40 "
+                         "first)", "comp-plane-change")  # fmt: skip
 
-    # ------------------------------------------------------------------ G53, G27-G30, end
-    def before_machine_move(self) -> None:
-        """G53 (and G27-G30, G60) are about to move: compensation is suspended for this block."""
-        if self.stage is not None:
-            self.stage.suspend()
 
-    def finish(self, file: str = "<program>") -> None:
-        """End of the program: emit what the look-ahead still holds (the vector stays, L4112)."""
-        if self.stage is not None:
-            try:
-                self.stage.flush()
-            except ProgramError as err:
-                raise err.located(file, self.stage.line) from None
+def corner_arc(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G39 [I_J_]: corner arc of the compensation radius (L4646-L4666); only in offset mode."""
+    comp = core.state.comp
+    if not comp.side or comp.stage is None or not comp.stage.active:
+        raise core.error("G39 is only allowed in cutter compensation mode (G41/G42 after start-up)",
+                         "g39-without-comp")  # fmt: skip
+    comp.stage.corner_arc(_direction(core, values), core.state.feed)
+
+
+# ---------------------------------------------------------------------- G43 / G44 / G49
+def length(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G43/G44 (tool length offset + / -) and G49 (cancel)."""
+    st = core.state
+    comp = st.comp
+    comp.length_restore = None  # G43/G44/G49 set the vector afresh (after a G28/G30 cancel too)
+    sign = int(spec.value)  # type: ignore[call-overload]
+    if sign and not any(letter in values for letter in _LETTERS):
+        raise core.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
+    if st.modal.get(1) in core.dialect.roles.arcs:  # G02/G03 in force: an arc block with the normal axis …
+        # … is a helix
+        u, v, w = PLANE_AXES[st.plane]
+        arc_words = ("IJK"[u], "IJK"[v], "R", _LETTERS[u], _LETTERS[v])
+        if _LETTERS[w] in values and any(letter in values for letter in arc_words):
+            raise core.error(f"{spec.name} cannot be given in a helical block (L1103)", "length-helical")
+    comp.length_sign = sign
+    if sign:
+        comp.length_axis = 2 if comp.settings.tool_length_type == "A" else PLANE_AXES[st.plane][2]
+    _apply_length(core, values)
+
+
+def cancel_length_at_intermediate(core: Seam, axes) -> None:
+    """G28/G30 reached the intermediate point: the tool length vector of the commanded axes is cancelled
+    (L3897: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
+    G43/G44). The next block commanding the axis restores it (:func:`restore_length`)."""
+    st = core.state
+    comp = st.comp
+    vector = st.offsets.tool_length
+    cancelled = [vector[a] if a in axes else 0.0 for a in range(3)]
+    if not any(cancelled):
+        return
+    st.offsets.tool_length = [vector[a] - cancelled[a] for a in range(3)]
+    st.offsets.update()
+    restore = comp.length_restore or [0.0, 0.0, 0.0]
+    comp.length_restore = [restore[a] + cancelled[a] for a in range(3)]
+    install(core)  # its per-block hook lets the restore see the next blocks
+
+
+def restore_length(core: Seam, values: dict) -> None:
+    """At the start of a block after G28/G30: the cancelled vector of each axis the block commands comes
+    back, and the block's move of that axis carries it (in G90 and G91 alike: ``length_pending``)."""
+    st = core.state
+    comp = st.comp
+    restore = comp.length_restore
+    axes = [a for a in range(3) if restore[a] and _LETTERS[a] in values]  # type: ignore[index]
+    if not axes:
+        return
+    vector = list(st.offsets.tool_length)
+    delta = [0.0, 0.0, 0.0]
+    for a in axes:
+        vector[a] += restore[a]  # type: ignore[index]
+        delta[a] = restore[a]  # type: ignore[index]
+        restore[a] = 0.0  # type: ignore[index]
+    if not any(restore):  # type: ignore[arg-type]
+        comp.length_restore = None
+    st.offsets.tool_length = vector
+    st.offsets.update()
+    if not st.transformed and comp.stage is not None:
+        # The programmed position moves with the vector, so an incremental move adds to the restored
+        # position and an absolute one goes to program + offsets + vector (the transformed path keeps
+        # its program position and gets this from the origin by itself).
+        comp.stage.length_pending = (delta[0], delta[1], delta[2])
+
+
+def _apply_length(core: Seam, values: dict) -> None:
+    """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the
+    next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (L3913)."""
+    st = core.state
+    comp = st.comp
+    new = [0.0, 0.0, 0.0]
+    if comp.length_sign:
+        new[comp.length_axis] = comp.length_sign * comp.offsets.length(comp.h_number)
+    old = st.offsets.tool_length
+    if new == list(old):
+        return
+    delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
+    st.offsets.tool_length = new
+    st.offsets.update()
+    if (
+        _incremental(core)
+        and not st.transformed
+        and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
+    ):
+        # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
+        # transformed path does this by itself (its program position ignores the machine's).
+        stage = install(core)
+        stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
+
+
+# ---------------------------------------------------------------------- G45-G48
+def position_offset(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
+    value (L4785-L4862). Not in G41/G42 mode (L4825); ignored in canned-cycle mode (L4839)."""
+    comp = core.state.comp
+    if comp.side:
+        raise core.error(f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
+                         "position-offset-in-comp")  # fmt: skip
+    if core.state.cycle.spec is not None:
+        return
+    axes = frozenset(a for a in range(3) if _LETTERS[a] in values)
+    amount = comp.offsets.position_offset(comp.d_number)
+    install(core).set_position_offset(int(spec.value), amount, axes, _incremental(core))  # type: ignore[call-overload]
+
+
+# ---------------------------------------------------------------------- G53, G27-G30, end
+def before_machine_move(core: Seam) -> None:
+    """G53 (and G27-G30, G60) are about to move: compensation is suspended for this block."""
+    stage = core.state.comp.stage
+    if stage is not None:
+        stage.suspend()
+
+
+def finish(core: Seam) -> None:
+    """End of the program (a block hook): emit what the look-ahead still holds (the vector stays, L4112)."""
+    stage = core.state.comp.stage
+    if stage is not None:
+        try:
+            stage.flush()
+        except ProgramError as err:
+            raise err.located(core.state.file, stage.line) from None
+
+
+ACTIONS = {
+    "offset_words": offset_words, "cutter_comp": cutter, "length_comp": length,
+    "position_offset": position_offset, "corner_arc": corner_arc,
+}  # fmt: skip

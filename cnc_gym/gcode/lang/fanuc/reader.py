@@ -1,4 +1,5 @@
-"""Read phase: program text → :class:`Program` (a list of :class:`Block` with a program counter).
+"""The Fanuc family's lexer and block reader: program text → :class:`~cnc_gym.gcode.program.Program` (the
+default :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`).
 
 Lexical rules (GSK 25i, seed notes §1; the dialect supplies the number formats):
 
@@ -25,14 +26,16 @@ block; the first is the main program (:attr:`Program.units`).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.expressions import ExpressionParser
+from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
+from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
+from cnc_gym.gcode.program import Block, Program, SpecialBlock
 
 if TYPE_CHECKING:
-    from cnc_gym.gcode.dialect import Dialect, MacroCalls
+    from cnc_gym.gcode.dialect import Dialect
+    from cnc_gym.gcode.settings import MacroCalls
 
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 # Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".". The plain-block
@@ -52,99 +55,6 @@ _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 _CALL_CONTROL = "GNOPL"
 
 
-class Block:
-    """One block after reading.
-
-    ``words``: ``(letter, value, text)`` tuples; ``value`` is a float for a literal (``text`` its
-    digits, for decimal-point checks) or an expression node (``text`` None) evaluated at execution. A
-    plain block (read on the hot path) keeps just ``(letter, digits)`` pairs; ``word[-1]`` is the text
-    either way.
-    ``assign``: ``(target_node, value_node)`` for a macro assignment block (then ``words`` is empty).
-    ``skip``: bit mask of the block-skip switches (bit n for ``/n``) that suppress the block.
-    ``gs``, ``ms``, ``values``: for a block without expressions, the words split once at read time (G
-    numbers, M numbers, other addresses → value); None when the block has expressions.
-    ``kind``: None (an ordinary block), ``"assign"`` (a macro assignment, in ``assign``), ``"stmt"`` (a macro
-    statement, in ``stmt``) or ``"call"`` (may call a macro; words kept in order, arguments read without the
-    addresses' own rules, evaluated at run time; ``stmt`` is then ``("strict", block or ProgramError)``,
-    the block as an ordinary one, for where the code does not call).
-    ``stmt``: ``("goto", target)``, ``("if_goto", cond, target)``, ``("if_then", cond, (target, value))``,
-    ``("while", cond or None, m)`` (``DOm`` alone has no condition), ``("end", m)``.
-    ``message``: the comment of an assignment block (``#3000=1 (TOOL NOT FOUND)``), else None.
-    """
-
-    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
-    # Ordinary blocks share these class-level defaults (no per-block stores on the read hot path);
-    # :class:`SpecialBlock` gives statements, assignments and calls their own.
-    kind: str | None = None
-    stmt: tuple | None = None
-    message: str | None = None
-
-    def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
-                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
-        self.line = line
-        self.words = words
-        self.skip = skip
-        self.has_expr = has_expr
-        self.assign = assign
-        self.number = number
-        if has_expr:
-            self.gs = self.ms = self.values = None
-        else:
-            self.gs, self.ms, self.values = split_words(words)
-
-    def __repr__(self) -> str:
-        return (f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r}, "
-                f"kind={self.kind!r}, stmt={self.stmt!r})")
-
-
-class SpecialBlock(Block):
-    """A block of kind ``"assign"``, ``"stmt"`` or ``"call"`` (see :class:`Block`)."""
-
-    __slots__ = ("kind", "message", "stmt")
-
-    def __init__(self, line: int, words: tuple, *, kind: str, stmt: tuple | None = None, skip: int = 0,
-                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
-        super().__init__(line, words, skip=skip, has_expr=True, assign=assign, number=number)
-        self.kind = kind
-        self.stmt = stmt
-        self.message = None
-
-
-def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
-    """(G numbers or None, M numbers or None, {address: value}); a repeated address is an error."""
-    values: dict[str, float] = {}
-    gs = ms = None
-    for letter, value, _ in words:
-        if letter == "G":
-            gs = [value] if gs is None else [*gs, value]
-        elif letter == "M":
-            ms = [value] if ms is None else [*ms, value]
-        elif letter in values:
-            # The manual's default is "the later one is valid" (L503, 1802#6 AD2 = 0); we take the
-            # AD2 = 1 behaviour, an alarm, as with two G codes of one group (docs/gcode.md).
-            raise ProgramError(f"address {letter} appears twice in the block", code="duplicate-word")
-        else:
-            values[letter] = value
-    return gs, ms, values
-
-
-@dataclass
-class Program:
-    """A read program: blocks in order, with sequence numbers indexed for a later GOTO.
-
-    ``units``: program number → ``(start, end)`` block indices of each ``O`` program in the text (start is
-    the ``O`` block; end is the next ``O`` block or the end). ``main``: the extent of the first program
-    (from block 0, whether or not it has an ``O`` number).
-    """
-
-    blocks: list[Block]
-    file: str = "<program>"
-    program_number: int | None = None
-    sequence_index: dict[int, list[int]] = field(default_factory=dict)
-    units: dict[int, tuple[int, int]] = field(default_factory=dict)
-    main: tuple[int, int] = (0, 0)
-
-
 class Reader:
     """Turns program text into a :class:`Program` for one dialect."""
 
@@ -152,7 +62,9 @@ class Reader:
         self.dialect = dialect
         calls = macro_calls if macro_calls is not None else dialect.macro_calls
         # Codes that make a block a possible macro call (kind "call"): G65/G66 and the configured ones.
-        self._call_g = frozenset({65.0, 66.0, *(float(g) for g in calls.g_macro)})
+        roles = dialect.roles
+        call_codes = {key / 10 for key in (roles.macro_call, roles.modal_call) if key is not None}  # G65, G66
+        self._call_g = frozenset({*call_codes, *(float(g) for g in calls.g_macro)})
         self._call_m = frozenset(float(m) for m in (*calls.m_macro, *calls.m_sub))
         self._call_t = calls.t_sub is not None
         self._last_comment: str | None = None
@@ -203,6 +115,35 @@ class Reader:
             self._deferred_letters |= {"R"}
         self._lenient_rules = lenient
 
+    def _hinted(self, exc: ProgramError, raw: str) -> ProgramError:
+        """The error with a hint when the line looks like another language's syntax (hints.py)."""
+        hint = self.dialect.language.hint
+        text = hint(raw) if hint is not None else None
+        if text is None and ";" in raw and self._comment_after_semicolon(raw):
+            text = SEMICOLON_COMMENT
+        if text is not None and text not in exc.message:
+            exc.message = f"{exc.message} ({text})"
+            exc.args = (exc.message,)
+        return exc
+
+    def _comment_after_semicolon(self, raw: str) -> bool:
+        """Whether the line reads up to a ';' and fails after it on words (``G01 X10 ; move``)."""
+        o_blocks, comment = list(self._o_blocks), self._last_comment
+        try:
+            text = _SPACES.sub("", self._strip_comments(raw, 0)).upper()
+        except ProgramError:
+            return False
+        try:
+            for index, part in enumerate(text.split(";")):
+                try:
+                    if part:
+                        self.read_block(part, 0)
+                except ProgramError:
+                    return index > 0 and re.search("[A-Z]{2}", part) is not None
+            return False
+        finally:
+            self._o_blocks, self._last_comment = o_blocks, comment
+
     def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):
         err = self.dialect.error(message, code, column=column, alarm=alarm)
         err.line = line
@@ -214,14 +155,18 @@ class Reader:
         self._o_blocks = []
         program_number = None
         seen_percent = False
+        colon = ":" in self.dialect.program_number_marks
         for line_no, raw in enumerate(text.splitlines(), start=1):
             stripped = raw.strip()
             if not stripped:
                 continue
+            if colon and stripped[0] == ":":
+                stripped = "O" + stripped[1:]  # ``:1234`` is the program number O1234 (ISO code)
             if stripped.startswith("%"):
                 if stripped.strip("%").strip() and not stripped[1:].lstrip().startswith("("):
-                    raise self.error("'%' must stand alone on its line (tape start/end mark)",
-                                     "bad-character", line_no)  # fmt: skip
+                    error = self.error("'%' must stand alone on its line (tape start/end mark)",
+                                       "bad-character", line_no)  # fmt: skip
+                    raise self._hinted(error, raw).located(file, line_no)
                 if seen_percent:
                     break  # second '%': end of tape
                 seen_percent = True
@@ -237,7 +182,7 @@ class Reader:
                         continue
                 blocks.extend(self.read_line(stripped, line_no))
             except ProgramError as exc:
-                raise exc.located(file, line_no) from None
+                raise self._hinted(exc, raw).located(file, line_no) from None
         program = Program(blocks, file=file)
         for index, block in enumerate(blocks):
             if block.number is not None:

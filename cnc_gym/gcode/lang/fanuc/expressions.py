@@ -9,6 +9,7 @@ Nodes are plain tuples (cheap to build, easy to test):
 ``("op", name, a, b)``       ``+ - * / MOD AND OR XOR``
 ``("fn", name, args)``       ``SIN[x]``, ``ATAN[y]/[x]`` (→ ``ATAN2``), ``POW[x,y]``
 ``("cmp", name, a, b)``      a condition of IF/WHILE: ``EQ NE GT GE LT LE``
+``("and"|"or", a, b)``       conditions combined (dialects with ``condition_operators``)
 ===========================  =======================================================
 
 Null ("vacant") semantics follow GSK L5162-L5211: reading a null variable gives ``None``; ``#2=#1`` keeps
@@ -25,10 +26,11 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.codes import round_to as _round_to
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
-    from cnc_gym.gcode.variables import VariableStore
+    from cnc_gym.gcode.state import Variables as VariableStore
 
 Node = tuple
 MAX_OPERATORS = 200
@@ -49,6 +51,8 @@ class ExpressionParser:
         self.dialect = dialect
         self.depth = 0
         self.operators = 0
+        #: Bracket depth at which AND/OR end an operand (a combined condition's comparison), or None.
+        self._stop_depth: int | None = None
 
     # ------------------------------------------------------------------ helpers
     def _peek(self) -> str:
@@ -104,7 +108,7 @@ class ExpressionParser:
                 continue
             word = self._word()
             op = next((w for w in _ADD_WORDS if word.startswith(w)), None)
-            if op is None:
+            if op is None or (op == "OR" and self._stop_depth == self.depth):
                 return node
             self.pos += len(op)
             self._count()
@@ -121,7 +125,7 @@ class ExpressionParser:
                 continue
             word = self._word()
             op = next((w for w in _MUL_WORDS if word.startswith(w)), None)
-            if op is None:
+            if op is None or (op == "AND" and self._stop_depth == self.depth):
                 return node
             self.pos += len(op)
             self._count()
@@ -137,8 +141,18 @@ class ExpressionParser:
         return ("neg", node) if signs % 2 else node
 
     def condition(self) -> Node:
-        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (L5663-L5720)."""
+        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (L5663-L5720).
+
+        With the dialect's condition operators (``Dialect.condition_operators``: Fanuc's AND, OR)
+        comparisons combine, AND before OR: ``[#1 GT 0 AND #2 LT 5]``, ``[[#1 GT 0] OR [#2 EQ 1]]``. At
+        the level of the comparison AND/OR are logical; inside an operand's own brackets they stay the
+        bitwise operators (``[#1 AND 3] EQ 1``)."""
         self._open()
+        node = self._logical_or() if self.dialect.condition_operators else self._comparison()
+        self._close()
+        return node
+
+    def _comparison(self) -> Node:
         left = self.expression()
         word = self._word()[:2]
         if word not in COMPARISONS:
@@ -147,8 +161,44 @@ class ExpressionParser:
         self.pos += 2
         self._count()
         right = self.expression()
-        self._close()
         return ("cmp", word, left, right)
+
+    def _logic_word(self) -> str | None:
+        word = self._word()
+        for op in ("AND", "OR"):
+            if word.startswith(op) and op in self.dialect.condition_operators:
+                return op
+        return None
+
+    def _logical_or(self) -> Node:
+        node = self._logical_and()
+        while self._logic_word() == "OR":
+            self.pos += 2
+            self._count()
+            node = ("or", node, self._logical_and())
+        return node
+
+    def _logical_and(self) -> Node:
+        node = self._logical_factor()
+        while self._logic_word() == "AND":
+            self.pos += 3
+            self._count()
+            node = ("and", node, self._logical_factor())
+        return node
+
+    def _logical_factor(self) -> Node:
+        """A bracketed condition, or a comparison whose operands stop at a logical AND/OR."""
+        if self._peek() == "[":
+            saved = (self.pos, self.depth, self.operators)
+            try:
+                return self.condition()
+            except ProgramError:
+                self.pos, self.depth, self.operators = saved  # an arithmetic bracket: ``[#1+1] GT 2``
+        outer, self._stop_depth = self._stop_depth, self.depth
+        try:
+            return self._comparison()
+        finally:
+            self._stop_depth = outer
 
     def number(self) -> float:
         text = self.text
@@ -250,7 +300,12 @@ def evaluate(node: Node, variables: VariableStore, dialect: Dialect, round_step:
 
 
 def evaluate_condition(node: Node, variables: VariableStore, dialect: Dialect) -> bool:
-    """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring)."""
+    """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring), or of an ``("and"|"or",
+    a, b)`` combination (both sides are evaluated, as a controller computing the truth values does)."""
+    if node[0] in ("and", "or"):
+        a = evaluate_condition(node[1], variables, dialect)
+        b = evaluate_condition(node[2], variables, dialect)
+        return (a and b) if node[0] == "and" else (a or b)
     _, op, left, right = node
     a = evaluate(left, variables, dialect)
     b = evaluate(right, variables, dialect)
@@ -303,12 +358,6 @@ def _finite(x: float, dialect: Dialect, what: str) -> float:
     if not math.isfinite(x):
         raise dialect.error(f"{what}: result out of range", "overflow")
     return float(x)
-
-
-def _round_to(x: float, step: float) -> float:
-    """Round half away from zero to a multiple of ``step`` (the address's least input increment)."""
-    n = math.floor(abs(x) / step + 0.5 + 1e-9)
-    return math.copysign(n * step, x) if n else 0.0
 
 
 def _fmt(values: list[float]) -> str:

@@ -25,77 +25,28 @@ this module re-reads K and R with those rules (:func:`word_value`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cnc_gym.gcode.expressions import evaluate
-from cnc_gym.gcode.reader import split_words
+from cnc_gym.gcode.codes import gkey
+from cnc_gym.gcode.program import split_words
+from cnc_gym.gcode.state import CurveInProgress
 from cnc_gym.toolpath.nurbs import NurbsCurve
 
 if TYPE_CHECKING:
-    from cnc_gym.gcode.dialect import AddressRule
-    from cnc_gym.gcode.interpreter import Interpreter
+    from cnc_gym.gcode.codes import AddressRule, CodeSpec
+    from cnc_gym.gcode.dialect import Seam
 
-#: Table keys (dialect.gkey) of G06.2 and G05.
-G06_2 = 62
-G05 = 50
 #: Words of the G06.2 block: P rank, K knot, R weight, F feed (plus the axes).
 NURBS_WORDS = "PKRF"
 
 
-def gkey(number: float) -> int:
-    return round(number * 10)
+def _error(core: Seam, message: str, code: str = "nurbs"):
+    return core.error(message, code)
 
 
-@dataclass(frozen=True)
-class NurbsParameters:
-    """GSK 25i NURBS parameters (Parameter volume; notes §3.21, ops_params L324-L344).
-
-    Only ``max_blocks`` (P1407) changes what the interpreter does: a curve longer than that many blocks
-    (control-point and knot-only blocks) is an error. The others are interpolator settings, kept here for
-    the motion stage (the tool path carries the exact curve; acceleration limits along it are the
-    interpolator's business, L1207).
-    """
-
-    curve_degree: int = 3  # P1404 "curve frequency" 1..4 (the program's P sets the rank of each curve)
-    point_density_per_mm: float | None = None  # P1405 standard density 5..1000 points/mm (value lost)
-    max_blocks: int = 200  # P1407 max program blocks of one NURBS curve, 10..500
-    decel_min_distance_mm: float = 1.0  # P1493: shorter control polygon legs are deceleration points
-    decel_min_corner_deg: float = 10.0  # P1494: larger corners are deceleration points
-    fold_line_corner_deg: float = 150.0  # P1495: least included angle of a smoothed fold-line junction
-
-
-@dataclass
-class CurveInProgress:
-    """One G06.2 curve being read: control points in program coordinates (mm), weights, knots."""
-
-    rank: int
-    feed: float
-    line: int
-    file_index: int
-    axes: frozenset[int] | None = None  # the axes named in the first control-point block
-    points: list[list[float]] = field(default_factory=list)
-    weights: list[float] = field(default_factory=list)
-    knots: list[float] = field(default_factory=list)
-    knot_only: int = 0  # knot-only blocks read so far
-
-
-@dataclass
-class NurbsState:
-    """High-precision contour control (G05 P10000) and the curve being read (None between curves)."""
-
-    hpcc: bool = False
-    curve: CurveInProgress | None = None
-    curves: int = 0  # curves emitted
-
-
-def _error(interp: Interpreter, message: str, code: str = "nurbs"):
-    return interp.error(message, code)
-
-
-def word_value(interp: Interpreter, letter: str, rule: AddressRule, words) -> float | None:
+def word_value(core: Seam, letter: str, rule: AddressRule, words) -> float | None:
     """The value of ``letter`` in ``words`` read with ``rule`` (the code's own number format): the
     literal text, or the expression evaluated without the address's rounding. None when absent or null."""
     for word in words:
@@ -105,225 +56,225 @@ def word_value(interp: Interpreter, letter: str, rule: AddressRule, words) -> fl
         if text is not None:
             value = float(text)
         else:
-            value = evaluate(word[1], interp.variables, interp.dialect, None)
+            value = core.dialect.language.evaluate(word[1], core.state.variables, core.dialect, None)
             if value is None:
                 return None
         if not rule.low <= value <= rule.high:
-            raise interp.error(f"{letter}={value:g} is out of range {rule.low:g} to {rule.high:g}",
-                               "value-out-of-range")  # fmt: skip
+            raise core.error(f"{letter}={value:g} is out of range {rule.low:g} to {rule.high:g}",
+                             "value-out-of-range")  # fmt: skip
         return value
     return None
 
 
-def _reread(interp: Interpreter, values: dict, words) -> dict:
+def _reread(core: Seam, values: dict, words) -> dict:
     """``values`` with the words G06.2 gives its own number format (its CodeSpec's ``address_rules``:
     K and R plain numbers in GSK 25i) read again with that format."""
-    rules = interp.dialect.gcodes[G06_2].address_rules
+    rules = core.dialect.gcodes[core.dialect.roles.nurbs].address_rules  # type: ignore[index]
     if not rules or rules.keys().isdisjoint(values):
         return values
     out = dict(values)
     for letter, rule in rules.items():
         if letter in out:
-            out[letter] = word_value(interp, letter, rule, words)
+            out[letter] = word_value(core, letter, rule, words)
     return out
 
 
 # ---------------------------------------------------------------------- G05
-def do_g05(interp: Interpreter, spec, values: dict) -> None:
+def contour_control(core: Seam, spec: CodeSpec, values: dict) -> None:
     """``G05 P10000`` / ``G05 P0``: high-precision contour control on / off (L1205-L1215). Alone in its
     block; a NURBS curve must be complete before P0."""
-    others = sorted({w[0] for w in interp._block_words} - set("GNOP"))
-    if others or sum(1 for w in interp._block_words if w[0] == "G") > 1:
-        raise _error(interp, "G05 must be alone in its block (G05 P10000 / G05 P0)", "bad-g05")
+    others = sorted({w[0] for w in core.state.block_words} - set("GNOP"))
+    if others or sum(1 for w in core.state.block_words if w[0] == "G") > 1:
+        raise _error(core, "G05 must be alone in its block (G05 P10000 / G05 P0)", "bad-g05")
     p = values.get("P")
-    state = interp.nurbs
+    state = core.state.nurbs
     if p == 10000:
         state.hpcc = True
     elif p == 0:
         if state.curve is not None:
-            raise _error(interp, f"G05 P0 before the NURBS curve of line {state.curve.line} is complete "
+            raise _error(core, f"G05 P0 before the NURBS curve of line {state.curve.line} is complete "
                          f"(it needs {state.curve.rank} knot-only blocks after its control points, L1256)",
                          "nurbs-incomplete")  # fmt: skip
         state.hpcc = False
     else:
-        raise _error(interp, "G05 needs P10000 (high-precision contour control on) or P0 (off)"
+        raise _error(core, "G05 needs P10000 (high-precision contour control on) or P0 (off)"
                      if p is None else f"G05 P{p:g}: only P10000 (on) and P0 (off) exist", "bad-g05")
 
 
 # ---------------------------------------------------------------------- G06.2
-def start(interp: Interpreter, spec, values: dict) -> None:
+def start(core: Seam, spec: CodeSpec, values: dict) -> None:
     """The G06.2 block: checks, rank, feed; opens a curve (and reads its first control point)."""
-    state = interp.nurbs
+    state = core.state.nurbs
     if not state.hpcc:
-        raise _error(interp, "G06.2 NURBS needs high-precision contour control: program G05 P10000 first "
+        raise _error(core, "G06.2 NURBS needs high-precision contour control: program G05 P10000 first "
                      "(L1209)", "nurbs-outside-hpcc")  # fmt: skip
-    if interp.comp.side:
-        raise _error(interp, "G06.2 cannot be used with cutter compensation: cancel G41/G42 with G40 first "
+    if core.state.comp.side:
+        raise _error(core, "G06.2 cannot be used with cutter compensation: cancel G41/G42 with G40 first "
                      "(L1289)", "nurbs-in-compensation")  # fmt: skip
-    if interp.polar is not None:
-        raise _error(interp, "G06.2 in polar coordinate mode G16: cancel it with G15 first", "nurbs")
-    forbidden = sorted({w[0] for w in interp._block_words} - set("GNO" + NURBS_WORDS + interp.dialect.axes))
+    if core.state.polar is not None:
+        raise _error(core, "G06.2 in polar coordinate mode G16: cancel it with G15 first", "nurbs")
+    forbidden = sorted({w[0] for w in core.state.block_words} - set("GNO" + NURBS_WORDS + core.dialect.axes))
     if forbidden:
-        raise _error(interp, f"address {forbidden[0]} cannot be given in a G06.2 block (L1281: no M, S, T, "
+        raise _error(core, f"address {forbidden[0]} cannot be given in a G06.2 block (L1281: no M, S, T, "
                      "B, D, H in NURBS mode)", "nurbs-forbidden")  # fmt: skip
     rank = values.get("P", 4.0)
     if rank not in (2.0, 3.0, 4.0):
-        raise _error(interp, f"G06.2 P{rank:g}: the NURBS rank P is 2, 3 or 4 (L1233)", "nurbs-bad-rank")
-    feed = interp.feed
+        raise _error(core, f"G06.2 P{rank:g}: the NURBS rank P is 2, 3 or 4 (L1233)", "nurbs-bad-rank")
+    feed = core.state.feed
     if not feed:
-        raise interp.error("G06.2 needs a feed: no F programmed yet" if feed is None else
-                           "G06.2 with F0: the feed is zero", "missing-feed")  # fmt: skip
-    curve = CurveInProgress(int(rank), feed, interp.out.line, interp.out.file_index)
+        raise core.error("G06.2 needs a feed: no F programmed yet" if feed is None else
+                         "G06.2 with F0: the feed is zero", "missing-feed")  # fmt: skip
+    curve = CurveInProgress(int(rank), feed, core.state.out.line, core.state.out.file_index)
     state.curve = curve
-    interp._block_hook = block_hook  # every later block in G06.2 mode comes here first
-    data = {k: v for k, v in _reread(interp, values, interp._block_words).items() if k not in "PF"}
+    core.state.block_hook = block_hook  # every later block in G06.2 mode comes here first
+    data = {k: v for k, v in _reread(core, values, core.state.block_words).items() if k not in "PF"}
     if data:
-        _add_block(interp, curve, data)
+        _add_block(core, curve, data)
 
 
-def block_hook(interp: Interpreter, block) -> bool:
+def block_hook(core: Seam, block) -> bool:
     """A block while G06.2 is the modal motion. True: handled here (a NURBS data block); False: run it as
     an ordinary block (one that ends NURBS mode, G05, or a block without NURBS data)."""
     if block.assign is not None:
         return False
-    state = interp.nurbs
+    state = core.state.nurbs
     curve = state.curve
     if block.has_expr:
-        gs, ms, values = split_words(interp._evaluate_words(block.words))
+        gs, ms, values = split_words(core.evaluate_words(block.words))
     else:
         gs, ms, values = block.gs, block.ms, block.values
-    gcodes = interp.dialect.gcodes
+    gcodes = core.dialect.gcodes
     if gs:
         keys = [gkey(g) for g in gs]
-        if G06_2 in keys:
+        if core.dialect.roles.nurbs in keys:
             if curve is not None:
-                raise _error(interp, f"G06.2 before the NURBS curve of line {curve.line} is complete (it "
+                raise _error(core, f"G06.2 before the NURBS curve of line {curve.line} is complete (it "
                              f"needs {curve.rank} knot-only blocks after its control points)",
                              "nurbs-incomplete")  # fmt: skip
             return False  # a new curve: the G06.2 action starts it
         group01 = [k for k in keys if k in gcodes and gcodes[k].group == 1]
         if group01:
             if curve is not None:
-                raise _error(interp, f"{gcodes[group01[0]].name} before the NURBS curve of line {curve.line} "
+                raise _error(core, f"{gcodes[group01[0]].name} before the NURBS curve of line {curve.line} "
                              f"is complete (it needs {curve.rank} knot-only blocks after its control points)",
                              "nurbs-incomplete")  # fmt: skip
-            interp._block_hook = None  # another group-01 code ends NURBS mode (L1229)
+            core.state.block_hook = None  # another group-01 code ends NURBS mode (L1229)
             return False
-        if keys == [G05]:
+        if keys == [core.dialect.roles.contour_control]:
             if curve is not None:
-                raise _error(interp, f"G05 before the NURBS curve of line {curve.line} is complete (it needs "
+                raise _error(core, f"G05 before the NURBS curve of line {curve.line} is complete (it needs "
                              f"{curve.rank} knot-only blocks after its control points)",
                              "nurbs-incomplete")  # fmt: skip
             return False  # G05 P0 after a complete curve (G05 checks its P)
         name = gcodes[keys[0]].name if keys[0] in gcodes else f"G{gs[0]:g}"
-        raise _error(interp, f"{name} in NURBS mode: no other G code may be given until a group-01 code "
+        raise _error(core, f"{name} in NURBS mode: no other G code may be given until a group-01 code "
                      "(G00-G03) ends G06.2 (L1281)", "nurbs-forbidden")  # fmt: skip
     if not state.hpcc:
         # G06.2 is still the modal motion after G05 P0, but NURBS cannot run outside contour control.
-        if "K" in values or not interp._axis_letters.isdisjoint(values):
-            raise _error(interp, "a move in G06.2 mode after G05 P0: select G00/G01/G02/G03 (or G05 P10000 "
+        if "K" in values or any(letter in values for letter in core.dialect.axes):
+            raise _error(core, "a move in G06.2 mode after G05 P0: select G00/G01/G02/G03 (or G05 P10000 "
                          "and a new G06.2)", "nurbs-outside-hpcc")  # fmt: skip
         return False
     if ms:
-        raise _error(interp, "M codes cannot be given in NURBS mode (L1281)", "nurbs-forbidden")
+        raise _error(core, "M codes cannot be given in NURBS mode (L1281)", "nurbs-forbidden")
     for letter in values:
-        if letter not in "KR" and letter not in interp._axis_letters:
+        if letter not in "KR" and letter not in core.dialect.axes:
             what = "the feed cannot change" if letter == "F" else f"address {letter} cannot be given"
-            raise _error(interp, f"{what} in NURBS mode (L1281)", "nurbs-forbidden")
+            raise _error(core, f"{what} in NURBS mode (L1281)", "nurbs-forbidden")
     if not values:
         return True  # N only: nothing to do
     if curve is None:
-        raise _error(interp, "the NURBS curve is complete: start a new one with G06.2 (or end NURBS mode "
+        raise _error(core, "the NURBS curve is complete: start a new one with G06.2 (or end NURBS mode "
                      "with a group-01 code)", "nurbs")  # fmt: skip
-    interp._block_words = block.words
-    _add_block(interp, curve, _reread(interp, values, block.words))
+    core.state.block_words = block.words
+    _add_block(core, curve, _reread(core, values, block.words))
     return True
 
 
-def _add_block(interp: Interpreter, curve: CurveInProgress, values: dict) -> None:
+def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
     """One control-point block (axes, K, optional R) or knot-only block (K) of ``curve``."""
-    letters = interp.dialect.axes
+    letters = core.dialect.axes
     named = frozenset(a for a, letter in enumerate(letters) if letter in values)
     if "K" not in values:
-        raise _error(interp, "every NURBS block carries its knot K (L1244)", "nurbs-missing-knot")
+        raise _error(core, "every NURBS block carries its knot K (L1244)", "nurbs-missing-knot")
     knot = values["K"]
     if curve.knots and knot < curve.knots[-1]:
-        raise _error(interp, f"K{knot:g} is smaller than the previous knot {curve.knots[-1]:g}: knots never "
+        raise _error(core, f"K{knot:g} is smaller than the previous knot {curve.knots[-1]:g}: knots never "
                      "decrease (L1262)", "nurbs-bad-knot")  # fmt: skip
-    limit = interp.dialect.nurbs_params.max_blocks
+    limit = core.dialect.nurbs_params.max_blocks
     if len(curve.knots) + 1 > limit:  # every block of the curve carries one knot
-        raise _error(interp, f"the NURBS curve of line {curve.line} has more than {limit} blocks (P1407)",
+        raise _error(core, f"the NURBS curve of line {curve.line} has more than {limit} blocks (P1407)",
                      "nurbs-too-long")  # fmt: skip
     if named:
         if curve.knot_only:
-            raise _error(interp, "a control point after the knot-only blocks: the last `rank` blocks carry "
+            raise _error(core, "a control point after the knot-only blocks: the last `rank` blocks carry "
                          "only a knot (L1244)", "nurbs-missing-knot")  # fmt: skip
         weight = values.get("R", 1.0)
         if not weight > 0.0 or not math.isfinite(weight):
-            raise _error(interp, f"R{weight:g}: a NURBS weight must be positive", "nurbs-bad-weight")
-        s = interp.scale
+            raise _error(core, f"R{weight:g}: a NURBS weight must be positive", "nurbs-bad-weight")
+        s = core.state.scale
         if curve.axes is None:
             # The first control point: all the NURBS axes are named here (L1276) and it must be the
             # current position (L1293).
             curve.axes = named
-            here = interp.program_position
+            here = core.program_position
             point = [here[a] if a not in named else
-                     (here[a] + values[letters[a]] * s if interp.incremental else values[letters[a]] * s)
+                     (here[a] + values[letters[a]] * s if core.state.incremental else values[letters[a]] * s)
                      for a in range(3)]  # fmt: skip
-            tolerance = 0.5 * interp.increment * s + 1e-9
+            tolerance = 0.5 * core.state.increment * s + 1e-9
             if max(abs(point[a] - here[a]) for a in range(3)) > tolerance:
                 where = ", ".join(f"{letters[a]}{point[a] / s:g}" for a in sorted(named))
                 now = ", ".join(f"{letters[a]}{here[a] / s:.4f}" for a in range(3))
-                raise _error(interp, f"the first NURBS control point ({where}) is not the current position "
+                raise _error(core, f"the first NURBS control point ({where}) is not the current position "
                              f"({now}) (L1293; in G91 write G06.2 X0 Y0 Z0 K_)", "nurbs-start-point")
             point = list(here)
-            start = interp.to_machine(point)
-            tool = interp.out.position
+            start = core.to_machine(point)
+            tool = core.state.out.position
             if max(abs(start[a] - tool[a]) for a in range(3)) > tolerance:
                 # G51/G68/G51.1 came into force since the last move: the tool is not yet at the image of
                 # its program position (the transforms keep it where it is, L1932).
-                raise _error(interp, "the tool is not at the start of the NURBS curve: a transform came into "
+                raise _error(core, "the tool is not at the start of the NURBS curve: a transform came into "
                              "force since the last move; move to the first control point first",
                              "nurbs-start-point")  # fmt: skip
         else:
             extra = named - curve.axes
             if extra:
-                raise _error(interp, f"axis {letters[min(extra)]} was not named in the first NURBS control "
+                raise _error(core, f"axis {letters[min(extra)]} was not named in the first NURBS control "
                              "point: every NURBS axis is given there (L1276)", "nurbs-axes")  # fmt: skip
             prev = curve.points[-1]
             point = [prev[a] if a not in named else
-                     (prev[a] + values[letters[a]] * s if interp.incremental else values[letters[a]] * s)
+                     (prev[a] + values[letters[a]] * s if core.state.incremental else values[letters[a]] * s)
                      for a in range(3)]  # fmt: skip
         curve.points.append(point)
         curve.weights.append(weight)
     else:
         if "R" in values:
-            raise _error(interp, "R (weight) without a control point", "nurbs-bad-weight")
+            raise _error(core, "R (weight) without a control point", "nurbs-bad-weight")
         if not curve.points:
-            raise _error(interp, "a knot-only block before the first NURBS control point (L1244)",
+            raise _error(core, "a knot-only block before the first NURBS control point (L1244)",
                          "nurbs-missing-knot")  # fmt: skip
         curve.knot_only += 1
     curve.knots.append(knot)
     if curve.knot_only == curve.rank:
-        _finish(interp, curve)
+        _finish(core, curve)
 
 
-def _finish(interp: Interpreter, curve: CurveInProgress) -> None:
+def _finish(core: Seam, curve: CurveInProgress) -> None:
     """The last knot-only block: build the exact curve in machine coordinates and emit it."""
-    state = interp.nurbs
+    state = core.state.nurbs
     state.curve = None
-    machine = [interp.to_machine(p) for p in curve.points]
-    machine[0] = interp.out.position  # the path stays joined exactly
+    machine = [core.to_machine(p) for p in curve.points]
+    machine[0] = core.state.out.position  # the path stays joined exactly
     try:
         exact = NurbsCurve(np.array(machine, dtype=float), np.array(curve.weights), np.array(curve.knots),
                            curve.rank)  # fmt: skip
     except ValueError as exc:
-        raise _error(interp, f"the NURBS curve of line {curve.line}: {exc}", "nurbs-bad-curve") from None
-    if interp._transformed:
-        interp._program = tuple(curve.points[-1])
+        raise _error(core, f"the NURBS curve of line {curve.line}: {exc}", "nurbs-bad-curve") from None
+    if core.state.transformed:
+        core.state.program_point = tuple(curve.points[-1])
     if exact.length <= 1e-9:
         return  # all control points at the current position: nothing to move
-    out = interp.out
+    out = core.state.out
     line, file_index = out.line, out.file_index
     out.line, out.file_index = curve.line, curve.file_index  # the segment belongs to the G06.2 block
     try:
@@ -331,3 +282,15 @@ def _finish(interp: Interpreter, curve: CurveInProgress) -> None:
     finally:
         out.line, out.file_index = line, file_index
     state.curves += 1
+
+
+def finish(core: Seam) -> None:
+    """End of the program (a block hook): a G06.2 curve must be complete."""
+    curve = core.state.nurbs.curve
+    if curve is not None:
+        raise core.error(f"the program ends before the NURBS curve of line {curve.line} is complete (it "
+                         f"needs {curve.rank} knot-only blocks after its control points, L1244)",
+                         "nurbs-incomplete").located(core.state.builder.files[curve.file_index], curve.line)
+
+
+ACTIONS = {"contour_control": contour_control, "nurbs": start}
