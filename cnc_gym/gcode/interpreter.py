@@ -264,6 +264,7 @@ class Interpreter:
             for check in self._checks:
                 from_checks.axis_owner = check(self, from_checks)
             axis_owner = from_checks.axis_owner
+            motion_spec = from_checks.motion
         if axis_owner is not None and motion_spec is not None and has_axes:
             raise self.error(f"{axis_owner.name} and {motion_spec.name} both use the axis words of the block",
                              "axis-word-conflict")  # fmt: skip

@@ -84,11 +84,15 @@ class CompensationSettings:
     G43/G44 block); GSK 2600#1 TLB, standard setting 1 = B. ``startup_type``: ``A`` or ``B`` start-up and
     cancel at outer corners (GSK "2602#2 TPH", not in the parameter volume; Fanuc's standard is A, and the
     manual's worked example describes A: "offset by the radius vertical to the next block", L4083).
-    ``d_is_diameter``: 2601#7 ODI (see the module docstring). ``offset_count``: H/D numbers 0..count.
+    ``d_is_diameter``: 2601#7 ODI (see offsets.py). ``offset_count``: H/D numbers 0..count.
+    ``length_needs_axis``: see the field.
     """
 
     tool_length_type: str = "B"
     startup_type: str = "A"
+    #: G43/G44 need an axis word in their block (GSK alarm 27); False: ``G43 H_`` alone puts the offset in
+    #: force and the next move of the tool axis carries it (Fanuc 0i, Haas).
+    length_needs_axis: bool = True
     d_is_diameter: bool = False
     offset_count: int = 256
     geometry_limit_mm: float = 999.999

@@ -6,13 +6,44 @@ Alarm numbers are the Fanuc 0i-M program (P/S) alarms where the condition is the
 
 from __future__ import annotations
 
-from cnc_gym.gcode.codes import AddressRule
+from cnc_gym.gcode.codes import AddressRule, gkey
 from cnc_gym.gcode.lang.fanuc import codes as family
-from cnc_gym.gcode.lang.fanuc.codes import BIG, table
+from cnc_gym.gcode.lang.fanuc.codes import BIG, g, m, table, unbuilt
 
-G_CODES = table([*family.G_CODES])
+G_CODES = table([
+    *family.G_CODES,
+    # G94/G95: feed per minute / per revolution (F × S), group 05.
+    g(94, 5, "feed_mode", "minute", step="feed_mode"),
+    g(95, 5, "feed_mode", "revolution", step="feed_mode"),
+    unbuilt(5.1, 0, "AI contour control G05.1"),
+    unbuilt(7.1, 0, "cylindrical interpolation G07.1"),
+    unbuilt(33, 1, "thread cutting G33"),
+    unbuilt(68.2, 16, "tilted working plane G68.2"),
+])
 POWER_ON = family.POWER_ON
-M_CODES = table([*family.M_CODES])
+
+M_CODES = table([
+    *family.M_CODES,
+    m(19, "spindle_orient", step="spindle"),  # oriented spindle stop, recorded
+])
+
+#: M codes that shop programs for such machines often carry but whose meaning the machine builder sets:
+#: refused by name (an unknown M code would be ignored by no real controller either), with what they
+#: usually do so the message helps.
+MACHINE_MCODES = {
+    gkey(n): what for n, what in {
+        7: "mist coolant on", 10: "rotary axis brake on", 11: "rotary axis brake off",
+        12: "rotary axis brake on", 13: "rotary axis brake off", 21: "optional user M code",
+        31: "chip conveyor forward", 33: "chip conveyor stop", 34: "coolant spigot position",
+        35: "coolant spigot position", 41: "low gear", 42: "high gear", 50: "pallet change",
+        51: "optional user M code", 52: "optional user M code", 53: "optional user M code",
+        59: "output relay", 69: "output relay", 75: "set the G35/G136 reference point",
+        82: "tool unclamp", 83: "air blast on", 84: "air blast off", 86: "tool clamp",
+        88: "through-spindle coolant on", 89: "through-spindle coolant off",
+        97: "local subprogram call on Haas (M97 P<N number>): write it as an O program called with M98",
+        109: "interactive user input",
+    }.items()
+}  # fmt: skip
 
 #: Addresses (Fanuc 0i-M, increment system IS-B: 0.001 mm / 0.0001 inch).
 ADDRESSES = {

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from cnc_gym.gcode.lang.fanuc.modal import missing_feed
 from cnc_gym.toolpath import PLANE_AXES
 
 if TYPE_CHECKING:
@@ -30,7 +31,7 @@ def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
     feed = st.feed
     if not feed:
         if feed is None:
-            raise core.error(f"{name} needs a feed: no F programmed yet", "missing-feed")
+            raise missing_feed(core, name)
         raise core.error(f"{name} with F0: zero feed is not allowed on an arc", "zero-feed")
     plane = st.plane
     u, v, w = PLANE_AXES[plane]

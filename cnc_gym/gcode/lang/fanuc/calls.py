@@ -85,7 +85,19 @@ class CallConvention:
         self.core.state.flow_request = ("call", number, count)
 
     def _program_and_count(self, values: dict, what: str) -> tuple[int, int]:
+        """P and L of M98: with 4-digit program numbers a repeat count may lead P (``P51002``: O1002 five
+        times); with longer program numbers (the O address's range, e.g. Fanuc's 8 digits) P is the number
+        and only L counts."""
         p = values["P"]
+        top = int(self.dialect.addresses["O"].high)
+        if top > 9999:
+            if p != int(p) or not 1 <= p <= top:
+                raise self.dialect.error(f"{what} P{p:g}: P is a program number 1..{top} (repeats: L)",
+                                         "bad-call")  # fmt: skip
+            count = int(values.get("L", 1))
+            if not 0 <= count <= 9999:
+                raise self.dialect.error(f"{what} L{count}: the repeat count is 0..9999", "bad-call")
+            return int(p), count
         if p != int(p) or p <= 0:
             raise self.dialect.error(
                 f"{what} P{p:g}: P is a program number (1-9999, a repeat count may lead: "
@@ -264,8 +276,9 @@ class CallConvention:
 
     def _macro_program(self, values: dict, what: str) -> tuple[int, int]:
         p = values["P"]
-        if p != int(p) or not 1 <= p <= 9999:
-            raise self.dialect.error(f"{what} P{p:g}: the macro program number is 1..9999", "bad-call")
+        top = max(9999, int(self.dialect.addresses["O"].high))
+        if p != int(p) or not 1 <= p <= top:
+            raise self.dialect.error(f"{what} P{p:g}: the macro program number is 1..{top}", "bad-call")
         count = 1
         if "L" in values:
             count = values["L"]

@@ -1128,8 +1128,11 @@ def length(core: Seam, spec: CodeSpec, values: dict) -> None:
     comp = st.comp
     comp.length_restore = None  # G43/G44/G49 set the vector afresh (after a G28/G30 cancel too)
     sign = int(spec.value)  # type: ignore[call-overload]
+    deferred = False
     if sign and not any(letter in values for letter in _LETTERS):
-        raise core.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
+        if comp.settings.length_needs_axis:
+            raise core.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
+        deferred = True  # the next move of the tool axis carries the vector
     if st.modal.get(1) in core.dialect.roles.arcs:  # G02/G03 in force: an arc block with the normal axis …
         # … is a helix
         u, v, w = PLANE_AXES[st.plane]
@@ -1139,7 +1142,25 @@ def length(core: Seam, spec: CodeSpec, values: dict) -> None:
     comp.length_sign = sign
     if sign:
         comp.length_axis = 2 if comp.settings.tool_length_type == "A" else PLANE_AXES[st.plane][2]
-    _apply_length(core, values)
+    if deferred:
+        _defer_length(core)
+    else:
+        _apply_length(core, values)
+
+
+def _defer_length(core: Seam) -> None:
+    """``G43 H_`` without an axis word (where the dialect allows it): the new vector waits, as after a
+    G28 cancel, for the next block that commands its axis, whose move carries it in G90 and G91 alike
+    (:func:`restore_length`)."""
+    st = core.state
+    comp = st.comp
+    new = [0.0, 0.0, 0.0]
+    new[comp.length_axis] = comp.length_sign * comp.offsets.length(comp.h_number)
+    old = st.offsets.tool_length
+    delta = [new[a] - old[a] for a in range(3)]
+    if any(delta):
+        comp.length_restore = delta
+        install(core)
 
 
 def cancel_length_at_intermediate(core: Seam, axes) -> None:

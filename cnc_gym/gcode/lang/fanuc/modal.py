@@ -13,6 +13,7 @@ from cnc_gym.gcode.lang.fanuc import compensation, corners, transforms
 from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:
+    from cnc_gym.errors import ProgramError
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Seam
 
@@ -24,6 +25,17 @@ PATH_MODES = {
     "auto_corner": SegmentMode.AUTO_CORNER,
     "cutting": SegmentMode.NONE,
 }
+
+
+def missing_feed(core: Seam, name: str) -> ProgramError:
+    """The error of a feed move without a feed (G95: F and S both needed)."""
+    st = core.state
+    if st.feed_per_rev and st.feed is None:
+        what = "no F in G95 yet" if st.feed_programmed is None else "the spindle speed S is 0"
+        return core.error(f"{name} in G95 (feed per revolution) needs F (mm/rev) and a spindle speed S: "
+                          f"{what}", "missing-feed")  # fmt: skip
+    return core.error(f"{name} needs a feed: no F programmed yet" if st.feed is None else
+                      f"{name} with F0: the feed is zero", "missing-feed")  # fmt: skip
 
 
 def record(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
@@ -79,16 +91,51 @@ def path_mode(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
 
 # ---------------------------------------------------------------------- words
 def feed(core: Seam, spec: CodeSpec | None, values: dict) -> None:
-    """F: the feed, mm/min (inch/min in G20, converted)."""
+    """F: the feed, mm/min (inch/min in G20, converted); in G95 mm/rev (inch/rev), the feed being F × S."""
     st = core.state
+    if st.feed_per_rev:
+        st.feed_programmed = values["F"] * st.scale
+        st.feed = _per_minute(st.feed_programmed, st.spindle_speed)
+        return
     st.feed = values["F"] * st.scale
 
 
 def spindle_speed(core: Seam, spec: CodeSpec | None, values: dict) -> None:
-    """S: spindle speed (r/min), recorded on every segment signed by the direction."""
+    """S: spindle speed (r/min), recorded on every segment signed by the direction (in G95 the feed follows
+    it)."""
     st = core.state
     st.spindle_speed = values["S"]
     st.out.spindle_rpm = st.spindle_speed * st.spindle_direction
+    if st.feed_per_rev and st.feed_programmed is not None:
+        st.feed = _per_minute(st.feed_programmed, st.spindle_speed)
+
+
+def _per_minute(per_rev: float, rpm: float) -> float | None:
+    """Feed per revolution × spindle speed; None while the spindle speed is 0 (no feed yet)."""
+    return per_rev * rpm if rpm > 0 else None
+
+
+def feed_mode(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
+    """G94 (feed per minute) / G95 (feed per revolution, ``spec.value`` ``"revolution"``): in G95 F is mm/rev
+    (inch/rev) and the feed is F × S, following S. A switch drops the F in force (its unit changed): the
+    program gives F again (Fanuc 0i)."""
+    st = core.state
+    per_rev = spec.value == "revolution"
+    if per_rev != st.feed_per_rev:
+        st.feed_per_rev = per_rev
+        st.feed_programmed = None
+        if values is not None:
+            st.feed = None
+
+
+def spindle_orient(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """M19 oriented spindle stop: the spindle stops at its orientation angle (a 0 s exact-stop dwell, spindle
+    speed 0 on the segments; counted in ``State.spindle_orients``)."""
+    st = core.state
+    st.spindle_direction = 0
+    st.out.spindle_rpm = 0.0
+    st.out.dwell(0.0, SegmentMode.EXACT_STOP)
+    st.spindle_orients += 1
 
 
 def tool(core: Seam, spec: CodeSpec | None, values: dict) -> None:
@@ -155,5 +202,5 @@ ACTIONS = {
     "record": record, "plane": plane, "distance": distance, "units": units, "path_mode": path_mode,
     "exact_stop_once": exact_stop_once, "feed": feed, "spindle_speed": spindle_speed, "tool": tool,
     "tool_change": tool_change, "spindle": spindle, "coolant": coolant, "stop": stop, "dwell": dwell,
-    "cycle_return": record,
+    "cycle_return": record, "feed_mode": feed_mode, "spindle_orient": spindle_orient,
 }  # fmt: skip

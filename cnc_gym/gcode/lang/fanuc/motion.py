@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from cnc_gym.gcode.codes import gkey
 from cnc_gym.gcode.lang.fanuc import compensation, corners, reference, transforms
+from cnc_gym.gcode.lang.fanuc.modal import missing_feed
 from cnc_gym.gcode.lang.fanuc.reference import MODAL_POSITIONING
 
 if TYPE_CHECKING:
@@ -66,9 +68,16 @@ def motion(core: Seam, spec: CodeSpec | None = None, values: dict | None = None)
     else:
         feed = st.feed
         if not feed:
-            raise core.error("G01 needs a feed: no F programmed yet" if feed is None else
-                             "G01 with F0: the feed is zero", "missing-feed")  # fmt: skip
+            raise missing_feed(core, "G01")
         out.straight_feed(target, feed)
+
+
+def motion_mode(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """A motion code that only sets the modal motion: G00/G01 in a block whose axis words another code
+    takes, where the dialect allows it (Fanuc's ``G00 G28 G91 Z0``)."""
+    st = core.state
+    st.motion = spec.value  # type: ignore[assignment]
+    st.motion_key = gkey(float(spec.name[1:]))
 
 
 def rotary_motion(core: Seam, mode: int, x, y, z, values: dict) -> None:
@@ -123,4 +132,4 @@ def machine_move(core: Seam, spec: CodeSpec, values: dict) -> None:
     core.resync_program_position()
 
 
-ACTIONS = {"motion": motion, "machine_move": machine_move}
+ACTIONS = {"motion": motion, "machine_move": machine_move, "motion_mode": motion_mode}

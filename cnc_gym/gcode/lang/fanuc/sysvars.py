@@ -196,7 +196,9 @@ class SystemVariables:
     def _last_value(self, letter: str) -> float | None:
         core = self.core
         if letter == "F":
-            return None if core.state.feed is None else core.state.feed / self._scale
+            st = core.state
+            feed = st.feed_programmed if st.feed_per_rev else st.feed
+            return None if feed is None else feed / self._scale
         if letter == "S":
             return core.state.spindle_speed
         if letter == "T":
