@@ -152,7 +152,7 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
         if unknown:
             raise ConfigError(f"macro_calls: unknown keys {sorted(unknown)} (g_macro, m_macro, m_sub, t_sub)")
         try:
-            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})
+            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})  # type: ignore[arg-type]
         except (TypeError, ValueError) as exc:
             raise ConfigError(f"macro_calls: {exc}") from None
     else:

@@ -370,7 +370,8 @@ class CanonicalMachine:
 
     def _rotary_move(self, target: Vec, feed: float | None) -> None:
         """A rapid (``feed`` None) or feed move that also takes the rotary axes to ``rotary_next``."""
-        rotary, self.rotary_next = self.rotary_next, None
+        rotary: tuple[float, ...] = self.rotary_next or ()
+        self.rotary_next = None
         if target == self.position and rotary == self.rotary:
             return
         context = self._context()

@@ -77,8 +77,8 @@ class ToolOffsets:
         return self.tables[("D", False)][number] + self.tables[("D", True)][number]
 
     # ------------------------------------------------------------------ writing
-    def set(self, letter: str, number: int, value_mm: float, *, wear: bool = False, incremental: bool = False,
-            error: ErrorFactory = _plain_error) -> None:  # fmt: skip
+    def set(self, letter: str, number: float, value_mm: float, *, wear: bool = False,
+            incremental: bool = False, error: ErrorFactory = _plain_error) -> None:  # fmt: skip
         """Store H/D ``number`` (geometry or wear); ``incremental`` adds to the stored value (G91).
 
         Errors (from ``error(message, code)``): ``bad-offset-number`` for 0 or beyond ``count``,

@@ -44,7 +44,7 @@ def pattern_holes(code: int, x: float, y: float, *, i: float = 0.0, j: float = 0
         return [(x + i * math.cos(math.radians(j + n * p)), y + i * math.sin(math.radians(j + n * p)))
                 for n in range(k)]  # fmt: skip
     if code == 123:
-        holes = []
+        holes: list[tuple[float, float]] = []
         nx = int(p)
         for row in range(k):
             cols = range(nx) if row % 2 == 0 else range(nx - 1, -1, -1)
@@ -61,7 +61,7 @@ def rectangle_holes(x: float, y: float, side1: float, side2: float, n1: int, n2:
     (its end corner is the next side's first hole). docs/gcode.md explains this reading."""
     turn = 1.0 if ccw else -1.0
     corners = [(x, y), (x + side1, y), (x + side1, y + turn * side2), (x, y + turn * side2)]
-    holes = []
+    holes: list[tuple[float, float]] = []
     for side, count in enumerate((n1, n2, n1, n2)):
         (ax, ay), (bx, by) = corners[side], corners[(side + 1) % 4]
         holes.extend((ax + (bx - ax) * n / count, ay + (by - ay) * n / count) for n in range(count))
@@ -157,7 +157,7 @@ def pattern_block(core: Seam, code: int, values: dict, cycle_spec: CodeSpec | No
                                    feed, zigzag=code == 126))  # fmt: skip
         return
     if code in (124, 125):
-        kind = core.dialect.cycles.get(cycle_spec.value) if cycle_spec is not None else None  # type: ignore[arg-type]
+        kind = core.dialect.cycles.get(str(cycle_spec.value)) if cycle_spec is not None else None
         if kind is None or kind.special or kind.shifting:
             raise core.error(f"G{code} needs a drilling-mode G code (G73 G74 G81-G86 G88 G89) in its block",
                              "cycle-argument", alarm=61)  # fmt: skip
@@ -208,7 +208,7 @@ def _drill_holes(core: Seam, holes: list[tuple[float, float]], *, last_uses_retu
                 emit(core, [("rapid", (hx, hy, None))])
                 continue
             if last_uses_return and index < len(holes) - 1:
-                st.modal[group] = roles.return_r  # type: ignore[index]
+                st.modal[group] = roles.return_r  # type: ignore[index,assignment]
             else:
                 st.modal[group] = saved_return  # type: ignore[index,assignment]
             cycle_block(core, None, {}, hole_xy=(hx, hy))

@@ -106,7 +106,7 @@ def pocket_steps(code: int, cx: float, cy: float, r_level: float, bottom: float,
             outer = i - rt
             radii = [min(outer, n * l_step) for n in range(1, math.ceil(outer / l_step - 1e-9) + 1)]
             start = (cx, cy)
-            rings = [("circle", rad) for rad in radii]
+            rings: list[tuple] = [("circle", rad) for rad in radii]
         elif code in (114, 115):
             first, last = j + rt, i + rt
             count = math.ceil((first - last) / l_step - 1e-9)
@@ -206,6 +206,7 @@ def check_pocket(code: int, *, tool_radius: float, i: float | None, j: float | N
         # examples' reading, L up to the tool diameter, is the rule (docs/gcode.md).
         if l_step is None or l_step <= 0 or (rt > 0 and l_step > 2.0 * rt):
             return f"L (step over) must be > 0 and at most the tool diameter {2.0 * rt:g}", 219
+    j = 0.0 if j is None else j  # given wherever the checks below read it (the "J is missing" check above)
     if code in (110, 111, 112, 113):
         if rt >= i:
             return f"tool radius {rt:g} is not smaller than the circle radius I{i:g}", 222

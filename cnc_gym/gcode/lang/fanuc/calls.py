@@ -15,6 +15,7 @@ actions at the end are what the code tables name.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
@@ -25,6 +26,7 @@ from cnc_gym.gcode.program import Block
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Dialect, Seam
+    from cnc_gym.gcode.lang.fanuc.variables import VariableStore
     from cnc_gym.gcode.settings import MacroCalls
 
 #: Argument specification I (L5892-L5914): address → local variable.
@@ -61,6 +63,7 @@ class CallConvention:
     modal_calls: list[ModalCall]
     _sub_depth: int
     _macro_depth: int
+    _variables: VariableStore
 
     def unit(self, number: int) -> Unit:
         raise NotImplementedError
@@ -191,7 +194,7 @@ class CallConvention:
                 )
             self.unit(number)  # alarm 59 now, not at the first move
             self.modal_calls.append(ModalCall(number, count, args))
-            core.state.modal[roles.modal_call_group] = roles.modal_call  # type: ignore[index]
+            core.state.modal[roles.modal_call_group] = roles.modal_call  # type: ignore[index,assignment]
             return pc
         if not frame.by_code:
             for g in gs:
@@ -261,7 +264,7 @@ class CallConvention:
             )
         return pc
 
-    def _evaluated(self, words: tuple) -> list[tuple[str, float]]:
+    def _evaluated(self, words: Sequence) -> list[tuple[str, float]]:
         """Call-block words → (letter, value) in order; a null variable drops its word (L5136)."""
         out = []
         variables = self.core.state.variables
@@ -324,7 +327,7 @@ class CallConvention:
             )
         unit = self.unit(number)
         self._macro_depth += 1
-        self.core.state.variables.push_locals(args)
+        self._variables.push_locals(args)
         return self._enter(
             Frame(unit, pc, count - 1, macro=True, modal_limit=modal_limit, by_code=by_code, args=args)
         )
@@ -334,8 +337,8 @@ class CallConvention:
         if self.modal_calls:
             self.modal_calls.pop()
         roles = self.dialect.roles
-        self.core.state.modal[roles.modal_call_group] = (  # type: ignore[index]
-            roles.modal_call if self.modal_calls else roles.modal_call_cancel)
+        key = roles.modal_call if self.modal_calls else roles.modal_call_cancel
+        self.core.state.modal[roles.modal_call_group] = key  # type: ignore[index,assignment]
 
     def macro_call_from_variable(self, spec) -> None:
         raise self.dialect.error(

@@ -79,8 +79,14 @@ class PlaneElement:
         return self.center is not None
 
     @property
+    def arc_center(self) -> Point:
+        """The centre of an arc (lines have none)."""
+        assert self.center is not None
+        return self.center
+
+    @property
     def radius(self) -> float:
-        c = self.center
+        c = self.arc_center
         return math.hypot(self.start[0] - c[0], self.start[1] - c[1])
 
     def tangent(self, at_end: bool) -> Point:
@@ -421,7 +427,7 @@ def correct_interference(
 
 def _circle_point(element: PlaneElement, d: float, toward: Point) -> Point:
     """The point of the arc's offset circle (radius for ``d``) in the direction of ``toward``."""
-    cu, cv = element.center
+    cu, cv = element.arc_center
     radius = offset_radius(element, d)
     du, dv = toward[0] - cu, toward[1] - cv
     n = math.hypot(du, dv)
@@ -480,13 +486,13 @@ def compensate(
         for q in starts[1:]:
             out.append(OutputMove(q, block=i))
         if element.is_arc and not as_line:
-            sweep = arc_sweep_between(element.center, starts[-1], ends_at[0], element.sweep)
-            out.append(OutputMove(ends_at[0], element.center, sweep, block=i))
+            sweep = arc_sweep_between(element.arc_center, starts[-1], ends_at[0], element.sweep)
+            out.append(OutputMove(ends_at[0], element.arc_center, sweep, block=i))
         else:
             out.append(OutputMove(ends_at[0], block=i))
         tool = ends_at[0]
         lead = ends_at[1:]
-        start_b = c.start_b
+        start_b = c.start_b if c.start_b is not None else tool  # set by Corner.__post_init__
     if cancel_last:
         for q in lead:
             out.append(OutputMove(q, block=len(elements) - 1))
@@ -521,6 +527,12 @@ class _Item:
     lead: list[Point] = field(default_factory=list)
     start_b: Point | None = None
     role: str = "offset"
+
+    @property
+    def move(self) -> PlaneElement:
+        """The element of a move in the plane (every item the corner logic sees has one)."""
+        assert self.element is not None
+        return self.element
 
 
 class OffsetStage:
@@ -735,6 +747,7 @@ class OffsetStage:
 
     def _adjust_arc(self, end: Vec, center: Vec, plane: Plane, sweep: float) -> tuple[Vec, Vec]:
         """G45-G48 on a quarter or three-quarter I/J/K circle: the radius changes by factor x D (L4831)."""
+        assert self._position_offset is not None  # the caller checked it
         factor, amount, _axes, _incremental = self._position_offset
         self._position_offset = None
         u, v, _w = PLANE_AXES[plane]
@@ -801,7 +814,7 @@ class OffsetStage:
             self.machine.straight_feed(target, feed)
 
     def _plane_move(self, item: _Item) -> None:
-        element = item.element
+        element = item.move
         line = self.line
         if not self.active:
             if item.kind == "arc":
@@ -857,17 +870,17 @@ class OffsetStage:
                 self._corner_arc_resolve(a, nxt)
                 return
             self.corner_arc_pending = False  # G39 before a cancel or the end: no corner to round
-        b_el = nxt.element if nxt is not None else None
+        b_el = nxt.move if nxt is not None else None
         try:
             if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:
                 virtual = PlaneElement(
-                    a.element.end,
+                    a.move.end,
                     (
-                        a.element.end[0] + self.cancel_direction[0],
-                        a.element.end[1] + self.cancel_direction[1],
+                        a.move.end[0] + self.cancel_direction[0],
+                        a.move.end[1] + self.cancel_direction[1],
                     ),
                 )
-                c = _cancel_with_direction(a.element, virtual, a.d)
+                c = _cancel_with_direction(a.move, virtual, a.d)
             else:
                 role = (
                     "startup"
@@ -875,7 +888,7 @@ class OffsetStage:
                     else ("cancel" if nxt is not None and nxt.role == "cancel" else "offset")
                 )
                 d_b = None if nxt is None or nxt.role == "cancel" else nxt.d
-                c = corner(a.element, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
+                c = corner(a.move, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
         except CompensationError as err:
             err.line = err.line or line
             raise
@@ -894,15 +907,15 @@ class OffsetStage:
         """G39: a ends with the vector perpendicular to its end; an arc of radius |d| about the corner
         takes the tool to the vector perpendicular to the next block's start (or to the I/J direction)."""
         self.corner_arc_pending = False
-        p = a.element.end
-        end_a = a.element.offset_point(True, a.d)
+        p = a.move.end
+        end_a = a.move.offset_point(True, a.d)
         if self.corner_arc_direction is not None:
             virtual = PlaneElement(
                 p, (p[0] + self.corner_arc_direction[0], p[1] + self.corner_arc_direction[1])
             )
             target = virtual.offset_point(False, a.d)
         else:
-            target = nxt.element.offset_point(False, nxt.d)
+            target = nxt.move.offset_point(False, nxt.d)
         self._emit_block(a, [end_a])
         sweep = arc_sweep_between(p, end_a, target, 0.0)
         if abs(sweep) > SMOOTH:
@@ -948,7 +961,7 @@ class OffsetStage:
         that are left for the next block's lead. An arc whose start vector is not on its offset circle
         (D changed in this block: the start vector keeps the old offset, L4480) steps radially onto it."""
         self._set_machine_context(item.context)
-        element = item.element
+        element = item.move
         line = item.context[0]
         u, v, _w = PLANE_AXES[self.plane]
         pos = self.machine.position
@@ -966,9 +979,9 @@ class OffsetStage:
             start = _circle_point(element, item.d, starts[-1])
             if _dist(starts[-1], start) > 1e-7:
                 self._emit_plane_point(start, item)
-            sweep = arc_sweep_between(element.center, start, end, element.sweep)
+            sweep = arc_sweep_between(element.arc_center, start, end, element.sweep)
             center = list(target)
-            center[u], center[v] = element.center
+            center[u], center[v] = element.arc_center
             self.machine.arc_feed(target, (center[0], center[1], center[2]), self.plane, sweep, item.feed)
         else:
             self._emit_straight("line" if item.kind == "arc" else item.kind, target, item.feed)
@@ -1228,7 +1241,8 @@ def _apply_length(core: Seam, values: dict) -> None:
         # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
         # transformed path does this by itself (its program position ignores the machine's).
         stage = install(core)
-        stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
+        moved = [delta[a] if _LETTERS[a] in values else 0.0 for a in range(3)]
+        stage.length_pending = (moved[0], moved[1], moved[2])
 
 
 # ---------------------------------------------------------------------- G45-G48

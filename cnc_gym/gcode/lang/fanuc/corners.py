@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
-from cnc_gym.toolpath import PLANE_AXES, Plane
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Seam
@@ -39,7 +39,7 @@ class PendingCorner:
     segment: tuple
     plane: Plane
     line: int
-    modes: object
+    modes: SegmentMode
     armed: bool = False
 
     def before_block(self, core: Seam) -> None:
@@ -50,7 +50,7 @@ def _capture(core: Seam, motion: int, x, y, z, values: dict):
     """This block's move as geometry in program coordinates, without emitting it (None: no motion)."""
     was = core.state.transformed
     saved = core.state.program_point
-    pending = core.state.pending
+    pending = cast("PendingCorner | None", core.state.pending)
     # The block starts where the waiting block ends (that one is not emitted yet).
     core.state.program_point = pending.segment[2] if pending is not None else core.program_position
     core.state.transformed = True
@@ -83,6 +83,10 @@ class CoordinateChangeMark:
         arm_corner(core)
 
 
+def _word(corner: object) -> str:
+    return cast("PendingCorner", corner).word
+
+
 def is_pending_corner(pending: object) -> bool:
     """Whether ``State.pending`` holds a chamfer/corner block (not a coordinate-change mark)."""
     return isinstance(pending, PendingCorner)
@@ -94,7 +98,7 @@ def mark_coordinate_change(core: Seam) -> None:
         core.state.pending = CoordinateChangeMark()
         return
     core.state.pending = None
-    raise core.error(f"a coordinate system or plane change between a chamfer/corner {corner.word} block "
+    raise core.error(f"a coordinate system or plane change between a chamfer/corner {_word(corner)} block "
                      "and its next move (L1633)", "bad-corner")  # fmt: skip
 
 
@@ -107,6 +111,7 @@ def arm_corner(core: Seam) -> None:
         else:
             corner.armed = True
         return
+    corner = cast("PendingCorner", corner)
     if corner.armed:
         core.state.pending = None
         raise core.error(f"the block after a chamfer/corner {corner.word} block (line {corner.line}) must "
@@ -120,6 +125,7 @@ def finish_corner(core: Seam) -> None:
     core.state.pending = None
     if isinstance(corner, CoordinateChangeMark):
         return
+    corner = cast("PendingCorner", corner)
     raise core.error(f"chamfer/corner {corner.word} in the last move block: no next move to meet (L1631)",
                      "bad-corner").located(core.state.file, corner.line)  # fmt: skip
 
@@ -141,7 +147,7 @@ def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
         raise core.error(f"a block takes either a chamfer {_chamfer_word(core)} or a corner radius ,R, not "
                          "both",
                          "bad-combination")  # fmt: skip
-    pending = core.state.pending
+    pending = cast("PendingCorner | None", core.state.pending)
     if words:
         word = words[0]
         if core.state.polar is not None:
@@ -318,8 +324,7 @@ def _within(segment, point, u: int, v: int, from_end: bool) -> bool:
         du, dv = _tangent(segment, True, u, v)
         t = (point[0] - start[u]) * du + (point[1] - start[v]) * dv
         return -tol <= t <= _length(segment, u, v) + tol
-    q = (0.0,) * 3
-    q = list(q)
+    q = [0.0, 0.0, 0.0]
     q[u], q[v] = point
     turned = _turn(_angle(centre, start, u, v), _angle(centre, q, u, v), sweep > 0)
     radius = math.hypot(start[u] - centre[u], start[v] - centre[v])
@@ -329,9 +334,9 @@ def _within(segment, point, u: int, v: int, from_end: bool) -> bool:
 def _with_point(segment, point, at_end: bool, u: int, v: int):
     """The block cut at ``point``: its new end (``at_end``) or its new start."""
     kind, start, end, centre, sweep, feed = segment
-    new = list(end if at_end else start)
-    new[u], new[v] = point
-    new = tuple(new)
+    cut = list(end if at_end else start)
+    cut[u], cut[v] = point
+    new = tuple(cut)
     if kind == "line":
         return (kind, start, new, None, 0.0, feed) if at_end else (kind, new, end, None, 0.0, feed)
     ccw = sweep > 0

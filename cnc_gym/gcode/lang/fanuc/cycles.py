@@ -412,6 +412,7 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
     if spec is not None:
         enter(core, spec)
     spec, kind = state.spec, state.kind
+    assert spec is not None and kind is not None  # enter() or the modal cycle set them
     if kind.special and st.plane != Plane.XY:
         raise core.error(f"{spec.name} works in the G17 plane only", "cycle-argument", alarm=227)
     s = st.scale
@@ -463,8 +464,8 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
                              f"{cycle_params.max_cutting_feed:g} (P1225)", "rigid-tap", alarm=61)  # fmt: skip
     roles = core.dialect.roles
     return_initial = st.modal.get(roles.return_group) != roles.return_r  # type: ignore[arg-type]
-    words = (values.get("X"), values.get("Y"), values.get("Z"))
-    words = tuple(None if a == w else t for a, t in enumerate(words))
+    axis_words = [None if a == w else values.get(letter) for a, letter in enumerate("XYZ")]
+    words = (axis_words[0], axis_words[1], axis_words[2])
     for _ in range(repeats):
         initial = state.initial
         r_level = state.r
@@ -533,7 +534,7 @@ def cancel(core: Seam) -> None:
     st.cycle.cancel()
     st.modal_item = None
     roles = core.dialect.roles
-    st.modal[roles.cycle_group] = roles.cycle_cancel  # type: ignore[index]
+    st.modal[roles.cycle_group] = roles.cycle_cancel  # type: ignore[index,assignment]
     _sync_general_path(core)
 
 

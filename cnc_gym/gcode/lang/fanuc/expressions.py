@@ -303,9 +303,9 @@ def evaluate_condition(node: Node, variables: VariableStore, dialect: Dialect) -
     """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring), or of an ``("and"|"or",
     a, b)`` combination (both sides are evaluated, as a controller computing the truth values does)."""
     if node[0] in ("and", "or"):
-        a = evaluate_condition(node[1], variables, dialect)
-        b = evaluate_condition(node[2], variables, dialect)
-        return (a and b) if node[0] == "and" else (a or b)
+        first = evaluate_condition(node[1], variables, dialect)
+        second = evaluate_condition(node[2], variables, dialect)
+        return (first and second) if node[0] == "and" else (first or second)
     _, op, left, right = node
     a = evaluate(left, variables, dialect)
     b = evaluate(right, variables, dialect)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.codes import gkey
@@ -31,6 +31,7 @@ from cnc_gym.toolpath import SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import ProgramReader, Seam
+    from cnc_gym.gcode.lang.fanuc.variables import VariableStore
     from cnc_gym.gcode.program import Block
 
 _DWELL = int(SegmentKind.DWELL)
@@ -60,6 +61,8 @@ class FlowRunner(CallConvention):
         self._macro_depth = 0
         core.state.flow = self
         core.state.flow_request = None
+        #: The Fanuc family's variable store (locals per macro level).
+        self._variables = cast("VariableStore", core.state.variables)
 
     # ------------------------------------------------------------------ the loop
     def run(self) -> None:
@@ -100,12 +103,12 @@ class FlowRunner(CallConvention):
                 slow = True
             budget -= pc - mark
             if budget < 0:
-                err = self.dialect.error(
+                runaway = self.dialect.error(
                     f"more than {self.options.max_blocks} blocks executed: a runaway loop? "
                     "(raise max_blocks if the program is really this long)",
                     "too-many-blocks",
                 )
-                raise err.located(unit.file, block.line)
+                raise runaway.located(unit.file, block.line)
             self.pc = pc
             try:
                 pc = self._special(block, pc) if slow else self._after(block, pc, moved=False)
@@ -343,11 +346,11 @@ class FlowRunner(CallConvention):
         if frame.repeats > 0:
             frame.repeats -= 1
             if frame.macro:
-                self.core.state.variables.locals = dict(frame.args)
+                self._variables.locals = dict(frame.args)
             return frame.unit.start
         self.frames.pop()
         if frame.macro:
-            self.core.state.variables.pop_locals()
+            self._variables.pop_locals()
             self._macro_depth -= 1
         if frame.subprogram:
             self._sub_depth -= 1

@@ -47,7 +47,8 @@ def motion(core: Seam, spec: CodeSpec | None = None, values: dict | None = None)
             return
         if x is None and y is None and z is None and not _ARC_WORDS.intersection(values):
             return  # no geometry in the block: the arc mode is only (re)selected
-        return core.dialect.hooks.arc(core, mode, x, y, z, values)  # type: ignore[misc]
+        core.dialect.hooks.arc(core, mode, x, y, z, values)  # type: ignore[misc]
+        return
     if x is None and y is None and z is None:
         return  # a motion code with no axis words only sets the mode (L938)
     if st.transformed:

@@ -53,6 +53,7 @@ def word_value(core: Seam, letter: str, rule: AddressRule, words) -> float | Non
         if word[0] != letter:
             continue
         text = word[-1]
+        value: float | None
         if text is not None:
             value = float(text)
         else:
@@ -228,7 +229,7 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
                 raise _error(core, f"the first NURBS control point ({where}) is not the current position "
                              f"({now}) (L1293; in G91 write G06.2 X0 Y0 Z0 K_)", "nurbs-start-point")
             point = list(here)
-            start = core.to_machine(point)
+            start = core.to_machine(here)
             tool = core.state.out.position
             if max(abs(start[a] - tool[a]) for a in range(3)) > tolerance:
                 # G51/G68/G51.1 came into force since the last move: the tool is not yet at the image of
@@ -263,7 +264,7 @@ def _finish(core: Seam, curve: CurveInProgress) -> None:
     """The last knot-only block: build the exact curve in machine coordinates and emit it."""
     state = core.state.nurbs
     state.curve = None
-    machine = [core.to_machine(p) for p in curve.points]
+    machine = [core.to_machine((p[0], p[1], p[2])) for p in curve.points]
     machine[0] = core.state.out.position  # the path stays joined exactly
     try:
         exact = NurbsCurve(np.array(machine, dtype=float), np.array(curve.weights), np.array(curve.knots),
@@ -271,7 +272,8 @@ def _finish(core: Seam, curve: CurveInProgress) -> None:
     except ValueError as exc:
         raise _error(core, f"the NURBS curve of line {curve.line}: {exc}", "nurbs-bad-curve") from None
     if core.state.transformed:
-        core.state.program_point = tuple(curve.points[-1])
+        last = curve.points[-1]
+        core.state.program_point = (last[0], last[1], last[2])
     if exact.length <= 1e-9:
         return  # all control points at the current position: nothing to move
     out = core.state.out

@@ -36,7 +36,8 @@ def skip(core: Seam, spec: CodeSpec, values: dict) -> None:
             if travel and 0.0 <= (surface - start[a]) / travel <= first:
                 first = (surface - start[a]) / travel
         if first < 1.0:  # the signal stops the move there: every axis at the same fraction (a straight move)
-            target = tuple(start[a] + first * (full[a] - start[a]) for a in range(3))
+            target = (start[0] + first * (full[0] - start[0]), start[1] + first * (full[1] - start[1]),
+                      start[2] + first * (full[2] - start[2]))  # fmt: skip
         out = core.state.out
         modes = out.modes
         out.modes = modes | SegmentMode.OVERRIDE_LOCKED | (SegmentMode.EXACT_STOP if first < 1.0 else 0)

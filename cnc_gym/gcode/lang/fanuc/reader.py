@@ -297,7 +297,7 @@ class Reader:
                         or letter in self._deferred_letters):  # fmt: skip
                     # macro arguments have their own rules; so do the words of some codes (L2.5 in G110,
                     # also in a later block of the modal cycle: checked when it runs)
-                    return self._scan_block(text, line)
+                    return self._rescan(text, line)
                 raise
             if letter == "G":
                 if gs is None:
@@ -311,15 +311,15 @@ class Reader:
                     ms.append(value)
             elif letter in values:
                 if letter in "IJK":
-                    return self._scan_block(text, line)  # argument specification II, if a call block
+                    return self._rescan(text, line)  # argument specification II, if a call block
                 raise self.error(f"address {letter} appears twice in the block", "duplicate-word", line)
             else:
                 values[letter] = value
         if ((gs is not None and not self._call_g.isdisjoint(gs))
                 or (ms is not None and not self._call_m.isdisjoint(ms)) or (self._call_t and "T" in values)):
-            return self._scan_block(text, line)  # a possible macro call: words kept in order
+            return self._rescan(text, line)  # a possible macro call: words kept in order
         if gs is not None and not self._override_codes.isdisjoint(gs):
-            return self._scan_block(text, line)  # a code with its own number formats (CodeSpec.address_rules)
+            return self._rescan(text, line)  # a code with its own number formats (CodeSpec.address_rules)
         number = None
         has_o = False
         if "N" in values or "O" in values:
@@ -343,6 +343,12 @@ class Reader:
         block.values = values
         if has_o:
             self._o_blocks.append(block)
+        return block
+
+    def _rescan(self, text: str, line: int) -> Block:
+        """A plain line that needs the scanner after all (it is not empty, so it gives a block)."""
+        block = self._scan_block(text, line)
+        assert block is not None
         return block
 
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:

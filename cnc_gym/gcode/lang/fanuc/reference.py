@@ -83,12 +83,14 @@ def _g29(core: Seam, spec, values: dict) -> None:
     if missing:
         raise core.error(f"G29 {''.join(missing)}: no intermediate point stored for that axis (G28/G30 "
                          "first)", "bad-reference", alarm=46)  # fmt: skip
-    middle = tuple(core.state.g28_intermediate)
+    stored = core.state.g28_intermediate
+    middle = (stored[0], stored[1], stored[2])
     core.move_linear(True, middle)
     s = core.state.scale
     if core.state.polar is None:
         base = middle if core.state.incremental else (0.0, 0.0, 0.0)
-        target = tuple(None if a not in axes else values[letters[a]] * s + base[a] for a in range(3))
+        each = [None if a not in axes else values[letters[a]] * s + base[a] for a in range(3)]
+        target = (each[0], each[1], each[2])
     else:
         target = core.resolve_target(*(values.get(letter) for letter in letters))
     core.move_linear(True, target)
@@ -128,7 +130,8 @@ def _g60(core: Seam, spec, values: dict) -> None:
     if target == (None, None, None):
         return
     p = core.program_position
-    full = tuple(p[a] if t is None else t for a, t in enumerate(target))
+    full = (p[0] if target[0] is None else target[0], p[1] if target[1] is None else target[1],
+            p[2] if target[2] is None else target[2])  # fmt: skip
     start = core.state.out.position
     end = list(core.to_machine(full))
     if not core.state.transformed:  # an omitted axis keeps its machine position (as in move_linear)

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.toolpath import SegmentKind, SegmentMode
@@ -262,7 +262,7 @@ class SystemVariables:
         work = offsets.work_origin()
         return [work[a] + offsets.local[a] for a in range(3)]
 
-    def _missing(self, index: int) -> None:
+    def _missing(self, index: int) -> NoReturn:
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
 
     # ------------------------------------------------------------------ write

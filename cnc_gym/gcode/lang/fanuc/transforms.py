@@ -114,11 +114,12 @@ def scaling(core: Seam, spec, values: dict) -> None:
     if "P" in values:
         factors = (_factor(core, "P", values["P"]),) * 3
     elif any(k in values for k in "IJK"):
-        factors = tuple(_factor(core, k, values[k]) if k in values else parameters.scale(core, a)
-                        for a, k in enumerate("IJK"))  # fmt: skip
+        each = [_factor(core, k, values[k]) if k in values else parameters.scale(core, a)
+                for a, k in enumerate("IJK")]  # fmt: skip
+        factors = (each[0], each[1], each[2])
     else:
         factors = (parameters.scale(core, None),) * 3  # P1861, latched now (L1954)
-    core.state.chain.set("scaling", scaling_stage("G51", centre, factors))  # type: ignore[arg-type]
+    core.state.chain.set("scaling", scaling_stage("G51", centre, factors))
     core.set_transform_state()
 
 
