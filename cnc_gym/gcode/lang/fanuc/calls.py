@@ -267,7 +267,7 @@ class CallConvention:
     def _evaluated(self, words: Sequence) -> list[tuple[str, float]]:
         """Call-block words → (letter, value) in order; a null variable drops its word (L5136)."""
         out = []
-        variables = self.core.state.variables
+        variables = self._variables
         for word in words:
             letter, value = word[0], word[1]
             if not isinstance(value, float):

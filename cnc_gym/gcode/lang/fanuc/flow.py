@@ -70,8 +70,9 @@ class FlowRunner(CallConvention):
         of ``max_blocks`` is charged in bulk whenever control leaves the fast path (a straight run through
         a program is finite, so only jumps, loops and calls need the check)."""
         core = self.core
+        st = core.state
         execute = core.execute
-        skip_mask = core.state.skip_mask
+        skip_mask = st.skip_mask
         budget = self.options.max_blocks
         unit = self.main
         blocks, end = unit.blocks, unit.end
@@ -96,7 +97,7 @@ class FlowRunner(CallConvention):
                     execute(block)
                 except ProgramError as err:
                     raise err.located(unit.file, block.line) from None
-                if core.state.flow_request is None and not core.state.ended:
+                if st.flow_request is None and not st.ended:
                     continue
                 slow = False
             else:
@@ -127,7 +128,7 @@ class FlowRunner(CallConvention):
             self.core.state.out.line = block.line  # for #3006's stop and #4113/#4114
         if kind == "assign":
             target, value = block.assign
-            variables = self.core.state.variables
+            variables = self._variables
             self.message = block.message
             variables.write(
                 evaluate(target, variables, self.dialect), evaluate(value, variables, self.dialect)
@@ -164,7 +165,7 @@ class FlowRunner(CallConvention):
             if isinstance(value, str):
                 value = float(value)
             elif not isinstance(value, float):
-                value = evaluate(value, self.core.state.variables, self.dialect)
+                value = evaluate(value, self._variables, self.dialect)
                 if value is None:
                     continue  # a null word is dropped (L5136)
             if letter == "G":
@@ -201,7 +202,7 @@ class FlowRunner(CallConvention):
         return pc
 
     def _count_part(self) -> None:
-        system = self.core.state.variables.system
+        system = self._variables.system
         if system is not None:
             system.count_part()
 
@@ -209,7 +210,7 @@ class FlowRunner(CallConvention):
     def _statement(self, block: Block, pc: int) -> int:
         stmt = block.stmt
         op = stmt[0]
-        variables = self.core.state.variables
+        variables = self._variables
         dialect = self.dialect
         unit = self.frames[-1].unit
         here = pc - 1
@@ -235,7 +236,7 @@ class FlowRunner(CallConvention):
         raise AssertionError(f"unknown statement {stmt!r}")
 
     def _goto(self, target_node: tuple, unit: Unit, here: int) -> int:
-        value = evaluate(target_node, self.core.state.variables, self.dialect)
+        value = evaluate(target_node, self._variables, self.dialect)
         number = self._sequence_number(value, "GOTO")
         target = unit.find(number, here + 1)
         if target is None:
