@@ -1,5 +1,5 @@
 """The macro variable store: #0 (always null), locals #1-#33, commons #100-#199 and #500-#999, and the
-system variables (#1000 and up) through :class:`~cnc_gym.gcode.sysvars.SystemVariables`.
+system variables (#1000 and up) through :class:`~cnc_gym.gcode.lang.fanuc.sysvars.SystemVariables`.
 
 Locals are one set per macro call level (L6364-L6379): G65, G66 and G/M-code macro calls push a fresh set
 (:meth:`VariableStore.push_locals`), M99 pops it; M98 and M/T-code subprogram calls share the caller's set.
@@ -20,11 +20,13 @@ MAX_VALUE = 1e47
 
 
 class SystemVariableSource(Protocol):
-    """What the store needs from the system-variable table (cnc_gym.gcode.sysvars)."""
+    """What the store needs from the system-variable table (lang/fanuc/sysvars.py)."""
 
     def read(self, index: int) -> float | None: ...
 
     def write(self, index: int, value: float | None) -> None: ...
+
+    def count_part(self) -> None: ...
 
 
 class VariableStore:
