@@ -3,9 +3,9 @@
     cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...] [--program-dir DIR]
     cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png] [--no-progress]
 
-``trace`` prints the canonical tool path as JSON Lines (the contract in DESIGN.md: ``kind``, ``line``,
-``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run`` simulates the
-program through controller and plant (implemented in :mod:`cnc_gym.runner`).
+``trace`` prints the canonical tool path as JSON Lines (the contract in docs/architecture.md: ``kind``,
+``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run`` simulates
+the program through controller and plant (implemented in :mod:`cnc_gym.runner`).
 
 Every error a user can cause ends the command with exit status 2 and one line on stderr (for a program:
 ``FILE:LINE: message [code]``); nothing is printed on stdout once an error has occurred, and never a

@@ -3,8 +3,7 @@
 A preset is a YAML file under ``configs/machines/`` (or any path). It is read with ``yaml.safe_load`` and
 validated into frozen dataclasses; unknown keys, wrong types and out-of-range values are
 :class:`~cnc_gym.errors.ConfigError` naming the file and the key. Parameter names say what they mean;
-the GSK 25i parameter number is given beside each where the manual has one
-(``shared/notes/seed000_ops_params.md``).
+the GSK 25i parameter number is given beside each where its parameter manual has one.
 
 Layout of a preset file::
 
@@ -18,6 +17,8 @@ Layout of a preset file::
 Rotary axes (``RotaryAxisConfig``) are optional: a machine without them rejects A/B/C words by name. The
 controller times their moves and keeps their speed, acceleration and jerk within limits; the plant
 simulates the three linear axes only (contour error is the tool's XYZ error, see docs/motion.md).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -67,7 +68,7 @@ class AxisConfig:
 class RotaryAxisConfig:
     """One rotary axis (A, B or C), in degrees: the limits the controller keeps while timing its moves.
 
-    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (L981-L995): in a block that
+    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (§3.2.2): in a block that
     moves linear and rotary axes together, F is the rate along the composite vector
     √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01 runs at F deg/min.
     """

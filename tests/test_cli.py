@@ -1,4 +1,4 @@
-"""The `cnc-gym` command: the trace contract and the error contract (DESIGN.md)."""
+"""The `cnc-gym` command: the trace contract and the error contract (docs/architecture.md)."""
 
 from __future__ import annotations
 

@@ -8,6 +8,8 @@ Read (the dialect's lexer, ``lang/fanuc/reader.py`` for the Fanuc family) → ch
 (:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. A dialect is a folder of tables
 and hooks (:mod:`cnc_gym.gcode.dialects`) on a language family (:mod:`cnc_gym.gcode.lang`); the contract
 between them and the core is :mod:`~cnc_gym.gcode.dialect`. See docs/gcode.md and docs/dialects.md.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -142,7 +144,7 @@ def interpret_file(
 
 def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCalls:
     """``macro_calls=`` → MacroCalls, checked (ConfigError): G 1-255 but not G00/G65/G66/G67, M 1-255 but
-    not the stop/call codes, at most 10 of each kind (L6232, L6281, L6301), programs 1-9999."""
+    not the stop/call codes, at most 10 of each kind (§3.7.6), programs 1-9999."""
     if value is None:
         return dialect.macro_calls
     if isinstance(value, MacroCalls):
@@ -197,7 +199,7 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
     Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
     270° in the plane). The first offending segment is reported, with the operation volume's stored
     stroke limit 1 alarm: 500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side
-    (n = the axis number, L7250).
+    (n = the axis number, GSK 25i operation manual §2.5.4).
     """
     n = len(toolpath)
     if not n:

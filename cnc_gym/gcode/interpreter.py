@@ -222,7 +222,7 @@ class Interpreter:
             if spec is None:
                 raise self.error(f"unknown G code {code_name('G', key)}", "unknown-code")
             if not spec.implemented:
-                raise self.error(f"{spec.name} is not implemented yet: {spec.note}", "not-implemented")
+                raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented")
             other = by_group.get(spec.group)
             if other is not None:
                 raise self.error(f"{other.name} and {spec.name} are both in modal group {spec.group:02d}; "
@@ -247,7 +247,7 @@ class Interpreter:
                 if spec is None:
                     raise self._unknown_m(key)
                 if not spec.implemented:
-                    raise self.error(f"{spec.name} is not implemented yet: {spec.note}", "not-implemented",
+                    raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented",
                                      alarm=dialect.addresses["M"].alarm)  # fmt: skip
                 for group, members in dialect.m_groups.items():
                     if key in members:
@@ -429,7 +429,7 @@ class Interpreter:
         chain = st.chain
         w = chain.apply(program) if chain.active else program
         if chain.stages["scaling"] is not None:
-            # Scaled results are rounded to the least increment, half up (GSK 25i programming manual §3.15,
+            # Scaled results are rounded to the least increment, half up (GSK 25i programming manual §3.2.17,
             # scaling note 7), so a tiny scaled move may become zero (a block without movement).
             step = st.increment * st.scale
             w = tuple(math.floor(c / step + 0.5 + 1e-7) * step for c in w)  # 1e-7: x.5 stored as x.4999…
@@ -443,8 +443,8 @@ class Interpreter:
         s = st.scale
         words = (x, y, z)
         if st.after_g69 and st.incremental and words != (None, None, None):
-            raise self.error("the first move after G69 must be absolute (L2044: an incremental one does not "
-                             "move correctly)", "incremental-after-g69")  # fmt: skip
+            raise self.error("the first move after G69 must be absolute (GSK 25i §3.2.18: an incremental one "
+                             "does not move correctly)", "incremental-after-g69")  # fmt: skip
         if st.polar is not None:
             return st.polar.resolve(words, st.plane, s, st.incremental, self.program_position)
         if st.incremental:

@@ -3,6 +3,8 @@
 A dialect's reader (its lexer, :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`) turns
 program text into a :class:`Program` of :class:`Block` records; the core checks and executes the ordinary
 blocks, the language's runner (control flow and calls) the statements, assignments and call blocks.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -91,7 +93,7 @@ def split_words(words) -> tuple[list | None, list | None, dict[str, float]]:
         elif letter == "M":
             ms = [value] if ms is None else [*ms, value]
         elif letter in values:
-            # The manual's default is "the later one is valid" (L503, 1802#6 AD2 = 0); we take the
+            # The manual's default is "the later one is valid" (§1.3.2, 1802#6 AD2 = 0); we take the
             # AD2 = 1 behaviour, an alarm, as with two G codes of one group (docs/gcode.md).
             raise ProgramError(f"address {letter} appears twice in the block", code="duplicate-word")
         else:

@@ -1,7 +1,6 @@
 """Program flow of the Fanuc family: the program-counter loop, Macro B statements (GOTO, IF, WHILE/DO/END),
-program units and files (seed notes §1.9, §6.5-§6.7; manual L461-L495 (subprograms), L5663-L5850 (GOTO,
-IF, WHILE), L5852-L6379 (calls)). The language's runner (:attr:`Language.runner
-<cnc_gym.gcode.dialect.Language.runner>`).
+program units and files (§1.3.1 subprograms, §3.7.5 GOTO, IF, WHILE, §3.7.6-§3.7.7 calls). The language's
+runner (:attr:`Language.runner <cnc_gym.gcode.dialect.Language.runner>`).
 
 * :class:`~cnc_gym.gcode.lang.fanuc.units.Unit` — one program (``O`` number … next ``O``), in the main
   file or in another file of the program directory, with its sequence-number index and its DO/END table
@@ -13,6 +12,8 @@ IF, WHILE), L5852-L6379 (calls)). The language's runner (:attr:`Language.runner
 
 Bounds: ``max_blocks`` executed blocks (runaway loops end with ``too-many-blocks``), subprogram nesting 4
 and macro nesting 4 (alarm 77), DO nesting 3 per level (alarm 96).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -143,7 +144,7 @@ class FlowRunner(CallConvention):
     def _ordinary(self, block: Block, pc: int) -> int:
         """An ordinary block while G66 is active (or after a call block's own words): watch for motion.
 
-        "A block containing a move command" (L6147) is read from the block itself — a non-null axis word
+        "A block containing a move command" (§3.7.6) is read from the block itself — a non-null axis word
         not taken by a code that only sets something (G04 G10 G52 G92 G51 G68 G50.1 G51.1) — or from the
         segments it produced (a move with no axis word of its own). The segments alone would miss moves
         that cutter compensation's look-ahead emits a block later."""
@@ -167,7 +168,7 @@ class FlowRunner(CallConvention):
             elif not isinstance(value, float):
                 value = evaluate(value, self._variables, self.dialect)
                 if value is None:
-                    continue  # a null word is dropped (L5136)
+                    continue  # a null word is dropped (§3.7.2)
             if letter == "G":
                 spec = self.dialect.gcodes.get(gkey(value))
                 if spec is not None and spec.action in _SETTING_ACTIONS:
@@ -243,7 +244,8 @@ class FlowRunner(CallConvention):
             raise self.dialect.error(f"GOTO{number}: no block N{number} in {unit.name}", "sequence-not-found")
         if not unit.loops(self.dialect).may_jump(here, target):
             raise self.dialect.error(
-                f"GOTO{number} jumps into a DO range (only jumps out of one are allowed, L5826)", "do-end"
+                f"GOTO{number} jumps into a DO range (only jumps out of one are allowed, GSK 25i §3.7.5)",
+                "do-end",
             )
         return target
 
