@@ -79,7 +79,7 @@ def interpret(
     #2001…/#10001… set them from the program).
 
     ``tool_measurement``: G37's simulated measuring instrument and parameters, a
-    :class:`~cnc_gym.gcode.measurement.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
+    :class:`~cnc_gym.gcode.settings.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
     "band_mm": 5}`` (H number → work coordinate where the approach-end signal comes; default: exactly at
     the commanded position, with the manual's standard P2651-P2653).
     ``skip_signal``: G31's simulated probe, ``{"Z": -5.0}``: a G31 move stops where it first reaches one of
