@@ -19,7 +19,7 @@ import json
 import sys
 from collections.abc import Sequence
 
-from cnc_gym.errors import CncGymError
+from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
 
 EXIT_USAGE = 2
 DIALECTS = ("gsk25i", "h4cm", "syntec", "azmc1")
@@ -115,7 +115,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_line(message: str) -> str:
-    return " ".join(message.split()) or "error"
+    return printable(message, MAX_LINE_CHARS) or "error"
 
 
 if __name__ == "__main__":
