@@ -34,7 +34,7 @@ from cnc_gym.gcode.expressions import ExpressionParser
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect, MacroCalls
 
-_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 # Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".". The plain-block
 # pattern is built per reader (_plain_block_pattern) so that it admits only words within the dialect's
 # length limit (GSK alarm 13, notes §9 E1): a longer literal falls to the scanner, which names it
@@ -46,6 +46,11 @@ def _plain_block_pattern(max_word_length: int) -> re.Pattern:
     n = max_word_length - 1  # characters after the address letter
     return re.compile(rf"(?:[A-Z](?:[-+][0-9.]{{1,{n - 1}}}|[0-9.]{{1,{n}}}))+")
 _SPACES = re.compile(r"[ \t\r\f\v]+")
+_BLANKS = " \t\r\f\v"
+# Line breaks other than CR/LF that str.splitlines() would also split at (FS, GS, RS, NEL, U+2028/9): a
+# block ends at a CR, LF or CRLF only, so line numbers are those of an editor.
+_OTHER_BREAKS = re.compile("[\x1c-\x1e\x85\u2028\u2029]")
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _NUMBER_AT = re.compile(_NUMBER)
 _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 #: Addresses of a call block that keep their own rules (the rest are arguments: any sign, decimal point).
@@ -214,8 +219,9 @@ class Reader:
         self._o_blocks = []
         program_number = None
         seen_percent = False
-        for line_no, raw in enumerate(text.splitlines(), start=1):
-            stripped = raw.strip()
+        lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        for line_no, raw in enumerate(lines, start=1):
+            stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
             if stripped.startswith("%"):
@@ -228,7 +234,7 @@ class Reader:
                 continue
             try:
                 # Hot path inline: a plain line (no comment, ';', expression) is one regex match.
-                if "(" not in stripped and ")" not in stripped and ";" not in stripped:
+                if stripped.isascii() and "(" not in stripped and ")" not in stripped and ";" not in stripped:
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
                         text_block = _SPACES.sub("", text_block)
@@ -275,6 +281,12 @@ class Reader:
         self._last_comment = None
         if "(" in text or ")" in text:
             text = self._strip_comments(text, line)
+        if not text.isascii():
+            # Only ASCII letters and digits are program text (a comment may hold anything): '²' or '١'
+            # would pass str.isdigit, and 'ı'.upper() is 'I'. Alarm 9 ILLEGAL CHARACTERS IN THE ADDRESS.
+            column, char = next((i, c) for i, c in enumerate(text) if not c.isascii())
+            raise self.error(f"illegal character {char!r} (U+{ord(char):04X})", "bad-character", line,
+                             column + 1)  # fmt: skip
         text = _SPACES.sub("", text).upper()
         if "%" in text:
             raise self.error("'%' must stand alone on its line (tape start/end mark)", "bad-character", line)

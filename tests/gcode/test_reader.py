@@ -132,3 +132,31 @@ def test_two_words_of_one_address_are_an_error():
 def test_interpret_keeps_the_file_name_in_the_toolpath():
     tp = interpret("G00 X1\n", file="dir/part.nc")
     assert tp.files[0] == "dir/part.nc"
+
+
+@pytest.mark.parametrize(
+    ("text", "char"),
+    [
+        ("#1=²\n", "²"),  # a superscript passes str.isdigit
+        ("#²=1\n", "²"),
+        ("G01 X١٢ F100\n", "١"),  # Arabic-Indic digits were silently read as 12
+        ("#1=١٢\nG01 X#1 F100\n", "١"),
+        ("G01 X1.5 F１00\n", "１"),  # a fullwidth digit
+        ("G01 Xı F100\n", "ı"),  # 'ı'.upper() is the ASCII 'I'
+        ("G0ﬁ\n", "ﬁ"),  # 'ﬁ'.upper() is 'FI'
+        ("G01 X1 F100\u00a0Y2\n", "\u00a0"),  # a no-break space is not a space
+        ("G01 X1 F100\u2028Y2\n", "\u2028"),  # nor a line break
+    ],
+)
+def test_only_ascii_is_program_text(text, char):
+    # Only ASCII letters and digits are program text: anything else is alarm 9 ILLEGAL CHARACTERS.
+    err = program_error(text, file="part.nc")
+    assert (err.code, err.alarm, err.line) == ("bad-character", 9, 1)
+    assert repr(char) in err.message
+
+
+def test_comments_may_hold_any_text_and_lines_break_at_cr_or_lf_only():
+    assert len(records("G00 X1 (Maß ½ – ok)\r\nG00 X2\rG00 X3\n")) == 3
+    # FS, NEL and U+2029 are no line breaks (str.splitlines would split there): an editor's line numbers.
+    err = program_error("G00 X1\nG00 X2\x1cG00 X3\nG00 X4\u2029\n")
+    assert (err.code, err.line) == ("bad-character", 2)
