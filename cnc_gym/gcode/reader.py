@@ -415,6 +415,11 @@ class Reader:
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:
         low, high, point_allowed, is_length = rule
         has_point = "." in digits
+        if has_point and digits.count(".") > 1:
+            # Before the truncation below, which would cut X1.23456.7 to X1.2345 (alarm 7 ILLEGAL USE OF
+            # DECIMAL POINT).
+            raise self.error(f"bad number {letter}{digits}: a second decimal point", "bad-number", line,
+                             alarm=7)  # fmt: skip
         if has_point:
             if not point_allowed:
                 raise self.error(f"{letter}{digits}: no decimal point allowed in {letter}",

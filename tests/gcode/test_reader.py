@@ -90,6 +90,11 @@ def test_o_and_n_must_lead_the_block():
     ("text", "code", "alarm"),
     [
         ("G01 X1.2.3 F100\n", "bad-number", 7),  # 7 ILLEGAL USE OF DECIMAL POINT
+        ("G01 X1.23456.7 F100\n", "bad-number", 7),  # was truncated to X1.2345 silently
+        ("G01 X-1.23456.7 Y#1 F100\n", "bad-number", 7),  # the scanner's path
+        ("G05 P10000\nG06.2 P2 K1.2345. X0 Y0 F100\n", "bad-number", 7),  # G06.2's own K format
+        ("G05 P10000\nG06.2 P2 K0 X0 Y0 F100\nK1.2345. X1\n", "bad-number", 7),  # a ValueError
+        ("G110 X1 L2.55555.5\n", "bad-number", 7),  # a cycle's own L format
         ("G01 X. F100\n", "bad-number", 7),
         ("G01 X F100\n", "missing-value", 5),
         ("G01 X- F100\n", "bad-sign", 6),  # 6 ILLEGAL USE OF NEGATIVE SIGN
@@ -109,7 +114,7 @@ def test_o_and_n_must_lead_the_block():
 )
 def test_lexical_errors(text, code, alarm):
     err = program_error(text, file="part.nc")
-    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", 1)
+    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", text.count("\n"))
 
 
 def test_error_line_counts_blank_and_comment_lines():
