@@ -684,7 +684,7 @@ class Reader:
                 parser.pos += 1
             if parser._peek() == ".":
                 raise self.error("a GOTO sequence number is an integer", "bad-number", line, parser.pos + 1)
-            return ("num", float(parser.text[start : parser.pos]))
+            return ("num", parser.constant(parser.text[start : parser.pos]))
         if c == "#":
             return parser.variable()
         if c == "[":
@@ -699,7 +699,7 @@ class Reader:
         digits = parser.text[start : parser.pos]
         if not digits:
             raise self.error(f"{word} needs its identifier 1, 2 or 3 ({word}1)", "do-end", line, start + 1)
-        m = int(digits)
+        m = int(parser.constant(digits))
         if not 1 <= m <= 3:
             raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (L5712)", "do-end", line,
                              start + 1, alarm=97)  # fmt: skip  # alarm 97 ILLEGAL CYCLE NUMBER

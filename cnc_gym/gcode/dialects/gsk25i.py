@@ -288,6 +288,7 @@ FUNCTIONS = {
 
 # --------------------------------------------------------------------------- alarms (Appendix B)
 ALARMS = {
+    "too-many-digits": 3,
     "missing-value": 5,
     "missing-address": 4,
     "bad-sign": 6,
