@@ -571,7 +571,9 @@ def _level_now(interp: Interpreter, w: int) -> float:
     return interp.program_position[w]
 
 
-#: Most pecks, passes or holes one cycle block may generate (a bound against a tiny Q/L hanging the run).
+#: Most pecks, passes or holes one cycle block may generate, counted across its K repeats and its pattern's
+#: holes (a bound against a tiny Q or L, or a huge K, filling the memory: G73 Q0.011 K9999 made 60 million
+#: moves).
 MAX_STEPS = 100_000
 
 
@@ -579,6 +581,11 @@ def _limit(interp: Interpreter, count: float, what: str) -> None:
     if not count <= MAX_STEPS:  # also catches NaN
         raise interp.error(f"{what}: {count:.0f} is more than the {MAX_STEPS} one block may make",
                            "cycle-too-long", alarm=61)  # fmt: skip
+
+
+def _times(repeats: int, holes: int) -> str:
+    """How a per-hole count is multiplied in a block: `` x 99 repeats x 9801 holes``."""
+    return (f" x {repeats} repeats" if repeats > 1 else "") + (f" x {holes} holes" if holes > 1 else "")
 
 
 def _dwell_from_p(interp: Interpreter, values: dict) -> float:
@@ -642,11 +649,12 @@ def _tool_radius(interp: Interpreter, values: dict, stored: dict) -> float:
 
 
 def cycle_block(interp: Interpreter, code: int | None, values: dict,
-                hole_xy: tuple[float, float] | None = None) -> None:  # fmt: skip
+                hole_xy: tuple[float, float] | None = None, holes: int = 1) -> None:  # fmt: skip
     """One block in canned-cycle mode: ``code`` is the block's group-09 cycle (None: the modal one).
     Stores the hole data, then drills at the block's position (K times) if the block has an axis word or
     R (L2629); otherwise the block only updates data. ``hole_xy``: a pattern's hole (program mm) instead
-    of the block's axis words."""
+    of the block's axis words; ``holes``: how many holes the pattern drills in all (the bound on the
+    block's moves counts them)."""
     state = interp.cycle
     u, v, w = drilling_axes(interp)
     if code is not None:
@@ -766,18 +774,22 @@ def cycle_block(interp: Interpreter, code: int | None, values: dict,
                         factor = math.hypot(*shift) / mapped
                         shift = (shift[0] * factor, shift[1] * factor, shift[2] * factor)
             if code in PECKING:
-                _limit(interp, (r_level - bottom) / q, f"G{code} pecks (depth / Q)")
+                _limit(interp, (r_level - bottom) / q * repeats * holes,
+                       f"G{code} pecks (depth / Q){_times(repeats, holes)}")  # fmt: skip
+            else:
+                _limit(interp, repeats * holes, f"G{code} holes{_times(repeats, holes)}")
             steps = drill_steps(code, hole, w, initial, r_level, bottom, return_initial=return_initial,
                                 feed=feed, q=q, dwell_s=state.dwell_s, params=params,
                                 spindle=interp.spindle_direction or 1, rigid=state.rigid,
                                 shift=shift, shift_feed=shift_feed)  # fmt: skip
         else:
-            steps = _pocket(interp, code, hole, values, r_level, bottom, initial, return_initial, feed)
+            steps = _pocket(interp, code, hole, values, r_level, bottom, initial, return_initial, feed,
+                            repeats)  # fmt: skip
         emit(interp, steps)
 
 
 def _pocket(interp: Interpreter, code: int, hole: Vec, values: dict, r_level: float, bottom: float,
-            initial: float, return_initial: bool, feed: float) -> list[Step]:  # fmt: skip
+            initial: float, return_initial: bool, feed: float, repeats: int) -> list[Step]:  # fmt: skip
     state = interp.cycle
     words = state.words
     radius = _tool_radius(interp, values, words)
@@ -790,7 +802,8 @@ def _pocket(interp: Interpreter, code: int, hole: Vec, values: dict, r_level: fl
         raise interp.error(f"G{code}: {problem[0]}", "cycle-argument", alarm=problem[1])
     if code in (110, 111, 114, 115, 130, 131, 134, 135):
         span = max(abs(i), abs(j or 0.0)) * max(words.get("E", 1.0), 1.0)
-        _limit(interp, (1 + (r_level - bottom) / state.q) * (1 + span / words["L"]), f"G{code} passes")
+        _limit(interp, (1 + (r_level - bottom) / state.q) * (1 + span / words["L"]) * repeats,
+               f"G{code} passes{_times(repeats, 1)}")  # fmt: skip
     return pocket_steps(code, hole[0], hole[1], r_level, bottom, initial, return_initial=return_initial,
                         feed=feed, tool_radius=radius, i=abs(i), j=abs(j or 0.0), l_step=words.get("L", 0.0),
                         w_first=words.get("W", 0.0), q_step=state.q or 0.0, v_clear=words.get("V", 0.0),
@@ -922,7 +935,7 @@ def _drill_holes(interp: Interpreter, holes: list[tuple[float, float]], *, last_
                 interp.modal[10] = 990
             else:
                 interp.modal[10] = saved_return
-            cycle_block(interp, None, {}, hole_xy=(hx, hy))
+            cycle_block(interp, None, {}, hole_xy=(hx, hy), holes=len(holes))
     finally:
         if saved_return is not None:
             interp.modal[10] = saved_return
