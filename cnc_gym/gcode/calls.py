@@ -12,7 +12,8 @@ Seed notes §1.9, §6.5-§6.7; manual L461-L495 (subprograms), L5663-L5850 (GOTO
 * :class:`FlowRunner` — the loop. Plain blocks go straight to :meth:`Interpreter.execute`; statements,
   assignments, calls and the requests M98/M99 leave (``Interpreter._flow``) come here.
 
-Bounds: ``max_blocks`` executed blocks (runaway loops end with ``too-many-blocks``), subprogram nesting 4
+Bounds: ``max_blocks`` executed blocks (runaway loops end with ``too-many-blocks``), ``max_seconds`` of CPU
+time (``time-budget``) and ``max_segments`` tool-path segments (``segment-budget``), subprogram nesting 4
 and macro nesting 4 (alarm 77), DO nesting 3 per level (alarm 96).
 """
 
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import bisect
 import os
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -37,6 +39,13 @@ if TYPE_CHECKING:
 
 #: Default bound on executed blocks (a runaway WHILE/GOTO loop ends with a clear error).
 DEFAULT_MAX_BLOCKS = 2_000_000
+#: Default bound on the CPU seconds one interpretation may take (2 000 000 blocks of a macro loop take
+#: 10-20 s; the bound catches what the block count does not: heavy blocks).
+DEFAULT_MAX_SECONDS = 60.0
+#: Default bound on the segments of one tool path (about 0.6 kB each while it is built: ~1.2 GB).
+DEFAULT_MAX_SEGMENTS = 2_000_000
+#: The clock and the segment count are read once per this many blocks charged to the budget.
+_CHECK_EVERY = 1024
 #: Argument specification I (L5892-L5914): address → local variable.
 ARGUMENT_SPEC_I = {
     "A": 1,
@@ -75,6 +84,8 @@ class FlowOptions:
     """
 
     max_blocks: int = DEFAULT_MAX_BLOCKS
+    max_seconds: float = DEFAULT_MAX_SECONDS
+    max_segments: int = DEFAULT_MAX_SEGMENTS
     program_dir: str | None = None
     macro_calls: MacroCalls | None = None
     main_m99: str = "end"
@@ -229,6 +240,7 @@ class FlowRunner:
         self._directory: dict[str, Path] | None = None
         self._sub_depth = 0
         self._macro_depth = 0
+        self._deadline = time.process_time() + self.options.max_seconds
         interp.macro = self
         interp._flow = None
 
@@ -241,6 +253,7 @@ class FlowRunner:
         execute = interp.execute
         skip_mask = interp.skip_mask
         budget = self.options.max_blocks
+        next_check = budget - _CHECK_EVERY
         unit = self.main
         blocks, end = unit.blocks, unit.end
         pc = mark = unit.start
@@ -249,6 +262,7 @@ class FlowRunner:
         while True:
             if pc >= end:
                 budget -= pc - mark
+                self.check_bounds()
                 pc = mark = self._fall_off()
                 if pc < 0:
                     return
@@ -277,6 +291,12 @@ class FlowRunner:
                     "too-many-blocks",
                 )
                 raise err.located(unit.file, block.line)
+            if budget < next_check:
+                next_check = budget - _CHECK_EVERY
+                try:
+                    self.check_bounds()
+                except ProgramError as err:
+                    raise err.located(unit.file, block.line) from None
             self.pc = pc
             try:
                 pc = self._special(block, pc) if slow else self._after(block, pc, moved=False)
@@ -288,6 +308,18 @@ class FlowRunner:
             watching = bool(self.modal_calls)
             unit = self.frames[-1].unit
             blocks, end = unit.blocks, unit.end
+
+    def check_bounds(self) -> None:
+        """The CPU-time and segment bounds of the run (``max_seconds``, ``max_segments``); the block count
+        is checked in the loop itself. Also called by blocks that make many moves (cycles.emit)."""
+        options = self.options
+        if len(self.interp.builder) > options.max_segments:
+            raise self.dialect.error(f"the tool path has more than {options.max_segments} segments (raise "
+                                     "max_segments if the program is really this long)", "segment-budget")
+        if time.process_time() > self._deadline:
+            raise self.dialect.error(f"interpretation took more than {options.max_seconds:g} s of CPU time "
+                                     "(a runaway loop? raise max_seconds if the program is really this long)",
+                                     "time-budget")  # fmt: skip
 
     def _special(self, block: Block, pc: int) -> int:
         kind = block.kind

@@ -526,6 +526,9 @@ def check_pocket(code: int, *, tool_radius: float, i: float | None, j: float | N
 # ====================================================================== interpreter side
 def emit(interp: Interpreter, steps: list[Step]) -> None:
     """Send steps through the coordinate seam (program coordinates → transforms → offsets → machine)."""
+    runner = interp.macro
+    if runner is not None:  # a cycle block may drill thousands of holes: keep the run's bounds
+        runner.check_bounds()
     out = interp.out
     for step in steps:
         kind = step[0]
