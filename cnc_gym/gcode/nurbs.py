@@ -32,7 +32,7 @@ import numpy as np
 
 from cnc_gym.gcode.expressions import evaluate
 from cnc_gym.gcode.reader import split_words
-from cnc_gym.toolpath.nurbs import NurbsCurve
+from cnc_gym.toolpath.nurbs import MAX_WEIGHT_RATIO, NurbsCurve
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import AddressRule
@@ -261,6 +261,11 @@ def _add_block(interp: Interpreter, curve: CurveInProgress, values: dict) -> Non
         weight = values.get("R", 1.0)
         if not weight > 0.0 or not math.isfinite(weight):
             raise _error(interp, f"R{weight:g}: a NURBS weight must be positive", "nurbs-bad-weight")
+        low, high = min([weight, *curve.weights]), max([weight, *curve.weights])
+        if high > MAX_WEIGHT_RATIO * low:
+            raise _error(interp, f"R{weight:g}: the weights of one NURBS curve may differ by a factor of at "
+                         f"most {MAX_WEIGHT_RATIO:g} (R{low:g} beside R{high:g}): the curve could not be "
+                         "evaluated to the tool path's accuracy", "nurbs-bad-weight")  # fmt: skip
         s = interp.scale
         if curve.axes is None:
             # The first control point: all the NURBS axes are named here (L1276) and it must be the
@@ -319,6 +324,8 @@ def _finish(interp: Interpreter, curve: CurveInProgress) -> None:
                            curve.rank)  # fmt: skip
     except ValueError as exc:
         raise _error(interp, f"the NURBS curve of line {curve.line}: {exc}", "nurbs-bad-curve") from None
+    if interp.macro is not None:
+        interp.macro.check_bounds()  # curves are plain blocks: keep the run's time bound between them
     if interp._transformed:
         interp._program = tuple(curve.points[-1])
     if exact.length <= 1e-9:

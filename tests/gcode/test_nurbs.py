@@ -336,3 +336,15 @@ def test_random_nurbs_programs_give_an_error_or_a_finite_path(words):
     except ProgramError:
         return
     assert np.all(np.isfinite(tp.end)) and np.isfinite(tp.total_length)
+
+
+def test_extreme_weights_are_rejected_and_small_ones_are_cheap():
+    # R0.01 beside R1 (the 8-line program) is a fine curve: its length table stays small.
+    text = _HEAD + "G06.2 P3 K0 X10 Y0 F600\nK0 X20 Y0 R0.01\nK0 X20 Y10 R1\nK0.5 X10 Y10 R0.01\nK1\nK1\nK1\n"
+    tp = interpret(text)
+    assert len(tp.nurbs[1]._leaf_t) < 200
+    # Weights more than a factor 1e6 apart cannot be evaluated to the path's accuracy: an error at the
+    # block that widens the range beyond it.
+    text = _HEAD + "G06.2 P4 K0 X10 Y0 R0.0001 F600\nK0 X20 Y0 R1000\nK0 X20 Y10\nK0 X10 Y10\n" + "K1\n" * 4
+    err = program_error(text)
+    assert (err.code, err.line) == ("nurbs-bad-weight", text.split("\n").index("K0 X20 Y0 R1000") + 1)
