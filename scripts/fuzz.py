@@ -171,36 +171,21 @@ class Grammar:
 
     def coordinates(self) -> list[str]:
         rng = self.rng
-        r = rng.randrange(10)
-        if r == 0:
-            return [f"G52 {self.axes()}"]
-        if r == 1:
-            return [f"G92 {self.axes()}"]
-        if r == 2:
-            return [f"G10 L2 P{rng.randint(0, 6)} {self.axes()}"]
-        if r == 3:
-            return [f"G10 L{rng.choice([10, 11, 12, 13])} P{rng.randint(1, 20)} R{self.number(small=True)}"]
-        if r == 4:
-            return [f"G54.1 P{rng.randint(1, 48)}"]
-        if r == 5:
-            return [f"G{rng.choice(['28', '28', '30', '27', '29'])} {self.axes()}"]
-        if r == 6:
-            return [f"G53 {self.axes()}"]
-        if r == 7:
-            return [f"G68 X{self.value()} Y{self.value()} R{self.number()}"]
-        if r == 8:
-            return [
-                rng.choice(
-                    [
-                        f"G51 X{self.value()} Y{self.value()} P{self.number(small=True)}",
-                        f"G51.1 X{self.value()}",
-                        "G51 X0 Y0 I2 J1 K-1",
-                    ]
-                ),
-                *self.motion(),
-                "G50 G50.1",
-            ]
-        return ["G16", f"G01 X{self.number(positive=True)} Y{self.number()} F100", "G15"]
+        makers = [
+            lambda: [f"G52 {self.axes()}"],
+            lambda: [f"G92 {self.axes()}"],
+            lambda: [f"G10 L2 P{rng.randint(0, 6)} {self.axes()}"],
+            lambda: [f"G10 L{rng.choice([10, 11, 12, 13])} P{rng.randint(1, 20)} R{self.number(small=True)}"],
+            lambda: [f"G54.1 P{rng.randint(1, 48)}"],
+            lambda: [f"G{rng.choice(['28', '28', '30', '27', '29'])} {self.axes()}"],
+            lambda: [f"G53 {self.axes()}"],
+            lambda: [f"G68 X{self.value()} Y{self.value()} R{self.number()}"],
+            lambda: [rng.choice([f"G51 X{self.value()} Y{self.value()} P{self.number(small=True)}",
+                                 f"G51.1 X{self.value()}", "G51 X0 Y0 I2 J1 K-1"]),
+                     *self.motion(), "G50 G50.1"],
+            lambda: ["G16", f"G01 X{self.number(positive=True)} Y{self.number()} F100", "G15"],
+        ]  # fmt: skip
+        return rng.choice(makers)()
 
     def compensation(self) -> list[str]:
         rng = self.rng
