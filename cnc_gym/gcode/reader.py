@@ -45,8 +45,8 @@ _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 def _plain_block_pattern(max_word_length: int) -> re.Pattern:
     n = max_word_length - 1  # characters after the address letter
     return re.compile(rf"(?:[A-Z](?:[-+][0-9.]{{1,{n - 1}}}|[0-9.]{{1,{n}}}))+")
-_SPACES = re.compile(r"[ \t\r\f\v]+")
 _BLANKS = " \t\r\f\v"
+_NO_BLANKS = str.maketrans("", "", _BLANKS)
 # Line breaks other than CR/LF that str.splitlines() would also split at (FS, GS, RS, NEL, U+2028/9): a
 # block ends at a CR, LF or CRLF only, so line numbers are those of an editor.
 _OTHER_BREAKS = re.compile("[\x1c-\x1e\x85\u2028\u2029]")
@@ -170,6 +170,9 @@ class Reader:
         self._max_words = dialect.max_words_per_block
         self._max_word_length = dialect.max_word_length
         self._plain_pattern = _plain_block_pattern(dialect.max_word_length)
+        # A longer block breaks the word-count or word-length limit: it goes to the scanner, which stops at
+        # the first word too many (the regex would keep a stack entry per word of a 10 MB line).
+        self._max_plain = dialect.max_words_per_block * dialect.max_word_length
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
@@ -237,8 +240,8 @@ class Reader:
                 if stripped.isascii() and "(" not in stripped and ")" not in stripped and ";" not in stripped:
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
-                        text_block = _SPACES.sub("", text_block)
-                    if self._plain_pattern.fullmatch(text_block):
+                        text_block = text_block.translate(_NO_BLANKS)
+                    if len(text_block) <= self._max_plain and self._plain_pattern.fullmatch(text_block):
                         blocks.append(self._plain_block(text_block, line_no))
                         continue
                 blocks.extend(self.read_line(stripped, line_no))
@@ -287,7 +290,8 @@ class Reader:
             column, char = next((i, c) for i, c in enumerate(text) if not c.isascii())
             raise self.error(f"illegal character {char!r} (U+{ord(char):04X})", "bad-character", line,
                              column + 1)  # fmt: skip
-        text = _SPACES.sub("", text).upper()
+        # (str.translate, not re.sub, which keeps a list entry per match: 160 MB for a 6 MB line of words)
+        text = text.translate(_NO_BLANKS).upper()
         if "%" in text:
             raise self.error("'%' must stand alone on its line (tape start/end mark)", "bad-character", line)
         if ";" in text:
@@ -328,7 +332,7 @@ class Reader:
 
     # ------------------------------------------------------------------ block
     def read_block(self, text: str, line: int) -> Block | None:
-        if self._plain_pattern.fullmatch(text):
+        if len(text) <= self._max_plain and self._plain_pattern.fullmatch(text):
             return self._plain_block(text, line)
         return self._scan_block(text, line)
 
@@ -584,9 +588,8 @@ class Reader:
             if text_digits is None:
                 has_expr = True
             words.append((letter, value, text_digits))
-        if len(words) > self._max_words:
-            raise self.error(f"{len(words)} words in one block (at most {self._max_words})", "too-many-words",
-                             line)  # fmt: skip
+            if len(words) > self._max_words:  # stop here: no need to read a million more words
+                raise self.error(f"more than {self._max_words} words in one block", "too-many-words", line)
         if defer:  # words that fail their address's own rule wait for the code they belong to
             for n, (letter, value, digits) in enumerate(words):
                 if digits is not None and letter in self._deferred_letters:

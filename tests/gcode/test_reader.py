@@ -165,3 +165,25 @@ def test_comments_may_hold_any_text_and_lines_break_at_cr_or_lf_only():
     # FS, NEL and U+2029 are no line breaks (str.splitlines would split there): an editor's line numbers.
     err = program_error("G00 X1\nG00 X2\x1cG00 X3\nG00 X4\u2029\n")
     assert (err.code, err.line) == ("bad-character", 2)
+
+
+@pytest.mark.parametrize(
+    ("text", "code"),
+    [
+        ("G01 " + "X1" * 3_000_000 + "\n", "too-many-words"),  # 6 MB: the plain-block regex kept 600 MB
+        ("G01 " + "X1\t" * 2_000_000 + "\n", "too-many-words"),  # re.sub of the blanks kept 160 MB
+        ("G65 P1 " + "A1 " * 1_000_000 + "\n", "too-many-words"),  # a call block's arguments
+        ("#1=" + "1+" * 1_000_000 + "1\n", "bad-expression"),  # more than 200 operators
+    ],
+)
+def test_one_long_line_is_an_error_in_bounded_memory(text, code):
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        err = program_error(text)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert err.code == code and err.line == 1
+    assert peak < 8 * len(text) + 2**20  # a few copies of the line, not an object per word
