@@ -182,3 +182,11 @@ def test_8_digit_constants_and_long_decimals_are_fine():
     assert x_of("[000000001.5]") == 1.5  # leading zeros are no digits
     assert x_of("[3.14159265358979]") == 3.1416  # neither are decimals (ROUND to the increment)
     assert moves("#0000000001=2\nG01 X#1 F100\n")[0]["end"][0] == 2.0
+
+
+@pytest.mark.parametrize("text", [f"G65 P{HUGE}\n", f"G65 P9000 A{HUGE}\nM30\nO9000\nM99\n", f"M98 P{HUGE}\n",
+                                  f"G01 X{HUGE} F100\n", f"N{HUGE} G00 X1\n"])
+def test_huge_literal_words_are_too_long(text):
+    # As a word (not an expression), a 401-digit number is longer than the 16 characters of a word.
+    err = program_error(text)
+    assert (err.code, err.alarm, err.line) == ("word-too-long", 13, 1) and len(str(err)) < 600
