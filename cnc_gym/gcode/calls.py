@@ -262,7 +262,10 @@ class FlowRunner:
         while True:
             if pc >= end:
                 budget -= pc - mark
-                self.check_bounds()
+                try:
+                    self.check_bounds()
+                except ProgramError as err:
+                    raise err.located(unit.file, blocks[end - 1].line if end > unit.start else 0) from None
                 pc = mark = self._fall_off()
                 if pc < 0:
                     return

@@ -230,7 +230,7 @@ class Reader:
             if stripped.startswith("%"):
                 if stripped.strip("%").strip() and not stripped[1:].lstrip().startswith("("):
                     raise self.error("'%' must stand alone on its line (tape start/end mark)",
-                                     "bad-character", line_no)  # fmt: skip
+                                     "bad-character", line_no).located(file, line_no)  # fmt: skip
                 if seen_percent:
                     break  # second '%': end of tape
                 seen_percent = True

@@ -329,6 +329,9 @@ def test_tool_path_size_is_bounded():
     err = program_error("G91 G81 X1 Z-1 R1 F100 K50000\n", max_segments=5000)
     assert (err.code, err.line) == ("segment-budget", 1)
     assert program_error("G91 G81 X1 Z-1 R1 F100 K99999\n", max_seconds=0.05).code == "time-budget"
+    # A subprogram that ends without M99 returns at the end of its text: checked there too, with its line.
+    err = program_error("M98 P1 L9999\nM30\nO1\nG91 G01 X1 F100\nX-1\n", max_segments=1000, file="p.nc")
+    assert (err.code, err.file, err.line) == ("segment-budget", "p.nc", 5)
 
 
 @pytest.mark.parametrize(("name", "bad"), [("max_seconds", 0), ("max_seconds", float("nan")),

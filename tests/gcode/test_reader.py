@@ -104,6 +104,7 @@ def test_o_and_n_must_lead_the_block():
         ("G01 X10 F100 (unclosed\n", "unclosed-comment", None),
         ("G01 X10 F100 )\n", "bad-character", 9),
         ("G00 X1 % \n", "bad-character", 9),
+        ("%G01 X1\n", "bad-character", 9),  # the tape mark's own check named no file
         ("M3.5\n", "decimal-point-not-allowed", 7),
         ("T1.0\n", "decimal-point-not-allowed", 7),
         ("N1234567 G00 X1\n", "value-out-of-range", 16),
