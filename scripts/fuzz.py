@@ -10,7 +10,8 @@ Every program ends in one outcome class:
 ``ok``             a tool path with finite numbers
 ``error:CODE``     a ``ProgramError``, its line ``FILE:LINE: message [CODE]`` one bounded line
 ``crash:TYPE``     any other exception, a tool path with NaN/inf (``crash:non-finite``), or an error line that
-                   breaks the contract (``crash:bad-error-line``)
+                   breaks the contract (``crash:bad-error-line``: not one bounded line naming the file and
+                   a line ≥ 1)
 ``over-time``      more than ``--time-limit`` CPU seconds in ``interpret`` (default 10), though ``interpret``
                    runs with ``max_seconds`` = half of it: the interpreter missed its own time bound
 ``over-memory``    a ``MemoryError`` under ``--memory-limit`` (MiB above the worker's start), or the
@@ -283,7 +284,8 @@ class Grammar:
         n = rng.randint(rank, 12)
         inner = sorted(rng.sample(range(1, 1000), n - rank)) if n - rank < 999 else []
         inner = [k / 1000 for k in inner]
-        weights = rng.choice([None, None, ["1", "0.5", "2", "0.7"], ["1", "0.01", "100", "0.0001", "1000"]])
+        extreme = ["1", "0.01", "100", "0.001", "1000"] + (["0.0001"] if self.chance(self.odd) else [])
+        weights = rng.choice([None, None, ["1", "0.5", "2", "0.7"], extreme])
         lines = ["G05 P10000", "G90 G00 X0 Y0 Z0"]
         weight = (lambda: f" R{rng.choice(weights)}") if weights else (lambda: "")
         lines.append(f"G06.2 P{rank} K0 X0 Y0 Z0{weight()} F{rng.randint(10, 3000)}")
@@ -521,12 +523,8 @@ def _classify(text: str, time_limit: float) -> tuple[str, float, str]:
         return "over-time", time.process_time() - start, ""
     except ProgramError as err:
         line = str(err)
-        good = (
-            bool(err.code)
-            and "\n" not in line
-            and len(line) <= MAX_LINE_CHARS
-            and line.startswith("fuzz.nc:")
-        )
+        good = (bool(err.code) and "\n" not in line and len(line) <= MAX_LINE_CHARS and err.line >= 1
+                and line.startswith("fuzz.nc:"))  # fmt: skip
         return (
             (f"error:{err.code}" if good else "crash:bad-error-line"),
             time.process_time() - start,
