@@ -44,6 +44,7 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 BAD_PREFIXES = ("crash", "over-time", "over-memory", "cli-mismatch")
 
@@ -140,8 +141,8 @@ class Grammar:
         if code not in ("G02", "G03"):
             return [f"{code} {self.axes()}{self.feed()}{corner if code == 'G01' else ''}".strip()]
         plane = rng.choice(["G17", "G17", "G18", "G19"])
-        u, v, w = {"G17": "XYZ", "G18": "ZXY", "G19": "YZX"}[plane]
-        i, j = {"G17": "IJ", "G18": "KI", "G19": "JK"}[plane]
+        u, v, w = {"G17": ("X", "Y", "Z"), "G18": ("Z", "X", "Y"), "G19": ("Y", "Z", "X")}[plane]
+        i, j = {"G17": ("I", "J"), "G18": ("K", "I"), "G19": ("J", "K")}[plane]
         if self.chance(self.odd + 0.05):  # anything goes
             centre = (
                 f"R{self.value()}"
@@ -282,8 +283,7 @@ class Grammar:
         rng = self.rng
         rank = rng.choice([2, 3, 4, 4, 5] if self.chance(self.odd) else [2, 3, 4, 4])
         n = rng.randint(rank, 12)
-        inner = sorted(rng.sample(range(1, 1000), n - rank)) if n - rank < 999 else []
-        inner = [k / 1000 for k in inner]
+        inner = [k / 1000 for k in sorted(rng.sample(range(1, 1000), n - rank))]
         extreme = ["1", "0.01", "100", "0.001", "1000"] + (["0.0001"] if self.chance(self.odd) else [])
         weights = rng.choice([None, None, ["1", "0.5", "2", "0.7"], extreme])
         lines = ["G05 P10000", "G90 G00 X0 Y0 Z0"]
@@ -574,8 +574,8 @@ def _worker(conn, time_limit: float, memory_limit_mb: float) -> None:
 class _Worker:
     def __init__(self, time_limit: float, memory_limit_mb: float) -> None:
         self.time_limit, self.memory_limit_mb = time_limit, memory_limit_mb
-        self.process = None
-        self.conn = None
+        self.process: multiprocessing.process.BaseProcess | None = None
+        self.conn: Any = None  # multiprocessing.connection.Connection
 
     def start(self) -> None:
         context = multiprocessing.get_context("fork")
@@ -607,8 +607,9 @@ class _Worker:
                 return outcome, seconds, detail, rss
             except EOFError:
                 pass
-        alive = self.process.is_alive()
-        code = self.process.exitcode
+        process = self.process
+        assert process is not None
+        alive, code = process.is_alive(), process.exitcode
         self.stop()
         if alive:
             return "over-time", 4 * self.time_limit + 30, "killed at the wall-clock backstop", 0.0
