@@ -33,6 +33,7 @@ import argparse
 import json
 import math
 import multiprocessing
+import os
 import random
 import resource
 import shutil
@@ -597,9 +598,19 @@ class _Worker:
         if self.process is None:
             self.start()
         self.conn.send(text)
-        # The CPU alarm ends a slow program inside the worker; this wall-clock backstop catches one stuck
-        # in a long C call (the alarm runs only between Python bytecodes) on a loaded machine.
-        if self.conn.poll(4 * self.time_limit + 30):
+        # The CPU alarm ends a slow program inside the worker; this backstop catches one stuck in a long C
+        # call (the alarm runs only between Python bytecodes): the worker's own CPU time, read from /proc
+        # (wall time on a loaded machine says little), and a far wall-clock limit.
+        process = self.process
+        assert process is not None
+        cpu_limit, wall_limit = 2 * self.time_limit + 10, 30 * self.time_limit + 300
+        cpu_start, wall_start = _cpu_seconds(process.pid), time.monotonic()
+        while not self.conn.poll(1.0):
+            cpu = _cpu_seconds(process.pid)
+            over_cpu = cpu is not None and cpu_start is not None and cpu - cpu_start > cpu_limit
+            if over_cpu or time.monotonic() - wall_start > wall_limit or not process.is_alive():
+                break
+        else:
             try:
                 outcome, seconds, detail, rss = self.conn.recv()
                 if outcome == "over-memory":
@@ -607,13 +618,21 @@ class _Worker:
                 return outcome, seconds, detail, rss
             except EOFError:
                 pass
-        process = self.process
-        assert process is not None
         alive, code = process.is_alive(), process.exitcode
         self.stop()
         if alive:
-            return "over-time", 4 * self.time_limit + 30, "killed at the wall-clock backstop", 0.0
+            return "over-time", cpu_limit, "killed by the backstop: no answer", 0.0
         return "over-memory", 0.0, f"worker died (exit {code})", 0.0
+
+
+def _cpu_seconds(pid: int | None) -> float | None:
+    """User + system CPU seconds of process ``pid`` (Linux /proc), None where that cannot be read."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            fields = stat.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
 
 
 def _cli_command() -> list[str]:
