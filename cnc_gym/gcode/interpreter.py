@@ -115,7 +115,7 @@ class Interpreter:
                                                               if a in dialect.other_axes)  # fmt: skip
         self.rotary_origin = [0.0] * len(self.rotary_axes)  # program 0 in machine degrees (G92)
         self.builder = ToolpathBuilder(files=(program.file,), rotary_axes=self.rotary_axes)
-        self.out = CanonicalMachine(self.builder, start, rotary=self.builder.rotary_origin)
+        self.out = CanonicalMachine(self.builder, start, rotary=self.builder.rotary_origin, error=self.error)
         self.offsets = OffsetStack()
         # Tool compensation (compensation.py): D/H tables (offsets.py), G40-G42, G43/G44/G49, G45-G48.
         self.comp = ToolCompensation(dialect, tool_offsets)

@@ -90,3 +90,16 @@ def test_random_arcs_are_consistent_or_rejected(plane, code, numbers, use_r):
         return  # a 0° R arc: no motion
     point, _, _ = tp.evaluate(tp.s_start[2] - 1e-12)
     assert np.allclose(point[0], tp.end[1], atol=1e-6)
+
+
+def test_a_runaway_transform_loop_ends_in_an_error_not_an_overflow():
+    # Found by scripts/fuzz.py: G51 I2 re-applied in a loop doubles the machine X of a G19 arc every pass;
+    # after some 1000 passes the coordinate was inf and math.floor raised OverflowError.
+    text = ("G00 X-1 Z0\n#3=0\nWHILE[#3LT3000]DO1\nG51 X0 Y0 I2 J1 K1\n"
+            "G19 G91 G03 Y-0.4461 Z-0.4946 J19.7558 K-18.2684 F100\nG90\nG50\n#3=#3+1\nEND1\n")  # fmt: skip
+    try:
+        interpret(text, file="p.nc")
+    except ProgramError as err:
+        assert (err.code, err.file, err.line) == ("value-out-of-range", "p.nc", 5) and "1e+09" in err.message
+    else:
+        raise AssertionError("the runaway loop ran to its end")
