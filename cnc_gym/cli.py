@@ -23,7 +23,7 @@ import json
 import sys
 from collections.abc import Sequence
 
-from cnc_gym.errors import CncGymError
+from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
@@ -170,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_line(message: str) -> str:
-    return " ".join(message.split()) or "error"
+    return printable(message, MAX_LINE_CHARS) or "error"
 
 
 if __name__ == "__main__":

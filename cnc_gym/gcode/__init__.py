@@ -24,7 +24,13 @@ from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.program import Program
-from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS, FlowOptions, MacroCalls
+from cnc_gym.gcode.settings import (
+    DEFAULT_MAX_BLOCKS,
+    DEFAULT_MAX_SECONDS,
+    DEFAULT_MAX_SEGMENTS,
+    FlowOptions,
+    MacroCalls,
+)
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
@@ -57,6 +63,8 @@ def interpret(
     machine: MachineConfig | None = None,
     block_skip: frozenset[int] = frozenset(),
     max_blocks: int = DEFAULT_MAX_BLOCKS,
+    max_seconds: float = DEFAULT_MAX_SECONDS,
+    max_segments: int = DEFAULT_MAX_SEGMENTS,
     program_dir: str | Path | None = None,
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
@@ -67,7 +75,10 @@ def interpret(
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
-    ``max_blocks``: bound on executed blocks (a runaway macro loop raises ``too-many-blocks``).
+    ``max_blocks``: bound on executed blocks (a runaway macro loop raises ``too-many-blocks``);
+    ``max_seconds``: bound on the CPU seconds of the interpretation (``time-budget``); ``max_segments``:
+    bound on the tool path's segments (``segment-budget``). The defaults (2 000 000 blocks, 60 s,
+    2 000 000 segments) are far above real programs; raise them for a really long one.
     ``program_dir``: where M98/G65 look for programs not in the text (files ``O1002``, ``O1002.nc``,
     ``1002.nc``); default the folder of ``file`` when that is a real file.
     ``macro_calls``: G/M/T codes that call programs (GSK parameters 6050-6089, 6001#0), as a
@@ -102,10 +113,15 @@ def interpret(
         calls = _macro_calls(macro_calls, spec)
         if main_m99 not in ("end", "restart"):
             raise ConfigError(f"main_m99 must be 'end' or 'restart', got {main_m99!r}")
-        if isinstance(max_blocks, bool) or not isinstance(max_blocks, int) or max_blocks < 1:
-            raise ConfigError(f"max_blocks must be a positive integer, got {max_blocks!r}")
+        for name, value in (("max_blocks", max_blocks), ("max_segments", max_segments)):
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        if isinstance(max_seconds, bool) or not isinstance(max_seconds, int | float) or not max_seconds > 0:
+            raise ConfigError(f"max_seconds must be a positive number of seconds, got {max_seconds!r}")
         folder = None if program_dir is None else str(program_dir)
-        options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
+        options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
+                              max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
+                              main_m99=main_m99)  # fmt: skip
         if units is not None and units not in ("mm", "inch"):
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
         program = spec.language.reader(spec, calls).read(text, file)
@@ -130,8 +146,8 @@ def interpret_file(
 ) -> Toolpath:
     """Interpret a program file (errors name the path). An unreadable file raises OSError.
 
-    ``options``: as :func:`interpret` (``max_blocks``, ``program_dir`` — default the file's folder —,
-    ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
+    ``options``: as :func:`interpret` (``max_blocks``, ``max_seconds``, ``max_segments``, ``program_dir``
+    — default the file's folder —, ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
     """
     path = Path(path)
     raw = path.read_bytes()

@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import Protocol
 
+from cnc_gym.errors import ProgramError
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, ToolpathBuilder
 
 Vec = tuple[float, float, float]
@@ -32,6 +33,10 @@ _PLANE_AXES = {int(p): axes for p, axes in PLANE_AXES.items()}
 _ARC = SegmentKind.ARC
 ZERO: Vec = (0.0, 0.0, 0.0)
 TWO_PI = 2.0 * math.pi
+#: No move may reach a machine coordinate beyond this, mm (1 000 km: far beyond any stroke, so only a
+#: runaway chain of offsets or transforms meets it, e.g. G51 applied again and again in a loop, which
+#: would otherwise double a coordinate to infinity).
+MAX_COORDINATE_MM = 1e9
 
 
 def mat_mul(a: Mat, b: Mat) -> Mat:
@@ -335,8 +340,12 @@ class OffsetStack:
 class CanonicalMachine:
     """Current machine position plus the per-segment context; appends segments to a builder."""
 
-    def __init__(self, builder: ToolpathBuilder, start: Vec = ZERO, rotary: tuple[float, ...] = ()) -> None:
+    def __init__(self, builder: ToolpathBuilder, start: Vec = ZERO, rotary: tuple[float, ...] = (),
+                 error=None) -> None:  # fmt: skip
         self.builder = builder
+        # ``error(message, code)`` makes the ProgramError of a move beyond MAX_COORDINATE_MM (the dialect's,
+        # with its alarm number).
+        self.error = error or (lambda message, code: ProgramError(message, code=code))
         self.position: Vec = tuple(float(c) for c in start)  # type: ignore[assignment]
         # Rotary axes (machine degrees); ``rotary_next`` is the target the next rapid/feed move takes them
         # to (set by the interpreter for a block with rotary words, consumed by that move).
@@ -352,8 +361,16 @@ class CanonicalMachine:
         return {"line": self.line, "file_index": self.file_index, "modes": self.modes, "tool": self.tool,
                 "spindle_rpm": self.spindle_rpm}  # fmt: skip
 
+    def _check(self, point) -> None:
+        limit = MAX_COORDINATE_MM
+        if not (-limit <= point[0] <= limit and -limit <= point[1] <= limit and -limit <= point[2] <= limit):
+            where = ", ".join(f"{'XYZ'[a]}{point[a]:.6g}" for a in range(3))
+            raise self.error(f"a move to ({where}) (machine) is beyond ±{limit:.0e} mm: a runaway offset or "
+                             "transform", "value-out-of-range")  # fmt: skip
+
     def straight_traverse(self, target: Vec) -> None:
         """Rapid to a machine-coordinate target (no segment for a zero-length move)."""
+        self._check(target)
         if self.rotary_next is not None:
             return self._rotary_move(target, None)
         if target != self.position:
@@ -363,6 +380,7 @@ class CanonicalMachine:
 
     def straight_feed(self, target: Vec, feed: float) -> None:
         """Feed move to a machine-coordinate target at ``feed`` mm/min."""
+        self._check(target)
         if self.rotary_next is not None:
             return self._rotary_move(target, feed)
         if target != self.position:
@@ -388,6 +406,8 @@ class CanonicalMachine:
 
     def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
         """Arc or helix (signed sweep in rad, + = CCW about the plane normal) to ``end``."""
+        self._check(end)
+        self._check(center)
         self.builder.arc(self.position, end, center, plane, sweep, feed, line=self.line,
                          file_index=self.file_index, modes=self.modes, tool=self.tool,
                          spindle_rpm=self.spindle_rpm)  # fmt: skip
@@ -396,6 +416,8 @@ class CanonicalMachine:
     def nurbs_feed(self, curve, feed: float) -> None:
         """An exact NURBS segment (``NurbsCurve`` in machine coordinates, from the current position) at
         ``feed`` mm/min; the position becomes its last control point."""
+        self._check(curve.control_points.min(axis=0))  # the curve lies in its control points' hull
+        self._check(curve.control_points.max(axis=0))
         self.builder.nurbs(curve, feed, line=self.line, file_index=self.file_index, modes=self.modes,
                            tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
         end = curve.control_points[-1]

@@ -113,6 +113,11 @@ class Seam(Protocol):
         """Carry out the dialect's action ``name`` (a feature re-entering another, e.g. the modal motion)."""
         ...
 
+    def check_budget(self) -> None:
+        """The run's CPU-time and tool-path bounds (``max_seconds``, ``max_segments``): a feature that makes
+        many moves from one block (a cycle over a hole pattern, a NURBS curve) checks them between moves."""
+        ...
+
 
 #: An action: ``action(core, spec, values)`` carries out one item of a block (a code, or a word such as F);
 #: ``values`` are the block's words (address → number, in program units). The actions a dialect runs at
@@ -142,7 +147,9 @@ class Hole:
 
     ``hole`` is the hole position (its drilling-axis coordinate unused); ``initial``, ``r_level`` and
     ``bottom`` are the levels; ``retract`` the return level (initial for G98, R for G99); ``shift`` the
-    G76/G87 shift vector and ``shift_feed`` its feed (None: rapid); ``values`` the block's words.
+    G76/G87 shift vector and ``shift_feed`` its feed (None: rapid); ``values`` the block's words;
+    ``repeats`` (K) and ``holes`` (of a hole pattern) how many times the block makes this hole's steps in
+    all, for the bound on one block's moves (``cycles.limit``).
     """
 
     spec: CodeSpec
@@ -161,6 +168,8 @@ class Hole:
     shift: Vec = (0.0, 0.0, 0.0)
     shift_feed: float | None = None
     values: dict = field(default_factory=dict)
+    repeats: int = 1
+    holes: int = 1
 
 
 @dataclass(frozen=True)
@@ -213,6 +222,10 @@ class ProgramReader(Protocol):
 
 class Runner(Protocol):
     def run(self) -> None: ...
+
+    def check_bounds(self) -> None:
+        """Raise ``time-budget`` / ``segment-budget`` when the run is over its CPU-time or tool-path bound."""
+        ...
 
 
 @dataclass(frozen=True)

@@ -68,7 +68,7 @@ class Interpreter:
             skip_signal=skip_signal_surfaces(skip_signal, dialect.axes),
             skip_mask=sum(1 << n for n in block_skip),
             builder=builder,
-            out=CanonicalMachine(builder, start, rotary=builder.rotary_origin),
+            out=CanonicalMachine(builder, start, rotary=builder.rotary_origin, error=self.error),
             variables=language.variables(dialect),
             comp=CompensationState(settings, settings.new_offsets(tool_offsets)),
         )
@@ -157,6 +157,11 @@ class Interpreter:
 
     def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
+
+    def check_budget(self) -> None:
+        runner = self.state.flow
+        if runner is not None:
+            runner.check_bounds()
 
     def run_action(self, name: str, spec: CodeSpec | None, values: dict) -> None:
         self._actions[name](self, spec, values)

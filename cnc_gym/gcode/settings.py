@@ -19,6 +19,11 @@ from cnc_gym.gcode.offsets import ToolOffsets
 
 #: Default bound on executed blocks (a runaway WHILE/GOTO loop ends with a clear error).
 DEFAULT_MAX_BLOCKS = 2_000_000
+#: Default bound on the CPU seconds one interpretation may take (2 000 000 blocks of a macro loop take
+#: 10-20 s; the bound catches what the block count does not: heavy blocks).
+DEFAULT_MAX_SECONDS = 60.0
+#: Default bound on the segments of one tool path (about 0.6 kB each while it is built: ~1.2 GB).
+DEFAULT_MAX_SEGMENTS = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -192,7 +197,8 @@ def skip_signal_surfaces(value: Mapping | None, axes: str) -> dict[str, float]:
 
 @dataclass
 class FlowOptions:
-    """Options of one run (``interpret(..., max_blocks=, program_dir=, macro_calls=, main_m99=)``).
+    """Options of one run (``interpret(..., max_blocks=, max_seconds=, max_segments=, program_dir=,
+    macro_calls=, main_m99=)``).
 
     ``main_m99``: what M99 in the main program does. ``"end"`` (default): the program ends after one pass
     (a simulated episode is one part; docs/gcode.md). ``"restart"``: the controller's behaviour (§1.3.1), back
@@ -201,6 +207,8 @@ class FlowOptions:
     """
 
     max_blocks: int = DEFAULT_MAX_BLOCKS
+    max_seconds: float = DEFAULT_MAX_SECONDS
+    max_segments: int = DEFAULT_MAX_SEGMENTS
     program_dir: str | None = None
     macro_calls: MacroCalls | None = None
     main_m99: str = "end"

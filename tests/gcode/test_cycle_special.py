@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from gcode_helpers import close, program_error
+from gcode_helpers import close, program_error, success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -208,6 +208,7 @@ _CODES = ["G73", "G74", "G76", "G81", "G82", "G83", "G84", "G85", "G86", "G87", 
 _num = st.one_of(st.integers(-60, 60).map(str), st.floats(-60, 60, allow_nan=False).map(lambda v: f"{v:.3f}"))
 
 
+@success_share(0.08)
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(code=st.sampled_from(_CODES), ret=st.sampled_from(["G98", "G99"]),
        dist=st.sampled_from(["G90", "G91"]), start_z=st.integers(-20, 60),
@@ -228,7 +229,9 @@ def test_random_cycle_blocks_give_an_error_or_a_path_that_keeps_the_levels(code,
     try:
         tp = interpret(text)
     except ProgramError:
+        tally(False)
         return
+    tally(True)
     assert np.isfinite(tp.end).all() and np.isfinite(tp.start).all()
     if "R" not in words or "Z" not in words or code == "G87" or any("Z" in w or "R" in w for w in more):
         return  # the level rule below needs the levels of the first block for the whole run
@@ -293,6 +296,7 @@ _PATTERN = [f"G{n}" for n in range(120, 128)]
 _small = st.one_of(st.integers(-5, 60).map(str), st.floats(-5, 60, allow_nan=False).map(lambda v: f"{v:.2f}"))
 
 
+@success_share(0.03)
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(code=st.sampled_from(_SPECIAL + _PATTERN), drill=st.sampled_from(["", "G81 Z-3 R1 F100 K0;\n"]),
        words=st.dictionaries(st.sampled_from("XYZRIJLWQVUEKPD"), _small, max_size=12))  # fmt: skip
@@ -312,7 +316,9 @@ def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, 
     try:
         tp = interpret(text, tool_offsets={"D": {1: 4.0, 2: 1.5}})
     except ProgramError:
+        tally(False)
         return
+    tally(True)
     assert np.isfinite(tp.end).all() and np.isfinite(tp.start).all()
     assert np.isfinite(tp.radius).all() and np.isfinite(tp.sweep).all()
     assert tp.end[:, 2].max() <= 60 + 1e-6

@@ -452,10 +452,22 @@ def test_scaling_does_not_scale_q_d_or_the_shift():
 
 @pytest.mark.parametrize("text", ["G73 X0 Y0 Z-1000 R0 Q0.0001 F100;\n",
                                   "G81 Z-5 R1 F100 K0;\nG123 X0 Y0 I1 J1 P9999 K9999;\n",
-                                  "G126 X0 Y0 Z-1 R1 I10 J999999 L1 F100;\n"])
+                                  "G126 X0 Y0 Z-1 R1 I10 J999999 L1 F100;\n",
+                                  # 2273 pecks per hole are fine; times K9999 they grew past 15 GB
+                                  "G73 X0 Y0 Z-20 R5 Q0.011 K9999 F100;\n",
+                                  # K0 stores the data; the pattern's 99 x 99 holes each peck 2500 times
+                                  "G99 G83 X0 Y0 Z-20 R5 Q0.01 F100 K0;\nG123 X0 Y0 I1 J1 K99 P99;\n",
+                                  "G110 X0 Y0 Z-50 R1 I50 W1 V1 D0 Q0.1 L0.5 K9999 F100;\n"])
 def test_a_block_that_would_make_millions_of_moves_is_an_error(text):
     err = program_error(text)
-    assert err.code == "cycle-too-long"
+    assert err.code == "cycle-too-long" and err.line == text.count("\n")
+
+
+def test_the_move_bound_counts_repeats_and_holes_but_allows_real_cycles():
+    # A deep peck cycle: 1000 pecks of 0.1 mm, 9 holes; 99 x 99 plain holes; K = 99999 plain holes.
+    assert len(records("G99 G83 Z-100 R0 Q0.1 F100 K0;\nG123 X0 Y0 I5 J5 K3 P3;\nG80;\n")) > 9 * 1000
+    assert len(records("G99 G81 Z-2 R1 F100 K0;\nG123 X0 Y0 I1 J1 K99 P99;\nG80;\n")) == 99 * 99 * 3
+    assert len(records("G91 G81 X1 Z-2 R1 F100 K20000;\n")) == 20000 * 4
 
 
 def test_drilling_axis_follows_the_plane_with_fxy_and_cannot_change_in_the_cycle():

@@ -24,7 +24,7 @@ import math
 from dataclasses import replace
 
 import pytest
-from gcode_helpers import close, program_error
+from gcode_helpers import close, program_error, success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -141,6 +141,7 @@ def test_i_j_still_mean_nothing_to_the_other_drilling_cycles_with_sij():
 _coord = st.integers(-400, 400).map(lambda v: v / 8.0)  # steps of 0.125 mm, exact in binary
 
 
+@success_share(0.1)
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(code=st.sampled_from(["G76", "G87"]), ret=st.sampled_from(["G98", "G99"]),
        hole=st.tuples(_coord, _coord), levels=st.tuples(_coord, _coord),
@@ -159,7 +160,9 @@ def test_random_sij_boring_blocks_move_sideways_only_by_the_i_j_shift_at_f(code,
         assert err.code == "cycle-levels"
         bottom, r_level = levels
         assert (bottom >= r_level) if code == "G76" else (bottom <= r_level)
+        tally(False)
         return
+    tally(True)
     si, sj = (v or 0.0 for v in shift)
     start = 1 if (hole[0], hole[1]) != (0.0, 0.0) else 0  # the positioning rapid (dropped when zero-length)
     for n in range(start, len(tp.kind)):

@@ -154,3 +154,42 @@ def test_pathological_expressions_are_errors_not_crashes():
 def test_deep_but_legal_nesting():
     # Five levels, counting function brackets (§3.7.4): SIN[[[[x]]]] is 5.
     assert math.isclose(x_of("[SIN[[[[90]]]]]"), 1.0)
+
+
+HUGE = "1" + "0" * 400  # a float of it is inf
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        f"#{HUGE}=1\n",  # a variable number
+        f"#1=#{HUGE}\n",
+        f"GOTO{HUGE}\n",  # a GOTO target
+        f"IF[#1GT0]GOTO{HUGE}\n",
+        f"G00 X[{HUGE}]\n",  # an axis expression
+        f"#1=[{HUGE}AND3]\n",  # AND / MOD operands
+        f"#1=[3MOD{HUGE}]\n",
+        f"G65 P9000 A[{HUGE}]\nM30\nO9000\nM99\n",  # a macro argument
+        f"WHILE[1LT2]DO{HUGE}\nEND1\n",  # a loop identifier (int() of 4300+ digits is a ValueError)
+        "#1=" + "9" * 5000 + "\n",
+        "#1=123456789\n",  # 9 digits: beyond "max ±99999999"
+    ],
+)
+def test_constants_have_at_most_8_digits(text):
+    err = program_error(text)
+    assert (err.code, err.alarm, err.line) == ("too-many-digits", 3, 1)
+
+
+def test_8_digit_constants_and_long_decimals_are_fine():
+    assert x_of("[99999999/10000000]") == pytest.approx(9.9999999)
+    assert x_of("[000000001.5]") == 1.5  # leading zeros are no digits
+    assert x_of("[3.14159265358979]") == 3.1416  # neither are decimals (ROUND to the increment)
+    assert moves("#0000000001=2\nG01 X#1 F100\n")[0]["end"][0] == 2.0
+
+
+@pytest.mark.parametrize("text", [f"G65 P{HUGE}\n", f"G65 P9000 A{HUGE}\nM30\nO9000\nM99\n", f"M98 P{HUGE}\n",
+                                  f"G01 X{HUGE} F100\n", f"N{HUGE} G00 X1\n"])
+def test_huge_literal_words_are_too_long(text):
+    # As a word (not an expression), a 401-digit number is longer than the 16 characters of a word.
+    err = program_error(text)
+    assert (err.code, err.alarm, err.line) == ("word-too-long", 13, 1) and len(str(err)) < 600

@@ -8,10 +8,12 @@ Sections (§n) are those of the GSK 25i programming manual.
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import pytest
 from gcode_helpers import close, moves, program_error
 
+from cnc_gym.errors import ConfigError
 from cnc_gym.gcode import get_dialect, interpret
 
 
@@ -85,10 +87,11 @@ def test_bracket_nesting_beyond_five_levels_is_alarm_209():
 
 
 def test_values_beyond_1e47_overflow_alarm_102():
-    # §3.7.7: variables hold at most ±10^47; 1E40 * 1E10 does not fit.
-    err = program_error("#1=10000000000*10000000000*10000000000*10000000000*10000000000\n")
+    # §3.7.7: variables hold at most ±10^47; 1E42 * 1E7 does not fit. (Constants have at most 8 digits,
+    # §3.7.4: 10000000 is 1E7.)
+    err = program_error("#1=10000000*10000000*10000000*10000000*10000000*10000000*10000000\n")
     assert (err.code, err.alarm) == ("overflow", 102)
-    assert x_values("#1=10000000000*10000000000*10000000000*10000000000\nG00 X[#1/#1]\n") == [1.0]
+    assert x_values("#1=10000000*10000000*10000000*10000000*10000000*10000000\nG00 X[#1/#1]\n") == [1.0]
 
 
 def test_roundoff_example_x68_with_a_0_001_increment():
@@ -307,3 +310,35 @@ def test_max_blocks_must_be_a_positive_integer(bad):
 
     with pytest.raises(ConfigError):
         interpret("G00 X1\n", max_blocks=bad)
+
+
+# A loop that never ends but stays within the block budget for long: 2 000 000 blocks take seconds.
+_ENDLESS = "#1=0\nWHILE[#1LT1]DO1\nG91 G01 X1 F100\nX-1\nEND1\n"
+
+
+def test_interpretation_time_is_bounded():
+    start = time.process_time()
+    err = program_error(_ENDLESS, max_seconds=0.3)
+    assert (err.code, err.alarm) == ("time-budget", None) and "max_seconds" in err.message
+    assert err.line in (2, 5)  # the WHILE or the END (where control leaves the straight path)
+    assert time.process_time() - start < 3.0
+
+
+def test_tool_path_size_is_bounded():
+    err = program_error(_ENDLESS, max_segments=5000)
+    assert err.code == "segment-budget" and "5000" in err.message
+    # A single cycle block makes its moves under the same bounds (checked per hole).
+    err = program_error("G91 G81 X1 Z-1 R1 F100 K50000\n", max_segments=5000)
+    assert (err.code, err.line) == ("segment-budget", 1)
+    assert program_error("G91 G81 X1 Z-1 R1 F100 K99999\n", max_seconds=0.05).code == "time-budget"
+    # A subprogram that ends without M99 returns at the end of its text: checked there too, with its line.
+    err = program_error("M98 P1 L9999\nM30\nO1\nG91 G01 X1 F100\nX-1\n", max_segments=1000, file="p.nc")
+    assert (err.code, err.file, err.line) == ("segment-budget", "p.nc", 5)
+
+
+@pytest.mark.parametrize(("name", "bad"), [("max_seconds", 0), ("max_seconds", float("nan")),
+                                           ("max_seconds", "5"), ("max_segments", 0), ("max_segments", 1.5),
+                                           ("max_segments", True)])
+def test_bad_bounds_are_config_errors(name, bad):
+    with pytest.raises(ConfigError, match=name):
+        interpret("G00 X1\n", **{name: bad})

@@ -37,13 +37,16 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     "E1": [("G00 X1\nG00 " + "X1 " * 33 + "\n", "too-many-words", 12, 2),
            ("G00 X1\nG00 X0000000000000001.0\n", "word-too-long", 13, 2)],
     # X takes ±999999.9999 (Table 1-1): 7 integer digits is beyond it.
-    "E2": [("G00 X1234567\n", "value-out-of-range", 8, 1)],
+    # An expression constant has at most 8 digits ("max ±99999999", §3.7.4): TOO MANY DIGITS (3).
+    "E2": [("G00 X1234567\n", "value-out-of-range", 8, 1), ("#1=123456789\n", "too-many-digits", 3, 1)],
     "E3": [
         ("G01 X F100\n", "missing-value", 5, 1),  # address without data (alarm 5)
         ("G01 X1 F100 &\n", "bad-character", 9, 1),  # illegal character (9)
+        ("#1=²\n", "bad-character", 9, 1),  # only ASCII digits are digits (9)
         ("G01 X1 F-100\n", "bad-sign", 6, 1),  # "-" where the address has no sign (6)
         ("G01 X1-2 F100\n", "bad-sign", 6, 1),  # "-" inside a number (6)
         ("G01 X1.2.3 F100\n", "bad-number", 7, 1),  # two decimal points (7)
+        ("G01 X1.23456.7 F100\n", "bad-number", 7, 1),  # also where the increment would truncate (7)
         ("M3.5\n", "decimal-point-not-allowed", 7, 1),  # "." where the address has none (7)
     ],
     "E4": [

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from gcode_helpers import program_error, records
+from gcode_helpers import program_error, records, success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -324,17 +324,46 @@ def test_canned_cycle_ends_at_g06_2():
     assert (tp.kind == SegmentKind.NURBS).sum() == 1
 
 
+_coordinate = st.floats(-5, 5, allow_nan=False).map(lambda v: round(v, 3))
+_weight = st.one_of(st.none(), st.sampled_from([0.5, 1, 2, 0.01, 30]))
+_control_point = st.tuples(_coordinate, _coordinate, _weight)
+
+
+@success_share(0.2)
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.lists(st.tuples(st.sampled_from(["K", "X", "Y", "Z", "R", "P", "F", "G01", "M08", ""]),
-                          st.floats(-5, 5, allow_nan=False).map(lambda v: round(v, 3))),
-                min_size=0, max_size=12))  # fmt: skip
-def test_random_nurbs_programs_give_an_error_or_a_finite_path(words):
+@given(st.lists(_control_point, min_size=2, max_size=10),
+       st.lists(st.floats(0.05, 0.95).map(lambda v: round(v, 2)), max_size=10),
+       st.lists(st.tuples(st.integers(0, 20), st.sampled_from(["K0.5", "X1", "R2", "P1", "F100", "G01", "M08",
+                                                               "", "K-1", "R0", "K2 X1"])),
+                max_size=2))  # fmt: skip
+def test_random_nurbs_programs_give_an_error_or_a_finite_path(points, inner, noise):
+    # Mostly well-formed curves (rank 3: knots 0 0 0, sorted inner knots, 1 1 1; random points and
+    # weights) with now and then a stray or broken block: an error, or a finite path.
+    knots = [0.0, 0.0, *sorted(inner)][: len(points)]
+    missing = len(points) - len(knots)
+    knots += [round(knots[-1] + (1 - knots[-1]) * (k + 1) / (missing + 1), 6) for k in range(missing)]
     lines = [_HEAD, "G06.2 P3 K0 X10 Y0 F600\n"]
-    for letter, value in words:
-        lines.append(f"{letter}{value}\n" if letter not in ("G01", "M08", "") else f"{letter}\n")
+    for (x, y, weight), knot in zip(points, knots, strict=True):
+        lines.append(f"K{knot} X{x} Y{y}" + (f" R{weight}" if weight is not None else "") + "\n")
     lines.append("K1\nK1\nK1\nG01 X0\n")
+    for position, word in noise:
+        lines.insert(2 + position % (len(lines) - 1), word + "\n")
     try:
         tp = interpret("".join(lines))
     except ProgramError:
+        tally(False)
         return
+    tally(True)
     assert np.all(np.isfinite(tp.end)) and np.isfinite(tp.total_length)
+
+
+def test_extreme_weights_are_rejected_and_small_ones_are_cheap():
+    # R0.01 beside R1 (the 8-line program) is a fine curve: its length table stays small.
+    text = _HEAD + "G06.2 P3 K0 X10 Y0 F600\nK0 X20 Y0 R0.01\nK0 X20 Y10 R1\nK0.5 X10 Y10 R0.01\nK1\nK1\nK1\n"
+    tp = interpret(text)
+    assert len(tp.nurbs[1]._leaf_t) < 200
+    # Weights more than a factor 1e6 apart cannot be evaluated to the path's accuracy: an error at the
+    # block that widens the range beyond it.
+    text = _HEAD + "G06.2 P4 K0 X10 Y0 R0.0001 F600\nK0 X20 Y0 R1000\nK0 X20 Y10\nK0 X10 Y10\n" + "K1\n" * 4
+    err = program_error(text)
+    assert (err.code, err.line) == ("nurbs-bad-weight", text.split("\n").index("K0 X20 Y0 R1000") + 1)

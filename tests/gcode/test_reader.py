@@ -93,6 +93,11 @@ def test_o_and_n_must_lead_the_block():
     ("text", "code", "alarm"),
     [
         ("G01 X1.2.3 F100\n", "bad-number", 7),  # 7 ILLEGAL USE OF DECIMAL POINT
+        ("G01 X1.23456.7 F100\n", "bad-number", 7),  # was truncated to X1.2345 silently
+        ("G01 X-1.23456.7 Y#1 F100\n", "bad-number", 7),  # the scanner's path
+        ("G05 P10000\nG06.2 P2 K1.2345. X0 Y0 F100\n", "bad-number", 7),  # G06.2's own K format
+        ("G05 P10000\nG06.2 P2 K0 X0 Y0 F100\nK1.2345. X1\n", "bad-number", 7),  # a ValueError
+        ("G110 X1 L2.55555.5\n", "bad-number", 7),  # a cycle's own L format
         ("G01 X. F100\n", "bad-number", 7),
         ("G01 X F100\n", "missing-value", 5),
         ("G01 X- F100\n", "bad-sign", 6),  # 6 ILLEGAL USE OF NEGATIVE SIGN
@@ -102,6 +107,7 @@ def test_o_and_n_must_lead_the_block():
         ("G01 X10 F100 (unclosed\n", "unclosed-comment", None),
         ("G01 X10 F100 )\n", "bad-character", 9),
         ("G00 X1 % \n", "bad-character", 9),
+        ("%G01 X1\n", "bad-character", 9),  # the tape mark's own check named no file
         ("M3.5\n", "decimal-point-not-allowed", 7),
         ("T1.0\n", "decimal-point-not-allowed", 7),
         ("N1234567 G00 X1\n", "value-out-of-range", 16),
@@ -112,7 +118,7 @@ def test_o_and_n_must_lead_the_block():
 )
 def test_lexical_errors(text, code, alarm):
     err = program_error(text, file="part.nc")
-    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", 1)
+    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", text.count("\n"))
 
 
 def test_error_line_counts_blank_and_comment_lines():
@@ -135,3 +141,53 @@ def test_two_words_of_one_address_are_an_error():
 def test_interpret_keeps_the_file_name_in_the_toolpath():
     tp = interpret("G00 X1\n", file="dir/part.nc")
     assert tp.files[0] == "dir/part.nc"
+
+
+@pytest.mark.parametrize(
+    ("text", "char"),
+    [
+        ("#1=²\n", "²"),  # a superscript passes str.isdigit
+        ("#²=1\n", "²"),
+        ("G01 X١٢ F100\n", "١"),  # Arabic-Indic digits were silently read as 12
+        ("#1=١٢\nG01 X#1 F100\n", "١"),
+        ("G01 X1.5 F１00\n", "１"),  # a fullwidth digit
+        ("G01 Xı F100\n", "ı"),  # 'ı'.upper() is the ASCII 'I'
+        ("G0ﬁ\n", "ﬁ"),  # 'ﬁ'.upper() is 'FI'
+        ("G01 X1 F100\u00a0Y2\n", "\u00a0"),  # a no-break space is not a space
+        ("G01 X1 F100\u2028Y2\n", "\u2028"),  # nor a line break
+    ],
+)
+def test_only_ascii_is_program_text(text, char):
+    # Only ASCII letters and digits are program text: anything else is alarm 9 ILLEGAL CHARACTERS.
+    err = program_error(text, file="part.nc")
+    assert (err.code, err.alarm, err.line) == ("bad-character", 9, 1)
+    assert repr(char) in err.message
+
+
+def test_comments_may_hold_any_text_and_lines_break_at_cr_or_lf_only():
+    assert len(records("G00 X1 (Maß ½ – ok)\r\nG00 X2\rG00 X3\n")) == 3
+    # FS, NEL and U+2029 are no line breaks (str.splitlines would split there): an editor's line numbers.
+    err = program_error("G00 X1\nG00 X2\x1cG00 X3\nG00 X4\u2029\n")
+    assert (err.code, err.line) == ("bad-character", 2)
+
+
+@pytest.mark.parametrize(
+    ("text", "code"),
+    [
+        ("G01 " + "X1" * 3_000_000 + "\n", "too-many-words"),  # 6 MB: the plain-block regex kept 600 MB
+        ("G01 " + "X1\t" * 2_000_000 + "\n", "too-many-words"),  # re.sub of the blanks kept 160 MB
+        ("G65 P1 " + "A1 " * 1_000_000 + "\n", "too-many-words"),  # a call block's arguments
+        ("#1=" + "1+" * 1_000_000 + "1\n", "bad-expression"),  # more than 200 operators
+    ],
+)
+def test_one_long_line_is_an_error_in_bounded_memory(text, code):
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        err = program_error(text)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert err.code == code and err.line == 1
+    assert peak < 8 * len(text) + 2**20  # a few copies of the line, not an object per word

@@ -17,7 +17,7 @@ import itertools
 import math
 
 import pytest
-from gcode_helpers import close, moves, program_error
+from gcode_helpers import close, moves, program_error, success_share, tally
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -165,6 +165,7 @@ block = st.tuples(st.sampled_from(["G01", "G02", "G03"]), st.integers(-30, 30), 
                   st.integers(45, 80), st.sampled_from(["", ",L1", ",R1", ",L3", ",R4"]))  # fmt: skip
 
 
+@success_share(0.2)
 @settings(max_examples=80, deadline=None)
 @given(st.lists(block, min_size=2, max_size=8),
        st.sampled_from(["", "G68 X3 Y-2 R30\n", "G51 X0 Y0 I2 J-1\n"]))  # fmt: skip
@@ -179,7 +180,9 @@ def test_random_contours_with_corners_stay_continuous(blocks, transform):
         toolpath = interpret("\n".join(lines) + "\nG01 X50 Y50\n")
     except ProgramError as err:
         assert err.code and err.line is not None
+        tally(False)
         return
+    tally(True)
     records = toolpath.to_records()
     moves_only = [r for r in records if r["kind"] != "dwell"]
     for a, b in itertools.pairwise(moves_only):

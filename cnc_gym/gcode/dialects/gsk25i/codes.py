@@ -74,6 +74,7 @@ ADDRESSES = {
 
 # --------------------------------------------------------------------------- alarms (the manual's alarm list)
 ALARMS = {
+    "too-many-digits": 3,
     "missing-value": 5,
     "missing-address": 4,
     "bad-sign": 6,

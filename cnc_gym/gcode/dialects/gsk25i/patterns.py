@@ -213,7 +213,7 @@ def _drill_holes(core: Seam, holes: list[tuple[float, float]], *, last_uses_retu
                 st.modal[group] = roles.return_r  # type: ignore[index,assignment]
             else:
                 st.modal[group] = saved_return  # type: ignore[index,assignment]
-            cycle_block(core, None, {}, hole_xy=(hx, hy))
+            cycle_block(core, None, {}, hole_xy=(hx, hy), holes=len(holes))
     finally:
         if saved_return is not None:
             st.modal[group] = saved_return  # type: ignore[index]

@@ -29,7 +29,7 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.dialect import CycleKind
-from cnc_gym.gcode.lang.fanuc.cycles import limit
+from cnc_gym.gcode.lang.fanuc.cycles import limit, times
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Hole, Seam
@@ -273,7 +273,8 @@ def pocket(core: Seam, h: Hole) -> list[Step]:
         raise core.error(f"{name}: {problem[0]}", "cycle-argument", alarm=problem[1])
     if code in _ROUGHING:
         span = max(abs(i), abs(j or 0.0)) * max(words.get("E", 1.0), 1.0)  # type: ignore[arg-type]
-        limit(core, (1 + (h.r_level - h.bottom) / state.q) * (1 + span / words["L"]), f"{name} passes")  # type: ignore[operator]
+        passes = (1 + (h.r_level - h.bottom) / state.q) * (1 + span / words["L"])  # type: ignore[operator]
+        limit(core, passes * h.repeats * h.holes, f"{name} passes{times(h.repeats, h.holes)}")
     return pocket_steps(code, h.hole[0], h.hole[1], h.r_level, h.bottom, h.initial,
                         return_initial=h.return_initial, feed=h.feed, tool_radius=radius, i=abs(i),  # type: ignore[arg-type]
                         j=abs(j or 0.0), l_step=words.get("L", 0.0), w_first=words.get("W", 0.0),

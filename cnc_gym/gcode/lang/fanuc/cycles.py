@@ -46,7 +46,9 @@ if TYPE_CHECKING:
 
 Vec = tuple[float, float, float]
 Step = tuple
-#: Most pecks, passes or holes one cycle block may generate (a bound against a tiny Q/L hanging the run).
+#: Most pecks, passes or holes one cycle block may generate, counted across its K repeats and its pattern's
+#: holes (a bound against a tiny Q or L, or a huge K, filling the memory: G73 Q0.011 K9999 made 60 million
+#: moves).
 MAX_STEPS = 100_000
 
 
@@ -270,6 +272,7 @@ def shift_vector(q: float, plane_u: int, plane_v: int, direction: int) -> Vec:
 # ====================================================================== the seam side
 def emit(core: Seam, steps: list[Step]) -> None:
     """Send steps through the coordinate seam (program coordinates → transforms → offsets → machine)."""
+    core.check_budget()  # a cycle block may drill thousands of holes: keep the run's bounds
     st = core.state
     out = st.out
     for step in steps:
@@ -317,6 +320,11 @@ def limit(core: Seam, count: float, what: str) -> None:
     if not count <= MAX_STEPS:  # also catches NaN
         raise core.error(f"{what}: {count:.0f} is more than the {MAX_STEPS} one block may make",
                          "cycle-too-long", alarm=61)  # fmt: skip
+
+
+def times(repeats: int, holes: int) -> str:
+    """How a per-hole count is multiplied in a block: `` x 99 repeats x 9801 holes``."""
+    return (f" x {repeats} repeats" if repeats > 1 else "") + (f" x {holes} holes" if holes > 1 else "")
 
 
 def _dwell_from_p(core: Seam, values: dict) -> float:
@@ -403,11 +411,12 @@ def enter(core: Seam, spec: CodeSpec) -> None:
 
 
 def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
-                hole_xy: tuple[float, float] | None = None) -> None:  # fmt: skip
+                hole_xy: tuple[float, float] | None = None, holes: int = 1) -> None:  # fmt: skip
     """One block in canned-cycle mode: ``spec`` is the block's cycle code (None: the modal one). Stores
     the hole data, then drills at the block's position (K times) if the block has an axis word or R
     (§3.4.3); otherwise the block only updates data. ``hole_xy``: a pattern's hole (program mm) instead of
-    the block's axis words."""
+    the block's axis words; ``holes``: how many holes the pattern drills in all (the bound on the block's
+    moves counts them)."""
     st = core.state
     state = st.cycle
     u, v, w = drilling_axes(core)
@@ -487,11 +496,15 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
         position[w] = None  # type: ignore[call-overload]
         emit(core, [("rapid", tuple(position))])
         h = Hole(spec, hole, w, initial, r_level, bottom, return_initial, feed, state.q or 0.0, state.dwell_s,
-                 cycle_params, st.spindle_direction or 1, state.rigid, values=values)  # fmt: skip
+                 cycle_params, st.spindle_direction or 1, state.rigid, values=values, repeats=repeats,
+                 holes=holes)  # fmt: skip
         if not kind.special:
             _machine_amounts(core, h, u, v)
             if kind.pecking:
-                limit(core, (r_level - bottom) / h.q, f"{spec.name} pecks (depth / Q)")
+                limit(core, (r_level - bottom) / h.q * repeats * holes,
+                      f"{spec.name} pecks (depth / Q){times(repeats, holes)}")  # fmt: skip
+            else:
+                limit(core, repeats * holes, f"{spec.name} holes{times(repeats, holes)}")
         emit(core, kind.steps(core, h))
 
 

@@ -36,6 +36,9 @@ if TYPE_CHECKING:
 
 Node = tuple
 MAX_OPERATORS = 200
+#: Largest constant an expression may hold: "max ±99999999" (GSK 25i, 8 digits; §3.7.4). A
+#: variable number and a GOTO target are constants too.
+MAX_CONSTANT = 99_999_999.0
 
 _MUL_WORDS = ("MOD", "AND")
 _ADD_WORDS = ("XOR", "OR")
@@ -211,7 +214,19 @@ class ExpressionParser:
         literal = text[start:end]
         if literal.count(".") > 1 or literal == ".":
             raise self._fail(f"bad number {literal!r}", "bad-number")
+        value = self.constant(literal)
         self.pos = end
+        return value
+
+    def constant(self, literal: str) -> float:
+        """The value of an unsigned literal (ASCII digits, at most one point) of at most 8 integer digits
+        (alarm 3 TOO MANY DIGITS): 1 followed by 400 zeros would be inf, and inf a crash wherever an
+        integer is taken of it."""
+        integer = literal.split(".", 1)[0].lstrip("0")
+        if len(integer) > 8:
+            shown = integer if len(integer) <= 20 else integer[:20] + "…"
+            raise self._fail(f"constant {shown} has more than 8 digits (at most ±{MAX_CONSTANT:.0f})",
+                             "too-many-digits")  # fmt: skip
         return float(literal)
 
     def variable(self) -> Node:
@@ -224,7 +239,7 @@ class ExpressionParser:
                 self.pos += 1
             if self._peek() == ".":
                 raise self._fail("a variable number must be an integer", "bad-variable")
-            return ("var", ("num", float(self.text[start : self.pos])))
+            return ("var", ("num", self.constant(self.text[start : self.pos])))
         if c == "[":
             return ("var", self.bracketed())
         raise self._fail("'#' must be followed by a variable number or [expression]", "missing-operand")

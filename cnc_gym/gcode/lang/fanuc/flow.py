@@ -10,7 +10,8 @@ runner (:attr:`Language.runner <cnc_gym.gcode.dialect.Language.runner>`).
 * :class:`FlowRunner` — the loop. Plain blocks go straight to the core's ``execute``; statements,
   assignments, calls and the requests M98/M99 leave (``State.flow_request``) come here.
 
-Bounds: ``max_blocks`` executed blocks (runaway loops end with ``too-many-blocks``), subprogram nesting 4
+Bounds: ``max_blocks`` executed blocks (runaway loops end with ``too-many-blocks``), ``max_seconds`` of CPU
+time (``time-budget``) and ``max_segments`` tool-path segments (``segment-budget``), subprogram nesting 4
 and macro nesting 4 (alarm 77), DO nesting 3 per level (alarm 96).
 
 Sections (§n) are those of the GSK 25i programming manual.
@@ -19,6 +20,7 @@ Sections (§n) are those of the GSK 25i programming manual.
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
@@ -37,6 +39,9 @@ if TYPE_CHECKING:
 
 _DWELL = int(SegmentKind.DWELL)
 #: Actions of codes whose axis words set something rather than move (no G66 call after their block).
+#: The clock and the segment count are read once per this many blocks charged to the budget.
+_CHECK_EVERY = 1024
+
 _SETTING_ACTIONS = frozenset({"dwell", "data_input", "local_origin", "floating_origin", "scaling", "rotation",
                               "mirror_cancel", "mirror"})
 
@@ -60,6 +65,7 @@ class FlowRunner(CallConvention):
         self._directory: dict[str, Path] | None = None
         self._sub_depth = 0
         self._macro_depth = 0
+        self._deadline = time.process_time() + self.options.max_seconds
         core.state.flow = self
         core.state.flow_request = None
         #: The Fanuc family's variable store (locals per macro level).
@@ -75,6 +81,7 @@ class FlowRunner(CallConvention):
         execute = core.execute
         skip_mask = st.skip_mask
         budget = self.options.max_blocks
+        next_check = budget - _CHECK_EVERY
         unit = self.main
         blocks, end = unit.blocks, unit.end
         pc = mark = unit.start
@@ -83,6 +90,10 @@ class FlowRunner(CallConvention):
         while True:
             if pc >= end:
                 budget -= pc - mark
+                try:
+                    self.check_bounds()
+                except ProgramError as err:
+                    raise err.located(unit.file, blocks[end - 1].line if end > unit.start else 0) from None
                 pc = mark = self._fall_off()
                 if pc < 0:
                     return
@@ -111,6 +122,12 @@ class FlowRunner(CallConvention):
                     "too-many-blocks",
                 )
                 raise runaway.located(unit.file, block.line)
+            if budget < next_check:
+                next_check = budget - _CHECK_EVERY
+                try:
+                    self.check_bounds()
+                except ProgramError as err:
+                    raise err.located(unit.file, block.line) from None
             self.pc = pc
             try:
                 pc = self._special(block, pc) if slow else self._after(block, pc, moved=False)
@@ -122,6 +139,19 @@ class FlowRunner(CallConvention):
             watching = bool(self.modal_calls)
             unit = self.frames[-1].unit
             blocks, end = unit.blocks, unit.end
+
+    def check_bounds(self) -> None:
+        """The CPU-time and segment bounds of the run (``max_seconds``, ``max_segments``); the block count
+        is checked in the loop itself. Also called through the seam's ``check_budget`` by blocks that make
+        many moves (cycles.emit, NURBS curves)."""
+        options = self.options
+        if len(self.core.state.builder) > options.max_segments:
+            raise self.dialect.error(f"the tool path has more than {options.max_segments} segments (raise "
+                                     "max_segments if the program is really this long)", "segment-budget")
+        if time.process_time() > self._deadline:
+            raise self.dialect.error(f"interpretation took more than {options.max_seconds:g} s of CPU time "
+                                     "(a runaway loop? raise max_seconds if the program is really this long)",
+                                     "time-budget")  # fmt: skip
 
     def _special(self, block: Block, pc: int) -> int:
         kind = block.kind

@@ -33,7 +33,7 @@ import numpy as np
 from cnc_gym.gcode.codes import gkey
 from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.state import CurveInProgress
-from cnc_gym.toolpath.nurbs import NurbsCurve
+from cnc_gym.toolpath.nurbs import MAX_WEIGHT_RATIO, NurbsCurve
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import AddressRule, CodeSpec
@@ -215,6 +215,11 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
         weight = values.get("R", 1.0)
         if not weight > 0.0 or not math.isfinite(weight):
             raise _error(core, f"R{weight:g}: a NURBS weight must be positive", "nurbs-bad-weight")
+        low, high = min([weight, *curve.weights]), max([weight, *curve.weights])
+        if high > MAX_WEIGHT_RATIO * low:
+            raise _error(core, f"R{weight:g}: the weights of one NURBS curve may differ by a factor of at "
+                         f"most {MAX_WEIGHT_RATIO:g} (R{low:g} beside R{high:g}): the curve could not be "
+                         "evaluated to the tool path's accuracy", "nurbs-bad-weight")  # fmt: skip
         s = core.state.scale
         if curve.axes is None:
             # The first control point: all the NURBS axes are named here (§3.2.5) and it must be the
@@ -274,6 +279,7 @@ def _finish(core: Seam, curve: CurveInProgress) -> None:
                            curve.rank)  # fmt: skip
     except ValueError as exc:
         raise _error(core, f"the NURBS curve of line {curve.line}: {exc}", "nurbs-bad-curve") from None
+    core.check_budget()  # curves are plain blocks: keep the run's time bound between them
     if core.state.transformed:
         last = curve.points[-1]
         core.state.program_point = (last[0], last[1], last[2])

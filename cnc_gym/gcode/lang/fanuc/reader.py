@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
     from cnc_gym.gcode.settings import MacroCalls
 
-_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 # Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".". The plain-block
 # pattern is built per reader (_plain_block_pattern) so that it admits only words within the dialect's
 # length limit (GSK alarm 13, docs/gsk25i_alarms.md E1): a longer literal falls to the scanner, which names it
@@ -50,7 +50,12 @@ _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 def _plain_block_pattern(max_word_length: int) -> re.Pattern:
     n = max_word_length - 1  # characters after the address letter
     return re.compile(rf"(?:[A-Z](?:[-+][0-9.]{{1,{n - 1}}}|[0-9.]{{1,{n}}}))+")
-_SPACES = re.compile(r"[ \t\r\f\v]+")
+_BLANKS = " \t\r\f\v"
+_NO_BLANKS = str.maketrans("", "", _BLANKS)
+# Line breaks other than CR/LF that str.splitlines() would also split at (FS, GS, RS, NEL, U+2028/9): a
+# block ends at a CR, LF or CRLF only, so line numbers are those of an editor.
+_OTHER_BREAKS = re.compile("[\x1c-\x1e\x85\u2028\u2029]")
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _NUMBER_AT = re.compile(_NUMBER)
 _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 #: Addresses of a call block that keep their own rules (the rest are arguments: any sign, decimal point).
@@ -79,6 +84,9 @@ class Reader:
         self._max_words = dialect.max_words_per_block
         self._max_word_length = dialect.max_word_length
         self._plain_pattern = _plain_block_pattern(dialect.max_word_length)
+        # A longer block breaks the word-count or word-length limit: it goes to the scanner, which stops at
+        # the first word too many (the regex would keep a stack entry per word of a 10 MB line).
+        self._max_plain = dialect.max_words_per_block * dialect.max_word_length
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
@@ -132,7 +140,7 @@ class Reader:
         """Whether the line reads up to a ';' and fails after it on words (``G01 X10 ; move``)."""
         o_blocks, comment = list(self._o_blocks), self._last_comment
         try:
-            text = _SPACES.sub("", self._strip_comments(raw, 0)).upper()
+            text = self._strip_comments(raw, 0).translate(_NO_BLANKS).upper()
         except ProgramError:
             return False
         try:
@@ -158,8 +166,9 @@ class Reader:
         program_number = None
         seen_percent = False
         colon = ":" in self.dialect.program_number_marks
-        for line_no, raw in enumerate(text.splitlines(), start=1):
-            stripped = raw.strip()
+        lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        for line_no, raw in enumerate(lines, start=1):
+            stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
             if colon and stripped[0] == ":":
@@ -175,11 +184,11 @@ class Reader:
                 continue
             try:
                 # Hot path inline: a plain line (no comment, ';', expression) is one regex match.
-                if "(" not in stripped and ")" not in stripped and ";" not in stripped:
+                if stripped.isascii() and "(" not in stripped and ")" not in stripped and ";" not in stripped:
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
-                        text_block = _SPACES.sub("", text_block)
-                    if self._plain_pattern.fullmatch(text_block):
+                        text_block = text_block.translate(_NO_BLANKS)
+                    if len(text_block) <= self._max_plain and self._plain_pattern.fullmatch(text_block):
                         blocks.append(self._plain_block(text_block, line_no))
                         continue
                 blocks.extend(self.read_line(stripped, line_no))
@@ -222,7 +231,14 @@ class Reader:
         self._last_comment = None
         if "(" in text or ")" in text:
             text = self._strip_comments(text, line)
-        text = _SPACES.sub("", text).upper()
+        if not text.isascii():
+            # Only ASCII letters and digits are program text (a comment may hold anything): '²' or '١'
+            # would pass str.isdigit, and 'ı'.upper() is 'I'. Alarm 9 ILLEGAL CHARACTERS IN THE ADDRESS.
+            column, char = next((i, c) for i, c in enumerate(text) if not c.isascii())
+            raise self.error(f"illegal character {char!r} (U+{ord(char):04X})", "bad-character", line,
+                             column + 1)  # fmt: skip
+        # (str.translate, not re.sub, which keeps a list entry per match: 160 MB for a 6 MB line of words)
+        text = text.translate(_NO_BLANKS).upper()
         if "%" in text:
             raise self.error("'%' must stand alone on its line (tape start/end mark)", "bad-character", line)
         if ";" in text:
@@ -263,7 +279,7 @@ class Reader:
 
     # ------------------------------------------------------------------ block
     def read_block(self, text: str, line: int) -> Block | None:
-        if self._plain_pattern.fullmatch(text):
+        if len(text) <= self._max_plain and self._plain_pattern.fullmatch(text):
             return self._plain_block(text, line)
         return self._scan_block(text, line)
 
@@ -356,6 +372,11 @@ class Reader:
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:
         low, high, point_allowed, is_length = rule
         has_point = "." in digits
+        if has_point and digits.count(".") > 1:
+            # Before the truncation below, which would cut X1.23456.7 to X1.2345 (alarm 7 ILLEGAL USE OF
+            # DECIMAL POINT).
+            raise self.error(f"bad number {letter}{digits}: a second decimal point", "bad-number", line,
+                             alarm=7)  # fmt: skip
         if has_point:
             if not point_allowed:
                 raise self.error(f"{letter}{digits}: no decimal point allowed in {letter}",
@@ -522,9 +543,8 @@ class Reader:
             if text_digits is None:
                 has_expr = True
             words.append((letter, value, text_digits))
-        if len(words) > self._max_words:
-            raise self.error(f"{len(words)} words in one block (at most {self._max_words})", "too-many-words",
-                             line)  # fmt: skip
+            if len(words) > self._max_words:  # stop here: no need to read a million more words
+                raise self.error(f"more than {self._max_words} words in one block", "too-many-words", line)
         if defer:  # words that fail their address's own rule wait for the code they belong to
             for n, (letter, value, digits) in enumerate(words):
                 if digits is not None and letter in self._deferred_letters:
@@ -623,7 +643,7 @@ class Reader:
                 parser.pos += 1
             if parser._peek() == ".":
                 raise self.error("a GOTO sequence number is an integer", "bad-number", line, parser.pos + 1)
-            return ("num", float(parser.text[start : parser.pos]))
+            return ("num", parser.constant(parser.text[start : parser.pos]))
         if c == "#":
             return parser.variable()
         if c == "[":
@@ -638,7 +658,7 @@ class Reader:
         digits = parser.text[start : parser.pos]
         if not digits:
             raise self.error(f"{word} needs its identifier 1, 2 or 3 ({word}1)", "do-end", line, start + 1)
-        m = int(digits)
+        m = int(parser.constant(digits))
         if not 1 <= m <= 3:
             raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (GSK 25i §3.7.5)", "do-end", line,
                              start + 1, alarm=97)  # fmt: skip  # alarm 97 ILLEGAL CYCLE NUMBER
