@@ -18,11 +18,11 @@ from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig, load_machine
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.motion import kernel as _kernel
-from cnc_gym.programs import load_program
+from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 # Columns of the controller's rows (Controller.advance_rows) the step reads.
-_O_X, _O_Z1, _O_SEG = _kernel.O_X, _kernel.O_Z + 1, _kernel.O_SEG
+_O_X, _O_Z1, _O_SEG, _O_S = _kernel.O_X, _kernel.O_Z + 1, _kernel.O_SEG, _kernel.O_S
 
 #: Scalar observation entries, in order (the look-ahead block follows them).
 SCALAR_FEATURES = (
@@ -200,12 +200,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     - **Termination**: the controller has finished the program (reference at rest at the end, dwells
       done) and every axis is within the in-position width (``in_position_mm``).
+    - A program without motion (nothing but modal codes, spindle or tool commands, ``M30``; or an empty
+      file) terminates on the first step with reward 0 and ``cycle_time_s`` 0.
     - **Truncation**: after ``max_episode_steps`` control steps (default: 5 × ``T_nominal`` / ``dt`` plus
       one second to settle), e.g. when the knob is held at 0.
 
     ## Arguments
 
-    ``programs`` (built-in names, paths or G-code text; None = the default task's set), ``dialect``,
+    ``programs`` (one program or a list: built-in names, paths, G-code text, ``ProgramText`` or interpreted
+    ``Program``\ s, by the rule of :mod:`cnc_gym.programs`; None = the default task's set), ``dialect``,
     ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
     of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
     ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
@@ -217,7 +220,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``cycle_time_s``, ``contour_error_mm`` (max in this step), ``contour_error_max_mm``,
     ``contour_error_rms_mm`` (over cutting samples so far), ``tolerance_mm``, ``violations`` (control
-    steps so far with ``e_max > tol``), ``cost``, ``line`` (source line of the current block),
+    steps so far with ``e_max > tol``), ``violation_length_mm`` and ``violation_time_s`` (path length
+    the reference advanced, and time, over the servo samples with contour error above ``tol``: these do
+    not depend on the control period), ``cost``, ``line`` (source line of the current block),
     ``override`` (applied), ``feed_mm_min`` (current path speed × 60), ``path_s``, ``progress``,
     ``program``, ``steps``. At the end of an episode these are the episode's totals.
 
@@ -230,7 +235,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        programs: Sequence[str | Path] | str | Path | None = None,
+        programs: Sequence[ProgramLike] | ProgramLike | None = None,
         dialect: str = "gsk25i",
         machine: str | Path | MachineConfig = "vmc-small",
         action_mode: str = "override",
@@ -344,7 +349,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             if not 0 <= index_or_name < len(self._programs):
                 raise ConfigError(f"program index {index_or_name} out of range 0..{len(self._programs) - 1}")
             name, toolpath = self._programs[int(index_or_name)]
-        elif isinstance(index_or_name, str | Path):
+        elif isinstance(index_or_name, PROGRAM_TYPES):
             found = [p for p in self._programs if p[0] == index_or_name]
             name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine)
         else:
@@ -372,6 +377,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._error_sq_sum = 0.0
         self._error_samples = 0
         self._violations = 0
+        self._violation_length_mm = 0.0
+        self._violation_time_s = 0.0
+        self._last_path_s = self.controller.path_s
         self._knob = 0.0
         self._last_segment = 0
         self._last_reference = self._start
@@ -413,6 +421,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         knob = self._parse_action(action)
         self._knob = knob
+        if not len(self.toolpath):  # a program without motion (only M30, or empty): done at once, in 0 s
+            self._steps += 1
+            return self._observe(), 0.0, True, False, self._info(0.0, 0.0)
         controller = self.controller
         n = self.ticks_per_step
         if not controller.finished:
@@ -423,15 +434,18 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                 rows = controller.advance_rows(n, feed_mm_min=(knob + 1.0) * 0.5 * self.max_feed_mm_min)
             reference = rows[:, _O_X:_O_Z1]
             segment = rows[:, _O_SEG].astype(np.int64)
+            path_s = rows[:, _O_S]
             if len(reference) < n:  # the program ended inside this step: hold the end point
                 reference = np.concatenate((reference, np.repeat(reference[-1:], n - len(reference), axis=0)))
                 segment = np.concatenate((segment, np.repeat(segment[-1:], n - len(segment))))
+                path_s = np.concatenate((path_s, np.repeat(path_s[-1:], n - len(path_s))))
             self._last_segment = int(segment[-1])
             self._last_reference = reference[-1]
         else:  # settling at the end: the reference rests at the last point
             reference = self._settle_reference
             reference[:] = self._last_reference
             segment = np.full(n, self._last_segment)
+            path_s = None
         actual = self.plant.step(reference[None])[0]
         # In-position check (P1471), sampled once per control step: the controller holds the reference on
         # an exact stop, a rapid end or start, or the program end until the servo is settled there.
@@ -459,6 +473,14 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             self._error_max_mm = e_max
         violated = e_max > self.tolerance_mm
         self._violations += violated
+        if violated:  # per servo sample: the reference's path advance and time while over tolerance
+            over = error > self.tolerance_mm
+            if path_s is not None:
+                advance = np.diff(path_s, prepend=self._last_path_s)
+                self._violation_length_mm += float(np.sum(advance[over]))
+            self._violation_time_s += int(np.count_nonzero(over)) * self.interpolation_period_s
+        if path_s is not None:
+            self._last_path_s = float(path_s[-1])
         self._last_error_step = e_max
         self._last_error_now = e_now
 
@@ -518,6 +540,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             "contour_error_rms_mm": rms,
             "tolerance_mm": self.tolerance_mm,
             "violations": self._violations,
+            "violation_length_mm": self._violation_length_mm,
+            "violation_time_s": self._violation_time_s,
             "cost": cost,
             "line": self._source_lines[segment] if self._source_lines else 0,
             "override": controller.override_applied,

@@ -38,6 +38,7 @@ from cnc_gym.config import (
 )
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.motion import ActionError
+from cnc_gym.programs import PROGRAM_TYPES, ProgramLike
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
@@ -94,21 +95,22 @@ MAX_EPISODE_STEPS = Number(
 
 
 class ProgramRefs(Spec):
-    """Programs given to the env: a name, path or G-code text, or a non-empty sequence of them."""
+    """Programs given to the env: a name, path, G-code text, ``ProgramText`` or interpreted ``Program``
+    (the rule of :mod:`cnc_gym.programs`), or a non-empty sequence of them."""
 
     def _parse(self, raw: Any) -> Any:
-        refs = [raw] if isinstance(raw, str | os.PathLike) else raw
+        refs = [raw] if isinstance(raw, PROGRAM_TYPES) else raw
         if isinstance(refs, bytes) or not isinstance(refs, list | tuple):
             raise Invalid(f"must be a program name, path or G-code text, or a list of them, got {shown(raw)}")
         if not refs:
             raise Invalid("must name at least one program")
         for ref in refs:
-            if not isinstance(ref, str | os.PathLike):
+            if not isinstance(ref, PROGRAM_TYPES):
                 raise Invalid(f"entries must be program names, paths or G-code text, got {shown(ref)}")
         return tuple(refs)
 
     def _allowed(self) -> str:
-        return "name, path or G-code text, or a list of them"
+        return "name, path, G-code text, `ProgramText` or `Program`, or a list of them"
 
 
 class MachineRef(Spec):
@@ -142,9 +144,10 @@ class RewardRef(Spec):
 class EnvArguments:
     """The keyword arguments of ``cnc_gym/Feedrate-v0``, checked."""
 
-    programs: tuple[str | Path, ...] | None = declared(ProgramRefs(
-        optional=True, doc="programs of the episodes: built-in names, `.nc` paths or G-code text (None: "
-                           "the default task's set)"))  # fmt: skip
+    programs: tuple[ProgramLike, ...] | None = declared(ProgramRefs(
+        optional=True, doc="programs of the episodes: built-in names, `.nc` paths, G-code text, "
+                           "`ProgramText` or interpreted `Program`s (None: the default task's set)",
+    ))  # fmt: skip
     dialect: str = declared(DIALECT, "gsk25i")
     machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
     action_mode: str = declared(ACTION_MODE, "override")
@@ -183,7 +186,7 @@ def control_ticks(control_period_s: float, machine: MachineConfig) -> int:
     return int(ticks)
 
 
-def reset_choice(options: Any) -> int | str | Path | None:
+def reset_choice(options: Any) -> int | ProgramLike | None:
     """The program that ``reset(options=...)`` asks for (None: draw one); ConfigError on a bad option."""
     if options is None:
         return None
@@ -193,7 +196,7 @@ def reset_choice(options: Any) -> int | str | Path | None:
     if unknown:
         raise ConfigError(f"reset: unknown option {unknown[0]} (allowed: program)")
     choice = options.get("program")
-    if choice is None or isinstance(choice, str | Path):
+    if choice is None or isinstance(choice, PROGRAM_TYPES):
         return choice
     if isinstance(choice, int | np.integer) and not isinstance(choice, bool | np.timedelta64):
         return int(choice)
