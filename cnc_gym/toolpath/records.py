@@ -31,8 +31,8 @@ def _g(x: float) -> float:
 def toolpath_records(tp: Toolpath) -> list[dict]:
     """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
     data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
-    coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that carry
-    one."""
+    coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that
+    carry one."""
     records = []
     rotary = tp.rotary_axes
     for i in range(len(tp)):
