@@ -430,7 +430,7 @@ DIALECT_MODULES: dict[str, str | None] = {
     "gsk25i": "cnc_gym.gcode.dialects.gsk25i",
     "fanuc": "cnc_gym.gcode.dialects.fanuc",
     "h4cm": None,
-    "syntec": None,
+    "syntec": "cnc_gym.gcode.dialects.syntec",
     "azmc1": None,
 }
 
