@@ -23,6 +23,9 @@ THREAD = 33
 #: Words of the hole-pattern codes (§G134-§G137.1).
 PATTERN_WORDS = {134: "IJK", 135: "IJK", 136: "IJPK", 137.1: "IPJK"}
 
+#: G37's D is a length (the probe over-travel), not an offset number.
+PROBE_RULES = {"D": AddressRule(0.0, BIG, "length")}
+
 G_CODES = table([
     *(spec for spec in family.G_CODES if gkey(float(spec.name[1:])) not in NOT_SYNTEC),
     # §G04: X seconds (or ms without a point), P ms; Syntec's rules in modes.py.
@@ -36,7 +39,7 @@ G_CODES = table([
     g(33, 1, "motion", THREAD, step="motion"),
     # §G37 / §G37.1 automatic tool length measurement (measurement.py). D and F of the block are the
     # probe over-travel and the measuring feed (blocks.py takes them off the block's words).
-    g(37, 0, "tool_length_measure", step="motion", uses_axes=True, words="RP"),
+    g(37, 0, "tool_length_measure", step="motion", uses_axes=True, words="RP", address_rules=PROBE_RULES),
     g(37.1, 0, "tool_length_measure_2", step="motion", uses_axes=True, words="RPQ"),
     # §G54…G59.9: fifteen work coordinate systems.
     *[g(59 + n / 10, 14, "wcs", 6 + n, step="wcs") for n in range(1, 10)],

@@ -15,14 +15,21 @@
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING
 
+from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.codes import round_to
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate as family_evaluate
 from cnc_gym.gcode.lang.fanuc.reader import Reader
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
     from cnc_gym.gcode.program import Block, Program
+
+
+#: G70 / G71 in a block's text (the code, not G700 or G70.1).
+_UNIT_CODE = re.compile(r"G0*7([01])(?![0-9.])")
 
 
 class _Rescan(Exception):
@@ -67,11 +74,16 @@ class SyntecReader(Reader):
     def __init__(self, dialect: Dialect, macro_calls=None) -> None:
         super().__init__(dialect, macro_calls)
         self._mode = "off"  # "plain": a plain block is being read; "scan": an ordinary block is scanned
+        self._unit: float | None = None  # the least unit of a block that holds G70/G71
 
     def read(self, text: str, file: str = "<program>") -> Program:
         if "//" in text:
             text = "\n".join(strip_line_comment(line) for line in text.splitlines())
-        return super().read(text, file)
+        try:
+            return super().read(text, file)
+        except ProgramError as err:
+            err.alarm = self.dialect.alarms.get(err.code)  # Syntec's numbers, not the family's
+            raise
 
     def _plain_block(self, text: str, line: int) -> Block:
         self._mode = "plain"
@@ -84,12 +96,17 @@ class SyntecReader(Reader):
 
     def _scan(self, text: str, line: int, relaxed: bool, code_rules: dict | None = None, *,
               defer: bool = False) -> Block | None:  # fmt: skip
-        # Macro-call arguments (relaxed) keep the family's reading: a number at the metric least unit.
+        # Macro-call arguments (relaxed) keep the family's reading: a number at the metric least unit. A
+        # block that selects its unit itself (G70/G71 run first) is read in that unit at once.
         saved, self._mode = self._mode, "off" if relaxed else "scan"
+        unit = _UNIT_CODE.search(text)
+        self._unit = None if unit is None else (self.dialect.least_increment_inch if unit.group(1) == "0"
+                                                else self.dialect.least_increment_mm)  # fmt: skip
         try:
             return super()._scan(text, line, relaxed, code_rules, defer=defer)
         finally:
             self._mode = saved
+            self._unit = None
 
     def _value(self, letter: str, text: str, pos: int, line: int, rule: tuple):
         value, digits, end = super()._value(letter, text, pos, line, rule)
@@ -107,5 +124,7 @@ class SyntecReader(Reader):
                     raise _Rescan
                 value = super()._literal(letter, digits[:point + 1 + self._decimals] if not whole else digits,
                                          rule, line)  # the range and sign checks, at the metric unit
+                if self._unit is not None:  # the block's own G70/G71: its unit is known
+                    return int(digits) * self._unit if whole else round_to(float(digits), self._unit)
                 return ("num", value, int(digits)) if whole else ("num", float(digits))
         return super()._literal(letter, digits, rule, line)
