@@ -222,6 +222,7 @@ def contour_control(core: Seam, spec: CodeSpec, values: dict) -> None:
         st.nurbs.hpcc = False
     elif p is not None and p in (10000, 1, 2, 3, 4, 5):
         d.hshp = int(p)
+        d.hshp_block = (st.file, st.out.line)
         st.nurbs.hpcc = True
     else:
         raise core.error("G05 needs P10000 or P1-P5 (on) or P0 (off)" if p is None else
@@ -271,7 +272,7 @@ def finish(core: Seam) -> None:
     d = core.state.dialect_data
     if d is not None and d.hshp is not None and not (core.state.ended or d.ended_by_code):
         raise core.error("the program ends in high-speed, high-precision mode G05 without M30 or M99 (§G05 "
-                         "condition 3)", "hshp-no-end")  # fmt: skip
+                         "condition 3)", "hshp-no-end").located(*d.hshp_block)  # fmt: skip
 
 
 # ---------------------------------------------------------------------- motion

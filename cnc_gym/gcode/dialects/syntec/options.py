@@ -66,6 +66,8 @@ class SyntecData:
 
     #: G05 parameter set in force (10000, 1-5), None: high-speed, high-precision mode off.
     hshp: int | None = None
+    #: File and line of the G05 block that turned the mode on (for the end-of-program error).
+    hshp_block: tuple[str, int] = ("<program>", 0)
     #: G05.1 Q1 E_: the smoothing tolerance in force (mm), None: off.
     smoothing_mm: float | None = None
     #: The next G01 block is not smoothed (the first after G43/G44/G49 or a coordinate change, §G05.1).
