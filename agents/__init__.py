@@ -5,7 +5,7 @@
 =====================  ======================================================================
 ``constant:<x>``       :class:`~agents.constant.ConstantOverride` at override x (1.0 = 100 %)
 ``classical``          :class:`~agents.classical.ClassicalPlanner` (tolerance-aware look-ahead)
-a path (``*.zip``)     :class:`~agents.model.ModelPolicy`, an SB3 model loaded with SB3's loader
+a path (``*.zip``)     :class:`~agents.model.ModelPolicy`, an SB3 model rebuilt without unpickling
 =====================  ======================================================================
 """
 

@@ -246,6 +246,9 @@ class ClassicalPlanner:
 
     def plan(self, toolpath: Toolpath, machine: MachineConfig, env: Any = None) -> Schedule:
         """Build (and, given an env to copy, refine by simulation) the schedule for one program."""
+        if not len(toolpath):  # a program without motion: nothing to schedule (the env ends it at once)
+            one = np.ones(1)
+            return Schedule(s=np.zeros(1), cap_mm_s=np.full(1, np.inf), speed_mm_s=0 * one, override=one)
         model = ServoErrorModel(machine)
         tolerance = float(machine.controller.contour_tolerance_mm)
         target = self.margin * tolerance

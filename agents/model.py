@@ -1,45 +1,338 @@
-"""Trained Stable-Baselines3 models as policies.
+"""Trained Stable-Baselines3 models as policies, loaded without running any code from the model file.
 
-Models are loaded with SB3's own loader (``PPO.load``: a zip of JSON + ``torch.load(weights_only=True)``
-tensors), never with raw pickle.
+SB3's own loader (``PPO.load``) unpickles several entries of a model zip's ``data`` JSON (``policy_class``,
+``lr_schedule``, the spaces …) with cloudpickle, so a crafted ``.zip`` runs whatever code it carries the
+moment it is loaded. cnc-gym therefore never calls it and never unpickles anything from the file:
+
+1. ``data`` is read as JSON (size-capped); its pickled (``":serialized:"``) entries are never decoded.
+2. The policy class comes from a fixed list, picked by the class name SB3 records in plain text beside the
+   pickle: ``ActorCriticPolicy`` (PPO, A2C ``MlpPolicy``), ``SACPolicy`` (SAC), ``TD3Policy`` (TD3, DDPG).
+3. The observation and action spaces are rebuilt from their recorded shape, dtype and bounds (``Box``
+   only).
+4. ``policy_kwargs`` are rebuilt from plain values (layer sizes, flags, numbers) and a fixed list of
+   activation, optimizer and feature-extractor classes, named by their recorded text.
+5. The weights (``policy.pth``) are read with ``torch.load(weights_only=True)``, which refuses anything but
+   tensors, and loaded strictly (every tensor, right shapes, all finite) into that policy.
+
+Nothing else in the zip is read (no optimizer state, no schedules, no replay buffers): a policy that
+acts needs none of them. A model outside this list (a custom policy class, image or dict observations)
+is refused with one line; there is no unsafe fallback. Such a model can still be loaded in your own code
+with SB3's loader, at your own risk, and run as any object with ``reset(env)`` and ``act(obs, info)``
+(:class:`agents.base.Policy`). docs/security.md says what a model file can and cannot do.
 """
 
 from __future__ import annotations
 
+import io
+import itertools
+import json
+import math
+import re
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from cnc_gym.config import escaped
 from cnc_gym.errors import CncGymError
 
-#: Algorithms a model file may hold, tried in this order (their zips are interchangeable in layout).
-_ALGORITHMS = ("PPO", "SAC", "TD3", "A2C")
+#: Largest ``data`` entry read (SB3 writes a few KB).
+MAX_DATA_BYTES = 4 << 20
+#: Largest ``policy.pth`` read (a 64×64 policy is about 50 KB).
+MAX_WEIGHTS_BYTES = 256 << 20
+#: Most observation entries / action entries a model may declare.
+MAX_OBSERVATION_SIZE = 100_000
+MAX_ACTION_SIZE = 1_000
+#: Most weights in a policy (what ``policy_kwargs`` may ask to build before the weights are checked).
+MAX_PARAMETERS = 50_000_000
+
+#: Policy classes by the name SB3 records (``"<function ActorCriticPolicy.__init__ at …>"``) and module,
+#: with the algorithm they come from (for messages).
+_FAMILIES = {
+    ("stable_baselines3.common.policies", "ActorCriticPolicy"): "PPO/A2C",
+    ("stable_baselines3.sac.policies", "SACPolicy"): "SAC",
+    ("stable_baselines3.td3.policies", "TD3Policy"): "TD3",
+}
+_CLASS_KEYS = ("activation_fn", "optimizer_class", "features_extractor_class")
 
 
-def load_sb3_model(path: str | Path, device: str = "cpu") -> Any:
-    """Load an SB3 model zip with SB3's loader; a missing or unreadable file is a CncGymError."""
+class ModelError(CncGymError):
+    """A model file that cnc-gym cannot or will not load (one line, naming the file)."""
+
+
+@dataclass(frozen=True)
+class LoadedModel:
+    """A policy rebuilt from an SB3 model zip, ready to act."""
+
+    policy: Any  # stable_baselines3.common.policies.BasePolicy
+    algorithm: str
+    observation_space: Any  # gymnasium.spaces.Box
+    action_space: Any  # gymnasium.spaces.Box
+    sb3_version: str
+
+    def predict(self, observation: np.ndarray, deterministic: bool = True) -> np.ndarray:
+        action, _ = self.policy.predict(observation, deterministic=deterministic)
+        return action
+
+
+def load_sb3_model(path: str | Path) -> LoadedModel:
+    """Rebuild the policy of an SB3 model zip without unpickling anything from it (see the module
+    docstring); any problem is one :class:`ModelError` line naming the file."""
     path = Path(path)
+    name = escaped(str(path), 200)
     if not path.is_file():
-        raise CncGymError(f"{path}: no such model file")
+        raise ModelError(f"{name}: no such model file")
     try:
-        import stable_baselines3 as sb3
+        import stable_baselines3  # noqa: F401
+        import torch
     except ImportError:  # pragma: no cover - rl extra not installed
-        raise CncGymError("loading a trained model needs the rl extra: pip install -e '.[rl]'") from None
+        raise ModelError("loading a trained model needs the rl extra: pip install -e '.[rl]'") from None
     if not zipfile.is_zipfile(path):
-        raise CncGymError(f"{path}: not a Stable-Baselines3 model (an SB3 model is a .zip file)")
-    errors = []
-    for algo in _ALGORITHMS:
-        try:
-            return getattr(sb3, algo).load(str(path), device=device)
-        except (ValueError, KeyError, TypeError, AssertionError) as exc:  # wrong algorithm for this zip
-            errors.append(f"{algo}: {exc}")
-        except Exception as exc:  # zipfile.BadZipFile, OSError ...
-            raise CncGymError(
-                f"{path}: not a Stable-Baselines3 model ({type(exc).__name__}: {exc})"
-            ) from None
-    raise CncGymError(f"{path}: cannot load as an SB3 model ({'; '.join(errors)[:300]})")
+        raise ModelError(f"{name}: not a Stable-Baselines3 model (an SB3 model is a .zip file)")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            data_bytes = _member(archive, "data", MAX_DATA_BYTES)
+            weights_bytes = _member(archive, "policy.pth", MAX_WEIGHTS_BYTES)
+            version = b"?"
+            if "_stable_baselines3_version" in archive.namelist():
+                version = _member(archive, "_stable_baselines3_version", 100)
+    except _Refused as exc:
+        raise ModelError(f"{name}: {exc}") from None
+    except Exception as exc:  # zipfile.BadZipFile, zlib.error, encrypted or unsupported members, OSError
+        raise ModelError(f"{name}: not a readable model zip ({type(exc).__name__}: "
+                         f"{escaped(str(exc), 120)})") from None  # fmt: skip
+    try:
+        data = _json(data_bytes)
+        family, algorithm = _family(data)
+        observation_space = _box(data, "observation_space", MAX_OBSERVATION_SIZE, bounds=False)
+        action_space = _box(data, "action_space", MAX_ACTION_SIZE, bounds=True)
+        kwargs = _policy_kwargs(data, family)
+        weights = _weights(weights_bytes, torch)
+        policy = _build(family, observation_space, action_space, kwargs, weights, torch)
+    except _Refused as exc:
+        raise ModelError(f"{name}: {exc}") from None
+    sb3_version = escaped(version.decode("ascii", "replace"), 40)
+    return LoadedModel(policy=policy, algorithm=algorithm, observation_space=observation_space,
+                       action_space=action_space, sb3_version=sb3_version)  # fmt: skip
+
+
+class _Refused(Exception):
+    """Why a model is refused (the loader adds the file name)."""
+
+
+def _member(archive: zipfile.ZipFile, member: str, limit: int) -> bytes:
+    if member not in archive.namelist():
+        raise _Refused(f"not a Stable-Baselines3 model (no {member!r} in the zip)")
+    with archive.open(member) as f:
+        content = f.read(limit + 1)  # bounded whatever the header claims (a zip bomb stops here)
+    if len(content) > limit:
+        raise _Refused(f"{member!r} is larger than {limit >> 20} MiB")
+    return content
+
+
+def _json(data_bytes: bytes) -> dict[str, Any]:
+    try:
+        data = json.loads(data_bytes.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        raise _Refused("its 'data' entry is not valid JSON") from None
+    if not isinstance(data, dict):
+        raise _Refused("its 'data' entry is not a JSON object")
+    return data
+
+
+def _family(data: dict[str, Any]) -> tuple[type, str]:
+    """The policy class, from the plain-text name SB3 records beside the pickled ``policy_class``."""
+    recorded = data.get("policy_class")
+    if not isinstance(recorded, dict):
+        raise _Refused("its data has no policy_class record")
+    module, init = recorded.get("__module__"), recorded.get("__init__")
+    match = re.match(r"<function (\w+)\.__init__ at ", init) if isinstance(init, str) else None
+    key = (module, match.group(1) if match else None)
+    if key not in _FAMILIES:
+        shown = escaped(f"{module}.{key[1]}", 100)
+        raise _Refused(f"policy class {shown} is not one cnc-gym rebuilds without running code from the "
+                       "file (MLP policies of PPO, A2C, SAC, TD3)")  # fmt: skip
+    algorithm = _FAMILIES[key]
+    if algorithm == "PPO/A2C":
+        algorithm = "PPO" if "clip_range" in data else "A2C"
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.sac.policies import SACPolicy
+    from stable_baselines3.td3.policies import TD3Policy
+
+    classes = {"PPO": ActorCriticPolicy, "A2C": ActorCriticPolicy, "SAC": SACPolicy, "TD3": TD3Policy}
+    return classes[algorithm], algorithm
+
+
+def _box(data: dict[str, Any], key: str, max_size: int, bounds: bool) -> Any:
+    """A ``Box`` space from its recorded ``_shape``, ``dtype`` and (for actions) ``low``/``high`` text."""
+    import gymnasium
+
+    recorded = data.get(key)
+    if not isinstance(recorded, dict) or not str(recorded.get(":type:", "")).endswith(".spaces.box.Box'>"):
+        raise _Refused(f"its {key} is not a Box (cnc-gym models observe and act in boxes)")
+    shape = recorded.get("_shape")
+    if (not isinstance(shape, list) or not 1 <= len(shape) <= 4
+            or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in shape)
+            or math.prod(shape) > max_size):  # fmt: skip
+        raise _Refused(f"its {key} has an unusable shape {escaped(str(shape), 60)}")
+    dtype = recorded.get("dtype")
+    if dtype not in ("float32", "float64"):
+        raise _Refused(f"its {key} has dtype {escaped(str(dtype), 40)} (float32 or float64 expected)")
+    if not bounds:  # the policy needs only the observation's shape and dtype
+        return gymnasium.spaces.Box(-np.inf, np.inf, shape=tuple(shape), dtype=dtype)
+    low, high = (_numbers(recorded.get(side), math.prod(shape), f"{key}.{side}") for side in ("low", "high"))
+    if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high)) and np.all(low < high)):
+        raise _Refused(f"its {key} bounds are not finite with low < high")
+    low, high = (side.reshape(shape).astype(dtype) for side in (low, high))
+    return gymnasium.spaces.Box(low, high, dtype=dtype)
+
+
+def _numbers(text: Any, count: int, what: str) -> np.ndarray:
+    """The numbers of a numpy array's printed form (``"[-1. -1.]"``)."""
+    if not isinstance(text, str) or "..." in text or len(text) > 64 * count + 64:
+        raise _Refused(f"its {what} is not a readable list of numbers")
+    try:
+        values = np.array([float(x) for x in text.replace("[", " ").replace("]", " ").split()])
+    except ValueError:
+        raise _Refused(f"its {what} is not a readable list of numbers") from None
+    if values.size != count:
+        raise _Refused(f"its {what} has {values.size} numbers, the shape needs {count}")
+    return values
+
+
+def _policy_kwargs(data: dict[str, Any], family: type) -> dict[str, Any]:
+    """``policy_kwargs`` from plain values and known classes only."""
+    import inspect
+
+    import torch
+    from stable_baselines3.common.sb2_compat.rmsprop_tf_like import RMSpropTFLike
+    from stable_baselines3.common.torch_layers import FlattenExtractor
+
+    recorded = data.get("policy_kwargs", {})
+    if recorded is None:
+        recorded = {}
+    if not isinstance(recorded, dict):
+        raise _Refused("its policy_kwargs are not a mapping")
+    recorded = {k: v for k, v in recorded.items() if k not in (":type:", ":serialized:")}
+    nn, optim = torch.nn, torch.optim
+    activations = (nn.Tanh, nn.ReLU, nn.ELU, nn.LeakyReLU, nn.GELU, nn.SiLU, nn.Mish, nn.SELU, nn.CELU,
+                   nn.Sigmoid, nn.Softplus, nn.Hardtanh, nn.ReLU6)  # fmt: skip
+    optimizers = (optim.Adam, optim.AdamW, optim.RMSprop, optim.SGD, RMSpropTFLike)
+    known_classes: dict[str, dict[str, type]] = {
+        "activation_fn": {str(c): c for c in activations},
+        "optimizer_class": {str(c): c for c in optimizers},
+        "features_extractor_class": {str(FlattenExtractor): FlattenExtractor},
+    }
+    fixed = {"observation_space", "action_space", "lr_schedule"}
+    allowed = set(inspect.signature(family).parameters) - fixed
+    kwargs: dict[str, Any] = {}
+    for key, value in recorded.items():
+        if key not in allowed:
+            shown = escaped(str(key), 40)
+            raise _Refused(f"policy_kwargs key {shown} is not an argument of {family.__name__}")
+        if key in _CLASS_KEYS:
+            if value not in known_classes[key]:
+                raise _Refused(f"policy_kwargs.{key} {escaped(str(value), 80)} is not one cnc-gym rebuilds "
+                               "without running code from the file")  # fmt: skip
+            kwargs[key] = known_classes[key][value]
+        elif key == "features_extractor_kwargs":
+            if value:
+                raise _Refused("policy_kwargs.features_extractor_kwargs must be empty (FlattenExtractor)")
+        else:
+            _check_plain(value, f"policy_kwargs.{key}")
+            kwargs[key] = value
+    n_critics = kwargs.get("n_critics", 2)
+    if isinstance(n_critics, bool) or not isinstance(n_critics, int) or not 1 <= n_critics <= 10:
+        raise _Refused("policy_kwargs.n_critics must be an integer from 1 to 10")
+    if family.__name__ == "ActorCriticPolicy" and isinstance(data.get("use_sde"), bool):
+        kwargs.setdefault("use_sde", data["use_sde"])  # PPO/A2C pass use_sde beside policy_kwargs
+    return kwargs
+
+
+def _check_plain(value: Any, what: str, depth: int = 0) -> None:
+    """JSON data only: numbers, flags, short text, and short lists and mappings of them."""
+    if depth > 4:
+        raise _Refused(f"{what} is nested too deeply")
+    if value is None or isinstance(value, bool | int | float):
+        if isinstance(value, float) and not math.isfinite(value):
+            raise _Refused(f"{what} holds a non-finite number")
+        return
+    if isinstance(value, str) and len(value) <= 40:
+        return
+    if isinstance(value, list) and len(value) <= 64:
+        for item in value:
+            _check_plain(item, what, depth + 1)
+        return
+    if isinstance(value, dict) and len(value) <= 64:
+        for key, item in value.items():
+            _check_plain(item, f"{what}.{escaped(str(key), 40)}", depth + 1)
+        return
+    raise _Refused(f"{what} is not a plain value")
+
+
+def _weights(weights_bytes: bytes, torch: Any) -> dict[str, Any]:
+    try:
+        weights = torch.load(io.BytesIO(weights_bytes), map_location="cpu", weights_only=True)
+    except Exception:  # pickle.UnpicklingError for anything but tensors, RuntimeError for a broken file …
+        raise _Refused("'policy.pth' holds something other than tensors, or is damaged (refused: "
+                       "loading it could run code)") from None  # fmt: skip
+    if not isinstance(weights, dict) or not all(
+        isinstance(k, str) and isinstance(v, torch.Tensor) for k, v in weights.items()
+    ):
+        raise _Refused("'policy.pth' is not a mapping of names to tensors")
+    if sum(int(v.numel()) for v in weights.values()) > MAX_PARAMETERS:
+        raise _Refused(f"'policy.pth' holds more than {MAX_PARAMETERS} weights")
+    for key, tensor in weights.items():
+        if not torch.is_floating_point(tensor) or not bool(torch.isfinite(tensor).all()):
+            raise _Refused(f"weight {escaped(key, 60)} is not finite floating-point")
+    return weights
+
+
+def _build(family: type, observation_space: Any, action_space: Any, kwargs: dict[str, Any],
+           weights: dict[str, Any], torch: Any) -> Any:  # fmt: skip
+    """The policy, built from known classes and plain values, with exactly the file's weights."""
+    n_weights = sum(int(v.numel()) for v in weights.values())
+    _check_size(kwargs.get("net_arch"), math.prod(observation_space.shape), n_weights)
+    # Acting needs no optimizer: the policy gets a stand-in (a torch optimizer's first use imports
+    # torch's compiler, seconds of start-up for nothing); the file's optimizer choice is checked above.
+    kwargs = {**kwargs, "optimizer_class": _NoOptimizer, "optimizer_kwargs": {}}
+    try:
+        policy = family(observation_space, action_space, lambda _: 0.0, **kwargs)
+    except (TypeError, ValueError, AssertionError, KeyError) as exc:
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise _Refused(f"its policy_kwargs do not build a {family.__name__}: {escaped(why, 120)}") from None
+    try:
+        policy.load_state_dict(weights, strict=True)
+    except RuntimeError as exc:
+        first = escaped(" ".join(str(exc).split()), 160)
+        raise _Refused(f"its weights do not fit the policy its data describes ({first})") from None
+    policy.set_training_mode(False)
+    return policy
+
+
+class _NoOptimizer:
+    """Stands in for the training optimizer a policy builds; a loaded policy only acts."""
+
+    def __init__(self, params: Any, **kwargs: Any) -> None:
+        self.param_groups: list[dict[str, Any]] = []
+
+
+def _check_size(net_arch: Any, n_inputs: int, n_weights: int) -> None:
+    """Refuse a ``net_arch`` that asks for a much larger network than the file's weights (a small file
+    must not make the loader allocate gigabytes before the weights are compared)."""
+    if net_arch is None:
+        return
+    layers = list(net_arch.values()) if isinstance(net_arch, dict) else [net_arch]
+    wanted = 0
+    for sizes in layers:
+        if not isinstance(sizes, list) or not all(type(n) is int and n >= 1 for n in sizes):
+            raise _Refused("policy_kwargs.net_arch must be lists of positive layer sizes")
+        widths = [n_inputs, *sizes]
+        wanted += sum(a * b for a, b in itertools.pairwise(widths))
+    if wanted > 4 * n_weights + 10_000:
+        raise _Refused(f"policy_kwargs.net_arch asks for {wanted} weights, the file holds {n_weights}")
 
 
 class ModelPolicy:
@@ -63,5 +356,5 @@ class ModelPolicy:
                               f"the env expects {env.action_space.shape}")  # fmt: skip
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
-        action, _ = self.model.predict(observation, deterministic=self.deterministic)
+        action = self.model.predict(observation, deterministic=self.deterministic)
         return np.asarray(action, dtype=np.float32)

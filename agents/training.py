@@ -1,42 +1,76 @@
 """SB3 training helpers: the validated training config and the PPO training loop.
 
 ``scripts/train.py`` and ``scripts/evaluate.py`` are thin entry points over these. A config is YAML read
-with ``yaml.safe_load`` and validated into dataclasses (unknown keys, wrong types and out-of-range values
-are :class:`~cnc_gym.errors.ConfigError` naming the file and key). See ``configs/train/ppo.yaml``.
+with the bounded safe loader of :mod:`cnc_gym.config`; every key is declared below with its type and
+range (docs/training.md's key table is written from these declarations), and the ``env:`` keys share
+their specs with the env's own arguments (:mod:`cnc_gym.envs.options`). Unknown keys, wrong types and
+out-of-range values are one :class:`~cnc_gym.errors.ConfigError` line naming the file and the key. See
+``configs/train/ppo.yaml``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import tempfile
 import time
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from cnc_gym.config import check_keys, read_yaml
-from cnc_gym.errors import ConfigError
+from cnc_gym.config import (
+    Number,
+    check_object,
+    declared,
+    flag,
+    from_mapping,
+    items,
+    number,
+    parse_value,
+    read_yaml,
+    section,
+    spec_of,
+    text,
+)
+from cnc_gym.envs.options import (
+    ACTION_MODE,
+    CONTROL_PERIOD,
+    DIALECT,
+    MACHINE_NAME,
+    MAX_EPISODE_STEPS,
+    PROGRAM_NAMES,
+    RewardWeights,
+)
+from cnc_gym.errors import CncGymError, ConfigError
+
+#: Most samples in one PPO rollout (n_steps × n_envs): about 200 MB of buffers with this env's observation.
+MAX_ROLLOUT = 2**20
 
 
 @dataclass
 class EnvSettings:
     """Keyword arguments of ``cnc_gym/Feedrate-v0`` used for training (and, by default, evaluation)."""
 
-    programs: list[str] = field(default_factory=lambda: ["star", "pocket", "freeform"])
-    dialect: str = "gsk25i"
-    machine: str = "vmc-small"
-    action_mode: str = "override"
-    control_period_s: float = 0.01
-    reward: dict[str, float] | None = None
-    max_episode_steps: int | None = None
+    programs: list[str] = declared(  # noqa: RUF009
+        dataclasses.replace(PROGRAM_NAMES, as_tuple=False),
+        default_factory=lambda: ["star", "pocket", "freeform"],
+    )
+    dialect: str = declared(DIALECT, "gsk25i")
+    machine: str = declared(MACHINE_NAME, "vmc-small")
+    action_mode: str = declared(ACTION_MODE, "override")
+    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    reward: RewardWeights | None = section(  # noqa: RUF009
+        RewardWeights, optional=True, doc="reward weights (null: configs/tasks/default.yaml)")  # fmt: skip
+    max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
 
     def make_kwargs(self) -> dict[str, Any]:
         kwargs: dict[str, Any] = {"programs": list(self.programs), "dialect": self.dialect,
                                   "machine": self.machine, "action_mode": self.action_mode,
                                   "control_period_s": self.control_period_s}  # fmt: skip
         if self.reward is not None:
-            kwargs["reward"] = dict(self.reward)
+            kwargs["reward"] = dataclasses.asdict(self.reward)
         if self.max_episode_steps is not None:
             kwargs["max_episode_steps"] = self.max_episode_steps
         return kwargs
@@ -46,111 +80,65 @@ class EnvSettings:
 class PPOSettings:
     """Subset of ``stable_baselines3.PPO`` arguments (same names)."""
 
-    learning_rate: float = 3e-4
-    n_steps: int = 512
-    batch_size: int = 128
-    n_epochs: int = 10
-    gamma: float = 0.99
-    gae_lambda: float = 0.95
-    clip_range: float = 0.2
-    ent_coef: float = 0.0
-    vf_coef: float = 0.5
-    max_grad_norm: float = 0.5
-    log_std_init: float = 0.0
-    net_arch: list[int] = field(default_factory=lambda: [64, 64])
+    learning_rate: float = number(3e-4, 0, 1, low_open=True, doc="Adam step size",
+                                  why="steps beyond 1 diverge at once.")  # fmt: skip
+    n_steps: int = number(512, 1, MAX_ROLLOUT, integer=True, doc="steps per env per rollout",
+                          why="n_steps × n_envs is the rollout, at most 2²⁰ samples.")  # fmt: skip
+    batch_size: int = number(128, 2, MAX_ROLLOUT, integer=True, doc="minibatch size",
+                             why="SB3 needs at least 2; at most the rollout (n_steps × n_envs).")  # fmt: skip
+    n_epochs: int = number(10, 1, 1000, integer=True, doc="passes over each rollout")
+    gamma: float = number(0.99, 0, 1, low_open=True, doc="discount factor")
+    gae_lambda: float = number(0.95, 0, 1, doc="GAE λ")
+    clip_range: float = number(0.2, 0, 1, low_open=True, doc="PPO's policy-ratio clip",
+                               why="0 or beyond 1 leaves nothing to clip (usual: 0.1-0.3).")  # fmt: skip
+    ent_coef: float = number(0.0, 0, 1, doc="entropy bonus weight")
+    vf_coef: float = number(0.5, 0, 1000, doc="value-loss weight")
+    max_grad_norm: float = number(0.5, 0, 1e6, low_open=True, doc="gradient clipping norm")
+    log_std_init: float = number(0.0, -20, 5, doc="initial log standard deviation of the actions",
+                                 why="e⁻²⁰ to e⁵ (≈ 150): any useful spread in a [-1, 1] box.")  # fmt: skip
+    net_arch: list[int] = items(  # noqa: RUF009
+        lambda: [64, 64], Number(low=1, high=1024, integer=True), max_items=8, as_tuple=False, noun="layer",
+        doc="hidden layer sizes of the policy and value MLPs", why="at most 8 layers of 1024: 8 M weights.")
 
 
 @dataclass
 class TrainConfig:
     """A training run: env, vectorisation, algorithm settings and where to write."""
 
-    env: EnvSettings = field(default_factory=EnvSettings)
-    ppo: PPOSettings = field(default_factory=PPOSettings)
-    total_timesteps: int = 100_000
-    n_envs: int = 4
+    env: EnvSettings = section(EnvSettings, doc="the env's arguments")  # noqa: RUF009
+    ppo: PPOSettings = section(PPOSettings, doc="PPO's arguments (SB3 names)")  # noqa: RUF009
+    total_timesteps: int = number(100_000, 1, 10**10, integer=True, doc="env steps to train for",
+                                  why="10¹⁰ steps are months at this env's ~10⁴ steps/s.")  # fmt: skip
+    n_envs: int = number(4, 1, 256, integer=True, doc="env copies in the process (DummyVecEnv)",
+                         why="each copy holds a controller, a plant and their buffers.")  # fmt: skip
     #: Scale rewards by a running estimate of the return's spread (VecNormalize with norm_obs=False):
     #: training only, so the saved model needs no extra statistics to run.
-    normalize_reward: bool = False
-    seed: int = 0
-    torch_threads: int = 1
-    output_dir: str = "runs"
-    run_name: str = "ppo"
-    progress_bar: bool = True
+    normalize_reward: bool = flag(False, doc="training only: VecNormalize(norm_obs=False, norm_reward=True)")
+    seed: int = number(0, 0, 2**32 - 1, integer=True, doc="seed of PPO and the envs (copy i: seed + i)",
+                       why="NumPy's seed range.")  # fmt: skip
+    torch_threads: int = number(1, 1, 256, integer=True, doc="torch threads (small MLPs gain little more)")
+    output_dir: str = text("runs", max_length=4096, doc="where runs are written")
+    run_name: str = text("ppo", max_length=100, pattern=r"[A-Za-z0-9][A-Za-z0-9._-]*",
+                         pattern_doc="a plain name (letters, digits, '.', '_', '-'; no '/', no leading '.')",
+                         doc="the run's folder under output_dir",
+                         why="a name, not a path, so a run never writes outside output_dir.")  # fmt: skip
+    progress_bar: bool = flag(True, doc="progress bar on a terminal")
     source: str = "<dict>"
 
-
-def _check_value(value: Any, default: Any, where: str, source: str) -> Any:
-    if isinstance(default, bool):
-        if not isinstance(value, bool):
-            raise ConfigError(f"{source}: {where} must be true or false, got {value!r}")
-        return value
-    if isinstance(default, float | int) and not isinstance(default, bool):
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ConfigError(f"{source}: {where} must be a number, got {value!r}")
-        if isinstance(default, int) and not float(value).is_integer():
-            raise ConfigError(f"{source}: {where} must be an integer, got {value!r}")
-        return type(default)(value)
-    if isinstance(default, str):
-        if not isinstance(value, str):
-            raise ConfigError(f"{source}: {where} must be a string, got {value!r}")
-        return value
-    return value
-
-
-def _build(cls: type, data: Any, source: str, where: str) -> Any:
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: {where or 'the config'} must be a mapping")
-    check_keys(data, {f.name for f in dataclasses.fields(cls)} - {"source"}, source, where)
-    default = cls()
-    values: dict[str, Any] = {}
-    for key, raw in data.items():
-        path = f"{where}.{key}" if where else key
-        current = getattr(default, key)
-        if dataclasses.is_dataclass(current):
-            values[key] = _build(type(current), raw, source, path)
-        elif key in ("programs", "net_arch"):
-            if not isinstance(raw, list) or not raw:
-                raise ConfigError(f"{source}: {path} must be a non-empty list")
-            kind = str if key == "programs" else int
-            if not all(isinstance(x, kind) and not isinstance(x, bool) for x in raw):
-                raise ConfigError(f"{source}: {path} must be a list of {kind.__name__}s, got {raw!r}")
-            values[key] = list(raw)
-        elif key == "reward":
-            if raw is not None and (
-                not isinstance(raw, dict)
-                or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in raw.values())
-            ):
-                raise ConfigError(f"{source}: {path} must be a mapping of weight names to numbers")
-            values[key] = None if raw is None else {str(k): float(v) for k, v in raw.items()}
-        elif key == "max_episode_steps":
-            if raw is not None and (isinstance(raw, bool) or not isinstance(raw, int) or raw <= 0):
-                raise ConfigError(f"{source}: {path} must be a positive integer or null")
-            values[key] = raw
-        else:
-            values[key] = _check_value(raw, current, path, source)
-    return cls(**values)
+    def config_problems(self) -> Iterator[tuple[str, str]]:
+        """Rules across keys: ``(key, problem)``."""
+        rollout = self.ppo.n_steps * self.n_envs
+        if not 2 <= rollout <= MAX_ROLLOUT:
+            yield "ppo.n_steps", f"× n_envs (the rollout, {rollout}) must be within 2 … {MAX_ROLLOUT}"
+        elif self.ppo.batch_size > rollout:
+            yield "ppo.batch_size", (f"must not exceed the rollout n_steps × n_envs = {rollout}, "
+                                     f"got {self.ppo.batch_size}")  # fmt: skip
 
 
 def load_config(path: str | Path) -> TrainConfig:
-    """Read and validate a training config (YAML via ``yaml.safe_load``)."""
-    path = Path(path)
+    """Read and validate a training config (YAML via the bounded safe loader)."""
     data = read_yaml(path, "training config")
-    config = _build(TrainConfig, data, str(path), "")
-    config.source = str(path)
-    positive = {"total_timesteps": config.total_timesteps, "n_envs": config.n_envs,
-                "torch_threads": config.torch_threads, "ppo.n_steps": config.ppo.n_steps,
-                "ppo.batch_size": config.ppo.batch_size, "ppo.n_epochs": config.ppo.n_epochs,
-                "ppo.learning_rate": config.ppo.learning_rate}  # fmt: skip
-    for key, value in positive.items():
-        if value <= 0:
-            raise ConfigError(f"{path}: {key} must be positive, got {value}")
-    if not 0 < config.ppo.gamma <= 1 or not 0 < config.ppo.gae_lambda <= 1:
-        raise ConfigError(f"{path}: ppo.gamma and ppo.gae_lambda must be within (0, 1]")
-    if any(n <= 0 for n in config.ppo.net_arch):
-        raise ConfigError(f"{path}: ppo.net_arch layer sizes must be positive")
-    return config
+    return from_mapping(TrainConfig, data, str(path), "", {"source": str(path)})
 
 
 def config_to_dict(config: TrainConfig) -> dict[str, Any]:
@@ -159,9 +147,33 @@ def config_to_dict(config: TrainConfig) -> dict[str, Any]:
     return data
 
 
+def checked_run_dir(config: TrainConfig, out: str | None = None) -> Path:
+    """``<output_dir>/<run_name>``, created and shown to be writable (``out`` overrides output_dir)."""
+    output_dir = config.output_dir
+    if out is not None:
+        output_dir = parse_value(spec_of(TrainConfig, "output_dir"), out, "", "--out")
+    run_dir = Path(output_dir) / config.run_name
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=run_dir):
+            pass
+    except OSError as exc:
+        key = "--out" if out is not None else f"{config.source}: output_dir"
+        raise ConfigError(f"{key}: cannot write to {run_dir}: {exc.strerror or exc}") from None
+    return run_dir
+
+
 def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None = None,
           progress_bar: bool | None = None) -> Path:  # fmt: skip
-    """Train PPO as configured; returns the path of the saved ``model.zip``."""
+    """Train PPO as configured; returns the path of the saved ``model.zip``. ``timesteps`` and ``out``
+    override ``total_timesteps`` and ``output_dir`` (checked with the same rules)."""
+    check_object(config, config.source)  # a config built in Python keeps the file's rules too
+    total = config.total_timesteps
+    if timesteps is not None:
+        total = parse_value(spec_of(TrainConfig, "total_timesteps"), timesteps, "", "--timesteps")
+    run_dir = checked_run_dir(config, out)
+    tensorboard_dir = run_dir.parent / "tensorboard"
+
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
@@ -173,8 +185,6 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
     torch.set_num_threads(config.torch_threads)  # small MLPs: more threads only add overhead
     for program in config.env.programs:  # interpret up front: program errors are one clear line
         load_program(program, config.env.dialect)
-    run_dir = Path(out or config.output_dir) / config.run_name
-    run_dir.mkdir(parents=True, exist_ok=True)
     vec_env = make_vec_env(
         "cnc_gym/Feedrate-v0",
         n_envs=config.n_envs,
@@ -192,21 +202,24 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
         n_epochs=p.n_epochs, gamma=p.gamma, gae_lambda=p.gae_lambda, clip_range=p.clip_range,
         ent_coef=p.ent_coef, vf_coef=p.vf_coef, max_grad_norm=p.max_grad_norm, seed=config.seed,
         policy_kwargs={"net_arch": list(p.net_arch), "log_std_init": p.log_std_init},
-        tensorboard_log=str(Path(out or config.output_dir) / "tensorboard"), device="cpu", verbose=0,
+        tensorboard_log=str(tensorboard_dir), device="cpu", verbose=0,
     )  # fmt: skip
-    total = int(timesteps or config.total_timesteps)
     show_bar = config.progress_bar if progress_bar is None else progress_bar
     started = time.perf_counter()
-    model.learn(total_timesteps=total, progress_bar=show_bar, tb_log_name=config.run_name)
-    elapsed = time.perf_counter() - started
     model_path = run_dir / "model.zip"
-    model.save(model_path)
-    saved = config_to_dict(config)
-    saved["total_timesteps"] = total
-    (run_dir / "config.yaml").write_text(yaml.safe_dump(saved, sort_keys=False))
-    vec_env.close()
+    try:
+        model.learn(total_timesteps=total, progress_bar=show_bar, tb_log_name=config.run_name)
+        elapsed = time.perf_counter() - started
+        model.save(model_path)
+        saved = config_to_dict(config)
+        saved["total_timesteps"] = total
+        (run_dir / "config.yaml").write_text(yaml.safe_dump(saved, sort_keys=False))
+    except OSError as exc:  # the disk filled up or the folder went away while training
+        raise CncGymError(f"cannot write the run under {run_dir}: {exc.strerror or exc}") from None
+    finally:
+        vec_env.close()
     print(f"trained {total} steps in {elapsed:.0f} s ({total / max(elapsed, 1e-9):.0f} steps/s)")
     print(f"model:       {model_path}")
     print(f"config:      {run_dir / 'config.yaml'}")
-    print(f"tensorboard: {Path(out or config.output_dir) / 'tensorboard'}")
+    print(f"tensorboard: {tensorboard_dir}")
     return model_path

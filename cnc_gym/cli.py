@@ -1,15 +1,19 @@
 """The ``cnc-gym`` command.
 
     cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...] [--program-dir DIR]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png] [--no-progress]
+                          [--max-blocks N]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png|DIR/]
+                        [--max-time SECONDS] [--max-blocks N] [--no-progress]
 
-``trace`` prints the canonical tool path as JSON Lines (the contract in DESIGN.md: ``kind``, ``line``,
-``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run`` simulates the
-program through controller and plant (implemented in :mod:`cnc_gym.runner`).
+PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
+the rule of :mod:`cnc_gym.programs`. ``trace`` prints the canonical tool path as JSON Lines (``kind``,
+``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run``
+simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`).
 
-Every error a user can cause ends the command with exit status 2 and one line on stderr (for a program:
-``FILE:LINE: message [code]``); nothing is printed on stdout once an error has occurred, and never a
-traceback.
+Exit status: 0 success; 2 an error a user can cause, as one line on stderr (for a program:
+``FILE:LINE: message [code]``), with nothing on stdout and never a traceback; 3 (``run``) the run stopped
+before the program's end (step budget or ``--max-time``): the results are printed with ``finished:
+false`` and a line on stderr says why; 130 interrupted.
 """
 
 from __future__ import annotations
@@ -20,18 +24,33 @@ import sys
 from collections.abc import Sequence
 
 from cnc_gym.errors import CncGymError
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
+from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
 DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
 
 
+EXIT_STATUS_HELP = """exit status:
+  0    success
+  2    bad program, arguments, machine, policy or model: one line on stderr, nothing on stdout
+  3    (run) truncated: the run stopped before the program's end (step budget or --max-time);
+       the results are printed (finished: false) and a line on stderr says why
+  130  interrupted (Ctrl-C)"""
+
+PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PROGRAMS)} (a built-in name "
+                "wins over a file of that name in the current folder: write ./star for the file)")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.")
+    parser = argparse.ArgumentParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
+                                     epilog=EXIT_STATUS_HELP,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
-    trace = sub.add_parser("trace", help="print the canonical tool path of a program as JSON Lines")
-    trace.add_argument("program", metavar="PROGRAM", help="G-code program file")
+    trace = add_command(sub, "trace", "print the canonical tool path of a program as JSON Lines")
+    trace.add_argument("program", metavar="PROGRAM", help=PROGRAM_HELP)
     _common(trace)
     trace.add_argument("--block-skip", metavar="N", type=int, nargs="+", action="extend", default=[],
                        help="block skip switches that are ON (1..9; '/' alone is switch 1)")  # fmt: skip
@@ -39,16 +58,26 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where M98/G65 find called programs (default: the program's folder)")  # fmt: skip
     trace.set_defaults(func=cmd_trace)
 
-    run = sub.add_parser("run", help="simulate a program through controller and servo plant")
-    run.add_argument("program", metavar="PROGRAM", help="G-code program file")
+    run = add_command(sub, "run", "simulate a program through controller and servo plant")
+    run.add_argument("program", metavar="PROGRAM", help=PROGRAM_HELP)
     _common(run)
     run.add_argument("--policy", default="constant:1.0",
                      help="constant:<override>, classical, or a trained model's path (default constant:1.0)")
     run.add_argument("--json", action="store_true", help="print one JSON object with the results")
-    run.add_argument("--plot", metavar="FILE.png", help="save a plot of path, contour error and feed")
+    run.add_argument("--plot", metavar="FILE.png|DIR/",
+                     help="save a plot of path, contour error and feed (.png, .pdf or .svg; a folder gets "
+                          "PROGRAM_POLICY.png)")  # fmt: skip
+    run.add_argument("--max-time", metavar="SECONDS", type=float, default=None,
+                     help="stop after this much simulated time (the run then counts as truncated, exit 3)")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.set_defaults(func=cmd_run)
     return parser
+
+
+def add_command(sub: argparse._SubParsersAction, name: str, help_text: str) -> argparse.ArgumentParser:
+    """A subcommand whose help ends with the exit statuses."""
+    return sub.add_parser(name, help=help_text, description=help_text, epilog=EXIT_STATUS_HELP,
+                          formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
@@ -56,19 +85,42 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--machine", default=None,
                         help="machine preset name (configs/machines) or YAML path; default: none for trace, "
                              "the runner's default for run")  # fmt: skip
+    parser.add_argument("--max-blocks", metavar="N", type=int, default=None,
+                        help=f"bound on executed blocks; a runaway loop ends in too-many-blocks "
+                             f"(default {DEFAULT_MAX_BLOCKS:,})")  # fmt: skip
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Empty option values are errors, the same for every command (never a silent fallback). Other values
+    are checked where they are used (``--max-time`` by the runner, names by their loaders)."""
+    for option in ("dialect", "machine", "policy"):
+        value = getattr(args, option, None)
+        if isinstance(value, str) and not value.strip():
+            raise CncGymError(f"cnc-gym {args.command}: --{option} needs a value, got {value!r}")
+    max_blocks = getattr(args, "max_blocks", None)
+    if max_blocks is not None and max_blocks < 1:
+        raise CncGymError(f"cnc-gym {args.command}: --max-blocks must be a positive integer, "
+                          f"got {max_blocks}")  # fmt: skip
 
 
 def cmd_trace(args: argparse.Namespace) -> int:
-    from cnc_gym.gcode import interpret_file
+    from cnc_gym.gcode import interpret, interpret_file
+    from cnc_gym.programs import resolve_program
 
     machine = None
     if args.machine is not None:
         from cnc_gym.machine import load_machine
 
         machine = load_machine(args.machine)
-    toolpath = interpret_file(args.program, dialect=args.dialect, machine=machine,
-                              block_skip=frozenset(args.block_skip),
-                              program_dir=args.program_dir)  # fmt: skip
+    options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
+               "program_dir": args.program_dir}  # fmt: skip
+    if args.max_blocks is not None:
+        options["max_blocks"] = args.max_blocks
+    source = resolve_program(args.program)
+    if source.path is None:  # text
+        toolpath = interpret(source.text or "", file=f"<{source.name}>", **options)
+    else:
+        toolpath = interpret_file(source.path, **options)
     # The whole program is interpreted before anything is printed: an error leaves stdout empty.
     text = "".join(json.dumps(record) + "\n" for record in toolpath.to_records())
     try:
@@ -102,12 +154,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(list(argv) if argv is not None else None)
     try:
+        _check_arguments(args)
         return args.func(args)
     except CncGymError as exc:
         print(_one_line(str(exc)), file=sys.stderr)
     except OSError as exc:
-        where = exc.filename if exc.filename is not None else getattr(args, "program", "")
-        print(f"{where}: cannot read: {exc.strerror or exc}", file=sys.stderr)
+        program = getattr(args, "program", "")
+        where = exc.filename if exc.filename is not None else program
+        verb = "cannot read: " if where == program else ""
+        print(_one_line(f"{where}: {verb}{exc.strerror or exc}"), file=sys.stderr)
     except KeyboardInterrupt:
         print("cnc-gym: interrupted", file=sys.stderr)
         return 130

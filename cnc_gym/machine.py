@@ -1,10 +1,12 @@
 """Machine presets: the controller's and the servo axes' parameters, loaded from YAML.
 
-A preset is a YAML file under ``configs/machines/`` (or any path). It is read with ``yaml.safe_load`` and
-validated into frozen dataclasses; unknown keys, wrong types and out-of-range values are
-:class:`~cnc_gym.errors.ConfigError` naming the file and the key. Parameter names say what they mean;
-the GSK 25i parameter number is given beside each where the manual has one
-(``shared/notes/seed000_ops_params.md``).
+A preset is a YAML file under ``configs/machines/`` (or any path). It is read with the bounded safe
+loader of :mod:`cnc_gym.config` and validated into frozen dataclasses (machines are cache keys: hashable,
+read-only). Every key is declared once below with its type, range, unit and meaning (the docs' key
+tables in docs/configs.md are written from these declarations); unknown keys, wrong types and
+out-of-range values are one :class:`~cnc_gym.errors.ConfigError` line naming the file and the key.
+Parameter names say what they mean; the GSK 25i parameter number is given beside each where the manual
+has one (GSK 25i parameter manual).
 
 Layout of a preset file::
 
@@ -18,68 +20,135 @@ Layout of a preset file::
 Rotary axes (``RotaryAxisConfig``) are optional: a machine without them rejects A/B/C words by name. The
 controller times their moves and keeps their speed, acceleration and jerk within limits; the plant
 simulates the three linear axes only (contour error is the tool's XYZ error, see docs/motion.md).
+
+The ranges are physical: wide enough for any real machine, narrow enough that the simulation stays
+finite, fast and small (a tiny rate would make an episode last hours of simulated time, a huge filter
+or look-ahead window would need gigabytes). Each range's reason is in its declaration.
 """
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cnc_gym.config import check_keys, configs_dir, read_yaml
+from cnc_gym.config import (
+    check_keys,
+    check_object,
+    configs_dir,
+    from_mapping,
+    mapping,
+    number,
+    read_yaml,
+    schema,
+    section,
+    shown,
+    text,
+)
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
-__all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "RotaryAxisConfig", "configs_dir",
-           "load_machine", "machine_names"]  # fmt: skip
+__all__ = ["AxisConfig", "ControllerConfig", "MachineConfig", "RotaryAxisConfig", "check_machine",
+           "configs_dir", "load_machine", "machine_names"]  # fmt: skip
 
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
+
+# Ranges shared by the keys of one kind, each with its reason (one place to change a kind's range).
+_RATE_WHY = ("100 mm/min is below any machine's rapid rate or feed clamp (slower rates make an episode "
+             "last hours of simulated time); 1 000 m/min is far above the fastest machines (about 200).")
+_ACCEL_WHY = ("0.0001 g to 100 g: real axes reach about 0.1-5 g; values far outside make the planner's "
+              "arithmetic overflow.")  # fmt: skip
+_JERK_WHY = "real axes run at 10^3-10^7 mm/s³; values far outside make the planner's arithmetic overflow."
+_TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double precision."
+
+
+_ROTARY_WHY = "as the linear axes', degrees counting as mm (the GSK rotary feed rule)."
+
+
+def _rate(default: float, doc: str, unit: str = "mm/min", why: str = _RATE_WHY) -> Any:
+    return number(default, 100, 1e6, unit=unit, doc=doc, why=why)
+
+
+def _accel(default: float, doc: str, unit: str = "mm/s²", why: str = _ACCEL_WHY) -> Any:
+    return number(default, 1, 1e6, unit=unit, doc=doc, why=why)
+
+
+def _jerk(default: float, doc: str, unit: str = "mm/s³", why: str = _JERK_WHY) -> Any:
+    return number(default, 10, 1e9, unit=unit, doc=doc, why=why)
+
+
+def _position(default: float, doc: str, unit: str = "mm", why: str = _TRAVEL_WHY) -> Any:
+    return number(default, -1e6, 1e6, unit=unit, doc=doc, why=why)
+
+
+def _corner_step(default: float, unit: str = "mm/min") -> Any:
+    return number(default, 0, 1e6, unit=unit, doc="largest velocity step of this axis at a block junction "
+                  "(P1227)", why="0 stops at every corner; the upper end as the rates'.")  # fmt: skip
 
 
 @dataclass(frozen=True)
 class AxisConfig:
     """One linear axis: kinematic limits used by the controller and servo parameters used by the plant."""
 
-    rapid_mm_min: float = 30000.0  # P1226 rapid traverse rate
-    max_feed_mm_min: float = 15000.0  # P1225 per-axis cutting-feed clamp
-    max_accel_mm_s2: float = 5000.0  # cutting acceleration; GSK: 2·P1225/(2·P1480+P1481)
-    max_jerk_mm_s3: float = 50000.0  # cutting jerk; GSK: 2·A/P1481
-    rapid_accel_mm_s2: float = 5000.0  # GSK: 2·P1226/(2·P1410+P1411)
-    rapid_jerk_mm_s3: float = 50000.0  # GSK: 2·A_rapid/P1411
-    corner_step_mm_min: float = 1000.0  # P1227 largest velocity step of this axis at a block junction
-    kv_1_s: float = 40.0  # position-loop gain Kv
-    feedforward: float = 0.0  # velocity feed-forward fraction, 0..1
-    velocity_loop_hz: float = 0.0  # velocity-loop bandwidth; 0 = ideal (pure P position loop)
-    velocity_loop_damping: float = 0.7
-    min_position_mm: float = -1e6  # travel limits (stored stroke check 1); generous by default
-    max_position_mm: float = 1e6
-    # Reference positions in machine coordinates: 1 for G28/G27, 2-4 for G30 P2-P4 (GSK P1051-P1053).
-    reference_1_mm: float = 0.0
-    reference_2_mm: float = 0.0
-    reference_3_mm: float = 0.0
-    reference_4_mm: float = 0.0
+    rapid_mm_min: float = _rate(30000.0, "rapid traverse rate (P1226)")
+    max_feed_mm_min: float = _rate(15000.0, "per-axis cutting-feed clamp (P1225)")
+    max_accel_mm_s2: float = _accel(5000.0, "cutting acceleration; GSK: 2·P1225/(2·P1480 + P1481)")
+    max_jerk_mm_s3: float = _jerk(50000.0, "cutting jerk; GSK: 2·A/P1481")
+    rapid_accel_mm_s2: float = _accel(5000.0, "rapid acceleration; GSK: 2·P1226/(2·P1410 + P1411)")
+    rapid_jerk_mm_s3: float = _jerk(50000.0, "rapid jerk; GSK: 2·A_rapid/P1411")
+    corner_step_mm_min: float = _corner_step(1000.0)
+    kv_1_s: float = number(40.0, 1, 2000, unit="1/s", doc="position-loop gain Kv",
+                           why="real drives run at 10-500 1/s.")  # fmt: skip
+    feedforward: float = number(0.0, 0, 1, doc="velocity feed-forward fraction")
+    velocity_loop_hz: float = number(
+        0.0, 1, 5000, off=0, unit="Hz", doc="velocity-loop bandwidth; 0 = ideal (a pure P position loop)",
+        why="real velocity loops have 50-2000 Hz; with a velocity loop, Kv must stay below "
+            "2·damping·2π·velocity_loop_hz (Routh-Hurwitz) or the loop is unstable.")  # fmt: skip
+    velocity_loop_damping: float = number(
+        0.7, 0.05, 5, doc="velocity-loop damping ratio ζ",
+        why="real loops are tuned to 0.3-1.5; extreme values break the plant's discretisation.")  # fmt: skip
+    min_position_mm: float = _position(-1e6, "travel limit − (stored stroke check 1)")
+    max_position_mm: float = _position(1e6, "travel limit + (stored stroke check 1)")
+    reference_1_mm: float = _position(0.0, "reference position 1 (G28/G27), machine coordinates")
+    reference_2_mm: float = _position(0.0, "reference position 2 (G30 P2; GSK P1051)")
+    reference_3_mm: float = _position(0.0, "reference position 3 (G30 P3; GSK P1052)")
+    reference_4_mm: float = _position(0.0, "reference position 4 (G30 P4; GSK P1053)")
+
+    def config_problems(self) -> Iterator[tuple[str, str]]:
+        """Rules across keys: ``(key, problem)``."""
+        if self.min_position_mm >= self.max_position_mm:
+            yield "min_position_mm", f"must be below max_position_mm ({self.max_position_mm:g})"
+        if self.velocity_loop_hz > 0:
+            # s³ + 2ζωn s² + ωn² s + ωn² Kv is stable iff Kv < 2ζωn.
+            bound = 2.0 * self.velocity_loop_damping * 2.0 * math.pi * self.velocity_loop_hz
+            if self.kv_1_s >= bound:
+                yield "kv_1_s", (f"makes the servo loop unstable: with a velocity loop it must be below "
+                                 f"2·damping·2π·velocity_loop_hz = {bound:.4g} 1/s, "
+                                 f"got {self.kv_1_s:g}")  # fmt: skip
 
 
 @dataclass(frozen=True)
 class RotaryAxisConfig:
     """One rotary axis (A, B or C), in degrees: the limits the controller keeps while timing its moves.
 
-    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (L981-L995): in a block that
-    moves linear and rotary axes together, F is the rate along the composite vector
-    √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01 runs at F deg/min.
+    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (GSK 25i programming manual
+    §3.2.2, G01 with rotary axes): in a block that moves linear and rotary axes together, F is the rate
+    along the composite vector √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01
+    runs at F deg/min.
     """
 
-    rapid_deg_min: float = 3600.0  # P1226 rapid traverse rate of the axis
-    max_feed_deg_min: float = 3600.0  # P1225 per-axis cutting-feed clamp
-    max_accel_deg_s2: float = 1800.0
-    max_jerk_deg_s3: float = 18000.0
-    rapid_accel_deg_s2: float = 1800.0
-    rapid_jerk_deg_s3: float = 18000.0
-    corner_step_deg_min: float = 1000.0  # P1227 largest velocity step at a block junction
-    reference_1_deg: float = 0.0  # G28 reference position (machine coordinate)
+    rapid_deg_min: float = _rate(3600.0, "rapid traverse rate (P1226)", "deg/min", _ROTARY_WHY)
+    max_feed_deg_min: float = _rate(3600.0, "cutting-feed clamp (P1225)", "deg/min", _ROTARY_WHY)
+    max_accel_deg_s2: float = _accel(1800.0, "cutting acceleration", "deg/s²", _ROTARY_WHY)
+    max_jerk_deg_s3: float = _jerk(18000.0, "cutting jerk", "deg/s³", _ROTARY_WHY)
+    rapid_accel_deg_s2: float = _accel(1800.0, "rapid acceleration", "deg/s²", _ROTARY_WHY)
+    rapid_jerk_deg_s3: float = _jerk(18000.0, "rapid jerk", "deg/s³", _ROTARY_WHY)
+    corner_step_deg_min: float = _corner_step(1000.0, "deg/min")
+    reference_1_deg: float = _position(0.0, "G28 reference position (machine coordinate)", "deg", _ROTARY_WHY)
 
 
 class RotaryAxes(FrozenDict):
@@ -90,24 +159,48 @@ class RotaryAxes(FrozenDict):
 class ControllerConfig:
     """Path-level controller parameters."""
 
-    interpolation_period_s: float = 0.002  # P9121 (2 ms)
-    lookahead_blocks: int = 32  # P1409 look-ahead planning window
-    max_feed_mm_min: float = 15000.0  # P1224 composite cutting-feed clamp (after override)
-    max_override: float = 2.0  # feed-override knob range 0..200 %
-    override_slew_per_s: float = 10.0  # how fast the applied override follows the knob (1/s)
-    max_centripetal_accel_mm_s2: float = 5000.0  # P1442 arc acceleration limit
-    chord_tolerance_mm: float = 0.001  # P1472 arc control accuracy at the interpolation period
-    min_arc_feed_mm_min: float = 0.0  # P1505 floor on the arc speed limit
-    post_filter_s: float = 0.0  # post-interpolation acc/dec filter (moving average), 0 = none
-    in_position_mm: float = 0.01  # in-position width for exact stop and program end
-    contour_tolerance_mm: float = 0.05  # contour error above this counts as a violation
+    interpolation_period_s: float = number(
+        0.002, 1e-4, 0.02, unit="s", doc="interpolation period (P9121)",
+        why="real controllers interpolate every 0.1-8 ms; the simulation takes one step per period "
+            "(1e-7 s would take minutes per second of motion), and beyond 20 ms a 15 m/min feed moves "
+            "5 mm between references.")  # fmt: skip
+    lookahead_blocks: int = number(
+        32, 0, 5000, integer=True, doc="look-ahead window in motion blocks (P1409); 0 or 1: every block "
+        "ends at rest", why="current controllers look ahead at most a few thousand blocks; the planner's "
+        "memory and work per period grow with the window.")  # fmt: skip
+    max_feed_mm_min: float = _rate(15000.0, "composite cutting-feed clamp after override (P1224)")
+    max_override: float = number(
+        2.0, 0.1, 10, doc="feed-override knob range: 2.0 = 0 … 200 %",
+        why="real knobs end at 120-254 %; up to 10× for experiments.")  # fmt: skip
+    override_slew_per_s: float = number(
+        10.0, 0.01, 10000, unit="1/s", doc="how fast the applied override follows the knob",
+        why="from 100 s for the whole range to a step within one period.")  # fmt: skip
+    max_centripetal_accel_mm_s2: float = _accel(5000.0, "arc acceleration limit (P1442)")
+    chord_tolerance_mm: float = number(
+        0.001, 1e-6, 1, unit="mm", doc="arc control accuracy at the interpolation period (P1472)",
+        why="1 nm (finer than any scale) to 1 mm.")  # fmt: skip
+    min_arc_feed_mm_min: float = number(0.0, 0, 1e6, unit="mm/min", why="up to max_feed_mm_min.",
+                                        doc="floor on the arc speed limit (P1505)")  # fmt: skip
+    post_filter_s: float = number(
+        0.0, 0, 0.5, unit="s", doc="post-interpolation acc/dec filter (moving average); 0 = none",
+        why="real after-interpolation filters are 0-0.5 s; the plant keeps one reference sample per "
+            "interpolation period of the window (1e6 s needed 22 GB).")  # fmt: skip
+    in_position_mm: float = number(0.01, 1e-6, 10, unit="mm", why="1 nm to 10 mm.",
+                                   doc="in-position width at exact stops and the end (P1471)")  # fmt: skip
+    contour_tolerance_mm: float = number(0.05, 1e-6, 10, unit="mm", why="1 nm to 10 mm.",
+                                         doc="contour error above this counts as a violation")  # fmt: skip
+
+    def config_problems(self) -> Iterator[tuple[str, str]]:
+        """Rules across keys: ``(key, problem)``."""
+        if self.min_arc_feed_mm_min > self.max_feed_mm_min:
+            yield "min_arc_feed_mm_min", f"must not exceed max_feed_mm_min ({self.max_feed_mm_min:g})"
 
 
 @dataclass(frozen=True)
 class MachineConfig:
-    name: str
-    description: str = ""
-    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    name: str = text("", doc="the preset's name (default: the file's name)")
+    description: str = text("", max_length=4096, doc="one paragraph for people")
+    controller: ControllerConfig = section(ControllerConfig, doc="path-level controller parameters")  # noqa: RUF009
     axes: tuple[AxisConfig, AxisConfig, AxisConfig] = (AxisConfig(), AxisConfig(), AxisConfig())
     source: str = "<defaults>"
     #: Rotary axes by upper-case letter, in A, B, C order (empty: a 3-axis machine).
@@ -127,87 +220,75 @@ class MachineConfig:
         return tuple(float(getattr(axis, name)) for axis in self.axes)  # type: ignore[return-value]
 
 
+#: Keys of a preset file besides MachineConfig's own: per-axis sections merged into ``axes``.
+_AXIS_SECTIONS = ("axis_defaults", "axes", "rotary_axes")
+
+
 def machine_names() -> list[str]:
     return sorted(p.stem for p in (configs_dir() / "machines").glob("*.yaml"))
 
 
-def load_machine(name_or_path: str | Path = "vmc-small") -> MachineConfig:
-    """Load a preset by name (``vmc-small``, ``gsk25i``, ``p-loop-30`` …) or from a YAML path."""
+def load_machine(name_or_path: str | Path | MachineConfig = "vmc-small") -> MachineConfig:
+    """Load a preset by name (``vmc-small``, ``gsk25i``, ``p-loop-30`` …) or from a YAML path; a
+    ``MachineConfig`` built in Python is checked against the same schema and returned."""
     if isinstance(name_or_path, MachineConfig):
-        return name_or_path
+        return check_machine(name_or_path)
+    if not isinstance(name_or_path, str | Path):
+        raise ConfigError(f"machine must be a preset name, a YAML path or a MachineConfig, "
+                          f"got {type(name_or_path).__name__}")  # fmt: skip
     path = Path(name_or_path)
     if path.suffix not in (".yaml", ".yml"):
         path = configs_dir() / "machines" / f"{name_or_path}.yaml"
-        if not path.exists():
-            raise ConfigError(f"unknown machine {name_or_path!r}; presets: {', '.join(machine_names())}")
+        if not str(name_or_path) or not path.is_file():
+            presets = ", ".join(machine_names())
+            raise ConfigError(f"unknown machine {shown(str(name_or_path))}; presets: {presets}")
     data = read_yaml(path, "machine config")
     return machine_from_dict(data, source=str(path))
 
 
 def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: a machine config must be a mapping")
-    keys = {"name", "description", "controller", "axis_defaults", "axes", "rotary_axes"}
-    check_keys(data, keys, source, "")
-    controller = _build(ControllerConfig, data.get("controller", {}), source, "controller")
-    defaults = data.get("axis_defaults", {}) or {}
-    axes_data = data.get("axes", {}) or {}
-    if not isinstance(axes_data, dict):
-        raise ConfigError(f"{source}: 'axes' must be a mapping of x/y/z")
-    check_keys(axes_data, set(AXIS_NAMES), source, "axes")
-    _build(AxisConfig, defaults, source, "axis_defaults")  # validate defaults on their own
+    """Build and check a machine from the data of a preset file (see the module docstring's layout)."""
+    data = mapping(data, source, "")
+    check_keys(data, set(schema(MachineConfig)) | set(_AXIS_SECTIONS), source)
+    defaults = mapping(data.get("axis_defaults"), source, "axis_defaults")
+    from_mapping(AxisConfig, defaults, source, "axis_defaults")  # checked on their own first
+    axes_data = mapping(data.get("axes"), source, "axes")
+    check_keys(axes_data, AXIS_NAMES, source, "axes")
     axes = tuple(
-        _build(AxisConfig, {**defaults, **(axes_data.get(n) or {})}, source, f"axes.{n}") for n in AXIS_NAMES
+        from_mapping(AxisConfig, {**defaults, **mapping(axes_data.get(n), source, where)}, source, where)
+        for n, where in ((n, f"axes.{n}") for n in AXIS_NAMES)
     )
-    rotary_data = data.get("rotary_axes", {}) or {}
-    if not isinstance(rotary_data, dict):
-        raise ConfigError(f"{source}: 'rotary_axes' must be a mapping of a/b/c")
-    check_keys(rotary_data, set(ROTARY_NAMES), source, "rotary_axes")
-    rotary = {n.upper(): _build(RotaryAxisConfig, rotary_data[n] or {}, source, f"rotary_axes.{n}")
-              for n in ROTARY_NAMES if n in rotary_data}  # fmt: skip
-    name = data.get("name", Path(source).stem)
-    if not isinstance(name, str):
-        raise ConfigError(f"{source}: 'name' must be a string")
-    return MachineConfig(name=name, description=str(data.get("description", "")), controller=controller,
-                         axes=axes, source=source, rotary_axes=rotary)  # type: ignore[arg-type]  # fmt: skip
+    rotary_data = mapping(data.get("rotary_axes"), source, "rotary_axes")
+    check_keys(rotary_data, ROTARY_NAMES, source, "rotary_axes")
+    rotary = RotaryAxes({n.upper(): from_mapping(RotaryAxisConfig, rotary_data[n], source, f"rotary_axes.{n}")
+                         for n in ROTARY_NAMES if n in rotary_data})  # fmt: skip
+    own = {key: value for key, value in data.items() if key not in _AXIS_SECTIONS}
+    own.setdefault("name", Path(source).stem)
+    built = {"axes": axes, "rotary_axes": rotary, "source": source}
+    return from_mapping(MachineConfig, own, source, "", built)
 
 
-def _build(cls, data: Any, source: str, where: str):
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: '{where}' must be a mapping")
-    fields = {f.name: f for f in dataclasses.fields(cls)}
-    check_keys(data, set(fields), source, where)
-    values = {}
-    for key, raw in data.items():
-        want = type(getattr(cls(), key))
-        if isinstance(raw, bool) or not isinstance(raw, int | float):
-            raise ConfigError(f"{source}: {where}.{key} must be a number, got {raw!r}")
-        if want is int and not float(raw).is_integer():
-            raise ConfigError(f"{source}: {where}.{key} must be an integer, got {raw!r}")
-        value = want(raw)
-        if not math.isfinite(value):
-            raise ConfigError(f"{source}: {where}.{key} must be finite")
-        if value < 0 and not key.startswith(("min_position", "max_position", "reference_")):
-            raise ConfigError(f"{source}: {where}.{key} must not be negative, got {raw!r}")
-        values[key] = value
-    obj = cls(**values)
-    _check_ranges(obj, source, where)
-    return obj
+def check_machine(machine: MachineConfig) -> MachineConfig:
+    """``machine`` if it keeps every rule a preset file must keep (same messages), else ConfigError."""
+    if not isinstance(machine, MachineConfig):
+        raise ConfigError(f"machine must be a MachineConfig, got {type(machine).__name__}")
+    try:
+        hash(machine)
+    except TypeError:
+        raise ConfigError(f"{machine.source}: a MachineConfig must be hashable (axes a tuple)") from None
+    return _check_machine(machine)
 
 
-def _check_ranges(obj, source: str, where: str) -> None:
-    positive = {
-        "interpolation_period_s", "lookahead_blocks", "max_feed_mm_min", "max_override",
-        "override_slew_per_s", "max_centripetal_accel_mm_s2", "chord_tolerance_mm", "in_position_mm",
-        "contour_tolerance_mm", "rapid_mm_min", "max_accel_mm_s2", "max_jerk_mm_s3", "rapid_accel_mm_s2",
-        "rapid_jerk_mm_s3", "kv_1_s", "rapid_deg_min", "max_feed_deg_min", "max_accel_deg_s2",
-        "max_jerk_deg_s3", "rapid_accel_deg_s2", "rapid_jerk_deg_s3",
-    }  # fmt: skip
-    for f in dataclasses.fields(obj):
-        if f.name in positive and getattr(obj, f.name) <= 0:
-            raise ConfigError(f"{source}: {where}.{f.name} must be positive")
-    if isinstance(obj, AxisConfig):
-        if obj.feedforward > 1:
-            raise ConfigError(f"{source}: {where}.feedforward must be within 0..1")
-        if obj.min_position_mm >= obj.max_position_mm:
-            raise ConfigError(f"{source}: {where}: min_position_mm must be below max_position_mm")
+@functools.lru_cache(maxsize=64)
+def _check_machine(machine: MachineConfig) -> MachineConfig:
+    source = machine.source
+    check_object(machine, source)
+    if len(machine.axes) != len(AXIS_NAMES) or not all(isinstance(a, AxisConfig) for a in machine.axes):
+        raise ConfigError(f"{source}: axes must be three AxisConfig (X, Y, Z)")
+    for name, axis in zip(AXIS_NAMES, machine.axes, strict=True):
+        check_object(axis, source, f"axes.{name}")
+    for letter, axis in machine.rotary_axes.items():
+        if letter not in "ABC" or not isinstance(axis, RotaryAxisConfig):
+            raise ConfigError(f"{source}: rotary_axes must map A, B or C to a RotaryAxisConfig")
+        check_object(axis, source, f"rotary_axes.{letter.lower()}")
+    return machine

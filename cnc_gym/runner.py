@@ -3,31 +3,65 @@
 The run goes through the Gymnasium env (``cnc_gym/Feedrate-v0``), the same code path an RL agent uses, so
 a baseline's numbers and a trained agent's numbers are comparable. :func:`simulate` returns a
 :class:`RunResult`; :func:`run_cli` is what the ``cnc-gym run`` command calls.
+
+Bounded resources: the summary numbers are the env's streaming totals (exact over every servo sample);
+the series kept for the plot are at most :data:`~cnc_gym.envs.render.DEFAULT_MAX_BINS` time bins
+(max contour error per bin, mean feed and override), so memory does not grow with the episode's length.
+A run ends when the program finishes, at the env's step budget, or at ``max_time_s`` of simulated time;
+the last two leave ``finished`` false and ``stopped_by`` naming the limit.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 import numpy as np
 
-from cnc_gym.errors import CncGymError
+from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries
+from cnc_gym.errors import CncGymError, ConfigError
 
-#: Keys of the ``--json`` object (the contract in DESIGN.md, plus a few extras).
+#: Keys of the ``--json`` object (the contract of docs/architecture.md, plus a few extras).
 JSON_KEYS = (
     "program", "machine", "policy", "cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm",
-    "tolerance_mm", "violations", "steps", "total_return", "finished",
+    "tolerance_mm", "violations", "steps", "total_return", "finished", "stopped_by", "nominal_time_s",
 )  # fmt: skip
+
+#: Exit status of ``cnc-gym run`` when the run stopped before the program's end (``finished: false``).
+EXIT_TRUNCATED = 3
+
+#: Values of ``stopped_by``: why a run that did not finish stopped.
+STEP_BUDGET = "step_budget"
+MAX_TIME = "max_time"
+
+#: A program whose nominal time is longer than this (simulated seconds) gets a notice before it runs.
+LONG_RUN_NOTICE_S = 600.0
+#: Wall-clock seconds after which a run projects its remaining wall-clock time (and says so if long).
+_PROJECTION_AFTER_WALL_S = 2.0
+_PROJECTION_NOTICE_WALL_S = 60.0
+
+#: Points of the programmed path drawn on the plot (plus every segment end).
+_PATH_POINTS = 20_000
+
+_SERIES_COLUMNS = {"time_s": "last", "path_s": "last", "feed_mm_min": "mean", "override": "mean",
+                   "contour_error_mm": "max"}  # fmt: skip
 
 
 @dataclass
 class RunResult:
-    """One simulated run: the ``--json`` summary plus per-control-step series for plotting."""
+    """One simulated run: the ``--json`` summary plus bounded series for plotting.
+
+    The time series (``time_s`` … ``contour_error_mm``) have one entry per bin of ``bin_steps`` control
+    steps (1 until the run outgrows :data:`~cnc_gym.envs.render.DEFAULT_MAX_BINS` steps): ``time_s`` and
+    ``path_s`` at the bin's end, mean ``feed_mm_min`` and ``override``, and the bin's largest
+    ``contour_error_mm`` (a max envelope). The path series (``path_xyz`` …) sample the programmed path.
+    """
 
     program: str
     machine: str
@@ -39,14 +73,23 @@ class RunResult:
     violations: int  # control steps with contour error above tolerance
     steps: int
     total_return: float
-    finished: bool  # the program ran to its end (not cut off by a step limit)
-    # Per-control-step series (not in the JSON summary).
+    finished: bool  # the program ran to its end (not cut off by the step budget or max_time_s)
+    stopped_by: str | None = None  # None when finished, else STEP_BUDGET or MAX_TIME
+    nominal_time_s: float = 0.0  # the program's time at 100 % feed (the env's T_nominal)
+    path_length_mm: float = 0.0  # the programmed path's length (cutting + rapid)
+    last_path_s: float = 0.0  # how far along it the run got, mm
+    # Time series, one entry per bin (not in the JSON summary).
+    bin_steps: int = 1
     time_s: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
-    path_xyz: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 3)))
+    path_s: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     feed_mm_min: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     override: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     contour_error_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    # The programmed path: points, whether each point's segment cuts, the feed run there (NaN where the
+    # run did not get to), for the plot.
+    path_xyz: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 3)))
     cutting: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=bool))
+    path_feed_mm_min: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
 
     def summary(self) -> dict[str, Any]:
         """The JSON-able summary (plain Python numbers)."""
@@ -56,8 +99,18 @@ class RunResult:
             out[key] = value.item() if isinstance(value, np.generic) else value
         return out
 
+    @property
+    def progress(self) -> float:
+        """Share of the programmed path's length the run got through (1 when finished)."""
+        if self.finished:
+            return 1.0
+        if self.path_length_mm <= 0:
+            return 0.0
+        return min(self.last_path_s / self.path_length_mm, 1.0)
 
-def make_env(program: str, *, dialect: str = "gsk25i", machine: str = "vmc-small", **kwargs: Any):
+
+def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
+             max_blocks: int | None = None, **kwargs: Any):  # fmt: skip
     """The Feedrate env on one program (interpreted up front, so program errors surface here)."""
     import gymnasium
 
@@ -65,23 +118,32 @@ def make_env(program: str, *, dialect: str = "gsk25i", machine: str = "vmc-small
     from cnc_gym.machine import load_machine
     from cnc_gym.programs import load_program
 
-    load_program(program, dialect, load_machine(machine))  # ProgramError / ConfigError with a clear message
-    return gymnasium.make(
-        "cnc_gym/Feedrate-v0", programs=[program], dialect=dialect, machine=machine, **kwargs
-    )
+    options = {} if max_blocks is None else {"max_blocks": max_blocks}
+    # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
+    loaded = load_program(program, dialect, load_machine(machine), **options)
+    return gymnasium.make("cnc_gym/Feedrate-v0", programs=[loaded], dialect=dialect, machine=machine,
+                          **kwargs)  # fmt: skip
 
 
 def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
-                record: bool = True) -> RunResult:  # fmt: skip
-    """Run one episode of ``env`` under ``policy``; the env decides which program (its reset)."""
+                record: bool = True, max_time_s: float | None = None, log: TextIO | None = None,
+                max_bins: int = DEFAULT_MAX_BINS) -> RunResult:  # fmt: skip
+    """Run one episode of ``env`` under ``policy``; the env decides which program (its reset).
+
+    ``max_time_s`` stops the run at that much simulated time (``stopped_by`` = ``"max_time"``). ``log``
+    (e.g. ``sys.stderr``) gets a one-line projection of the wall-clock time when a run looks long.
+    ``record=False`` keeps no series (the summary only).
+    """
+    _check_max_time(max_time_s)
     observation, info = env.reset(seed=seed)
     policy.reset(env)
     base = env.unwrapped
     toolpath = base.toolpath
     tolerance = float(info.get("tolerance_mm", base.machine.controller.contour_tolerance_mm))
-    times, path_s, feeds, overrides, errors = [], [], [], [], []
+    nominal = float(getattr(base, "nominal_time_s", 0.0))
+    series = BinnedSeries(_SERIES_COLUMNS, max_bins) if record else None
     total_return, steps = 0.0, 0
-    terminated = truncated = False
+    terminated = truncated = stopped_at_max_time = False
     bar = None
     if progress:
         from tqdm import tqdm
@@ -89,100 +151,232 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         bar_format = "{desc}: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}"
         desc = str(info.get("program", "program"))
         bar = tqdm(total=100, desc=desc, file=sys.stderr, leave=False, bar_format=bar_format)
+    started = time.perf_counter()
+    projection_due = started + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
     try:
         while not (terminated or truncated):
             action = policy.act(observation, info)
             observation, reward, terminated, truncated, info = env.step(action)
             total_return += float(reward)
             steps += 1
-            if record:
-                times.append(float(info["cycle_time_s"]))
-                path_s.append(float(info.get("path_s", 0.0)))
-                feeds.append(float(info.get("feed_mm_min", 0.0)))
-                overrides.append(float(info.get("override", 0.0)))
-                errors.append(float(info.get("contour_error_mm", 0.0)))
-            if bar is not None and steps % 20 == 0:
-                bar.n = round(100 * float(info.get("progress", 0.0)))
-                bar.refresh()
+            if series is not None:
+                series.add(info["cycle_time_s"], info["path_s"], info["feed_mm_min"], info["override"],
+                           info["contour_error_mm"])  # fmt: skip
+            if steps % 20 == 0:
+                if bar is not None:
+                    bar.n = round(100 * float(info.get("progress", 0.0)))
+                    bar.refresh()
+                now = time.perf_counter()
+                if log is not None and now >= projection_due:
+                    projection_due = math.inf
+                    _project_wall_time(log, info, nominal, max_time_s, now - started)
+            if max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9:
+                stopped_at_max_time = True
+                break
     finally:
         if bar is not None:
             bar.close()
     rms = float(info.get("contour_error_rms_mm", 0.0))
-    path_xyz, cutting = np.zeros((0, 3)), np.zeros(0, dtype=bool)
-    if record and path_s:
-        from cnc_gym.toolpath import SegmentKind
-
-        path_xyz = toolpath.evaluate(np.asarray(path_s))[0]
-        kind = toolpath.kind[toolpath.segment_at(np.asarray(path_s))]
-        cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
-    return RunResult(
+    finished = bool(terminated)
+    stopped_by = None if finished else (MAX_TIME if stopped_at_max_time else STEP_BUDGET)
+    result = RunResult(
         program=str(info.get("program", getattr(base, "program_name", "program"))),
         machine=str(base.machine.name),
         policy=str(getattr(policy, "name", type(policy).__name__)),
-        cycle_time_s=float(info["cycle_time_s"]),
+        cycle_time_s=float(info.get("cycle_time_s", 0.0)),
         contour_error_max_mm=float(info.get("contour_error_max_mm", 0.0)),
         contour_error_rms_mm=rms if math.isfinite(rms) else 0.0,
         tolerance_mm=tolerance,
         violations=int(info.get("violations", 0)),
         steps=steps,
         total_return=total_return,
-        finished=bool(terminated),
-        time_s=np.asarray(times),
-        path_xyz=path_xyz,
-        feed_mm_min=np.asarray(feeds),
-        override=np.asarray(overrides),
-        contour_error_mm=np.asarray(errors),
-        cutting=cutting,
+        finished=finished,
+        stopped_by=stopped_by,
+        nominal_time_s=nominal,
+        path_length_mm=float(toolpath.total_length),
+        last_path_s=float(info.get("path_s", 0.0)),
     )
+    if series is not None:
+        data = series.arrays()
+        result.bin_steps = series.width
+        for name in _SERIES_COLUMNS:
+            setattr(result, name, data[name])
+        _sample_path(result, toolpath)
+    return result
 
 
-def simulate(program: str, *, dialect: str = "gsk25i", machine: str = "vmc-small",
-             policy: str | Any = "constant:1.0", progress: bool = False) -> RunResult:  # fmt: skip
-    """Simulate ``program`` (built-in name, file or G-code text) under ``policy`` (spec or Policy)."""
+def _sample_path(result: RunResult, toolpath: Any) -> None:
+    """The programmed path for the plot: points, cutting flags, and the feed the run had there."""
+    if not len(toolpath) or toolpath.total_length <= 0:
+        return
+    from cnc_gym.toolpath import SegmentKind
+
+    s, points = toolpath.sample(max(toolpath.total_length / _PATH_POINTS, 1e-3))
+    kind = toolpath.kind[toolpath.segment_at(s)]
+    result.path_xyz = points
+    result.cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
+    feed = np.full(len(s), np.nan)
+    if len(result.path_s):
+        reached = s <= result.path_s[-1] + 1e-9
+        # path_s never decreases, so the feed at a path position is read off the run's bins.
+        feed[reached] = np.interp(s[reached], result.path_s, result.feed_mm_min)
+    result.path_feed_mm_min = feed
+
+
+def _check_max_time(max_time_s: float | None) -> None:
+    if max_time_s is None:
+        return
+    if isinstance(max_time_s, bool) or not isinstance(max_time_s, int | float) or not (
+        math.isfinite(max_time_s) and max_time_s > 0
+    ):
+        raise ConfigError(f"--max-time (max_time_s) must be a positive number of seconds, got {max_time_s!r}")
+
+
+def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_time_s: float | None,
+                       wall_s: float) -> None:  # fmt: skip
+    """One stderr line when the run, at its speed so far, will take long in wall-clock time."""
+    simulated = float(info.get("cycle_time_s", 0.0))
+    if simulated <= 0 or wall_s <= 0:
+        return
+    target = nominal if max_time_s is None else min(nominal, max_time_s)
+    remaining = (target - simulated) * wall_s / simulated
+    if remaining > _PROJECTION_NOTICE_WALL_S:
+        print(f"cnc-gym run: {info.get('program', 'program')}: about {_duration(remaining)} of wall-clock "
+              f"time to go at the speed so far ({simulated / wall_s:.0f} simulated s per s); "
+              "Ctrl-C stops it, --max-time SECONDS bounds it", file=log)  # fmt: skip
+
+
+def _duration(seconds: float) -> str:
+    """``1 h 02 min``, ``12 min 5 s``, ``42 s``."""
+    seconds = max(0.0, float(seconds))
+    if seconds >= 3600:
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
+    if seconds >= 60:
+        return f"{int(seconds // 60)} min {int(seconds % 60)} s"
+    return f"{seconds:.0f} s"
+
+
+def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
+             policy: str | Any = "constant:1.0", progress: bool = False, max_time_s: float | None = None,
+             max_blocks: int | None = None, log: TextIO | None = None) -> RunResult:  # fmt: skip
+    """Simulate ``program`` (built-in name, file or G-code text: the rule of :mod:`cnc_gym.programs`)
+    under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
+    and a projection of the wall-clock time once it has run a while."""
     from agents import make_policy
 
+    _check_max_time(max_time_s)
     pol = make_policy(policy) if isinstance(policy, str) else policy
-    env = make_env(program, dialect=dialect, machine=machine)
+    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks)
     try:
-        return run_episode(env, pol, progress=progress)
+        if log is not None:
+            _announce_long_program(env.unwrapped, max_time_s, log)
+        return run_episode(env, pol, progress=progress, max_time_s=max_time_s, log=log)
     finally:
         env.close()
 
 
-def plot_run(result: RunResult, path: str | Path) -> Path:
-    """PNG: left, the XY path coloured by feed; right, contour error over time with the tolerance line."""
-    import matplotlib
+def _announce_long_program(base: Any, max_time_s: float | None, log: TextIO) -> None:
+    nominal = float(base.nominal_time_s)
+    if nominal <= LONG_RUN_NOTICE_S or (max_time_s is not None and max_time_s <= LONG_RUN_NOTICE_S):
+        return
+    limit = "" if max_time_s is None else f"; --max-time stops it at {_duration(max_time_s)}"
+    print(f"cnc-gym run: {base.program_name}: nominal cycle time {_duration(nominal)} of simulated time "
+          f"(at 100 % feed){limit}; the step budget is {base.max_episode_steps} control steps "
+          f"({_duration(base.max_episode_steps * base.control_period_s)})", file=log)  # fmt: skip
 
-    matplotlib.use("Agg")
+
+def truncation_message(result: RunResult) -> str:
+    """The stderr line of a run that stopped before the program's end."""
+    where = f"at {result.cycle_time_s:g} s simulated, {100 * result.progress:.0f} % of the path"
+    if result.stopped_by == MAX_TIME:
+        why = "stopped by --max-time"
+    else:
+        why = f"stopped at the step budget ({result.steps} control steps)"
+    return (f"cnc-gym run: {result.program}: truncated: {why} {where}; the results cover the part run "
+            f"(finished: false, exit status {EXIT_TRUNCATED})")  # fmt: skip
+
+
+def run_cli(args: Any) -> int:
+    """``cnc-gym run``: errors (bad program, policy, model) propagate as CncGymError for the CLI to print.
+
+    Exit status 0 when the program finished, :data:`EXIT_TRUNCATED` (3) when the run stopped before its
+    end (step budget or ``--max-time``), after printing the results and a line on stderr.
+    """
+    progress = not getattr(args, "no_progress", False) and sys.stderr.isatty()
+    # The CLI leaves --machine unset (None) when not given: the runner's default is vmc-small.
+    machine = args.machine if getattr(args, "machine", None) is not None else "vmc-small"
+    plot = plot_target(args.plot) if getattr(args, "plot", None) is not None else None
+    result = simulate(args.program, dialect=args.dialect, machine=machine, policy=args.policy,
+                      progress=progress, max_time_s=getattr(args, "max_time", None),
+                      max_blocks=getattr(args, "max_blocks", None), log=sys.stderr)  # fmt: skip
+    if plot is not None:
+        target, is_folder = plot
+        plot_run(result, target / default_plot_name(result) if is_folder else target)
+    summary = result.summary()
+    if getattr(args, "json", False):
+        print(json.dumps(summary))
+    else:
+        print(format_table([summary]))
+    if not result.finished:
+        sys.stdout.flush()
+        print(truncation_message(result), file=sys.stderr)
+        return EXIT_TRUNCATED
+    return 0
+
+
+#: Formats ``--plot`` writes (matplotlib's raster and vector backends).
+PLOT_FORMATS = (".png", ".pdf", ".svg")
+
+
+def plot_target(value: str) -> tuple[Path, bool]:
+    """Check ``--plot`` before the run. Returns ``(path, is_folder)``: a file with a known format, or a
+    folder (the argument ends in ``/`` or names one), where the plot gets :func:`default_plot_name`."""
+    if not value:
+        raise CncGymError("cnc-gym run: --plot needs a file name (e.g. out/run.png) or a folder")
+    path = Path(value)
+    is_folder = value.endswith(("/", "\\")) or path.is_dir()
+    if not is_folder and path.suffix.lower() not in PLOT_FORMATS:
+        raise CncGymError(f"cnc-gym run: --plot {value}: unknown plot format {path.suffix or '(none)'!r}; "
+                          f"use {', '.join(PLOT_FORMATS)}, or a folder ending in /")  # fmt: skip
+    # Fail before a long run, not after it: the folder must exist (or be made) and be writable.
+    folder = path if is_folder else path.parent
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CncGymError(f"{folder}: cannot make the plot's folder: {exc.strerror or exc}") from None
+    if not os.access(folder, os.W_OK):
+        raise CncGymError(f"{folder}: cannot write the plot there: permission denied")
+    return path, is_folder
+
+
+def default_plot_name(result: RunResult) -> str:
+    """``<program>_<policy>.png`` with characters that are awkward in file names replaced."""
+    policy = Path(result.policy.replace(":", "-")).name
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in f"{result.program}_{policy}") + ".png"
+
+
+def feed_limits(results: list[RunResult]) -> tuple[float, float]:
+    """One feed colour scale for several runs (e.g. two policies on one program): 0 to the largest feed
+    any of them ran on a cutting move."""
+    top = 0.0
+    for r in results:
+        feeds = r.path_feed_mm_min[r.cutting] if len(r.cutting) == len(r.path_feed_mm_min) else np.zeros(0)
+        feeds = feeds[np.isfinite(feeds)]
+        if len(feeds):
+            top = max(top, float(feeds.max()))
+    return 0.0, max(top, 1.0)
+
+
+def plot_run(result: RunResult, path: str | Path, *, feed_range: tuple[float, float] | None = None) -> Path:
+    """Save the run's plot (:func:`run_figure`; PNG, PDF or SVG by the suffix) and return its path."""
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection
 
     path = Path(path)
-    fig, (ax_path, ax_err) = plt.subplots(1, 2, figsize=(12, 5), constrained_layout=True)
-    xy = result.path_xyz[:, :2]
-    if len(xy) >= 2:
-        segments = np.stack([xy[:-1], xy[1:]], axis=1)
-        cut = result.cutting[1:] if len(result.cutting) == len(xy) else np.ones(len(segments), dtype=bool)
-        # Rapids in thin grey: their speed would swamp the colour scale of the cutting feed.
-        if np.any(~cut):
-            ax_path.add_collection(LineCollection(segments[~cut], colors="0.7", linewidths=0.8))
-        lines = LineCollection(segments[cut], cmap="viridis", linewidths=2)
-        lines.set_array(result.feed_mm_min[1:][cut])
-        ax_path.add_collection(lines)
-        ax_path.autoscale()
-        fig.colorbar(lines, ax=ax_path, label="feed on cutting moves (mm/min)")
-    ax_path.set_aspect("equal", adjustable="datalim")
-    ax_path.set_xlabel("X (mm)")
-    ax_path.set_ylabel("Y (mm)")
-    ax_path.set_title(f"{result.program}: tool path coloured by feed")
-    ax_err.plot(result.time_s, result.contour_error_mm * 1000.0, lw=1, label="contour error")
-    ax_err.axhline(result.tolerance_mm * 1000.0, color="r", ls="--", label="tolerance")
-    ax_err.set_xlabel("time (s)")
-    ax_err.set_ylabel("contour error (µm)")
-    ax_err.set_title(f"{result.policy}: cycle {result.cycle_time_s:.2f} s, {result.violations} violations")
-    ax_err.legend(loc="upper right")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() not in PLOT_FORMATS:
+        raise CncGymError(f"{path}: unknown plot format; use {', '.join(PLOT_FORMATS)}")
+    fig = run_figure(result, feed_range=feed_range)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=110)
     except OSError as exc:
         raise CncGymError(f"{path}: cannot write plot: {exc.strerror or exc}") from None
@@ -191,33 +385,57 @@ def plot_run(result: RunResult, path: str | Path) -> Path:
     return path
 
 
-def run_cli(args: Any) -> int:
-    """``cnc-gym run``: errors (bad program, policy, model) propagate as CncGymError for the CLI to print."""
-    progress = not getattr(args, "no_progress", False) and sys.stderr.isatty()
-    # The CLI leaves --machine unset (None) when not given: the runner's default is vmc-small.
-    machine = getattr(args, "machine", None) or "vmc-small"
-    dialect = getattr(args, "dialect", None) or "gsk25i"
-    result = simulate(args.program, dialect=dialect, machine=machine,
-                      policy=getattr(args, "policy", None) or "constant:1.0", progress=progress)  # fmt: skip
-    if getattr(args, "plot", None):
-        plot_run(result, args.plot)
-    summary = result.summary()
-    if getattr(args, "json", False):
-        print(json.dumps(summary))
+def run_figure(result: RunResult, *, feed_range: tuple[float, float] | None = None):
+    """The run's matplotlib figure (Agg; close it with ``plt.close``).
+
+    The XY path coloured by the feed run there (rapids thin grey; the part the run did not reach dashed),
+    XZ and YZ views when the program cuts in Z (more than plunges), and the contour error over time as a
+    max envelope per time bin with the tolerance line. A truncated run says so in the figure's title.
+    ``feed_range`` fixes the colour scale, so that plots of several runs compare (:func:`feed_limits`).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cnc_gym.envs.render import plot_error_envelope, plot_path_views, wants_z_views
+
+    if wants_z_views(result.path_xyz, result.cutting):
+        fig, axes = plt.subplots(2, 2, figsize=(12, 9.5), constrained_layout=True)
+        ax_xy, ax_err, ax_xz, ax_yz = axes.ravel()
+        views = {"XY": ax_xy, "XZ": ax_xz, "YZ": ax_yz}
     else:
-        print(format_table([summary]))
-    return 0
+        fig, (ax_xy, ax_err) = plt.subplots(1, 2, figsize=(12, 5.2), constrained_layout=True)
+        views = {"XY": ax_xy}
+    plot_path_views(fig, views, result.path_xyz, result.cutting, result.path_feed_mm_min, feed_range)
+    ax_xy.set_title(f"{result.program}: tool path coloured by feed")
+    plot_error_envelope(ax_err, result.time_s, result.contour_error_mm, result.tolerance_mm,
+                        bin_s=_bin_seconds(result))  # fmt: skip
+    ax_err.set_title(f"{result.policy}: cycle {result.cycle_time_s:.2f} s, {result.violations} violations")
+    if not result.finished:
+        why = "--max-time" if result.stopped_by == MAX_TIME else "step budget"
+        fig.suptitle(f"truncated ({why}) at {result.cycle_time_s:g} s, {100 * result.progress:.0f} % of the "
+                     "path: the numbers cover the part run", color="C3", fontsize=12)  # fmt: skip
+    return fig
+
+
+def _bin_seconds(result: RunResult) -> float:
+    if len(result.time_s) >= 2 and result.steps:
+        return result.cycle_time_s / max(result.steps, 1) * result.bin_steps
+    return 0.0
 
 
 def format_table(rows: list[dict[str, Any]]) -> str:
-    """A plain-text table of run summaries (program, policy, cycle time, errors, violations)."""
-    header = ("program", "policy", "cycle s", "max err µm", "rms err µm", "tol µm", "violations", "return")
+    """A plain-text table of run summaries (program, policy, cycle time, errors, violations, finished)."""
+    header = ("program", "policy", "cycle s", "max err µm", "rms err µm", "tol µm", "violations", "return",
+              "finished")  # fmt: skip
     lines = [header]
     for r in rows:
         lines.append((
             str(r["program"]), str(r["policy"]), f"{r['cycle_time_s']:.3f}",
             f"{1000 * r['contour_error_max_mm']:.1f}", f"{1000 * r['contour_error_rms_mm']:.1f}",
             f"{1000 * r['tolerance_mm']:.0f}", str(r["violations"]), f"{r.get('total_return', 0.0):.2f}",
+            "yes" if r.get("finished", True) else "NO",
         ))  # fmt: skip
     widths = [max(len(row[i]) for row in lines) for i in range(len(header))]
     text = ["  ".join(cell.rjust(w) if i >= 2 else cell.ljust(w) for i, (cell, w) in

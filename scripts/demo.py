@@ -4,7 +4,8 @@
 
 For each built-in program it runs the constant override at 100 % and the classical planner through the
 env (controller + servo plant), prints cycle time, max/RMS contour error and violations, and writes one
-PNG per run (path coloured by feed, contour error over time) under ``--out``.
+PNG per run (path coloured by feed, contour error over time) under ``--out``; the plots of one program
+share one feed colour scale.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from cnc_gym.errors import CncGymError
 
 def main(argv: list[str] | None = None) -> int:
     from cnc_gym.programs import program_names
-    from cnc_gym.runner import format_table, plot_run, simulate
+    from cnc_gym.runner import default_plot_name, feed_limits, format_table, plot_run, simulate
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--machine", default="vmc-small")
@@ -36,18 +37,20 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     try:
         for program in programs:
-            for policy in args.policies:
-                result = simulate(program, dialect=args.dialect, machine=args.machine, policy=policy)
+            results = [simulate(program, dialect=args.dialect, machine=args.machine, policy=policy)
+                       for policy in args.policies]  # fmt: skip
+            # One feed colour scale for the program's plots, so the policies compare at a glance.
+            shared = feed_limits(results)
+            for result in results:
                 rows.append(result.summary())
-                safe = policy.replace(":", "-").replace("/", "_")
-                plots.append(plot_run(result, out / f"{Path(program).stem}_{Path(safe).name}.png"))
+                plots.append(plot_run(result, out / default_plot_name(result), feed_range=shared))
     except CncGymError as exc:
         print(f"demo: {exc}", file=sys.stderr)
         return 2
     print(f"cnc-gym demo: {len(programs)} programs x {len(args.policies)} policies on {args.machine} "
           f"({time.perf_counter() - started:.1f} s)\n")  # fmt: skip
     print(format_table(rows))
-    print(f"\nplots: {out}/ ({len(plots)} PNG files)")
+    print(f"\nplots: {out}/ ({len(plots)} PNG files, one feed colour scale per program)")
     return 0
 
 

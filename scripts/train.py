@@ -2,10 +2,13 @@
 
     .venv/bin/python scripts/train.py --config configs/train/ppo.yaml [--timesteps N] [--out DIR]
 
-The config (YAML, read with ``yaml.safe_load``; unknown keys are errors) names the env (programs, machine,
-dialect, action mode, control period, reward weights), the number of in-process envs (DummyVecEnv) and
-the PPO settings. The run writes, under ``<output_dir>/<run_name>/``: ``model.zip`` (load it with
-``PPO.load``), ``config.yaml`` (the config as used), and TensorBoard logs under ``<output_dir>/tensorboard``.
+The config (YAML, read with the bounded safe loader; every key has a type and range, see docs/configs.md)
+names the env (programs, machine, dialect, action mode, control period, reward weights), the number of
+in-process envs (DummyVecEnv) and the PPO settings. The run writes, under ``<output_dir>/<run_name>/``:
+``model.zip`` (``cnc-gym run --policy`` and ``scripts/evaluate.py`` load it without unpickling, see
+docs/security.md), ``config.yaml`` (the config as used), and TensorBoard logs under
+``<output_dir>/tensorboard``. ``--timesteps`` and ``--out`` follow the rules of ``total_timesteps`` and
+``output_dir``; a bad config or option is one line on stderr and exit status 2.
 """
 
 from __future__ import annotations

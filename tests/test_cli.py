@@ -1,4 +1,4 @@
-"""The `cnc-gym` command: the trace contract and the error contract (DESIGN.md)."""
+"""The `cnc-gym` command: the trace contract and the error contract (docs/architecture.md)."""
 
 from __future__ import annotations
 
@@ -153,3 +153,89 @@ def test_console_command_never_prints_a_traceback(tmp_path):
     assert proc.returncode == 2 and proc.stdout == ""
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
     assert proc.stderr.startswith(f"{program}:2: ") and proc.stderr.rstrip().endswith("[arc-impossible]")
+
+
+# ------------------------------------------------------------------------------- programs and options
+def test_trace_takes_built_in_names_like_run(capsys):
+    from cnc_gym.programs import program_path
+
+    status, by_name, err = run_main(["trace", "star"], capsys)
+    assert status == 0 and err == ""
+    _, by_file, _ = run_main(["trace", str(program_path("star"))], capsys)
+    assert by_name == by_file and len(by_name.splitlines()) > 10
+
+
+@pytest.mark.parametrize("command", ["trace", "run"])
+def test_help_says_program_may_be_a_built_in_name_and_lists_exit_statuses(capsys, command):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "built-in program name: circle, star, freeform, pocket" in text
+    assert "exit status" in text and "3 (run) truncated" in text
+
+
+@pytest.mark.parametrize("text", ["G90\nM30\n", "", "T1 M06\nM03 S1000\nM05\nM30\n"])
+def test_trace_of_a_program_without_motion_prints_nothing(tmp_path, capsys, text):
+    status, out, err = run_main(["trace", write(tmp_path, text)], capsys)
+    assert (status, out, err) == (0, "", "")
+
+
+@pytest.mark.parametrize("command", ["trace", "run"])
+def test_dev_null_is_an_empty_program_for_both_commands(capsys, command):
+    extra = ["--no-progress"] if command == "run" else []
+    status, out, err = run_main([command, "/dev/null", *extra], capsys)
+    assert status == 0 and err == ""
+    if command == "run":
+        assert out.splitlines()[-1].split()[-1] == "yes"
+
+
+@pytest.mark.parametrize(("command", "option"), [("trace", "--dialect"), ("trace", "--machine"),
+                                                 ("run", "--dialect"), ("run", "--machine"),
+                                                 ("run", "--policy")])  # fmt: skip
+def test_empty_option_values_are_rejected_by_both_commands(tmp_path, capsys, command, option):
+    extra = ["--no-progress"] if command == "run" else []
+    status, out, err = run_main([command, write(tmp_path, "G00 X1\n"), f"{option}=", *extra], capsys)
+    assert status == 2 and out == "" and len(err.splitlines()) == 1 and option in err
+
+
+LOOP = "#1=0\nWHILE [#1 LT 50] DO1\n#1=#1+1\nEND1\nG01 X10 F100\nM30\n"  # about 150 blocks
+
+
+@pytest.mark.parametrize("command", ["trace", "run"])
+def test_max_blocks_is_settable_from_the_command_line(tmp_path, capsys, command):
+    program = write(tmp_path, LOOP)
+    extra = ["--no-progress"] if command == "run" else []
+    status, out, err = run_main([command, program, "--max-blocks", "40", *extra], capsys)
+    assert status == 2 and out == "" and err.rstrip().endswith("[too-many-blocks]")
+    status, out, err = run_main([command, program, "--max-blocks", "100000", *extra], capsys)
+    assert status == 0 and err == "" and out
+    status, _, err = run_main([command, program, "--max-blocks", "0", *extra], capsys)
+    assert status == 2 and "--max-blocks" in err
+
+
+def test_one_line_gcode_with_a_slash_is_text_not_a_path(capsys):
+    # X[10/4] is an expression, "/G00 X5" a block with its skip mark: neither is a path.
+    status, out, err = run_main(["trace", "G01 X[10/4] F100"], capsys)
+    assert status == 0 and err == "" and json.loads(out)["end"][0] == 2.5
+    status, out, _ = run_main(["trace", "/G00 X5"], capsys)
+    assert status == 0 and json.loads(out)["end"][0] == 5.0  # block skip switch off: the block runs
+    status, out, _ = run_main(["trace", "/G00 X5", "--block-skip", "1"], capsys)
+    assert status == 0 and out == ""
+    status, out, err = run_main(["trace", "examples/no-such-part"], capsys)
+    assert status == 2 and out == "" and "not a built-in" in err and "nor an existing file" in err
+
+
+def test_docs_cli_matches_the_code():
+    # docs/cli.md is derived from these constants; a change to one without the other fails here.
+    from cnc_gym.envs.render import DEFAULT_MAX_BINS
+    from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
+    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PLOT_FORMATS
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
+    for key in JSON_KEYS:
+        assert f"`{key}`" in text, key
+    assert f"default {DEFAULT_MAX_BLOCKS:,}" in text
+    assert f"at most {DEFAULT_MAX_BINS} time bins" in text
+    assert f"exceeds {LONG_RUN_NOTICE_S / 60:g} minutes" in text
+    assert f"| {EXIT_TRUNCATED} | `run` only: truncated" in text
+    assert all(f"`{suffix}`" in text for suffix in PLOT_FORMATS)

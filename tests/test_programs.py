@@ -12,7 +12,15 @@ import numpy as np
 import pytest
 
 from cnc_gym.errors import ConfigError, ProgramError
-from cnc_gym.programs import BUILTIN_PROGRAMS, load_program, program_names, program_path
+from cnc_gym.programs import (
+    BUILTIN_PROGRAMS,
+    Program,
+    ProgramText,
+    load_program,
+    program_names,
+    program_path,
+    resolve_program,
+)
 from cnc_gym.toolpath import SegmentKind
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -160,6 +168,79 @@ def test_loader_errors(tmp_path):
     with pytest.raises(ProgramError) as err:
         load_program(bad)
     assert "bad.nc:2" in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("program", "kind"),
+    [
+        ("star", "builtin"),
+        ("G01 X10 F100", "text"),  # one line of G-code
+        ("G01 X[10/4] F100", "text"),  # a '/' in an expression is not a path separator
+        ("/G00 X5", "text"),  # nor is a block skip mark
+        ("F1/80", "text"),
+        ("M30", "text"),
+        ("G00 X1\nG00 X2", "text"),  # a line break: always text
+        ("G01 X1 F100 " * 800, "text"),  # long one-line text: no 'File name too long'
+        ("/dev/null", "file"),  # exists (a device): an empty program
+    ],
+)
+def test_the_program_rule(program, kind):
+    assert resolve_program(program).kind == kind
+
+
+@pytest.mark.parametrize("program", ["circel", "parts/bracket", "examples\\part", "~/jobs/p1", "a" * 5000])
+def test_names_and_paths_that_name_nothing_are_errors(program):
+    with pytest.raises(ConfigError, match="not a built-in") as err:
+        resolve_program(program)
+    assert len(str(err.value)) < 250  # a long argument is quoted in part
+
+
+def test_program_suffixes_and_path_objects_are_files_even_when_missing(tmp_path):
+    for program in (str(tmp_path / "missing.nc"), "missing.NGC", tmp_path / "missing"):
+        with pytest.raises(ConfigError, match="not found"):
+            resolve_program(program)
+    with pytest.raises(ConfigError, match="folder"):
+        resolve_program(tmp_path)
+    with pytest.raises(ConfigError, match="folder"):
+        resolve_program(str(tmp_path))
+
+
+def test_program_text_is_text_whatever_it_looks_like(tmp_path):
+    existing = tmp_path / "G00.nc"
+    existing.write_text("G00 X99\n")
+    source = resolve_program(ProgramText(str(existing)))  # would be a path as a plain str
+    assert source.kind == "text" and source.name.startswith("text-")
+    name, tp = load_program(ProgramText("G01 X3 F100\n", name="three"))
+    assert name == "three" and tp.total_length == pytest.approx(3.0)
+    with pytest.raises(ConfigError):
+        ProgramText(b"G00 X1")  # type: ignore[arg-type]
+    with pytest.raises(ConfigError):
+        ProgramText("G00 X1", name="")
+
+
+def test_loaded_programs_pass_through_and_max_blocks_is_part_of_the_key():
+    loop = "#1=0\nWHILE [#1 LT 50] DO1\n#1=#1+1\nEND1\nG01 X10 F100\nM30\n"
+    with pytest.raises(ProgramError) as err:
+        load_program(loop, max_blocks=40)
+    assert err.value.code == "too-many-blocks"
+    loaded = load_program(loop, max_blocks=1000)  # not a cached failure, not the default budget
+    assert isinstance(loaded, Program) and loaded.toolpath.total_length == pytest.approx(10.0)
+    assert load_program(loaded) is loaded
+
+
+def test_env_takes_every_program_form(tmp_path):
+    from cnc_gym.envs.feedrate import FeedrateEnv
+
+    path = tmp_path / "part.nc"
+    path.write_text("G01 X5 F600\nM30\n")
+    loaded = load_program("G01 X7 F600\nM30\n")
+    env = FeedrateEnv(programs=[path, str(path), ProgramText("G01 X6 F600"), loaded, "circle"])
+    names = env.program_names
+    assert names[:2] == ["part", "part"] and names[2].startswith("text-")
+    assert names[3:] == [loaded.name, "circle"]
+    single = FeedrateEnv(programs=ProgramText("G01 X4 F600", name="four"))
+    assert single.program_names == ["four"]
+    assert FeedrateEnv(programs=loaded).program_names == [loaded.name]
 
 
 def plunge_line(name: str) -> int:

@@ -1,15 +1,24 @@
-"""`cnc-gym run` and the runner: the JSON contract, the plot, and errors as one line with exit status 2."""
+"""`cnc-gym run` and the runner: the JSON contract, bounded series, truncation (exit 3), programs without
+motion, the plot, and errors as one line with exit status 2."""
 
 from __future__ import annotations
 
+import io
 import json
 import math
+from pathlib import Path
 
+import gymnasium
+import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+import cnc_gym.runner as runner
+from agents import make_policy
+from cnc_gym.cli import main
 from cnc_gym.errors import CncGymError
-from cnc_gym.runner import JSON_KEYS, plot_run, simulate
+from cnc_gym.programs import ProgramText
+from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, feed_limits, plot_run, run_episode, run_figure, simulate
 
 CONTRACT_KEYS = ("cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm", "violations",
                  "steps")  # fmt: skip
@@ -24,8 +33,10 @@ def test_summary_has_the_contract_fields(star_run):
     summary = star_run.summary()
     assert set(CONTRACT_KEYS) <= set(summary) and set(JSON_KEYS) == set(summary)
     json.dumps(summary)  # plain Python values only
-    assert summary["finished"] is True
-    assert summary["steps"] == len(star_run.time_s) > 0
+    assert summary["finished"] is True and summary["stopped_by"] is None
+    assert summary["steps"] == len(star_run.time_s) > 0  # 540 steps: one bin per step
+    assert star_run.bin_steps == 1
+    assert 0 < summary["nominal_time_s"] < summary["cycle_time_s"]
     assert all(math.isfinite(summary[k]) for k in CONTRACT_KEYS)
 
 
@@ -63,8 +74,6 @@ def test_runner_errors_are_cnc_gym_errors():
 
 
 def test_cli_run_json(capsys, tmp_path):
-    from cnc_gym.cli import main
-
     plot = tmp_path / "run.png"
     status = main(["run", "star", "--policy", "constant:1.5", "--json", "--plot", str(plot), "--no-progress"])
     out = capsys.readouterr().out.strip().splitlines()
@@ -78,10 +87,205 @@ def test_cli_run_json(capsys, tmp_path):
 @pytest.mark.parametrize("argv", [["run", "no-such-program"], ["run", "star", "--policy", "fast"],
                                   ["run", "star", "--policy", "nope.zip"]])  # fmt: skip
 def test_cli_run_errors_are_one_line(capsys, argv):
-    from cnc_gym.cli import main
-
     status = main([*argv, "--no-progress"])
     captured = capsys.readouterr()
     assert status == 2
     assert captured.out == ""
     assert len(captured.err.strip().splitlines()) == 1 and "Traceback" not in captured.err
+
+
+# ------------------------------------------------------------------------------------- bounded series
+def test_long_runs_keep_a_bounded_series_with_exact_summary_numbers(star_run):
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"])
+    binned = run_episode(env, make_policy("constant:1.0"), max_bins=32)
+    env.close()
+    assert binned.steps == star_run.steps == 540
+    assert len(binned.time_s) <= 33 and binned.bin_steps == 32  # 540 steps in bins of 32
+    # The summary is the env's streaming totals, the same whatever the binning ...
+    assert binned.summary() == star_run.summary()
+    # ... and the envelope keeps the largest step error, the bins' ends the run's time.
+    assert binned.contour_error_mm.max() == pytest.approx(star_run.contour_error_max_mm, abs=1e-15)
+    assert binned.time_s[-1] == pytest.approx(star_run.cycle_time_s)
+    worst_bin = int(np.argmax(binned.contour_error_mm))
+    worst_step = int(np.argmax(star_run.contour_error_mm))
+    assert worst_bin * 32 <= worst_step < (worst_bin + 1) * 32
+    assert np.all(np.diff(binned.path_s) >= 0)
+
+
+def test_record_false_keeps_no_series():
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["circle"])
+    result = run_episode(env, make_policy("constant:1.0"), record=False)
+    env.close()
+    assert result.finished and len(result.time_s) == 0 and len(result.path_xyz) == 0
+
+
+# ------------------------------------------------------------------------------------------ truncation
+def test_max_time_stops_the_run_and_says_so(capsys, tmp_path):
+    plot = tmp_path / "cut.png"
+    status = main(["run", "star", "--max-time", "1.5", "--json", "--no-progress", "--plot", str(plot)])
+    captured = capsys.readouterr()
+    assert status == EXIT_TRUNCATED == 3
+    data = json.loads(captured.out)
+    assert data["finished"] is False and data["stopped_by"] == "max_time"
+    assert data["cycle_time_s"] == pytest.approx(1.5) and data["steps"] == 150
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and "truncated" in err[0] and "--max-time" in err[0] and "exit status 3" in err[0]
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_step_budget_truncation_table_plot_and_exit_status(capsys):
+    # Knob at 0 % override: the program never ends, the env stops at its step budget (5 x T_nominal + 1 s).
+    status = main(["run", "star", "--policy", "constant:0", "--no-progress"])
+    captured = capsys.readouterr()
+    assert status == 3
+    header, _, row = captured.out.strip().splitlines()
+    assert header.split()[-1] == "finished" and row.split()[-1] == "NO"
+    assert "step budget" in captured.err and "truncated" in captured.err
+    result = simulate("star", policy="constant:0")
+    assert not result.finished and result.stopped_by == "step_budget"
+    assert result.steps == math.ceil(5 * result.nominal_time_s / 0.01) + 100
+    assert 0.0 < result.progress < 0.5
+    fig = run_figure(result)
+    try:
+        assert "truncated" in fig._suptitle.get_text() and "step budget" in fig._suptitle.get_text()
+    finally:
+        plt.close(fig)
+
+
+def test_finished_runs_have_no_truncation_title(star_run):
+    fig = run_figure(star_run)
+    try:
+        assert fig._suptitle is None
+    finally:
+        plt.close(fig)
+
+
+def test_long_programs_are_announced_and_projected(monkeypatch):
+    monkeypatch.setattr(runner, "LONG_RUN_NOTICE_S", 1.0)
+    monkeypatch.setattr(runner, "_PROJECTION_AFTER_WALL_S", 0.0)
+    monkeypatch.setattr(runner, "_PROJECTION_NOTICE_WALL_S", -1.0)
+    log = io.StringIO()
+    simulate("star", log=log)
+    lines = log.getvalue().splitlines()
+    assert len(lines) == 2
+    assert "nominal cycle time" in lines[0] and "step budget" in lines[0]
+    assert "wall-clock time to go" in lines[1] and "--max-time" in lines[1]
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, math.nan, math.inf, "5"])
+def test_bad_max_time_is_a_config_error(bad):
+    with pytest.raises(CncGymError, match="max_time_s"):
+        simulate("star", max_time_s=bad)
+
+
+# --------------------------------------------------------------------------------- no-motion programs
+NO_MOTION = {
+    "modal-only": "G90\nM30\n",
+    "empty": "",
+    "tool-and-spindle": "T1 M06\nM03 S1000\nM05\nM30\n",
+}
+
+
+@pytest.mark.parametrize("policy", ["constant:1.0", "classical"])
+@pytest.mark.parametrize("name", list(NO_MOTION))
+def test_programs_without_motion_run_to_a_zero_second_result(tmp_path, capsys, name, policy):
+    program = tmp_path / f"{name}.nc"
+    program.write_text(NO_MOTION[name])
+    status = main(["run", str(program), "--policy", policy, "--json", "--no-progress",
+                   "--plot", str(tmp_path / "p.png")])  # fmt: skip
+    captured = capsys.readouterr()
+    assert status == 0 and captured.err == ""
+    data = json.loads(captured.out)
+    assert data["finished"] is True and data["cycle_time_s"] == 0.0
+    assert data["violations"] == 0 and data["contour_error_max_mm"] == 0.0 and data["total_return"] == 0.0
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_dwell_only_program_takes_its_dwell():
+    result = simulate(ProgramText("G04 P500\nM30\n"), policy="classical")
+    assert result.finished and result.cycle_time_s == pytest.approx(0.5)
+
+
+# ---------------------------------------------------------------------------------------------- plots
+def test_paired_plots_share_one_feed_scale(star_run):
+    classical = simulate("star", policy="classical")
+    low, high = feed_limits([star_run, classical])
+    top = max(np.nanmax(r.path_feed_mm_min[r.cutting]) for r in (star_run, classical))
+    assert low == 0.0 and high == pytest.approx(top)
+    for result in (star_run, classical):
+        fig = run_figure(result, feed_range=(low, high))
+        try:
+            colourbar = fig.axes[0].collections[-1]
+            assert colourbar.norm.vmin == 0.0 and colourbar.norm.vmax == pytest.approx(high)
+        finally:
+            plt.close(fig)
+
+
+def test_error_panel_legend_sits_outside_the_axes(star_run):
+    fig = run_figure(star_run)
+    try:
+        fig.canvas.draw()
+        ax_err = fig.axes[1]
+        legend = ax_err.get_legend()
+        inside = ax_err.get_window_extent()
+        # The legend lies below the plotting area, so it cannot hide the tolerance line.
+        assert legend.get_window_extent().y1 <= inside.y0
+        tol_line = [line for line in ax_err.get_lines() if line.get_label().startswith("tolerance")]
+        assert tol_line and ax_err.get_ylim()[1] > tol_line[0].get_ydata()[0]
+    finally:
+        plt.close(fig)
+
+
+def test_programs_with_z_motion_get_side_views():
+    ramp = ProgramText("G90 G21 G17\nG01 X20. Z-2. F600.\nG01 X40. Z-4.\nM30\n", name="ramp")
+    result = simulate(ramp)
+    fig = run_figure(result)
+    try:
+        titles = [ax.get_title() for ax in fig.axes]
+        assert "XZ view" in titles and "YZ view" in titles
+    finally:
+        plt.close(fig)
+
+
+@pytest.mark.parametrize("target", ["out.txt", "out", ""])
+def test_unknown_plot_formats_are_one_line_errors_before_the_run(capsys, tmp_path, monkeypatch, target):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(runner, "simulate", lambda *a, **k: pytest.fail("ran before checking --plot"))
+    status = main(["run", "star", "--plot", target, "--no-progress"])
+    captured = capsys.readouterr()
+    assert status == 2 and captured.out == "" and len(captured.err.splitlines()) == 1
+    assert "--plot" in captured.err and "Traceback" not in captured.err
+
+
+def test_plot_into_a_folder_names_the_file_after_program_and_policy(capsys, tmp_path):
+    folder = tmp_path / "plots"
+    assert main(["run", "star", "--policy", "constant:1.5", "--plot", f"{folder}/", "--no-progress"]) == 0
+    assert (folder / "star_constant-1.5.png").read_bytes()[:4] == b"\x89PNG"
+    existing = tmp_path / "existing"
+    existing.mkdir()
+    assert main(["run", "star", "--plot", str(existing), "--no-progress"]) == 0  # no trailing slash
+    assert (existing / "star_constant-1.png").is_file() and not (tmp_path / "existing.png").exists()
+
+
+def test_a_plot_that_cannot_be_written_is_reported_as_a_write_error(capsys, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    status = main(["run", "star", "--plot", str(blocker / "p.png"), "--no-progress"])
+    captured = capsys.readouterr()
+    assert status == 2 and captured.out == "" and len(captured.err.splitlines()) == 1
+    assert "cannot read" not in captured.err and "plot" in captured.err
+
+
+def test_drilled_holes_show_as_dots_seen_from_above():
+    from matplotlib.collections import PathCollection
+
+    drill = Path(__file__).resolve().parents[1] / "examples" / "drill.nc"
+    result = simulate(drill)
+    fig = run_figure(result)
+    try:
+        ax_xy = fig.axes[0]
+        dots = [c for c in ax_xy.collections if isinstance(c, PathCollection)]
+        assert len(dots) == 1 and len(dots[0].get_offsets()) == 6  # six holes
+        assert {ax.get_title() for ax in fig.axes} >= {"XZ view", "YZ view"}
+    finally:
+        plt.close(fig)

@@ -12,12 +12,13 @@ import numpy as np
 from gymnasium import spaces
 from numba import njit
 
-from cnc_gym.envs.task import ACTION_MODES, RewardWeights, load_task, resolve_reward
+from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
+from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig, load_machine
-from cnc_gym.motion import ActionError  # one error type for bad actions, env and controller alike
+from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.motion import kernel as _kernel
-from cnc_gym.programs import load_program
+from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 # Columns of the controller's rows (Controller.advance_rows) the step reads.
@@ -199,12 +200,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     - **Termination**: the controller has finished the program (reference at rest at the end, dwells
       done) and every axis is within the in-position width (``in_position_mm``).
+    - A program without motion (nothing but modal codes, spindle or tool commands, ``M30``; or an empty
+      file) terminates on the first step with reward 0 and ``cycle_time_s`` 0.
     - **Truncation**: after ``max_episode_steps`` control steps (default: 5 × ``T_nominal`` / ``dt`` plus
       one second to settle), e.g. when the knob is held at 0.
 
     ## Arguments
 
-    ``programs`` (built-in names, paths or G-code text; None = the default task's set), ``dialect``,
+    ``programs`` (one program or a list: built-in names, paths, G-code text, ``ProgramText`` or interpreted
+    ``Program``\ s, by the rule of :mod:`cnc_gym.programs`; None = the default task's set), ``dialect``,
     ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
     of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
     ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
@@ -229,7 +233,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        programs: Sequence[str | Path] | str | Path | None = None,
+        programs: Sequence[ProgramLike] | ProgramLike | None = None,
         dialect: str = "gsk25i",
         machine: str | Path | MachineConfig = "vmc-small",
         action_mode: str = "override",
@@ -245,43 +249,20 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
         self._controller_cls = Controller
         self._meter_cls = ContourErrorMeter
-        if action_mode not in ACTION_MODES:
-            raise ConfigError(f"action_mode must be one of {', '.join(ACTION_MODES)}, got {action_mode!r}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ConfigError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        if max_episode_steps is not None and (
-            isinstance(max_episode_steps, bool)
-            or not isinstance(max_episode_steps, int)
-            or max_episode_steps < 1
-        ):
-            raise ConfigError(f"max_episode_steps must be a positive integer, got {max_episode_steps!r}")
-        if not (isinstance(lookahead_points, int) and lookahead_points >= 1):
-            raise ConfigError(f"lookahead_points must be a positive integer, got {lookahead_points!r}")
-        if not (isinstance(lookahead_mm, int | float) and math.isfinite(lookahead_mm) and lookahead_mm > 0):
-            raise ConfigError(f"lookahead_mm must be a positive number, got {lookahead_mm!r}")
-
-        self.machine: MachineConfig = load_machine(machine)
-        self.action_mode = action_mode
-        self.render_mode = render_mode
-        self.dialect = dialect
-        self.reward_weights = resolve_reward(reward)
+        # Every argument checked once, against one schema (cnc_gym/envs/options.py).
+        args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
+                             control_period_s=control_period_s, reward=reward,
+                             max_episode_steps=max_episode_steps, render_mode=render_mode,
+                             lookahead_mm=lookahead_mm, lookahead_points=lookahead_points)  # fmt: skip
+        self.machine: MachineConfig = load_machine(args.machine)
+        self.action_mode = args.action_mode
+        self.render_mode = args.render_mode
+        self.dialect = args.dialect
+        self.reward_weights = resolve_reward(args.reward)
         ctrl = self.machine.controller
         self.interpolation_period_s = ctrl.interpolation_period_s
-        if (
-            isinstance(control_period_s, bool)
-            or not isinstance(control_period_s, int | float)
-            or not math.isfinite(control_period_s)
-            or control_period_s <= 0
-        ):
-            raise ConfigError(f"control_period_s must be a positive number, got {control_period_s!r}")
-        ticks = round(control_period_s / ctrl.interpolation_period_s)
-        if ticks < 1 or abs(ticks * ctrl.interpolation_period_s - control_period_s) > 1e-9 * max(1.0, ticks):
-            raise ConfigError(
-                f"control_period_s ({control_period_s} s) must be a whole multiple of the interpolation "
-                f"period ({ctrl.interpolation_period_s} s) of machine {self.machine.name!r}"
-            )
-        self.ticks_per_step = int(ticks)
-        self.control_period_s = ticks * ctrl.interpolation_period_s
+        self.ticks_per_step = control_ticks(args.control_period_s, self.machine)
+        self.control_period_s = self.ticks_per_step * ctrl.interpolation_period_s
         self.tolerance_mm = float(ctrl.contour_tolerance_mm)
         self.in_position_mm = float(ctrl.in_position_mm)
         self.max_override = float(ctrl.max_override)
@@ -289,24 +270,14 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._v_ref = self.max_feed_mm_min / 60.0
         self._a_ref = max(self.machine.axis_array("max_accel_mm_s2"))
         self._max_lag_mm = self._v_ref / min(self.machine.axis_array("kv_1_s"))
-        horizon = float(lookahead_mm) if isinstance(lookahead_mm, int | float) else math.nan
-        if isinstance(lookahead_mm, bool) or not math.isfinite(horizon) or horizon <= 0:
-            raise ConfigError(f"lookahead_mm must be a positive number, got {lookahead_mm!r}")
-        if (isinstance(lookahead_points, bool) or not isinstance(lookahead_points, int | np.integer)
-                or lookahead_points < 1):  # fmt: skip
-            raise ConfigError(f"lookahead_points must be a positive integer, got {lookahead_points!r}")
-        self.lookahead_mm = horizon
-        self.lookahead_points = int(lookahead_points)
-        self._lookahead_horizon = horizon
-        self._max_episode_steps_arg = max_episode_steps
+        self.lookahead_mm = args.lookahead_mm
+        self.lookahead_points = args.lookahead_points
+        self._lookahead_horizon = args.lookahead_mm
+        self._max_episode_steps_arg = args.max_episode_steps
+        self._needs_reset = True  # step() before the first reset() is an error, wrapped or not
 
         # Programs: interpreted once (cached by cnc_gym.programs), controllers built lazily per program.
-        if programs is None:
-            programs = load_task("default").programs
-        elif isinstance(programs, str | Path):
-            programs = [programs]
-        if len(programs) == 0:
-            raise ConfigError("programs must name at least one program")
+        programs = load_task("default").programs if args.programs is None else args.programs
         self._programs: list[tuple[str, Toolpath]] = [
             load_program(p, dialect, self.machine) for p in programs
         ]
@@ -376,7 +347,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             if not 0 <= index_or_name < len(self._programs):
                 raise ConfigError(f"program index {index_or_name} out of range 0..{len(self._programs) - 1}")
             name, toolpath = self._programs[int(index_or_name)]
-        elif isinstance(index_or_name, str | Path):
+        elif isinstance(index_or_name, PROGRAM_TYPES):
             found = [p for p in self._programs if p[0] == index_or_name]
             name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine)
         else:
@@ -417,15 +388,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        choice = reset_choice(options)
         super().reset(seed=seed)
-        choice: int | str | None = None
-        if options is not None:
-            if not isinstance(options, dict):
-                raise ConfigError(f"options must be a dict, got {type(options).__name__}")
-            unknown = sorted(set(options) - {"program"})
-            if unknown:
-                raise ConfigError(f"unknown reset option {unknown[0]!r} (allowed: program)")
-            choice = options.get("program")
+        self._needs_reset = False
         if choice is None:
             choice = int(self.np_random.integers(len(self._programs))) if len(self._programs) > 1 else 0
         self._select(choice)
@@ -440,24 +405,20 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     # --------------------------------------------------------------------------------------------- step
     def _parse_action(self, action: Any) -> float:
+        if self._needs_reset:
+            raise EnvNotReset("FeedrateEnv: call reset() before step()")
         if type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f":  # usual case
             knob = float(action[0])
             if math.isfinite(knob):
                 return min(max(knob, -1.0), 1.0)
-        try:
-            value = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ActionError(f"action must be a number or an array of shape (1,), got {action!r}") from None
-        if value.size != 1 or value.ndim > 1:
-            raise ActionError(f"action must have shape (1,), got shape {value.shape}")
-        knob = float(value.reshape(()))
-        if not math.isfinite(knob):
-            raise ActionError(f"action must be finite, got {knob}")
-        return min(max(knob, -1.0), 1.0)
+        return parse_action(action)  # every other form, checked (cnc_gym/envs/options.py)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         knob = self._parse_action(action)
         self._knob = knob
+        if not len(self.toolpath):  # a program without motion (only M30, or empty): done at once, in 0 s
+            self._steps += 1
+            return self._observe(), 0.0, True, False, self._info(0.0, 0.0)
         controller = self.controller
         n = self.ticks_per_step
         if not controller.finished:

@@ -1,38 +1,156 @@
-"""``render_mode="rgb_array"`` for the feed-rate env: programmed path, actual motion and contour error.
+"""Plotting support: a bounded time series, and ``render_mode="rgb_array"`` for the feed-rate env.
 
-The recorder keeps the actual positions and errors of every servo sample of the episode (appended per
-step; nothing is recorded when the env has no render mode). The matplotlib figure is built on the first
-``render()`` call on an Agg canvas (no display needed) and reused.
+:class:`BinnedSeries` keeps a series of any length in at most ``max_bins`` time bins (max, min, mean or
+last value per bin), so that recording an episode for a plot takes bounded memory however long the
+program runs; ``cnc-gym run`` and the env's renderer both record through it.
+
+The renderer records the actual positions and contour errors of the episode's servo samples (nothing is
+recorded when the env has no render mode). The matplotlib figure is built on the first ``render()`` call
+on an Agg canvas (no display needed) and reused.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cnc_gym.errors import ConfigError
+
 if TYPE_CHECKING:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     from cnc_gym.envs.feedrate import FeedrateEnv
 
 _FIG_SIZE_IN = (8.0, 4.0)
 _DPI = 80  # 640 × 320 pixels
 
+#: Bins a recorded episode keeps at most (per series): enough for a plot's full width at any length.
+DEFAULT_MAX_BINS = 4096
 
-class EpisodeRenderer:
-    """Records an episode's actual motion and draws it (left: XY path; right: contour error over time)."""
+_REDUCTIONS = ("max", "min", "mean", "last")  # the op codes 0..3 of BinnedSeries
 
-    def __init__(self, tolerance_mm: float) -> None:
-        self.tolerance_mm = tolerance_mm
-        self._positions: list[np.ndarray] = []
-        self._errors: list[np.ndarray] = []
-        self._path_xy: np.ndarray | None = None
-        self._path_key: int | None = None
-        self._figure = None
-        self._canvas = None
+
+class BinnedSeries:
+    """A series of samples kept in at most ``max_bins`` bins of equal sample count.
+
+    ``columns`` maps each column name to its reduction over a bin: ``"max"`` (an envelope), ``"min"``,
+    ``"mean"`` or ``"last"``. Each bin holds ``width`` consecutive samples: 1 until ``max_bins`` are
+    filled, then neighbouring bins are merged pairwise and ``width`` doubles. Memory is
+    ``max_bins`` × columns whatever the number of samples; the reductions are exact over each bin.
+    """
+
+    def __init__(self, columns: Mapping[str, str], max_bins: int = DEFAULT_MAX_BINS) -> None:
+        bad = [f"{name}={how!r}" for name, how in columns.items() if how not in _REDUCTIONS]
+        if not columns or bad:
+            raise ConfigError(f"columns need a reduction among {', '.join(_REDUCTIONS)}: {', '.join(bad)}")
+        if isinstance(max_bins, bool) or not isinstance(max_bins, int) or max_bins < 2 or max_bins % 2:
+            raise ConfigError(f"max_bins must be an even integer >= 2, got {max_bins!r}")
+        self.names = tuple(columns)
+        self._how = tuple(columns.values())
+        self._ops = tuple((j, _REDUCTIONS.index(how)) for j, how in enumerate(self._how))
+        self.max_bins = max_bins
+        self._bins = np.zeros((max_bins, len(self.names)))
+        self._weights = np.zeros(max_bins)  # samples per bin
+        self._acc = [0.0] * len(self.names)  # the bin being filled: running max / min / sum / last
+        self.clear()
 
     def clear(self) -> None:
-        self._positions.clear()
-        self._errors.clear()
+        self._staged = 0  # samples in the bin being filled
+        self._filled = 0  # closed bins
+        self.width = 1  # samples per closed bin
+        self.count = 0  # samples added
+
+    def add(self, *values: float) -> None:
+        """One sample: a value per column, in the order of ``columns``."""
+        acc = self._acc
+        if self._staged == 0:
+            acc[:] = values
+        else:
+            for j, op in self._ops:
+                v = values[j]
+                if op == 0:
+                    if v > acc[j]:
+                        acc[j] = v
+                elif op == 1:
+                    if v < acc[j]:
+                        acc[j] = v
+                elif op == 2:
+                    acc[j] += v
+                else:
+                    acc[j] = v
+        self._staged += 1
+        self.count += 1
+        if self._staged == self.width:
+            self._bins[self._filled] = self._open_bin()
+            self._weights[self._filled] = self._staged
+            self._filled += 1
+            self._staged = 0
+            if self._filled == self.max_bins:
+                self._merge_pairs()
+
+    def extend(self, rows: Iterable[Iterable[float]]) -> None:
+        """Several samples, one row each."""
+        for row in rows:
+            self.add(*row)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """One array per column (bins in order, the partly filled last bin included) and ``"samples"``
+        (the number of samples in each bin)."""
+        n = self._filled
+        bins, weights = self._bins[:n], self._weights[:n]
+        if self._staged:
+            bins = np.vstack((bins, self._open_bin()))
+            weights = np.append(weights, self._staged)
+        out = {name: bins[:, j].copy() for j, name in enumerate(self.names)}
+        out["samples"] = weights.astype(np.int64)
+        return out
+
+    def _open_bin(self) -> list[float]:
+        """The bin being filled, reduced (a mean is its running sum over the samples so far)."""
+        k = self._staged
+        return [a / k if op == 2 else a for a, (_, op) in zip(self._acc, self._ops, strict=True)]
+
+    def _merge_pairs(self) -> None:
+        """Halve the resolution: bins 2i and 2i+1 become bin i; ``width`` doubles."""
+        a, b = self._bins[0::2], self._bins[1::2]
+        wa, wb = self._weights[0::2], self._weights[1::2]
+        merged = np.empty_like(a)
+        for j, op in self._ops:
+            if op == 0:
+                merged[:, j] = np.maximum(a[:, j], b[:, j])
+            elif op == 1:
+                merged[:, j] = np.minimum(a[:, j], b[:, j])
+            elif op == 2:
+                merged[:, j] = (a[:, j] * wa + b[:, j] * wb) / (wa + wb)
+            else:
+                merged[:, j] = b[:, j]
+        half = self.max_bins // 2
+        self._bins[:half] = merged
+        self._weights[:half] = wa + wb
+        self._filled = half
+        self.width *= 2
+
+
+class EpisodeRenderer:
+    """Records an episode's actual motion and draws it (left: XY path; right: contour error over time).
+
+    Servo samples go through a :class:`BinnedSeries` (position: last of each bin; contour error: max), so
+    a long episode draws at lower resolution instead of growing without bound.
+    """
+
+    def __init__(self, tolerance_mm: float, max_bins: int = DEFAULT_MAX_BINS) -> None:
+        self.tolerance_mm = tolerance_mm
+        self._samples = BinnedSeries({"x": "last", "y": "last", "z": "last", "error": "max"}, max_bins)
+        self._path_xy: np.ndarray | None = None
+        self._path_key: int | None = None
+        self._figure: Figure | None = None
+        self._canvas: FigureCanvasAgg | None = None
+
+    def clear(self) -> None:
+        self._samples.clear()
 
     def start(self, env: FeedrateEnv) -> None:
         self.clear()
@@ -42,8 +160,7 @@ class EpisodeRenderer:
             self._path_key = id(env.toolpath)
 
     def record(self, actual: np.ndarray, error: np.ndarray) -> None:
-        self._positions.append(actual.copy())
-        self._errors.append(error.copy())
+        self._samples.extend(np.column_stack((actual, error)).tolist())
 
     def draw(self, env: FeedrateEnv) -> np.ndarray:
         """The current episode as an (H, W, 3) uint8 image."""
@@ -51,31 +168,35 @@ class EpisodeRenderer:
         from matplotlib.collections import LineCollection
         from matplotlib.figure import Figure
 
-        if self._figure is None:
+        if self._figure is None or self._canvas is None:
             self._figure = Figure(figsize=_FIG_SIZE_IN, dpi=_DPI)
             self._canvas = FigureCanvasAgg(self._figure)
-        if self._path_key != id(env.toolpath):
+        if self._path_xy is None or self._path_key != id(env.toolpath):
             self.start(env)
-        fig = self._figure
+        fig, canvas, path_xy = self._figure, self._canvas, self._path_xy
+        assert path_xy is not None  # start() sets it
         fig.clf()
         ax_path, ax_err = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.1, 1.0]})
         tol = self.tolerance_mm
-        ax_path.plot(self._path_xy[:, 0], self._path_xy[:, 1], color="0.75", lw=2.5, label="programmed")
-        if self._positions:
-            actual = np.concatenate(self._positions)
-            error = np.concatenate(self._errors)
-            xy = actual[:, :2]
+        ax_path.plot(path_xy[:, 0], path_xy[:, 1], color="0.75", lw=2.5, label="programmed")
+        if self._samples.count:
+            series = self._samples.arrays()
+            error = series["error"]
+            xy = np.column_stack((series["x"], series["y"]))
             if len(xy) > 1:
                 # Colour each sample by its contour error: green within tolerance, red at 2× tolerance.
                 segments = np.stack((xy[:-1], xy[1:]), axis=1)
-                lines = LineCollection(segments, cmap="RdYlGn_r", norm=_norm(0.0, 2.0 * tol), lw=1.2)
+                lines = LineCollection(segments, cmap="RdYlGn_r", norm=_norm(0.0, 2.0 * tol),  # type: ignore[arg-type]
+                                       lw=1.2)  # (an (n, 2, 2) array is a valid sequence of segments)
                 lines.set_array(error[1:])
                 ax_path.add_collection(lines)
                 fig.colorbar(lines, ax=ax_path, label="contour error (mm)", fraction=0.046, pad=0.04)
             ax_path.plot(xy[-1, 0], xy[-1, 1], "o", color="k", ms=4)
-            t = (np.arange(len(error)) + 1) * env.interpolation_period_s
-            ax_err.plot(t, error * 1000.0, color="C0", lw=1.0)
-        ax_err.axhline(tol * 1000.0, color="C3", ls="--", lw=1.0, label=f"tolerance {tol * 1000:g} µm")
+            t = np.cumsum(series["samples"]) * env.interpolation_period_s
+            bin_s = self._samples.width * env.interpolation_period_s
+            plot_error_envelope(ax_err, t, error, tol, bin_s=bin_s, fontsize=7)
+        else:
+            plot_error_envelope(ax_err, np.zeros(0), np.zeros(0), tol, fontsize=7)
         ax_path.set_aspect("equal", adjustable="datalim")
         ax_path.set_title(f"{env.program_name}: tool path", fontsize=9)
         ax_path.set_xlabel("X (mm)", fontsize=8)
@@ -83,12 +204,11 @@ class EpisodeRenderer:
         ax_err.set_title(f"contour error, max {env._error_max_mm * 1000:.1f} µm", fontsize=9)
         ax_err.set_xlabel("time (s)", fontsize=8)
         ax_err.set_ylabel("µm", fontsize=8)
-        ax_err.legend(fontsize=7, loc="upper right")
         for ax in (ax_path, ax_err):
             ax.tick_params(labelsize=7)
         fig.tight_layout()
-        self._canvas.draw()
-        return np.asarray(self._canvas.buffer_rgba())[:, :, :3].copy()
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
 
     def close(self) -> None:
         if self._figure is not None:
@@ -101,3 +221,122 @@ def _norm(vmin: float, vmax: float):
     from matplotlib.colors import Normalize
 
     return Normalize(vmin=vmin, vmax=vmax)
+
+
+# ------------------------------------------------------------------------------ plot pieces (runner too)
+#: Views of the path: (horizontal axis, vertical axis) indices into XYZ.
+_VIEW_AXES = {"XY": (0, 1), "XZ": (0, 2), "YZ": (1, 2)}
+#: Z-only cutting moves longer than this share of the cutting length call for side views (drilling).
+_Z_ONLY_SHARE = 0.5
+#: Depth span (mm) of the XY-moving cutting moves above which the part is cut at several depths or in 3-D.
+_DEPTH_SPAN_MM = 0.01
+
+
+def wants_z_views(xyz: np.ndarray, cutting: np.ndarray) -> bool:
+    """Whether a path needs XZ/YZ views: it cuts at more than one depth (or in 3-D), or a good share of
+    its cutting is straight down (drilling). A plunge to one depth before an XY contour needs neither.
+
+    ``xyz`` are points along the path, ``cutting[k]`` whether the piece from point k to k+1 cuts.
+    """
+    if len(xyz) < 2:
+        return False
+    delta = np.diff(xyz, axis=0)
+    cut = np.asarray(cutting[:-1], dtype=bool)
+    planar = np.hypot(delta[:, 0], delta[:, 1])
+    length = np.linalg.norm(delta, axis=1)
+    moving_xy = cut & (planar > 1e-9)
+    if np.any(moving_xy):
+        z = np.concatenate((xyz[:-1][moving_xy, 2], xyz[1:][moving_xy, 2]))
+        if np.ptp(z) > _DEPTH_SPAN_MM:
+            return True
+    total = float(np.sum(length[cut]))
+    return total > 0 and float(np.sum(length[cut & (planar <= 1e-9)])) > _Z_ONLY_SHARE * total
+
+
+def plot_path_views(fig, views: dict, xyz: np.ndarray, cutting: np.ndarray, feed_mm_min: np.ndarray,
+                    feed_range: tuple[float, float] | None = None) -> None:  # fmt: skip
+    """Draw the path in each view (``{"XY": ax, "XZ": ax, "YZ": ax}``): cutting pieces coloured by
+    ``feed_mm_min`` (one colour scale for all views, ``feed_range`` or 0 … the largest feed), rapids thin
+    grey, cutting pieces the run did not reach (feed NaN) dashed. ``cutting`` and ``feed_mm_min`` are per
+    point; a piece takes the values of its first point."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import Normalize
+
+    cut = np.asarray(cutting[:-1], dtype=bool) if len(xyz) >= 2 else np.zeros(0, dtype=bool)
+    feed = np.full(len(cut), np.nan)
+    if len(feed_mm_min) == len(xyz):
+        feed = np.asarray(feed_mm_min[:-1], dtype=float)
+    reached = cut & np.isfinite(feed)
+    missed = cut & ~np.isfinite(feed)
+    if feed_range is None:
+        top = float(np.max(feed[reached])) if np.any(reached) else 1.0
+        feed_range = (0.0, max(top, 1.0))
+    norm = Normalize(*feed_range)
+    coloured = None
+    for label, ax in views.items():
+        i, j = _VIEW_AXES[label]
+        if len(xyz) >= 2:
+            pts = xyz[:, (i, j)]
+            segments = np.stack((pts[:-1], pts[1:]), axis=1)
+            # Rapids in thin grey: their speed would swamp the colour scale of the cutting feed.
+            if np.any(~cut):
+                ax.add_collection(LineCollection(segments[~cut], colors="0.7", linewidths=0.8))
+            if np.any(missed):  # one polyline per stretch, so the dashes run on across the pieces
+                ax.plot(*_stretches(pts, missed).T, color="0.55", lw=1.0, ls="--")
+            lines = LineCollection(segments[reached], cmap="viridis", norm=norm, linewidths=2)
+            lines.set_array(feed[reached])
+            ax.add_collection(lines)
+            # Cuts straight into the view (drilling seen from above) are points: mark each place once, in
+            # the colour of the largest feed cut there.
+            end_on = reached & (np.hypot(*(pts[1:] - pts[:-1]).T) <= 1e-9)
+            if np.any(end_on):
+                spots, where = np.unique(np.round(pts[:-1][end_on], 6), axis=0, return_inverse=True)
+                spot_feed = np.zeros(len(spots))
+                np.maximum.at(spot_feed, where.ravel(), feed[end_on])
+                ax.scatter(spots[:, 0], spots[:, 1], c=spot_feed, cmap="viridis", norm=norm, s=36, zorder=3,
+                           edgecolors="k", linewidths=0.5)  # fmt: skip
+            coloured = coloured or lines
+            ax.autoscale()
+        else:
+            ax.text(0.5, 0.5, "no motion in this program", transform=ax.transAxes, ha="center")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(f"{label[0]} (mm)")
+        ax.set_ylabel(f"{label[1]} (mm)")
+        if label != "XY":
+            ax.set_title(f"{label} view")
+    if coloured is not None:
+        fig.colorbar(coloured, ax=views["XY"], label="feed on cutting moves (mm/min)")
+
+
+def _stretches(points: np.ndarray, pieces: np.ndarray) -> np.ndarray:
+    """The points of the selected pieces (piece k joins point k to k+1) as one polyline, a NaN row
+    between separate stretches."""
+    idx = np.flatnonzero(pieces)
+    gap = np.diff(idx) > 1
+    starts, ends = idx[np.r_[True, gap]], idx[np.r_[gap, True]]
+    nan_row = np.full((1, points.shape[1]), np.nan)
+    return np.concatenate([part for a, b in zip(starts, ends, strict=True)
+                           for part in (points[a : b + 2], nan_row)])  # fmt: skip
+
+
+def plot_error_envelope(ax, t_end_s: np.ndarray, error_mm: np.ndarray, tolerance_mm: float,
+                        bin_s: float = 0.0, fontsize: float | None = None) -> None:  # fmt: skip
+    """Contour error over time as a max envelope: bin k (ending at ``t_end_s[k]``, the first starting at
+    0) drawn at its largest error, filled below, with the tolerance line; the legend sits under the axes
+    so it never hides the line."""
+    tol_um = tolerance_mm * 1000.0
+    if len(t_end_s):
+        x = np.concatenate(([0.0], t_end_s))
+        y = np.concatenate((error_mm[:1], error_mm)) * 1000.0
+        what = f"max per {bin_s * 1000:.0f} ms" if bin_s > 0 else "max per bin"
+        ax.fill_between(x, y, step="pre", color="C0", alpha=0.3, lw=0)
+        ax.step(x, y, where="pre", color="C0", lw=0.8, label=f"contour error ({what})")
+        top = max(tol_um, float(np.max(y)))
+    else:
+        top = tol_um
+    ax.axhline(tol_um, color="C3", ls="--", lw=1.2, label=f"tolerance {tol_um:g} µm")
+    ax.set_ylim(0.0, 1.12 * top)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("contour error (µm)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False, fontsize=fontsize)
+

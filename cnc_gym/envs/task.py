@@ -1,52 +1,50 @@
-"""Task configs (``configs/tasks/*.yaml``) and the reward weights of :class:`~cnc_gym.envs.FeedrateEnv`.
+"""Task configs (``configs/tasks/*.yaml``): what :class:`~cnc_gym.envs.FeedrateEnv` runs and how it is
+rewarded.
 
 A task file names a program set, a dialect, a machine, the action mode, the control period and the
-reward weights. It is read with ``yaml.safe_load``; unknown keys, wrong types and out-of-range values
-are :class:`~cnc_gym.errors.ConfigError` naming the file and the key.
+reward weights. It is read with the bounded safe loader of :mod:`cnc_gym.config`; its keys are declared
+below with the same specs as the env's arguments (:mod:`cnc_gym.envs.options`), so unknown keys, wrong
+types and out-of-range values are one :class:`~cnc_gym.errors.ConfigError` line naming the file and the
+key (docs/configs.md lists them).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from cnc_gym.config import check_keys, configs_dir, read_yaml
+from cnc_gym.config import check_object, configs_dir, declared, from_mapping, read_yaml, section, shown, text
+from cnc_gym.envs.options import (
+    ACTION_MODE,
+    ACTION_MODES,
+    CONTROL_PERIOD,
+    DIALECT,
+    MACHINE_NAME,
+    PROGRAM_NAMES,
+    SOURCE,
+    RewardWeights,
+)
 from cnc_gym.errors import ConfigError
 
-ACTION_MODES = ("override", "feed")
-
-
-@dataclass(frozen=True)
-class RewardWeights:
-    """Reward weights, per control step:
-    ``r = -time·dt/T + progress·Δp - contour_error·min(e/tol, cap)² - violation·[e > tol]``
-    (Δp: path progress in the step as a fraction of the program's length; see FeedrateEnv's docstring).
-    """
-
-    time: float = 10.0  # whole-episode time cost at nominal (100 %) speed
-    contour_error: float = 0.05  # per step, per (e_max / tol)²
-    violation: float = 1.0  # per control step whose contour error exceeds the tolerance
-    error_ratio_cap: float = 10.0  # e_max / tol is capped here so one bad step cannot dominate a return
-    # Paid per unit of path progress; sums to exactly this over a finished episode whatever the policy,
-    # so it leaves the undiscounted ranking of finishing policies unchanged but pays for progress when it
-    # happens, which a discounted (γ < 1) learner needs to see that slow costs (see docs/env.md).
-    progress: float = 10.0
+__all__ = ["ACTION_MODES", "RewardWeights", "TaskConfig", "load_task", "resolve_reward", "reward_from_dict",
+           "task_from_dict", "task_path"]  # fmt: skip
 
 
 @dataclass(frozen=True)
 class TaskConfig:
     """One task: what the env runs and how it is rewarded."""
 
-    name: str = "default"
-    description: str = ""
-    programs: tuple[str, ...] = ("circle", "star", "freeform", "pocket")
-    dialect: str = "gsk25i"
-    machine: str = "vmc-small"
-    action_mode: str = "override"
-    control_period_s: float = 0.01
-    reward: RewardWeights = field(default_factory=RewardWeights)
+    name: str = text("default", doc="the task's name")
+    description: str = text("", max_length=4096, doc="one paragraph for people")
+    programs: tuple[str, ...] = declared(PROGRAM_NAMES, default_factory=lambda: ("circle", "star", "freeform",
+                                                                                  "pocket"))  # fmt: skip
+    dialect: str = declared(DIALECT, "gsk25i")
+    machine: str = declared(MACHINE_NAME, "vmc-small")
+    action_mode: str = declared(ACTION_MODE, "override")
+    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    reward: RewardWeights = section(RewardWeights, doc="reward weights (docs/env.md, Reward)")  # noqa: RUF009
     source: str = "<defaults>"
 
 
@@ -56,9 +54,9 @@ def task_path(name_or_path: str | Path) -> Path:
     if path.suffix in (".yaml", ".yml"):
         return path
     path = configs_dir() / "tasks" / f"{name_or_path}.yaml"
-    if not path.exists():
+    if not str(name_or_path) or not path.is_file():
         names = sorted(p.stem for p in (configs_dir() / "tasks").glob("*.yaml"))
-        raise ConfigError(f"unknown task {name_or_path!r}; tasks: {', '.join(names)}")
+        raise ConfigError(f"unknown task {shown(str(name_or_path))}; tasks: {', '.join(names)}")
     return path
 
 
@@ -70,65 +68,25 @@ def load_task(name_or_path: str | Path = "default") -> TaskConfig:
 
 
 def task_from_dict(data: Any, source: str = "<dict>") -> TaskConfig:
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: a task config must be a mapping")
-    allowed = {"name", "description", "programs", "dialect", "machine", "action_mode", "control_period_s",
-               "reward"}  # fmt: skip
-    check_keys(data, allowed, source, "")
-    values: dict[str, Any] = {"source": source}
-    for key in ("name", "description", "dialect", "machine", "action_mode"):
-        if key in data:
-            if not isinstance(data[key], str):
-                raise ConfigError(f"{source}: {key} must be a string, got {data[key]!r}")
-            values[key] = data[key]
-    if values.get("action_mode", "override") not in ACTION_MODES:
-        raise ConfigError(f"{source}: action_mode must be one of {', '.join(ACTION_MODES)}")
-    if "programs" in data:
-        programs = data["programs"]
-        if isinstance(programs, str):
-            programs = [programs]
-        if not isinstance(programs, list) or not programs or not all(isinstance(p, str) for p in programs):
-            raise ConfigError(f"{source}: programs must be a non-empty list of names or paths")
-        values["programs"] = tuple(programs)
-    if "control_period_s" in data:
-        values["control_period_s"] = _positive_number(data["control_period_s"], source, "control_period_s")
-    if "reward" in data:
-        values["reward"] = reward_from_dict(data["reward"], source)
-    return TaskConfig(**values)
+    """Build and check a task from the data of a task file."""
+    return from_mapping(TaskConfig, data, source, "", {"source": source})
 
 
 def reward_from_dict(data: Any, source: str = "<dict>") -> RewardWeights:
     """Validate a mapping of reward weights (all optional; unknown keys are errors)."""
-    if not isinstance(data, dict):
-        raise ConfigError(f"{source}: reward must be a mapping of weights")
-    names = ("time", "progress", "contour_error", "violation", "error_ratio_cap")
-    check_keys(data, set(names), source, "reward")
-    values = {}
-    for key, raw in data.items():
-        if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw) or raw < 0:
-            raise ConfigError(f"{source}: reward.{key} must be a finite number >= 0, got {raw!r}")
-        values[key] = float(raw)
-    if values.get("error_ratio_cap", 1.0) <= 0:
-        raise ConfigError(f"{source}: reward.error_ratio_cap must be positive")
-    return RewardWeights(**values)
+    return from_mapping(RewardWeights, data, source, "reward")
 
 
-def resolve_reward(reward: str | Path | dict | RewardWeights | None) -> RewardWeights:
+def resolve_reward(reward: str | os.PathLike | dict | RewardWeights | None) -> RewardWeights:
     """The env's ``reward`` argument: None (the default task's weights), a task file, a dict or weights."""
     if reward is None:
         return load_task("default").reward
     if isinstance(reward, RewardWeights):
+        check_object(reward, SOURCE, "reward")
         return reward
     if isinstance(reward, dict):
-        return reward_from_dict(reward, "reward")
-    if isinstance(reward, str | Path):
-        return load_task(reward).reward
-    raise ConfigError(
-        f"reward must be None, a task YAML path or a dict of weights, got {type(reward).__name__}"
-    )
-
-
-def _positive_number(raw: Any, source: str, key: str) -> float:
-    if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw) or raw <= 0:
-        raise ConfigError(f"{source}: {key} must be a positive number, got {raw!r}")
-    return float(raw)
+        return reward_from_dict(reward, SOURCE)
+    if isinstance(reward, str | os.PathLike):
+        return load_task(reward if isinstance(reward, str) else Path(reward)).reward
+    raise ConfigError(f"{SOURCE}: reward must be None, a task YAML path or a dict of weights, "
+                      f"got {type(reward).__name__}")  # fmt: skip

@@ -8,6 +8,8 @@ Read (the dialect's lexer, ``lang/fanuc/reader.py`` for the Fanuc family) → ch
 (:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. A dialect is a folder of tables
 and hooks (:mod:`cnc_gym.gcode.dialects`) on a language family (:mod:`cnc_gym.gcode.lang`); the contract
 between them and the core is :mod:`~cnc_gym.gcode.dialect`. See docs/gcode.md and docs/dialects.md.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -77,7 +79,7 @@ def interpret(
     #2001…/#10001… set them from the program).
 
     ``tool_measurement``: G37's simulated measuring instrument and parameters, a
-    :class:`~cnc_gym.gcode.measurement.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
+    :class:`~cnc_gym.gcode.settings.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
     "band_mm": 5}`` (H number → work coordinate where the approach-end signal comes; default: exactly at
     the commanded position, with the manual's standard P2651-P2653).
     ``skip_signal``: G31's simulated probe, ``{"Z": -5.0}``: a G31 move stops where it first reaches one of
@@ -142,7 +144,7 @@ def interpret_file(
 
 def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCalls:
     """``macro_calls=`` → MacroCalls, checked (ConfigError): G 1-255 but not G00/G65/G66/G67, M 1-255 but
-    not the stop/call codes, at most 10 of each kind (L6232, L6281, L6301), programs 1-9999."""
+    not the stop/call codes, at most 10 of each kind (§3.7.6), programs 1-9999."""
     if value is None:
         return dialect.macro_calls
     if isinstance(value, MacroCalls):
@@ -152,7 +154,7 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
         if unknown:
             raise ConfigError(f"macro_calls: unknown keys {sorted(unknown)} (g_macro, m_macro, m_sub, t_sub)")
         try:
-            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})
+            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})  # type: ignore[arg-type]
         except (TypeError, ValueError) as exc:
             raise ConfigError(f"macro_calls: {exc}") from None
     else:
@@ -197,7 +199,7 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
     Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
     270° in the plane). The first offending segment is reported, with the operation volume's stored
     stroke limit 1 alarm: 500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side
-    (n = the axis number, L7250).
+    (n = the axis number, GSK 25i operation manual §2.5.4).
     """
     n = len(toolpath)
     if not n:

@@ -2,7 +2,7 @@
 
 Everything the interpreter emits passes through here. A program point (work coordinates, mm, after
 G20 conversion and G16 polar conversion) becomes a machine point through the stages, in the manual's
-order (L2046: "the scaling is applied firstly and then the coordinates are rotated"):
+order (§3.2.18: "the scaling is applied firstly and then the coordinates are rotated"):
 
     program ─▶ mirror G51.1 ─▶ scaling/mirror G51 ─▶ rotation G68 ─▶ + origin ─▶ machine
     origin = local (G52) + work origin + tool length vector (G43/G44, owned by compensation),
@@ -13,6 +13,8 @@ them into one affine map ``work = A·p + t``; with no stage active it is the ide
 skips it altogether (the plain-G-code hot path does ``program + origin`` only). :class:`OffsetStack`
 holds the translations. :class:`CanonicalMachine` keeps the current machine position and appends
 segments.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -60,7 +62,7 @@ class AffineStage:
     """One program-side stage: ``p' = centre + linear·(p - centre)``.
 
     ``centre`` is the program point the stage was commanded about; the chain carries it through the
-    stages before this one (the G68 centre "will also be scaled", L2046).
+    stages before this one (the G68 centre "will also be scaled", §3.2.18).
     """
 
     name: str
@@ -153,7 +155,7 @@ class TransformChain:
 
 class PolarState:
     """G16 polar input: the plane's first axis word is the radius, the second the angle (degrees, CCW
-    from the first axis's + direction). GSK 25i programming manual §3.6 (polar coordinate command).
+    from the first axis's + direction). GSK 25i programming manual §3.2.16 (polar coordinate command).
 
     * radius word in G90: the origin is the work zero; in G91: the origin is the current position;
     * angle word in G90: the angle itself; in G91: added to the last angle;
@@ -209,7 +211,7 @@ def map_arc(chain: TransformChain, plane: Plane, sweep: float, start_m: Vec,
     plane (G68 rotates only in the selected plane, and a plane change in G68 mode is an error). With equal
     in-plane factors the image of the circle is a circle: the sweep keeps its size and flips its sign
     under a mirror (G02 ↔ G03). With unequal factors the controller traces no ellipse (GSK 25i programming
-    manual §3.15, note 5; the figures are lost): we keep the mapped centre and the mapped start, so the
+    manual §3.2.17, note 5; the figures are lost): we keep the mapped centre and the mapped start, so the
     radius is the mapped start's distance from the mapped centre, and move the mapped end radially onto
     that circle; a full circle stays a full circle. Raises :class:`MapError`.
     """
@@ -272,7 +274,7 @@ class OffsetStack:
     """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them).
 
     ``tool_length`` is the tool length offset vector (G43/G44; owned by the compensation module): it is
-    added to the origin by :meth:`update`, after the program-side transforms (L2045).
+    added to the origin by :meth:`update`, after the program-side transforms (§3.2.18).
     """
 
     def __init__(self, n_wcs: int = 6, n_extra_wcs: int = 48) -> None:
@@ -308,7 +310,7 @@ class OffsetStack:
 
     def select_wcs(self, index: int) -> None:
         """G54..G59 (0..5), G54.1 P1..P48 (6..53). GSK: selecting any work coordinate system drops a G92
-        floating system (L1707-L1712)."""
+        floating system (§3.2.13)."""
         self.active_wcs = index
         self.floating = None
         self.update()
@@ -370,7 +372,8 @@ class CanonicalMachine:
 
     def _rotary_move(self, target: Vec, feed: float | None) -> None:
         """A rapid (``feed`` None) or feed move that also takes the rotary axes to ``rotary_next``."""
-        rotary, self.rotary_next = self.rotary_next, None
+        rotary: tuple[float, ...] = self.rotary_next or ()
+        self.rotary_next = None
         if target == self.position and rotary == self.rotary:
             return
         context = self._context()

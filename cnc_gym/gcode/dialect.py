@@ -30,7 +30,7 @@ action, never a literal GSK number.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -101,7 +101,7 @@ class Seam(Protocol):
         """The literal digits of the block's ``letter`` word (None: absent or an expression)."""
         ...
 
-    def evaluate_words(self, words: tuple) -> list:
+    def evaluate_words(self, words: Sequence) -> list:
         """Expression words of a block → numbers, with each address's rounding and range rules."""
         ...
 
@@ -115,8 +115,9 @@ class Seam(Protocol):
 
 
 #: An action: ``action(core, spec, values)`` carries out one item of a block (a code, or a word such as F);
-#: ``values`` are the block's words (address → number, in program units).
-Action = Callable[[Seam, CodeSpec, dict], None]
+#: ``values`` are the block's words (address → number, in program units). The actions a dialect runs at
+#: power-on get ``values`` None; the motion action gets ``spec`` None for an axis-only block.
+Action = Callable[..., None]
 
 
 @dataclass

@@ -20,6 +20,7 @@ and hooks of the dialect, and they see the core only through the :class:`~cnc_gy
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ConfigError, ProgramError
@@ -158,7 +159,7 @@ class Interpreter:
         return self.dialect.error(message, code, alarm=alarm)
 
     def run_action(self, name: str, spec: CodeSpec | None, values: dict) -> None:
-        self._actions[name](self, spec, values)  # type: ignore[arg-type]
+        self._actions[name](self, spec, values)
 
     # ------------------------------------------------------------------ one block
     def execute(self, block: Block) -> None:
@@ -221,7 +222,7 @@ class Interpreter:
             if spec is None:
                 raise self.error(f"unknown G code {code_name('G', key)}", "unknown-code")
             if not spec.implemented:
-                raise self.error(f"{spec.name} is not implemented yet: {spec.note}", "not-implemented")
+                raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented")
             other = by_group.get(spec.group)
             if other is not None:
                 raise self.error(f"{other.name} and {spec.name} are both in modal group {spec.group:02d}; "
@@ -246,7 +247,7 @@ class Interpreter:
                 if spec is None:
                     raise self._unknown_m(key)
                 if not spec.implemented:
-                    raise self.error(f"{spec.name} is not implemented yet: {spec.note}", "not-implemented",
+                    raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented",
                                      alarm=dialect.addresses["M"].alarm)  # fmt: skip
                 for group, members in dialect.m_groups.items():
                     if key in members:
@@ -290,9 +291,9 @@ class Interpreter:
             self._reject_words(values, allowed, axis_owner)
 
         # Modal table (raw), then the items in the dialect's order of execution.
-        for group, key in keys.items():
-            if group > 0:
-                st.modal[group] = key
+        for modal_group, modal_key in keys.items():
+            if modal_group > 0:
+                st.modal[modal_group] = modal_key
         if motion_spec is not None:
             st.motion_key = keys[motion_spec.group]
         for letter, spec in self._word_specs:
@@ -343,7 +344,7 @@ class Interpreter:
             context = f"with {owner.name}" if owner is not None else "in this block"
             raise self.error(f"address {letter} has no meaning {context}", "unused-word")
 
-    def evaluate_words(self, words: tuple) -> list:
+    def evaluate_words(self, words: Sequence) -> list:
         """Expression words → numbers, with the address's rounding and range rules."""
         dialect = self.dialect
         st = self.state
@@ -378,7 +379,7 @@ class Interpreter:
             out.append((letter, number, None))
         return out
 
-    def _deferred_word(self, letter: str, node: tuple, words: tuple, overrides: dict | None) -> float:
+    def _deferred_word(self, letter: str, node: tuple, words: Sequence, overrides: dict | None) -> float:
         """A literal the address's own rule rejects (``L2.5``): valid when the block belongs to a code that
         gives the letter its own format: a code of the block, or else the modal canned cycle (a later block
         of a G110 pocket). Otherwise the reader's error (decimal point not allowed) stands."""
@@ -428,7 +429,7 @@ class Interpreter:
         chain = st.chain
         w = chain.apply(program) if chain.active else program
         if chain.stages["scaling"] is not None:
-            # Scaled results are rounded to the least increment, half up (GSK 25i programming manual §3.15,
+            # Scaled results are rounded to the least increment, half up (GSK 25i programming manual §3.2.17,
             # scaling note 7), so a tiny scaled move may become zero (a block without movement).
             step = st.increment * st.scale
             w = tuple(math.floor(c / step + 0.5 + 1e-7) * step for c in w)  # 1e-7: x.5 stored as x.4999…
@@ -442,8 +443,8 @@ class Interpreter:
         s = st.scale
         words = (x, y, z)
         if st.after_g69 and st.incremental and words != (None, None, None):
-            raise self.error("the first move after G69 must be absolute (L2044: an incremental one does not "
-                             "move correctly)", "incremental-after-g69")  # fmt: skip
+            raise self.error("the first move after G69 must be absolute (GSK 25i §3.2.18: an incremental one "
+                             "does not move correctly)", "incremental-after-g69")  # fmt: skip
         if st.polar is not None:
             return st.polar.resolve(words, st.plane, s, st.incremental, self.program_position)
         if st.incremental:
@@ -508,7 +509,7 @@ class Interpreter:
                 self.to_machine(_on_plane(center_program, start, plane))))
         except MapError as exc:
             raise self.error(str(exc), exc.code) from None
-        st.program_point = tuple(end_program)  # type: ignore[assignment]
+        st.program_point = (end_program[0], end_program[1], end_program[2])
         if st.after_g69:
             st.after_g69 = False
             self.set_transform_state()

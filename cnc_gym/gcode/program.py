@@ -3,11 +3,15 @@
 A dialect's reader (its lexer, :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`) turns
 program text into a :class:`Program` of :class:`Block` records; the core checks and executes the ordinary
 blocks, the language's runner (control flow and calls) the statements, assignments and call blocks.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from cnc_gym.errors import ProgramError
 
@@ -33,10 +37,19 @@ class Block:
     """
 
     __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
+    line: int
+    words: Sequence  # (letter, value, text) tuples; a plain block keeps a list of (letter, digits) pairs
+    skip: int
+    has_expr: bool
+    assign: Any  # (target node, value node) or None
+    number: int | None
+    gs: list | None
+    ms: list | None
+    values: Any  # dict[str, float], or None for a block with expressions
     # Ordinary blocks share these class-level defaults (no per-block stores on the read hot path);
     # :class:`SpecialBlock` gives statements, assignments and calls their own.
     kind: str | None = None
-    stmt: tuple | None = None
+    stmt: Any = None  # a tuple whose shape depends on the statement (see above)
     message: str | None = None
 
     def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
@@ -70,7 +83,7 @@ class SpecialBlock(Block):
         self.message = None
 
 
-def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
+def split_words(words) -> tuple[list | None, list | None, dict[str, float]]:
     """(G numbers or None, M numbers or None, {address: value}); a repeated address is an error."""
     values: dict[str, float] = {}
     gs = ms = None
@@ -80,7 +93,7 @@ def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
         elif letter == "M":
             ms = [value] if ms is None else [*ms, value]
         elif letter in values:
-            # The manual's default is "the later one is valid" (L503, 1802#6 AD2 = 0); we take the
+            # The manual's default is "the later one is valid" (§1.3.2, 1802#6 AD2 = 0); we take the
             # AD2 = 1 behaviour, an alarm, as with two G codes of one group (docs/gcode.md).
             raise ProgramError(f"address {letter} appears twice in the block", code="duplicate-word")
         else:

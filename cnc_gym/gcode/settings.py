@@ -5,6 +5,8 @@ one of each (``cycle_params``, ``nurbs_params``, ``compensation``, ``macro_calls
 takes the run's options (:class:`FlowOptions`, :class:`ToolMeasurement`, the skip signal). They live
 below every feature module so that the dialect record and the features can both name them without an
 import cycle. Parameter numbers are the GSK 25i's, beside each field.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -40,11 +42,11 @@ class CycleParameters:
     max_cutting_feed: float = 4000.0
     #: The unnamed G124/G125 parameter: hole-to-hole moves as cutting feed (True) or rapid (False).
     pattern_moves_cutting: bool = False
-    #: "022#6 SIJ" (L2618; not in the Parameter volume): True = the G76/G87 shift is the incremental
+    #: "022#6 SIJ" (§3.4.3; not in the Parameter volume): True = the G76/G87 shift is the incremental
     #: vector I (X), J (Y), modal in the cycle mode, moved at the feed F; Q then shifts nothing (it stays
     #: the modal peck depth of G73/G83). False = the shift is |Q| in the 2000#4/#5 direction, at rapid.
     shift_by_ij: bool = False
-    #: G87 variant (L3030-L3044): 2 = back boring (the manual's example X41), 1 = boring with a feed
+    #: G87 variant (§3.4.11): 2 = back boring (the manual's example X41), 1 = boring with a feed
     #: hold and manual retract at the bottom (like G88, without the shift). The manual names no selector
     #: but "canned cycle I / II"; its only parameter there, 009#7 FIX2, is not in the Parameter volume.
     g87_variant: int = 2
@@ -60,12 +62,12 @@ class CycleParameters:
 
 @dataclass(frozen=True)
 class NurbsParameters:
-    """GSK 25i NURBS parameters (Parameter volume; notes §3.21, ops_params L324-L344).
+    """GSK 25i NURBS parameters (the parameter manual; programming manual §3.2.5).
 
     Only ``max_blocks`` (P1407) changes what the interpreter does: a curve longer than that many blocks
     (control-point and knot-only blocks) is an error. The others are interpolator settings, kept here for
     the motion stage (the tool path carries the exact curve; acceleration limits along it are the
-    interpolator's business, L1207).
+    interpolator's business, §3.2.5).
     """
 
     curve_degree: int = 3  # P1404 "curve frequency" 1..4 (the program's P sets the rank of each curve)
@@ -83,7 +85,7 @@ class CompensationSettings:
     ``tool_length_type``: ``A`` (the offset always on Z) or ``B`` (on the axis normal to the plane of the
     G43/G44 block); GSK 2600#1 TLB, standard setting 1 = B. ``startup_type``: ``A`` or ``B`` start-up and
     cancel at outer corners (GSK "2602#2 TPH", not in the parameter volume; Fanuc's standard is A, and the
-    manual's worked example describes A: "offset by the radius vertical to the next block", L4083).
+    manual's worked example describes A: "offset by the radius vertical to the next block", §3.5.2).
     ``d_is_diameter``: 2601#7 ODI (see offsets.py). ``offset_count``: H/D numbers 0..count.
     ``length_needs_axis``: see the field.
     """
@@ -117,7 +119,7 @@ class MacroCalls:
     ``m_macro``: M code → program, called like G65 with arguments (6080-6089 → O9020-O9029).
     ``m_sub``: M code → program, called like M98 after the block's other commands (6071-6079 → O9001-O9009).
     ``t_sub``: with a program number (6001#0 TCS = 1: O9000), ``Tt`` is ``#149=t`` then ``M98 P9000``.
-    Inside a program called by one of these codes, the codes are ordinary (L6265, L6331).
+    Inside a program called by one of these codes, the codes are ordinary (§3.7.6).
     """
 
     g_macro: Mapping[int, int] = field(default_factory=dict)
@@ -193,7 +195,7 @@ class FlowOptions:
     """Options of one run (``interpret(..., max_blocks=, program_dir=, macro_calls=, main_m99=)``).
 
     ``main_m99``: what M99 in the main program does. ``"end"`` (default): the program ends after one pass
-    (a simulated episode is one part; docs/gcode.md). ``"restart"``: the controller's behaviour (L481), back
+    (a simulated episode is one part; docs/gcode.md). ``"restart"``: the controller's behaviour (§1.3.1), back
     to the start (or to ``Nn`` for ``M99 Pn``), so only a macro exit (a GOTO to M30) ends the run, else
     ``max_blocks`` does.
     """

@@ -10,6 +10,7 @@ features; this module holds data only, so that every module can name it without 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -227,7 +228,7 @@ class State:
     modal_item: CodeSpec | None = None
     # ------------------------------------------------------------------ the block being executed
     block: Block | None = None
-    block_words: tuple = ()
+    block_words: Sequence = ()
     g53: bool = False  # G53 in this block: it makes the block's move
     #: Control flow requested by the block (M98/M99): ``("call", number, count)``, ``("return", n)``.
     flow_request: tuple | None = None

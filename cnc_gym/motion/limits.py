@@ -24,6 +24,8 @@ after every rapid, tool or spindle change, program end, or every junction when l
 the acceleration bound on arrival ``a_in`` (a backward pass so that a lower acceleration limit ahead can
 always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k), restarted at every mandatory stop), and the
 lowest acceleration bound and jerk from each point to the next mandatory stop (the braking limits).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -140,7 +142,7 @@ def _rotary_only_profiles(tp: Toolpath, machine: MachineConfig, rows: np.ndarray
                           limits: dict[str, np.ndarray]) -> np.ndarray:  # fmt: skip
     """Rotary-only moves (no XYZ travel), one row each: toolpath row, seconds, travel, speed, acceleration,
     jerk. Each is the fastest jerk-limited move along the rotary vector at F (deg/min: the composite rate
-    with no linear part, L981-L995) or the rapid rate, each axis's speed, acceleration and jerk limit
+    with no linear part, §3.2.2) or the rapid rate, each axis's speed, acceleration and jerk limit
     projected on the vector. Timed at 100 % override."""
     delta = np.abs(tp.rotary_end[rows] - tp.rotary_start[rows])
     travel = np.linalg.norm(delta, axis=1)
@@ -454,7 +456,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         aux_change = (tp.tool[prev] != tp.tool[nxt]) | (tp.spindle_rpm[prev] != tp.spindle_rpm[nxt])
         # Without look-ahead every block ends at rest — but the pieces of one NURBS block are one block, and
         # a block in tapping mode (G63, TAPPING_MODE) "is not decelerated at the end point of a block, but
-        # the next block is executed" (manual L6423): it runs on as in G64 with look-ahead.
+        # the next block is executed" (manual §3.8): it runs on as in G64 with look-ahead.
         tapping_prev = (modes[prev] & SegmentMode.TAPPING_MODE) != 0
         no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt) & ~tapping_prev
         stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead

@@ -1,4 +1,4 @@
-"""The built-in program suite and the program loader the env uses.
+r"""The built-in program suite and the program loader the env uses.
 
 Built-in programs ship as package data (``cnc_gym/programs/*.nc``, plain GSK 25i G-code written by
 ``scripts/make_programs.py``):
@@ -13,18 +13,36 @@ pocket     a pocket-like spiral of rounded rectangles (G02) with tangent step-ov
            roughing F3000, finishing loop F2000
 =========  ===========================================================================================
 
-:func:`load_program` accepts a built-in name, a path to a program file, or G-code text, and caches the
-interpreted :class:`~cnc_gym.toolpath.Toolpath` (interpretation happens once per program and dialect).
+What a program argument may be (``load_program``, the env's ``programs=``, ``cnc-gym run/trace
+PROGRAM``) — one rule, :func:`resolve_program`:
+
+=======================  ===================================================================================
+``Path``, ``PathLike``   a program file (it must exist and not be a folder; ``/dev/null``: an empty program)
+:class:`ProgramText`     G-code text, never taken for a name or a path
+:class:`Program`         an already interpreted program (what :func:`load_program` returns), used as is
+``str``                  in this order: a built-in name; G-code text if it has a line break; a file if it
+                         names an existing one or ends in ``.nc .ngc .gcode .tap .cnc .txt``; an error if it
+                         looks like a name or a path (only letters, digits and ``_ . - / \ ~ :``, with two
+                         letters in a row, e.g. ``circel`` or ``parts/bracket``); else one line of G-code text
+                         (``G01 X10 F100``, ``F1/80``, ``/G00 X5`` with its block skip)
+=======================  ===================================================================================
+
+Interpretation is cached (once per program, dialect, machine and block budget; a file's modification
+time is part of the key, so an edited file is read again).
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
 import re
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Literal, NamedTuple
 
 from cnc_gym.errors import ConfigError
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import Toolpath
 
@@ -33,9 +51,48 @@ PROGRAMS_DIR = Path(__file__).resolve().parent
 #: Built-in programs in suite order (the env's default program set).
 BUILTIN_PROGRAMS: tuple[str, ...] = ("circle", "star", "freeform", "pocket")
 
-# A bare word of two or more letters (``"circel"``) is a mistyped name, not a one-block program.
-_NAME_LIKE = re.compile(r"[A-Za-z]{2,}[\w-]*")
-_PROGRAM_SUFFIXES = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".txt")
+#: File name endings that make a one-line string a path even when no such file exists (then: not found).
+PROGRAM_SUFFIXES = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".txt")
+
+# A one-line string made of name/path characters with two letters in a row (``circel``, ``parts/bracket``)
+# is a mistyped name or a missing file, not a block of G-code (addresses are single letters).
+_NAME_OR_PATH = re.compile(r"[\w.~:/\\-]*[A-Za-z]{2}[\w.~:/\\-]*")
+
+
+@dataclass(frozen=True)
+class ProgramText:
+    """G-code text, taken as text whatever it looks like; ``name`` defaults to ``text-<8 hex of SHA-1>``."""
+
+    text: str
+    name: str | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.text, str):
+            raise ConfigError(f"ProgramText needs a str, got {type(self.text).__name__}")
+        if self.name is not None and not (isinstance(self.name, str) and self.name.strip()):
+            raise ConfigError(f"ProgramText name must be a non-empty str, got {self.name!r}")
+
+
+class Program(NamedTuple):
+    """An interpreted program: its name (built-in name, file stem or text name) and its tool path."""
+
+    name: str
+    toolpath: Toolpath
+
+
+#: Everything a program argument may be (see the module docstring for the rule).
+ProgramLike = str | os.PathLike | ProgramText | Program
+PROGRAM_TYPES = (str, os.PathLike, ProgramText, Program)
+
+
+@dataclass(frozen=True)
+class ProgramSource:
+    """Where a program comes from, once :func:`resolve_program` has applied the rule."""
+
+    kind: Literal["builtin", "file", "text"]
+    name: str
+    path: Path | None = None  # builtin and file (None for text)
+    text: str | None = None  # text (None for builtin and file)
 
 
 def program_names() -> list[str]:
@@ -50,59 +107,106 @@ def program_path(name: str) -> Path:
     return PROGRAMS_DIR / f"{name}.nc"
 
 
-def load_program(program: str | Path, dialect: str = "gsk25i",
-                 machine: MachineConfig | None = None) -> tuple[str, Toolpath]:  # fmt: skip
-    """Interpret a program once and cache it. Returns ``(name, toolpath)``.
-
-    ``program`` is a built-in name (``"circle"`` …), a path to a program file (``str`` or ``Path``), or
-    G-code text (anything containing a newline or a G/M word that is not an existing file). The name is
-    the built-in name, the file's stem, or ``text-<8 hex digits of its SHA-1>``. Program errors raise
-    :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``). With ``machine`` the program may
-    move the machine's rotary axes and must stay within its travel (see :func:`cnc_gym.gcode.interpret`).
-    """
-    key = machine  # machines are frozen and hashable: part of the cache key
-    if not isinstance(program, str | Path):
+def resolve_program(program: str | os.PathLike | ProgramText) -> ProgramSource:
+    """Apply the rule of the module docstring: a built-in, a file or text. Raises ConfigError otherwise."""
+    if isinstance(program, ProgramText):
+        return ProgramSource("text", program.name or _text_name(program.text), text=program.text)
+    if isinstance(program, os.PathLike):
+        return _file_source(Path(program))
+    if not isinstance(program, str):
         raise ConfigError(
-            f"a program must be a built-in name, a path or G-code text, got {type(program).__name__}"
+            "a program must be a built-in name, a path, G-code text or a ProgramText, "
+            f"got {type(program).__name__}"
         )
-    if isinstance(program, str) and program in BUILTIN_PROGRAMS:
-        return program, _load_file(str(program_path(program)), dialect, 0.0, key)
-    if isinstance(program, Path) or _looks_like_path(program):
-        path = Path(program)
-        if not path.is_file():
-            raise ConfigError(f"program file not found: {path}")
-        # The modification time is part of the cache key so an edited file is read again.
-        return path.stem, _load_file(str(path.resolve()), dialect, path.stat().st_mtime, key)
-    if _NAME_LIKE.fullmatch(program):
-        raise ConfigError(
-            f"unknown program {program!r}: not a built-in ({', '.join(BUILTIN_PROGRAMS)}) nor a file"
-        )
-    text = program
-    digest = hashlib.sha1(text.encode("utf-8")).hexdigest()[:8]
-    return f"text-{digest}", _load_text(text, dialect, key)
-
-
-def _looks_like_path(program: str) -> bool:
+    if program in BUILTIN_PROGRAMS:
+        return ProgramSource("builtin", program, path=program_path(program))
     if "\n" in program or "\r" in program:
+        return ProgramSource("text", _text_name(program), text=program)
+    if _exists(program) or Path(program).suffix.lower() in PROGRAM_SUFFIXES:
+        return _file_source(Path(program))
+    if _NAME_OR_PATH.fullmatch(program):
+        raise ConfigError(
+            f"unknown program {_excerpt(program)}: not a built-in ({', '.join(BUILTIN_PROGRAMS)}) "
+            "nor an existing file (pass G-code text as ProgramText)"
+        )
+    return ProgramSource("text", _text_name(program), text=program)
+
+
+def load_program(program: ProgramLike, dialect: str = "gsk25i",
+                 machine: MachineConfig | None = None, *,
+                 max_blocks: int = DEFAULT_MAX_BLOCKS) -> Program:  # fmt: skip
+    """Interpret a program once and cache it. Returns :class:`Program` ``(name, toolpath)``.
+
+    ``program`` follows the rule of the module docstring; the name is the built-in name, the file's stem,
+    or the text's name. Program errors raise :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message
+    [code]``). With ``machine`` the program may move the machine's rotary axes and must stay within its
+    travel (see :func:`cnc_gym.gcode.interpret`). ``max_blocks`` bounds the executed blocks (a runaway
+    loop ends in ``too-many-blocks``). A :class:`Program` is returned as it is.
+    """
+    if isinstance(program, Program):
+        return program
+    source = resolve_program(program)
+    key = machine  # machines are frozen and hashable: part of the cache key
+    if source.path is None:  # text
+        return Program(source.name, _load_text(source.text or "", source.name, dialect, key, max_blocks))
+    # The modification time is part of the cache key so an edited file is read again.
+    mtime = 0.0 if source.kind == "builtin" else source.path.stat().st_mtime
+    return Program(source.name, _load_file(str(source.path.resolve()), dialect, mtime, key, max_blocks))
+
+
+def _file_source(path: Path) -> ProgramSource:
+    if not _exists(path):
+        raise ConfigError(f"program file not found: {path}")
+    if path.is_dir():
+        raise ConfigError(f"{path}: is a folder, not a program file")
+    return ProgramSource("file", path.stem or path.name, path=path)
+
+
+def _exists(path: str | Path) -> bool:
+    """Whether ``path`` names something (a file, ``/dev/null``, a pipe); a string too long or with a NUL
+    byte to be a path is not one."""
+    try:
+        return Path(path).exists()
+    except (OSError, ValueError):
         return False
-    if Path(program).suffix.lower() in _PROGRAM_SUFFIXES or "/" in program or "\\" in program:
-        return True
-    return Path(program).is_file()
+
+
+def _excerpt(text: str, limit: int = 60) -> str:
+    """``repr`` of at most ``limit`` characters of ``text`` (error lines stay short and printable)."""
+    return repr(text) if len(text) <= limit else repr(text[:limit]) + f"… ({len(text)} characters)"
+
+
+def _text_name(text: str) -> str:
+    return f"text-{hashlib.sha1(text.encode('utf-8', 'surrogatepass')).hexdigest()[:8]}"
 
 
 @lru_cache(maxsize=64)
-def _load_file(path: str, dialect: str, mtime: float, machine: MachineConfig | None) -> Toolpath:
+def _load_file(path: str, dialect: str, mtime: float, machine: MachineConfig | None,
+               max_blocks: int) -> Toolpath:  # fmt: skip
     from cnc_gym.gcode import interpret_file
 
-    return interpret_file(path, dialect=dialect, machine=machine)
+    return interpret_file(path, dialect=dialect, machine=machine, max_blocks=max_blocks)
 
 
 @lru_cache(maxsize=64)
-def _load_text(text: str, dialect: str, machine: MachineConfig | None) -> Toolpath:
+def _load_text(text: str, name: str, dialect: str, machine: MachineConfig | None,
+               max_blocks: int) -> Toolpath:  # fmt: skip
     from cnc_gym.gcode import interpret
 
-    digest = hashlib.sha1(text.encode("utf-8")).hexdigest()[:8]
-    return interpret(text, dialect=dialect, file=f"<text-{digest}>", machine=machine)
+    return interpret(text, dialect=dialect, file=f"<{name}>", machine=machine, max_blocks=max_blocks)
 
 
-__all__ = ["BUILTIN_PROGRAMS", "PROGRAMS_DIR", "load_program", "program_names", "program_path"]
+__all__ = [
+    "BUILTIN_PROGRAMS",
+    "PROGRAMS_DIR",
+    "PROGRAM_SUFFIXES",
+    "PROGRAM_TYPES",
+    "Program",
+    "ProgramLike",
+    "ProgramSource",
+    "ProgramText",
+    "load_program",
+    "program_names",
+    "program_path",
+    "resolve_program",
+]

@@ -1,4 +1,4 @@
-"""Exact NURBS curves for the tool path (GSK 25i ``G06.2``, manual §3.21).
+"""Exact NURBS curves for the tool path (``G06.2``, GSK 25i programming manual §3.2.5).
 
 A curve of rank (order) k = degree + 1 with control points P_i, weights w_i and a clamped knot vector x:
 

@@ -1,4 +1,4 @@
-"""The tool path as plain records: the ``cnc-gym trace`` JSON Lines contract (see DESIGN.md)."""
+"""The tool path as plain records: the ``cnc-gym trace`` JSON Lines contract (docs/architecture.md)."""
 
 from __future__ import annotations
 

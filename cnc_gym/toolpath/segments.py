@@ -8,6 +8,8 @@ Arc convention (the same as the ``cnc-gym trace`` contract): a plane is named by
 ``(u, v)`` and its normal ``w`` with ``u × v = w`` — XY (normal +Z), ZX (normal +Y), YZ (normal +X). The
 sweep is signed: positive is counter-clockwise seen from the + end of the normal (G03), negative is
 clockwise (G02). The centre's normal coordinate is the start's; a helix rises linearly in ``w``.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -192,7 +194,7 @@ class Toolpath:
     @property
     def rotary_length(self) -> np.ndarray:
         """The rotary travel as the feed counts it: degrees as mm, or as inch in a G20 program (so 25.4 mm
-        per degree there), mm. F covers √(length² + rotary_length²) per minute (L981-L995)."""
+        per degree there), mm. F covers √(length² + rotary_length²) per minute (§3.2.2)."""
         inch = (self.modes & SegmentMode.INCH_PROGRAM) != 0
         return self.rotary_travel * np.where(inch, 25.4, 1.0)
 
@@ -200,9 +202,9 @@ class Toolpath:
     def path_feed(self) -> np.ndarray:
         """Programmed feed along the 3-D path, mm/min.
 
-        GSK 25i (manual L1097): on a helix, F is the speed of the arc's projection on the plane, so the
+        GSK 25i (manual §3.2.3): on a helix, F is the speed of the arc's projection on the plane, so the
         speed along the helix is F · length / planar_length. Lines and flat arcs: F itself.
-        With rotary axes (L981-L995) F is the rate along the composite vector with degrees counted as mm,
+        With rotary axes (§3.2.2) F is the rate along the composite vector with degrees counted as mm,
         so the XYZ feed of a line is F · length / √(length² + rotary_travel²).
         """
         ratio = np.divide(self.length, self.planar_length, out=np.ones_like(self.length),

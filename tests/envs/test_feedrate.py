@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
-from cnc_gym.envs.feedrate import ActionError, FeedrateEnv, nominal_time_s
+from cnc_gym.envs.feedrate import SCALAR_FEATURES, ActionError, FeedrateEnv, nominal_time_s
 from cnc_gym.errors import CncGymError, ConfigError
-from cnc_gym.programs import BUILTIN_PROGRAMS, load_program
+from cnc_gym.programs import BUILTIN_PROGRAMS, ProgramText, load_program
 
 ENV_ID = "cnc_gym/Feedrate-v0"
 INFO_KEYS = {
@@ -231,11 +231,33 @@ def test_bad_actions_raise_one_clear_error(circle_env, action):
     assert "action" in str(err.value)
 
 
-def test_scalar_and_python_float_actions_are_accepted(circle_env):
+@pytest.mark.parametrize(
+    "action", [0.25, np.float32(0.25), np.float64(0.25), [0.25], (0.25,), np.array(0.25), np.array([0.25])]
+)
+def test_scalar_and_python_float_actions_are_accepted(circle_env, action):
+    # Any real number, or a sequence/array of one, is the same knob as the canonical float32 array.
     circle_env.reset(seed=0)
-    circle_env.step(0.0)
-    circle_env.step(np.float32(0.0))
-    circle_env.step([0.0])
+    expected = [circle_env.step(np.array([0.25], dtype=np.float32)) for _ in range(3)]
+    circle_env.reset(seed=0)
+    got = [circle_env.step(action) for _ in range(3)]
+    for (obs, reward, terminated, truncated, info), want in zip(got, expected, strict=True):
+        np.testing.assert_array_equal(obs, want[0])
+        assert (reward, terminated, truncated, info) == want[1:]
+        assert obs[SCALAR_FEATURES.index("knob")] == 0.25
+
+
+@pytest.mark.parametrize("text", ["G90\nM30\n", "", "T1 M06\nM03 S1000\nM05\nM30\n"])
+def test_a_program_without_motion_ends_at_the_first_step_in_zero_seconds(text):
+    env = gym.make("cnc_gym/Feedrate-v0", programs=[ProgramText(text)])
+    obs, info = env.reset(seed=0)
+    assert env.observation_space.contains(obs) and info["progress"] == 1.0
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    assert terminated and not truncated and reward == 0.0
+    assert env.observation_space.contains(obs)
+    assert info["cycle_time_s"] == 0.0 and info["violations"] == 0 and info["contour_error_max_mm"] == 0.0
+    assert info["steps"] == 1
+    env.reset(seed=1)  # and it starts over like any program
+    env.close()
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,4 @@
-"""Property tests of cutter radius compensation (seed notes §5.2) and tool offsets.
+"""Property tests of cutter radius compensation (§3.5.2) and tool offsets.
 
 1. Random convex polygons traced with G41 (tool inside a counter-clockwise contour) or G42 (outside), with
    a radius smaller than the smallest inscribed feature: every compensated edge runs on the line at exactly
@@ -6,6 +6,8 @@
    to the contour (inner corners are intersection points, outer corners intersection or extension points).
 2. Random programs mixing G40/G41/G42, D/H changes, lines, arcs, Z moves and dwells give a ProgramError
    or a finite tool path.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations

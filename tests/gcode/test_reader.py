@@ -1,4 +1,7 @@
-"""Lexical rules of the GSK 25i dialect (seed notes §1): %, O, N, comments, block skip, numbers, case."""
+"""Lexical rules of the GSK 25i dialect (§1.2.3): %, O, N, comments, block skip, numbers, case.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -32,15 +35,15 @@ def test_comments_case_spaces_and_semicolon_end_of_block():
 
 
 def test_number_without_decimal_point_is_mm_and_literals_are_truncated():
-    # GSK 1800#0 DPI = 1 (standard): X10 is 10 mm (L684). X9.87654 is truncated (not rounded) to the
-    # least input increment 0.0001 mm: 9.8765 (L685-L690, worked example X6).
+    # GSK 1800#0 DPI = 1 (standard): X10 is 10 mm (§2.5). X9.87654 is truncated (not rounded) to the
+    # least input increment 0.0001 mm: 9.8765 (§2.5, worked example X6).
     out = moves("G00 X10 Y9.87654 Z-0.00009\n")
     assert out[0]["end"] == [10.0, 9.8765, 0.0]  # -0.00009 truncates to -0.0000
 
 
 def test_truncation_at_a_0_001_mm_increment_and_dpi_0():
-    # The same literal at a 0.001 mm increment becomes 9.876 (L686, X6). With DPI = 0 a number without a
-    # point counts least increments: X10000 = 10 mm at 0.001 mm (the Fanuc-style examples, L4523).
+    # The same literal at a 0.001 mm increment becomes 9.876 (§2.5, X6). With DPI = 0 a number without a
+    # point counts least increments: X10000 = 10 mm at 0.001 mm (the Fanuc-style examples, §3.5.3).
     coarse = dataclasses.replace(GSK, least_increment_mm=0.001, least_increment_inch=0.001)
     assert moves("G00 X9.87654\n", dialect=coarse)[0]["end"][0] == 9.876
     dpi0 = dataclasses.replace(coarse, integer_is_unit=False)
@@ -62,28 +65,28 @@ def test_optional_block_skip(switches, expected_x):
 
 
 def test_block_skip_applies_to_program_end():
-    # "/M30" does not end the program when the switch is on (L516).
+    # "/M30" does not end the program when the switch is on (§1.3.3).
     assert len(moves("G00 X1\n/M30\nX2\n", block_skip=frozenset({1}))) == 2
     assert len(moves("G00 X1\n/M30\nX2\n")) == 1
 
 
 def test_slash_inside_a_block_discards_the_rest():
-    # L533-L535: "information between the slash and EOB code is ignored".
+    # §1.3.4: "information between the slash and EOB code is ignored".
     assert moves("G00 X10 /Y20\n")[0]["end"] == [10.0, 0.0, 0.0]
 
 
 def test_block_skip_syntax_errors():
-    assert program_error("//3 G00 X10.0\n").code == "bad-block-skip"  # written /1/3 (L522-L524)
+    assert program_error("//3 G00 X10.0\n").code == "bad-block-skip"  # written /1/3 (§1.3.4)
     assert program_error("/0 G00 X1\n").code == "bad-block-skip"
     err = program_error("/#2 G00 X100.0\n")
-    assert err.code == "variable-not-allowed"  # L5159
+    assert err.code == "variable-not-allowed"  # §3.7.2
 
 
 def test_o_and_n_must_lead_the_block():
     assert program_error("G00 N10 X1\n").code == "misplaced-word"
     assert program_error("G00 X1 O12\n").code == "misplaced-word"
-    assert program_error("N#3 Y200.0\n").code == "variable-not-allowed"  # L5160
-    assert program_error("O#1\n").code == "variable-not-allowed"  # L5158
+    assert program_error("N#3 Y200.0\n").code == "variable-not-allowed"  # §3.7.2
+    assert program_error("O#1\n").code == "variable-not-allowed"  # §3.7.2
 
 
 @pytest.mark.parametrize(
@@ -124,7 +127,7 @@ def test_lowercase_and_uppercase_give_the_same_toolpath():
 
 
 def test_two_words_of_one_address_are_an_error():
-    # The manual's default is "the later one is valid" (L503); this interpreter raises instead
+    # The manual's default is "the later one is valid" (§1.3.2); this interpreter raises instead
     # (1802#6 AD2 = 1 behaviour), consistently with group conflicts. docs/gcode.md.
     assert program_error("G01 X1 X2 F100\n").code == "duplicate-word"
 

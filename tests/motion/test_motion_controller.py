@@ -302,7 +302,7 @@ NO_LOOKAHEAD = machine_from_dict({
 
 
 def test_g63_tapping_mode_runs_on_through_block_ends_at_f_whatever_the_knob():
-    # GSK manual L6423: in G63 "tool is not decelerated at the end point of a block, but the next block is
+    # GSK manual §3.8: in G63 "tool is not decelerated at the end point of a block, but the next block is
     # executed. When G63 is specified, feedrate override and feed hold are invalid." Without look-ahead
     # (P1409 = 0) a G64 block ends at rest; a tapping-mode block runs on into the next one where the limits
     # allow. Two collinear 10 mm Z blocks at F 1200 (20 mm/s), A 3000, J 30000 (20 < A²/J = 300).

@@ -4,6 +4,8 @@ Sources are the GSK 25i programming manual (sections cited as "§n") and its par
 holds what is the GSK's own: its code tables, addresses and alarm numbers (``codes.py``), its special
 canned cycles (pockets and bosses, ``pockets.py``) and hole patterns (``patterns.py``); everything else is
 the Fanuc family's (``cnc_gym/gcode/lang/fanuc``). docs/gsk25i.md describes the dialect.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -53,8 +55,8 @@ DIALECT = Dialect(
     parameter_ranges=PARAMETER_RANGES,
     functions=codes.FUNCTIONS,
     alarms=ALARMS,
-    integer_is_unit=True,  # 1800#0 DPI standard setting 1: X10 = 10 mm (L684, PARAM-VOL)
-    least_increment_mm=0.0001,  # L2101-L2104
+    integer_is_unit=True,  # 1800#0 DPI standard setting 1: X10 = 10 mm (§2.5; parameter manual §4.7)
+    least_increment_mm=0.0001,  # §3.2.19
     least_increment_inch=0.0001,
     arc_radius_tolerance_mm=0.01,  # P1810
     cycle_params=CycleParameters(),  # P2010/P2011 = 0.5 mm, P2000 = 0, P2141/2142 = 1000 r/min
@@ -62,7 +64,7 @@ DIALECT = Dialect(
     max_m_per_block=3,  # 1803#6 M3B standard 1
     m_groups=codes.M_GROUPS,
     corner_words=frozenset({",L", ",R"}),
-    max_bracket_depth=5,  # L5593
+    max_bracket_depth=5,  # §3.7.4
     keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),
     variables=((1, 33), (100, 199), (500, 999)),
     system_variables=(

@@ -5,6 +5,8 @@ Sources: the GSK 25i programming manual and its parameter volume, section number
 the controller has but this simulator does not carry out are listed as ``unbuilt`` so they are rejected by
 name (``not-implemented``), never ignored; codes missing from these tables are ``unknown-code`` (GSK alarm
 10 "IMPROPER G-CODE").
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -21,20 +23,20 @@ STEP_LENGTH = {"L": AddressRule(0.0, BIG, "length")}
 
 G_CODES = table([
     *family.G_CODES,
-    # G06.2 NURBS (§3.21; nurbs.py): modal in group 01; the block's axis words are control points.
+    # G06.2 NURBS (§3.2.5; nurbs.py): modal in group 01; the block's axis words are control points.
     g(6.2, 1, "nurbs", step="motion", uses_axes=True, words="PKR", address_rules=NURBS_RULES),
     unbuilt(33, 1, "thread cutting G33"),
-    # G09 (one-shot exact stop) is missing from GSK's table (notes §3.5); Fanuc-standard, kept.
+    # G09 (one-shot exact stop) is missing from GSK's table (§3.8); Fanuc-standard, kept.
     g(5, 0, "contour_control", step="modes", words="P"),  # G05 P10000 / P0: high-precision contour control
     unbuilt(7.1, 0, "cylindrical interpolation G07.1"),
     unbuilt(107, 0, "cylindrical interpolation G107"),
     unbuilt(53.1, 0, "tool axis direction control G53.1"),
     unbuilt(43.4, 8, "tool centre point control G43.4"),
     unbuilt(68.2, 16, "tilted working plane G68.2"),
-    # Hole patterns G120-G125 and face milling G126/G127 (§3.19; patterns.py): the value is the G number.
+    # Hole patterns G120-G125 and face milling G126/G127 (§3.6; patterns.py): the value is the G number.
     *[g(n, 0, "pattern", n, step="motion", uses_axes=True, words=PATTERN_WORDS[n],
         address_rules=STEP_LENGTH if "L" in PATTERN_WORDS[n] else None) for n in range(120, 128)],
-    # Special cycles G110-G117, G130-G137 (§3.18; pockets.py): canned cycles of their own kinds.
+    # Special cycles G110-G117, G130-G137 (§3.4.16-§3.4.23; pockets.py): canned cycles of their own kinds.
     *[g(code, 9, "cycle", kind, step="motion", uses_axes=True, words=POCKET_WORDS[code],
         address_rules=STEP_LENGTH if "L" in POCKET_WORDS[code] else None)
       for kind, code in KIND_CODES.items()],
@@ -49,7 +51,7 @@ M_CODES = table([
     m(97, "not_implemented", step="stop", implemented=False, note="macro interrupt M97"),
 ])
 
-# --------------------------------------------------------------------------- addresses (Table 1-1, §1.7)
+# --------------------------------------------------------------------------- addresses (Table 1-1, §2.5)
 ADDRESSES = {
     **{a: AddressRule(-BIG, BIG, "length") for a in "XYZIJKRQ"},
     "F": AddressRule(0.0, 1000000.0, "feed"),
@@ -64,13 +66,13 @@ ADDRESSES = {
     "H": AddressRule(0.0, 256.0, "integer", point_allowed=False, alarm=30),
     "D": AddressRule(0.0, 256.0, "integer", point_allowed=False, alarm=30),
     **{a: AddressRule(-BIG, BIG, "plain") for a in "ABCEUVW"},
-    # Chamfer and corner rounding (L1597-L1646): ,L is the chamfer distance, ,R the corner radius.
+    # Chamfer and corner rounding (§3.2.11): ,L is the chamfer distance, ,R the corner radius.
     ",L": AddressRule(0.0, BIG, "length"),
     ",R": AddressRule(0.0, BIG, "length"),
 }
 
 
-# --------------------------------------------------------------------------- alarms (Appendix B)
+# --------------------------------------------------------------------------- alarms (the manual's alarm list)
 ALARMS = {
     "missing-value": 5,
     "missing-address": 4,
@@ -92,7 +94,7 @@ ALARMS = {
     "arc-missing-center": 22,
     "zero-feed": 25,
     "bad-g10": 31,
-    # Coordinates and transforms (notes §9.2 M14-M20, Appendix B).
+    # Coordinates and transforms (docs/gsk25i_alarms.md M14-M20).
     "forbidden-in-scaling": 109,
     "bad-scale-factor": 110,
     "reference-check-failed": 46,
@@ -105,7 +107,7 @@ ALARMS = {
     "overflow": 102,
     "variable-not-allowed": 205,
     "too-many-m-codes": 201,
-    # Tool compensation (notes §5, §9.5; compensation.py, offsets.py).
+    # Tool compensation (§3.5; compensation.py, offsets.py).
     "length-no-axis": 27,
     "bad-offset-number": 30,
     "bad-offset-value": 32,
@@ -114,7 +116,7 @@ ALARMS = {
     "comp-plane-change": 37,
     "comp-arc-centre": 38,
     "comp-interference": 41,
-    # Canned cycles (notes §9.4; the special-cycle checks pass their own 210-228 numbers).
+    # Canned cycles (docs/gsk25i_alarms.md; the special-cycle checks pass their own 210-228 numbers).
     "cycle-group01": 61,
     "cycle-conflict": 61,
     "cycle-missing-data": 61,
@@ -128,7 +130,7 @@ ALARMS = {
     "g37-signal": 80,
     "g37-h-in-block": 80,
     "g37-no-h": 80,
-    # Macros and subprograms (notes §9.6, Appendix B).
+    # Macros and subprograms (docs/gsk25i_alarms.md S1-S15).
     "bad-call": 17,  # illegal macro program number / beyond the maximum repeat count
     "program-not-found": 59,
     "sequence-not-found": 60,

@@ -1,10 +1,12 @@
 """The GSK 25i hole patterns and face milling: G120-G125 (bolt circle, line, arc, grid, rectangle) and
-G126/G127 (zig-zag and one-way face milling) (GSK 25i programming manual §3.19, hole-machining patterns).
+G126/G127 (zig-zag and one-way face milling) (GSK 25i programming manual §3.6, the special canned cycles).
 
 One-shot codes: G120-G125 drill every hole with the modal canned cycle (only positioning when none is
 active); G124/G125 take the drilling code of their own block; G126/G127 face-mill. The geometry is pure
 (:func:`pattern_holes`, :func:`rectangle_holes`, :func:`face_mill_steps`); the holes are drilled through
 the Fanuc family's modal cycle (``lang/fanuc/cycles.py``).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ PATTERN_WORDS = {120: "IJK", 121: "IJK", 122: "IJPK", 123: "IJPK", 124: "RIJPK",
 
 def pattern_holes(code: int, x: float, y: float, *, i: float = 0.0, j: float = 0.0, k: int = 0,
                   p: float = 0.0) -> list[tuple[float, float]]:  # fmt: skip
-    """Hole positions (XY, mm) of G120-G123 (L4873-L4985). Angles in degrees.
+    """Hole positions (XY, mm) of G120-G123 (§3.6.1-§3.6.4). Angles in degrees.
 
     G120 bolt circle: centre (x, y), radius i, first angle j, k holes 360°/k apart.
     G121 line: start (x, y), spacing i (negative = the other way), angle j, k holes including the start.
@@ -44,7 +46,7 @@ def pattern_holes(code: int, x: float, y: float, *, i: float = 0.0, j: float = 0
         return [(x + i * math.cos(math.radians(j + n * p)), y + i * math.sin(math.radians(j + n * p)))
                 for n in range(k)]  # fmt: skip
     if code == 123:
-        holes = []
+        holes: list[tuple[float, float]] = []
         nx = int(p)
         for row in range(k):
             cols = range(nx) if row % 2 == 0 else range(nx - 1, -1, -1)
@@ -61,7 +63,7 @@ def rectangle_holes(x: float, y: float, side1: float, side2: float, n1: int, n2:
     (its end corner is the next side's first hole). docs/gcode.md explains this reading."""
     turn = 1.0 if ccw else -1.0
     corners = [(x, y), (x + side1, y), (x + side1, y + turn * side2), (x, y + turn * side2)]
-    holes = []
+    holes: list[tuple[float, float]] = []
     for side, count in enumerate((n1, n2, n1, n2)):
         (ax, ay), (bx, by) = corners[side], corners[(side + 1) % 4]
         holes.extend((ax + (bx - ax) * n / count, ay + (by - ay) * n / count) for n in range(count))
@@ -70,7 +72,7 @@ def rectangle_holes(x: float, y: float, side1: float, side2: float, n1: int, n2:
 
 def face_mill_steps(x: float, y: float, width_x: float, width_y: float, step: float, level: float,
                     r_level: float, initial: float, feed: float, zigzag: bool) -> list[Step]:  # fmt: skip
-    """G126 (zig-zag) / G127 (one-way) face milling (L5025-L5062): passes along X of length
+    """G126 (zig-zag) / G127 (one-way) face milling (§3.6.6): passes along X of length
     ``width_x`` from (x, y), stepping ``step`` toward +Y (or -Y for a negative width) until ``width_y``
     is covered; the last pass lies exactly on ``y + width_y``. One-way: rapid up to R, back, feed down."""
     n = max(1, math.ceil(abs(width_y) / step - 1e-9))
@@ -96,7 +98,7 @@ def face_mill_steps(x: float, y: float, width_x: float, width_y: float, step: fl
 
 
 def _angle(core: Seam, letter: str, values: dict) -> float:
-    """Pattern angles: with a decimal point in degrees, without one in 0.001° (L4882)."""
+    """Pattern angles: with a decimal point in degrees, without one in 0.001° (§3.6)."""
     text = core.word_text(letter)
     value = values[letter]
     if text is not None and "." not in text:
@@ -112,7 +114,7 @@ def _count(core: Seam, letter: str, values: dict, code: int, *, required: bool) 
         return 0
     n = values[letter]
     if code in (124, 125):
-        return max(0, int(n))  # negatives invalid, decimals truncated (L5071)
+        return max(0, int(n))  # negatives invalid, decimals truncated (§3.6.6)
     if n != int(n) or not 1 <= n <= 9999:
         raise core.error(f"G{code} {letter}{n:g}: the number of holes must be 1..9999", "cycle-argument",
                          alarm=225)  # fmt: skip
@@ -124,13 +126,13 @@ def pattern_block(core: Seam, code: int, values: dict, cycle_spec: CodeSpec | No
     when none is active); G124/G125 take the cycle code of their own block; G126/G127 face-mill."""
     state = core.state.cycle
     if code <= 123 and state.kind is not None and state.kind.special:
-        # "G110 ... G137 isn't with the function of continuous drilling holes" (L5075): the patterns
-        # drill with the standard cycles only (L4881), never a pocket per hole.
+        # "G110 ... G137 isn't with the function of continuous drilling holes" (§3.6.6): the patterns
+        # drill with the standard cycles only (§3.6), never a pocket per hole.
         raise core.error(f"G{code} while the special cycle {state.spec.name} is modal: the hole "  # type: ignore[union-attr]
                          "patterns drill with G73-G89 only; cancel it with G80", "cycle-conflict",
                          alarm=61)  # fmt: skip
     if core.state.comp.side:
-        # the radius offset is ignored by the cycles (L2516): see cycles.cycle_block
+        # the radius offset is ignored by the cycles (§3.4.1): see cycles.cycle_block
         compensation.before_machine_move(core)
     s = core.state.scale
     here = core.program_position
@@ -157,7 +159,7 @@ def pattern_block(core: Seam, code: int, values: dict, cycle_spec: CodeSpec | No
                                    feed, zigzag=code == 126))  # fmt: skip
         return
     if code in (124, 125):
-        kind = core.dialect.cycles.get(cycle_spec.value) if cycle_spec is not None else None  # type: ignore[arg-type]
+        kind = core.dialect.cycles.get(str(cycle_spec.value)) if cycle_spec is not None else None
         if kind is None or kind.special or kind.shifting:
             raise core.error(f"G{code} needs a drilling-mode G code (G73 G74 G81-G86 G88 G89) in its block",
                              "cycle-argument", alarm=61)  # fmt: skip
@@ -193,8 +195,8 @@ def pattern_block(core: Seam, code: int, values: dict, cycle_spec: CodeSpec | No
 
 def _drill_holes(core: Seam, holes: list[tuple[float, float]], *, last_uses_return: bool,
                  moves_cutting: bool) -> None:  # fmt: skip
-    """Drill each hole with the modal cycle, or only position when no cycle is active (L4869).
-    ``last_uses_return``: G124/G125 return to R between holes, G98/G99 only after the last (L5069)."""
+    """Drill each hole with the modal cycle, or only position when no cycle is active (§3.5.7).
+    ``last_uses_return``: G124/G125 return to R between holes, G98/G99 only after the last (§3.6.6)."""
     st = core.state
     state = st.cycle
     roles = core.dialect.roles
@@ -208,7 +210,7 @@ def _drill_holes(core: Seam, holes: list[tuple[float, float]], *, last_uses_retu
                 emit(core, [("rapid", (hx, hy, None))])
                 continue
             if last_uses_return and index < len(holes) - 1:
-                st.modal[group] = roles.return_r  # type: ignore[index]
+                st.modal[group] = roles.return_r  # type: ignore[index,assignment]
             else:
                 st.modal[group] = saved_return  # type: ignore[index,assignment]
             cycle_block(core, None, {}, hole_xy=(hx, hy))
@@ -225,7 +227,7 @@ def pattern(core: Seam, spec: CodeSpec, values: dict) -> None:
 def check_block(core: Seam, plan: BlockPlan) -> CodeSpec | None:
     """A pattern and a cycle code in one block (block check): G124/G125 take the cycle code as their
     drilling mode (and the axis words); with G120-G123 it is an error (ours: the manual ignores the cycle
-    code, L4933)."""
+    code, §3.6.2)."""
     roles = core.dialect.roles
     cycle_spec = plan.by_group.get(roles.cycle_group)  # type: ignore[arg-type]
     if cycle_spec is None or cycle_spec.action != "cycle":

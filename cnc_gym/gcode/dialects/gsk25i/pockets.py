@@ -1,5 +1,5 @@
 """The GSK 25i special canned cycles: circular and rectangular pockets and bosses, roughing and finishing,
-G110-G117 and G130-G137 (GSK 25i programming manual §3.18, special canned cycles; group 09).
+G110-G117 and G130-G137 (GSK 25i programming manual §3.4.16-§3.4.23; group 09).
 
 Each code is a kind of the dialect's cycle library (:data:`CYCLES`), run by the Fanuc family's modal
 cycle (``lang/fanuc/cycles.py``: levels, G98/G99, K, the hole position) like any drilling cycle. The
@@ -19,6 +19,8 @@ G132 / G133  ``rect_pocket_finish``      finishing rectangle, lead-in from L
 G134 / G135  ``rect_boss_rough``         rectangles from the stock E·(I, J) in
 G136 / G137  ``rect_boss_finish``        finishing rectangle around the boss
 ===========  ==========================  ===========================================================
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -95,7 +97,7 @@ def pocket_steps(code: int, cx: float, cy: float, r_level: float, bottom: float,
                  l_step: float = 0.0, w_first: float = 0.0, q_step: float = 0.0, v_clear: float = 0.0,
                  u_corner: float = 0.0, e_stock: float = 0.0) -> list[Step]:  # fmt: skip
     """Tool-centre path of the special cycles G110-G117, G130-G137 in the XY plane (values already
-    checked by :func:`check_pocket`). The figures are lost (seed notes §4.4-§4.8): the geometry below is
+    checked by :func:`check_pocket`). The figures are lost (§3.4.16): the geometry below is
     our design, described in docs/gcode.md. Every cycle ends over (cx, cy) at the return level."""
     ccw = code % 2 == 0
     retract = initial if return_initial else r_level
@@ -106,7 +108,7 @@ def pocket_steps(code: int, cx: float, cy: float, r_level: float, bottom: float,
             outer = i - rt
             radii = [min(outer, n * l_step) for n in range(1, math.ceil(outer / l_step - 1e-9) + 1)]
             start = (cx, cy)
-            rings = [("circle", rad) for rad in radii]
+            rings: list[tuple] = [("circle", rad) for rad in radii]
         elif code in (114, 115):
             first, last = j + rt, i + rt
             count = math.ceil((first - last) / l_step - 1e-9)
@@ -162,7 +164,7 @@ def pocket_steps(code: int, cx: float, cy: float, r_level: float, bottom: float,
             contact = cx + hx
         # Tangential half-circle lead-in and lead-out between the start point and the contact point on
         # the +X side: inside the pocket they turn the finishing way, outside the boss the other way
-        # (L3568, L3805).
+        # (§3.4.19, §3.4.23).
         mid = ((start_x + contact) / 2.0, cy, bottom)
         lead = math.pi if ccw else -math.pi
         if not inside:
@@ -183,7 +185,7 @@ def pocket_steps(code: int, cx: float, cy: float, r_level: float, bottom: float,
 def check_pocket(code: int, *, tool_radius: float, i: float | None, j: float | None, l_step: float | None,
                  w_first: float | None, q_step: float | None, v_clear: float | None, u_corner: float | None,
                  e_stock: float | None) -> tuple[str, int] | None:  # fmt: skip
-    """The special-cycle argument checks (alarms 210-228, seed notes §4.8): ``(message, alarm)`` or None."""
+    """The special-cycle argument checks (alarms 210-228, §3.4.20): ``(message, alarm)`` or None."""
     rt = tool_radius
     rough = code in (110, 111, 114, 115, 130, 131, 134, 135)
     rect = code >= 130
@@ -206,6 +208,7 @@ def check_pocket(code: int, *, tool_radius: float, i: float | None, j: float | N
         # examples' reading, L up to the tool diameter, is the rule (docs/gcode.md).
         if l_step is None or l_step <= 0 or (rt > 0 and l_step > 2.0 * rt):
             return f"L (step over) must be > 0 and at most the tool diameter {2.0 * rt:g}", 219
+    j = 0.0 if j is None else j  # given wherever the checks below read it (the "J is missing" check above)
     if code in (110, 111, 112, 113):
         if rt >= i:
             return f"tool radius {rt:g} is not smaller than the circle radius I{i:g}", 222
@@ -241,7 +244,7 @@ def check_pocket(code: int, *, tool_radius: float, i: float | None, j: float | N
 
 
 def tool_radius(core: Seam, values: dict, stored: dict) -> float:
-    """Tool radius from the D offset number (D0 = radius 0, L3350); D missing is alarm 221."""
+    """Tool radius from the D offset number (D0 = radius 0, §3.4.16); D missing is alarm 221."""
     if "D" in values:
         stored["D"] = int(values["D"])
     if "D" not in stored:

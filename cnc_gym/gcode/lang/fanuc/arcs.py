@@ -5,6 +5,8 @@ I/J/K are incremental from the start in every distance mode; R > 0 is the arc up
 180°; R wins over I/J/K; an R arc whose end is its start is 0° (no motion); an I/J/K arc whose end is its
 start is a full circle. Within the dialect's radius tolerance the end point moves radially onto the
 circle (docs/gcode.md "Arcs").
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ _IJK = "IJK"
 
 
 def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
-    """G02/G03 in the selected plane, I/J/K (incremental, L1025) or R (R wins, L510; R<0 > 180°)."""
+    """G02/G03 in the selected plane, I/J/K (incremental, §3.2.3) or R (R wins, §1.3.3; R<0 > 180°)."""
     name = "G02" if motion == 2 else "G03"
     st = core.state
     feed = st.feed
@@ -40,7 +42,7 @@ def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
     if transformed:
         # Geometry in program coordinates; move_arc maps it through the chain.
         if st.polar is not None and "R" not in values:
-            raise core.error(f"{name} in polar mode (G16) needs R (L1849)", "polar-arc-needs-r")
+            raise core.error(f"{name} in polar mode (G16) needs R (GSK 25i §3.2.16)", "polar-arc-needs-r")
         pos = st.program_point
         end = [pos[a] if t is None else t for a, t in enumerate(core.resolve_target(x, y, z))]
     elif st.incremental:
@@ -66,7 +68,7 @@ def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
                 raise core.error(f"{name} with R: end point equals start in the plane, so the arc is 0° "
                                  "and cannot carry a helical move (use I/J/K for a full turn)",
                                  "arc-impossible")  # fmt: skip
-            return  # "G02 R;": a 0° arc, the tool does not move (L1036)
+            return  # "G02 R;": a 0° arc, the tool does not move (§3.2.3)
         if radius == 0:
             raise core.error(f"{name} with R0", "arc-impossible")
         half = chord / 2.0

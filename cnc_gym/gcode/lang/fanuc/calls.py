@@ -1,5 +1,5 @@
 """The Fanuc family's call convention: M98/M99 subprograms, G65/G66/G67 macro calls, calls by G, M and T
-code (GSK 25i programming manual §1.9 subprograms, §6.6 macro calls).
+code (GSK 25i programming manual §1.3.1 subprograms, §3.7.6 macro calls).
 
 * ``M98 P[count]oooo [L count]`` runs program O-oooo after the block's other commands; ``M99 [P n]``
   returns (to block Nn of the caller with P). A subprogram shares the caller's locals.
@@ -11,10 +11,13 @@ code (GSK 25i programming manual §1.9 subprograms, §6.6 macro calls).
 
 :class:`CallConvention` is the part of the runner (``flow.FlowRunner``) that carries these out; the
 actions at the end are what the code tables name.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
@@ -25,9 +28,10 @@ from cnc_gym.gcode.program import Block
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Dialect, Seam
+    from cnc_gym.gcode.lang.fanuc.variables import VariableStore
     from cnc_gym.gcode.settings import MacroCalls
 
-#: Argument specification I (L5892-L5914): address → local variable.
+#: Argument specification I (§3.7.6): address → local variable.
 ARGUMENT_SPEC_I = {
     "A": 1,
     "B": 2,
@@ -61,6 +65,7 @@ class CallConvention:
     modal_calls: list[ModalCall]
     _sub_depth: int
     _macro_depth: int
+    _variables: VariableStore
 
     def unit(self, number: int) -> Unit:
         raise NotImplementedError
@@ -78,7 +83,7 @@ class CallConvention:
         raise NotImplementedError
 
     def subprogram_call(self, values: dict) -> None:
-        """M98 P[count]oooo [L count]: called after the block's other commands (L5878)."""
+        """M98 P[count]oooo [L count]: called after the block's other commands (§3.7.6)."""
         if "P" not in values:
             raise self.dialect.error("M98 needs P (the program number)", "missing-program-number")
         number, count = self._program_and_count(values, "M98")
@@ -118,7 +123,7 @@ class CallConvention:
         if number == 0:
             raise self.dialect.error(f"{what} P{p}: program number 0", "bad-call")
         if count > 999:
-            raise self.dialect.error(f"{what} P{p}: at most 999 repeats (L469)", "bad-call")
+            raise self.dialect.error(f"{what} P{p}: at most 999 repeats (GSK 25i §1.3)", "bad-call")
         return number, max(count, 1)
 
     def _push_subprogram(self, number: int, count: int, pc: int, *, by_code: bool) -> int:
@@ -127,7 +132,7 @@ class CallConvention:
         if self._sub_depth >= self.dialect.max_subprogram_nesting:
             raise self.dialect.error(
                 f"M98 P{number}: subprograms nest at most "
-                f"{self.dialect.max_subprogram_nesting} levels (L465)",
+                f"{self.dialect.max_subprogram_nesting} levels (GSK 25i §1.3)",
                 "nesting",
             )
         unit = self.unit(number)
@@ -159,7 +164,8 @@ class CallConvention:
         roles = self.dialect.roles
         if core.state.nurbs.hpcc and core.state.modal.get(1) == roles.nurbs:  # G06.2 in force (nurbs.py)
             raise self.dialect.error("a macro or subprogram call in NURBS mode: no G, M or T codes until a "
-                                     "group-01 code ends G06.2 (L1281)", "nurbs-forbidden")  # fmt: skip
+                                     "group-01 code ends G06.2 (GSK 25i §3.2.5)",
+                                     "nurbs-forbidden")  # fmt: skip
         words = self._evaluated(block.words)
         frame = self.frames[-1]
         gs = [w[1] for w in words if w[0] == "G"]
@@ -191,7 +197,7 @@ class CallConvention:
                 )
             self.unit(number)  # alarm 59 now, not at the first move
             self.modal_calls.append(ModalCall(number, count, args))
-            core.state.modal[roles.modal_call_group] = roles.modal_call  # type: ignore[index]
+            core.state.modal[roles.modal_call_group] = roles.modal_call  # type: ignore[index,assignment]
             return pc
         if not frame.by_code:
             for g in gs:
@@ -220,7 +226,7 @@ class CallConvention:
                 raise strict
             for m in ms:
                 if int(m) == m and int(m) in calls.m_sub:
-                    # N_ G_ X_ Y_ … Mxx ≡ N_ G_ X_ Y_ … M98 Pxxxx: the block's other commands first (L6281).
+                    # N_ G_ X_ Y_ … Mxx ≡ N_ G_ X_ Y_ … M98 Pxxxx: the block's other commands first (§3.7.6).
                     pc = self._run_without(strict, pc, "M", m)
                     if pc < 0:
                         return pc
@@ -228,13 +234,13 @@ class CallConvention:
             if calls.t_sub is not None:
                 t = next((w[1] for w in words if w[0] == "T"), None)
                 if t is not None:
-                    # Tt ≡ #149=t; … M98 P9000 (L6321-L6333).
+                    # Tt ≡ #149=t; … M98 P9000 (§3.7.6).
                     core.state.variables.write(149.0, t)
                     pc = self._run_without(strict, pc, "T", None)
                     if pc < 0:
                         return pc
                     return self._push_subprogram(calls.t_sub, 1, pc, by_code=True)
-        # A mapped code inside a program called by a code: an ordinary block (L6265, L6331).
+        # A mapped code inside a program called by a code: an ordinary block (§3.7.6).
         strict = block.stmt[1]
         if isinstance(strict, ProgramError):
             raise strict
@@ -243,7 +249,7 @@ class CallConvention:
         return self._ordinary(strict, pc)
 
     def _run_without(self, block: Block | None, pc: int, letter: str, value: float | None) -> int:
-        """The block's other words, before a subprogram call by M or T code (L6281, L6321)."""
+        """The block's other words, before a subprogram call by M or T code (§3.7.6)."""
         if block is None:
             return pc
         kept = tuple(w for w in block.words if not (w[0] == letter and (value is None or w[1] == value)))
@@ -261,10 +267,10 @@ class CallConvention:
             )
         return pc
 
-    def _evaluated(self, words: tuple) -> list[tuple[str, float]]:
-        """Call-block words → (letter, value) in order; a null variable drops its word (L5136)."""
+    def _evaluated(self, words: Sequence) -> list[tuple[str, float]]:
+        """Call-block words → (letter, value) in order; a null variable drops its word (§3.7.2)."""
         out = []
-        variables = self.core.state.variables
+        variables = self._variables
         for word in words:
             letter, value = word[0], word[1]
             if not isinstance(value, float):
@@ -284,13 +290,13 @@ class CallConvention:
             count = values["L"]
             if count != int(count) or not 1 <= count <= 9999:
                 raise self.dialect.error(
-                    f"{what} L{count:g}: the repeat count is 1..9999 (L6150)", "bad-call"
+                    f"{what} L{count:g}: the repeat count is 1..9999 (GSK 25i §3.7.6)", "bad-call"
                 )
         return int(p), int(count)
 
     def _arguments(self, words: list, *, pl_is_error: bool = False) -> dict[int, float]:
         """Argument specifications I and II, mixed freely; a later word for the same variable wins
-        (L5892-L5968). I/J/K: a letter not after the previous one of its group starts the next group."""
+        (§3.7.6). I/J/K: a letter not after the previous one of its group starts the next group."""
         args: dict[int, float] = {}
         group = 0
         last = 3
@@ -298,19 +304,22 @@ class CallConvention:
             if letter in "GNO" or (letter in "PL" and not pl_is_error):
                 continue
             if letter in "PL" and pl_is_error:
-                raise self.dialect.error(f"address {letter} cannot be a macro argument (L5892)", "bad-call")
+                raise self.dialect.error(f"address {letter} cannot be a macro argument (GSK 25i §3.7.6)",
+                                         "bad-call")
             k = _IJK.get(letter)
             if k is not None:
                 if k <= last:
                     group += 1
                     if group > 10:
-                        raise self.dialect.error("more than 10 I/J/K argument groups (L5916)", "bad-call")
+                        raise self.dialect.error("more than 10 I/J/K argument groups (GSK 25i §3.7.6)",
+                                                 "bad-call")
                 last = k
                 args[4 + 3 * (group - 1) + k] = value
                 continue
             index = ARGUMENT_SPEC_I.get(letter)
             if index is None:
-                raise self.dialect.error(f"address {letter} cannot be a macro argument (L5892)", "bad-call")
+                raise self.dialect.error(f"address {letter} cannot be a macro argument (GSK 25i §3.7.6)",
+                                         "bad-call")
             args[index] = value
         return args
 
@@ -319,23 +328,24 @@ class CallConvention:
     ) -> int:
         if self._macro_depth >= self.dialect.max_macro_nesting:
             raise self.dialect.error(
-                f"O{number:04d}: macro calls nest at most {self.dialect.max_macro_nesting} levels (L6160)",
+                f"O{number:04d}: macro calls nest at most {self.dialect.max_macro_nesting} levels (GSK 25i "
+                "§3.7.6)",
                 "nesting",
             )
         unit = self.unit(number)
         self._macro_depth += 1
-        self.core.state.variables.push_locals(args)
+        self._variables.push_locals(args)
         return self._enter(
             Frame(unit, pc, count - 1, macro=True, modal_limit=modal_limit, by_code=by_code, args=args)
         )
 
     def cancel_modal_call(self) -> None:
-        """G67: the latest G66 ends (L6199)."""
+        """G67: the latest G66 ends (§3.7.6)."""
         if self.modal_calls:
             self.modal_calls.pop()
         roles = self.dialect.roles
-        self.core.state.modal[roles.modal_call_group] = (  # type: ignore[index]
-            roles.modal_call if self.modal_calls else roles.modal_call_cancel)
+        key = roles.modal_call if self.modal_calls else roles.modal_call_cancel
+        self.core.state.modal[roles.modal_call_group] = key  # type: ignore[index,assignment]
 
     def macro_call_from_variable(self, spec) -> None:
         raise self.dialect.error(

@@ -6,6 +6,8 @@ A dialect's ``codes.py`` starts from these and adds, replaces or removes entries
 action that carries it out (``lang/fanuc/__init__.py``'s registry) and, for a canned cycle, the cycle kind
 (``cycles.py``). Sources: GSK 25i programming manual (the reference dialect), checked against the Fanuc
 0i-M conventions where a dialect differs (docs/dialects.md).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ def g(number: float, group: int, action: str, value: object = None, *, step: str
 def unbuilt(number: float, group: int, what: str, *, uses_axes: bool = False) -> CodeSpec:
     """A G code the controller has and this interpreter does not carry out: rejected by name."""
     return g(number, group, "not_implemented", step="motion", uses_axes=uses_axes, implemented=False,
-             note=f"{what} (a later issue)")  # fmt: skip
+             note=what)  # fmt: skip
 
 
 def m(number: int, action: str, value: object = None, *, step: str, implemented: bool = True,
@@ -59,7 +61,7 @@ CYCLE_CODES = {
 
 #: The G codes every Fanuc-family mill dialect starts from (GSK 25i section numbers beside each group).
 G_CODES = [
-    # Group 01: motion (§3.1-§3.3). Modal; the axis words of the block belong to it.
+    # Group 01: motion (§3.2.1-§3.2.3). Modal; the axis words of the block belong to it.
     g(0, 1, "motion", 0, step="motion"),
     g(1, 1, "motion", 1, step="motion"),
     g(2, 1, "motion", 2, step="motion", words="IJKR"),
@@ -85,7 +87,7 @@ G_CODES = [
     g(60, 0, "single_direction", step="motion", uses_axes=True),
     g(65, 0, "macro_call", step="stop", words=ARGUMENTS, note="one-shot macro call (calls.py)"),
     g(92, 0, "floating_origin", step="setting", uses_axes=True),
-    # Group 02: plane (§3.7).
+    # Group 02: plane (§3.2.15).
     g(17, 2, "plane", Plane.XY, step="plane"),
     g(18, 2, "plane", Plane.ZX, step="plane"),
     g(19, 2, "plane", Plane.YZ, step="plane"),
@@ -98,18 +100,18 @@ G_CODES = [
     # Group 05: feed mode.
     g(94, 5, "record", step="feed_mode"),
     unbuilt(95, 5, "feed per revolution G95"),
-    # Group 06: units (§3.10).
+    # Group 06: units (§3.2.19).
     g(20, 6, "units", True, step="units"),
     g(21, 6, "units", False, step="units"),
-    # Group 07: cutter radius compensation C (§5.2; compensation.py).
+    # Group 07: cutter radius compensation C (§3.5.2; compensation.py).
     g(40, 7, "cutter_comp", 0, step="cutter_comp", words="IJK"),  # I/J/K: the cancel direction
     g(41, 7, "cutter_comp", 1, step="cutter_comp"),
     g(42, 7, "cutter_comp", -1, step="cutter_comp"),
-    # Group 08: tool length offset (§5.1).
+    # Group 08: tool length offset (§3.5.1).
     g(43, 8, "length_comp", 1, step="length_comp"),
     g(44, 8, "length_comp", -1, step="length_comp"),
     g(49, 8, "length_comp", 0, step="length_comp"),
-    # Group 09: canned cycles (§3.17; cycles.py). G80 = no cycle. The axis words of a cycle block are the
+    # Group 09: canned cycles (§3.4; cycles.py). G80 = no cycle. The axis words of a cycle block are the
     # hole position and bottom; the value is the cycle kind.
     *[g(n, 9, "cycle", kind, step="motion", uses_axes=True, words=words)
       for n, (kind, words) in CYCLE_CODES.items()],
@@ -117,7 +119,7 @@ G_CODES = [
     # Group 10: canned-cycle return level (G98 initial level, G99 R level).
     g(98, 10, "cycle_return", "initial", step="modes"),
     g(99, 10, "cycle_return", "r", step="modes"),
-    # Group 11: scaling (§3.15).
+    # Group 11: scaling (§3.2.17).
     g(50, 11, "scaling_cancel", step="modes"),
     g(51, 11, "scaling", step="setting", uses_axes=True, words="PIJK"),
     # Group 12: modal macro call.
@@ -126,7 +128,8 @@ G_CODES = [
     # Group 13: constant surface speed.
     unbuilt(96, 13, "constant surface speed G96"),
     g(97, 13, "record", step="modes"),
-    # Group 14: work coordinate systems (§3.11). G54.1's value: the codes whose P would collide with its P.
+    # Group 14: work coordinate systems (§3.2.10, §3.2.20). G54.1's value: the codes whose P would collide
+    # with its P.
     *[g(n, 14, "wcs", n - 53, step="wcs") for n in range(54, 60)],
     g(54.1, 14, "wcs_extra", frozenset(gkey(n) for n in (4, 10, 65, 30)), step="wcs", words="P"),
     # Group 15: path mode: flags on the segments for the controller.
@@ -134,10 +137,10 @@ G_CODES = [
     g(62, 15, "path_mode", "auto_corner", step="path_mode"),
     g(63, 15, "path_mode", "tapping", step="path_mode"),
     g(64, 15, "path_mode", "cutting", step="path_mode"),
-    # Group 16: rotation (§3.16).
+    # Group 16: rotation (§3.2.18).
     g(68, 16, "rotation", step="setting", uses_axes=True, words="R"),
     g(69, 16, "rotation_cancel", step="modes"),
-    # Group 17: polar coordinates (§3.6).
+    # Group 17: polar coordinates (§3.2.16).
     g(15, 17, "polar_cancel", step="modes"),
     g(16, 17, "polar", step="modes"),
     # Group 22: programmable mirror.
@@ -195,7 +198,7 @@ def _deg_trig(fn):
 
 
 def _tan(x: float) -> float:
-    # GSK computes TAN as SIN/COS (L5532); a zero cosine is a division by zero.
+    # GSK computes TAN as SIN/COS (§3.7.4); a zero cosine is a division by zero.
     c = math.cos(math.radians(x))
     if abs(c) < 1e-15:
         raise ZeroDivisionError
@@ -239,7 +242,7 @@ FUNCTIONS = {
     "TAN": (1, _tan),
     "ATAN": (1, lambda x: math.degrees(math.atan(x))),
     "ATAN2": (2, _atan2_deg),  # the parser maps ATAN[a]/[b] here
-    # ASIN/ACOS/LN/EXP/POW are Fanuc Macro B functions the GSK list (L5527-L5545) does not print;
+    # ASIN/ACOS/LN/EXP/POW are Fanuc Macro B functions the GSK list (§3.7.4) does not print;
     # accepted as an extension (docs/gcode.md).
     "ASIN": (1, lambda x: math.degrees(math.asin(x))),
     "ACOS": (1, lambda x: math.degrees(math.acos(x))),

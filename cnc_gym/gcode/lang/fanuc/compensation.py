@@ -4,26 +4,27 @@ Two layers:
 
 * **Plane geometry** (pure functions): a programmed move projected on the compensation plane is a
   :class:`PlaneElement` (line or arc). :func:`offset_curve` gives its offset line/circle,
-  :func:`corner` the tool-centre points at the junction of two elements (GSK/Fanuc type C, seed notes
-  §5.2, manual L4107-L4237): intersection points at inner corners and outer corners of 90° or more,
-  extension points (two or three extra points) at outer corners under 90°, start-up and cancel of type A
-  or B. :func:`correct_interference` is the interference check (alarm 41) with the manual's correction
-  before it alarms (interfering corner-vector pairs ignored from the inside out, an arc turned into a
-  line, L4554-L4611). :func:`compensate` runs a whole sequence (start-up line, offset-mode moves, cancel
-  line).
+  :func:`corner` the tool-centre points at the junction of two elements (GSK/Fanuc type C, §3.5.2-§3.5.3):
+  intersection points at inner corners and outer corners of 90° or more, extension points (two or three extra
+  points) at outer corners under 90°, start-up and cancel of type A or B. :func:`correct_interference` is the
+  interference check (alarm 41) with the manual's correction before it alarms (interfering corner-vector pairs
+  ignored from the inside out, an arc turned into a line, §3.5.3). :func:`compensate` runs a whole sequence
+  (start-up line, offset-mode moves, cancel line).
 * **The stage** (:class:`OffsetStage`): sits between the interpreter and the
   :class:`~cnc_gym.gcode.canonical.CanonicalMachine` with the same interface (``straight_traverse``,
   ``straight_feed``, ``arc_feed``, ``dwell``, ``position``, context attributes). It receives programmed
   moves in machine coordinates (after the work offsets), keeps the look-ahead the corners need (the
   manual's three-block buffer: a corner is resolved with the next move in the plane if it comes within
-  the next two blocks, else the vector is perpendicular to the block, L4119, L4515-L4555), and emits
+  the next two blocks, else the vector is perpendicular to the block, §3.5.3), and emits
   compensated moves (the tool length vector is already in every target: ``OffsetStack.tool_length``).
   ``position`` reports the *programmed* position, so the interpreter's incremental and arc arithmetic
   stays in programmed coordinates.
 
 Conventions: ``d`` is the signed offset, positive to the left of the direction of travel (G41 with a
-positive D), negative to the right (G42, or G41 with a negative D: the manual's swap, L4005). Arcs are
+positive D), negative to the right (G42, or G41 with a negative D: the manual's swap, §3.5.2). Arcs are
 signed sweeps in radians, positive counter-clockwise in the plane (u, v).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -79,8 +80,14 @@ class PlaneElement:
         return self.center is not None
 
     @property
+    def arc_center(self) -> Point:
+        """The centre of an arc (lines have none)."""
+        assert self.center is not None
+        return self.center
+
+    @property
     def radius(self) -> float:
-        c = self.center
+        c = self.arc_center
         return math.hypot(self.start[0] - c[0], self.start[1] - c[1])
 
     def tangent(self, at_end: bool) -> Point:
@@ -208,13 +215,13 @@ def corner(
     role: str = "offset",
     startup_type: str = "B",
 ) -> Corner:
-    """Tool-centre points at the end of ``a`` / start of ``b`` (type C, seed notes §5.2).
+    """Tool-centre points at the end of ``a`` / start of ``b`` (type C, §3.5.2).
 
     ``role``: ``offset`` (both blocks compensated), ``startup`` (``a`` is the start-up line: its start
     has no vector), ``cancel`` (``b`` is the cancel line: it ends without a vector). ``b`` None: no next
     move in the plane within the look-ahead (end of program, G40 without a move): the vector is
     perpendicular to ``a`` at its end. ``d_b``: b's offset; only a G41/G42 switch (the opposite sign) uses
-    it here: a D change applies from the end vector of the block that carries it (L4480), so b's start
+    it here: a D change applies from the end vector of the block that carries it (§3.5.3), so b's start
     vector is computed with the old offset ``d_a`` (an arc then steps radially onto its new offset circle).
     ``startup_type``: ``A`` or ``B`` for outer corners of start-up and cancel (parameter 2602#2 TPH).
 
@@ -228,7 +235,7 @@ def corner(
     if d_b is None:
         d_b = d_a
     switch = d_a * d_b < 0.0
-    # A D change applies from the end vector of the block that carries it (L4480): b's start vector uses
+    # A D change applies from the end vector of the block that carries it (§3.5.3): b's start vector uses
     # the previous offset (a line tapers to the new one; an arc steps radially onto its new circle).
     if not switch:
         d_b = d_a
@@ -245,7 +252,7 @@ def corner(
         return Corner(va, lead, vb, kind)
 
     if switch:
-        # G41 <-> G42 (L4335-L4349): no inside/outside; the intersection if the offset paths meet, else a
+        # G41 <-> G42 (§3.5.3): no inside/outside; the intersection if the offset paths meet, else a
         # vector perpendicular to b at its start.
         point = _nearest(intersections(curve_a, curve_b), p)
         if point is None:
@@ -273,7 +280,7 @@ def corner(
         return Corner(point, [], point, "inner")
     if role in ("startup", "cancel") and startup_type == "A":
         if role == "startup":
-            return Corner(vb, [], vb, "type-a")  # straight to the vector perpendicular to b (L3980)
+            return Corner(vb, [], vb, "type-a")  # straight to the vector perpendicular to b (§3.5.2)
         return Corner(va, [], va, "type-a")  # cancel: perpendicular to a, then straight to the end
     obtuse = dot >= -1e-12  # alpha >= 90 deg on the workpiece side
     if obtuse:
@@ -286,10 +293,10 @@ def corner(
         ):
             return Corner(point, [], point, "outer-intersection")
         # The offset curves do not meet near the corner (arcs): straight from one vector to the other
-        # ("moving the corner", L4440).
+        # ("moving the corner", §3.5.3).
         return perpendicular("outer-vectors")
     # Acute outer corner: extension points r beyond the end of a and r before the start of b along their
-    # tangents (two or three extra points, L4452).
+    # tangents (two or three extra points, §3.5.3).
     q1 = (va[0] + r * ta[0], va[1] + r * ta[1])
     q2 = (vb[0] - r * tb[0], vb[1] - r * tb[1])
     if a.is_arc:
@@ -324,7 +331,7 @@ def block_interference(
     element: PlaneElement, d: float, start: Point, end: Point, as_line: bool = False, line: int = 0
 ) -> str | None:
     """Interference check of one block's compensated movement from ``start`` to ``end`` (Remark 9,
-    L4554-L4580); returns why it interferes, or None.
+    §3.5.3); returns why it interferes, or None.
 
     (a) the tool-centre path runs 90°-270° against the programmed path: for a line (or an arc turned into
     a line by the correction, compared with its chord), the dot product of the two directions is negative;
@@ -376,7 +383,7 @@ def correct_interference(
     end_vectors: list[Point],
     line: int = 0,
 ) -> tuple[list[Point], list[Point], bool]:
-    """The controller's correction of interference before it alarms (L4582-L4611, seed notes §5.2).
+    """The controller's correction of interference before it alarms (§3.5.3, §3.5.2).
 
     ``start_vectors``: the tool-centre points at the block's start corner in path order (the first is
     where the previous block ended, the last where this block's own movement starts); ``end_vectors``:
@@ -387,9 +394,9 @@ def correct_interference(
     out is checked, until a pair does not interfere. The last vector at a corner is never dropped: when
     only one side can give one up, only that one is dropped (a step smaller than the tool radius
     machined with an arc: "one vector is ignored and the tool traverses toward the 2nd vector",
-    L4511-L4513); when neither can (a single pair from the start, or interference left after
+    §3.5.3); when neither can (a single pair from the start, or interference left after
     correcting) it is ``comp-interference`` (alarm 41). Once a vector has been dropped an arc block runs
-    as a straight line (L4600).
+    as a straight line (§3.5.3).
 
     Returns the kept start vectors, the kept end vectors and whether an arc now runs as a line.
     """
@@ -421,7 +428,7 @@ def correct_interference(
 
 def _circle_point(element: PlaneElement, d: float, toward: Point) -> Point:
     """The point of the arc's offset circle (radius for ``d``) in the direction of ``toward``."""
-    cu, cv = element.center
+    cu, cv = element.arc_center
     radius = offset_radius(element, d)
     du, dv = toward[0] - cu, toward[1] - cv
     n = math.hypot(du, dv)
@@ -480,13 +487,13 @@ def compensate(
         for q in starts[1:]:
             out.append(OutputMove(q, block=i))
         if element.is_arc and not as_line:
-            sweep = arc_sweep_between(element.center, starts[-1], ends_at[0], element.sweep)
-            out.append(OutputMove(ends_at[0], element.center, sweep, block=i))
+            sweep = arc_sweep_between(element.arc_center, starts[-1], ends_at[0], element.sweep)
+            out.append(OutputMove(ends_at[0], element.arc_center, sweep, block=i))
         else:
             out.append(OutputMove(ends_at[0], block=i))
         tool = ends_at[0]
         lead = ends_at[1:]
-        start_b = c.start_b
+        start_b = c.start_b if c.start_b is not None else tool  # set by Corner.__post_init__
     if cancel_last:
         for q in lead:
             out.append(OutputMove(q, block=len(elements) - 1))
@@ -495,7 +502,7 @@ def compensate(
 
 
 def _cancel_with_direction(a: PlaneElement, virtual: PlaneElement, d: float) -> Corner:
-    """``G40 X_ Y_ I_ J_`` (L4420-L4436): a ends where its offset path meets the offset of the (I, J)
+    """``G40 X_ Y_ I_ J_`` (§3.5.3): a ends where its offset path meets the offset of the (I, J)
     direction from its end; if they do not meet, perpendicular to a at its end."""
     point = _nearest(intersections(offset_curve(a, d), offset_curve(virtual, d)), a.end)
     if point is None:
@@ -521,6 +528,12 @@ class _Item:
     lead: list[Point] = field(default_factory=list)
     start_b: Point | None = None
     role: str = "offset"
+
+    @property
+    def move(self) -> PlaneElement:
+        """The element of a move in the plane (every item the corner logic sees has one)."""
+        assert self.element is not None
+        return self.element
 
 
 class OffsetStage:
@@ -555,7 +568,7 @@ class OffsetStage:
         self.corner_arc_feed: float | None = None
         # The tool length vector lives in OffsetStack.tool_length (it is in every target already).
         # ``length_pending``: the change of that vector an incremental move of
-        # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, L3869).
+        # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, §3.5.1).
         self.length_pending: Vec | None = None
         self.suspended = False  # this block's moves pass through uncompensated (G53, G27-G30, G60)
         self._position_offset: tuple[int, float, frozenset[int], bool] | None = None
@@ -589,14 +602,14 @@ class OffsetStage:
         self._position_offset = None
         if self.cancel_requested and self.pending is not None:
             # G40 in a block without a move in the plane: the vector stays perpendicular to the last
-            # block and is cancelled on the next move (L4418).
+            # block and is cancelled on the next move (§3.5.3).
             self._resolve(None)
             self.active = False
         elif self.pending is not None:
             self.blocks_since += 1
             if self.blocks_since > LOOKAHEAD_BLOCKS:
                 # The two blocks after the pending one have no move in the plane: the next block cannot
-                # be seen, so its end vector is perpendicular to it (the overcut of L4535-L4545).
+                # be seen, so its end vector is perpendicular to it (the overcut of §3.5.3).
                 self._resolve(None)
         if self.cancel_requested and self.pending is None:
             self.cancel_requested = False
@@ -626,7 +639,7 @@ class OffsetStage:
         self._position_offset = (factor, amount, axes, incremental)
 
     def corner_arc(self, direction: Point | None, feed: float | None) -> None:
-        """G39 [I J]: a corner arc of radius |d| at the end of the pending block (L4646-L4666)."""
+        """G39 [I J]: a corner arc of radius |d| at the end of the pending block (§3.5.4)."""
         self.corner_arc_pending = True
         self.corner_arc_direction = direction
         self.corner_arc_feed = feed
@@ -708,7 +721,7 @@ class OffsetStage:
     def suspend(self) -> None:
         """G53, G27-G30, G60 come next: everything buffered is emitted first (the last block ending with its
         vector perpendicular to it) and this block's moves go through uncompensated; the next move in the
-        plane is a new start-up. A simplification of the manual's temporary cancel (L1664, L4371-L4394):
+        plane is a new start-up. A simplification of the manual's temporary cancel (§3.2.12, §3.5.3):
         the vector is gone at the intermediate point and comes back with the next block's start-up."""
         self.flush()
         self.suspended = True
@@ -716,7 +729,7 @@ class OffsetStage:
 
     # ------------------------------------------------------------------ internals
     def _adjust(self, target: Vec) -> Vec:
-        """G45-G48 on a straight move: each commanded axis's travel grows/shrinks by factor x D (L4785)."""
+        """G45-G48 on a straight move: each commanded axis's travel grows/shrinks by factor x D (§3.5.7)."""
         request = self._position_offset
         if request is None:
             return target
@@ -729,12 +742,13 @@ class OffsetStage:
             if delta != 0.0:
                 delta += math.copysign(1.0, delta) * factor * amount
             elif incremental:
-                delta = factor * amount  # a zero move in G91 moves by the offset (L4806, N9/N11)
+                delta = factor * amount  # a zero move in G91 moves by the offset (§3.5.7, N9/N11)
             out[a] = pos[a] + delta
         return (out[0], out[1], out[2])
 
     def _adjust_arc(self, end: Vec, center: Vec, plane: Plane, sweep: float) -> tuple[Vec, Vec]:
-        """G45-G48 on a quarter or three-quarter I/J/K circle: the radius changes by factor x D (L4831)."""
+        """G45-G48 on a quarter or three-quarter I/J/K circle: the radius changes by factor x D (§3.5.7)."""
+        assert self._position_offset is not None  # the caller checked it
         factor, amount, _axes, _incremental = self._position_offset
         self._position_offset = None
         u, v, _w = PLANE_AXES[plane]
@@ -748,7 +762,7 @@ class OffsetStage:
         if not quarter or abs(abs(sweep) - math.pi) < 1e-6:
             raise CompensationError(
                 "G45-G48 on an arc: only quarter and three-quarter circles with the "
-                "centre on an axis direction can be offset (L4831)",
+                "centre on an axis direction can be offset (GSK 25i §3.5.7)",
                 "position-offset-arc",
             )
         change = factor * amount
@@ -801,7 +815,7 @@ class OffsetStage:
             self.machine.straight_feed(target, feed)
 
     def _plane_move(self, item: _Item) -> None:
-        element = item.element
+        element = item.move
         line = self.line
         if not self.active:
             if item.kind == "arc":
@@ -837,7 +851,7 @@ class OffsetStage:
             self._position = item.target
             return
         if self.pending is None:
-            # The previous block was resolved without seeing this one (look-ahead starved, L4535): the tool
+            # The previous block was resolved without seeing this one (look-ahead starved, §3.5.3): the tool
             # sits on the old vector and runs straight to this block's end vector (an arc: to its start).
             item.start_b = element.offset_point(False, item.d)
         else:
@@ -857,17 +871,17 @@ class OffsetStage:
                 self._corner_arc_resolve(a, nxt)
                 return
             self.corner_arc_pending = False  # G39 before a cancel or the end: no corner to round
-        b_el = nxt.element if nxt is not None else None
+        b_el = nxt.move if nxt is not None else None
         try:
             if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:
                 virtual = PlaneElement(
-                    a.element.end,
+                    a.move.end,
                     (
-                        a.element.end[0] + self.cancel_direction[0],
-                        a.element.end[1] + self.cancel_direction[1],
+                        a.move.end[0] + self.cancel_direction[0],
+                        a.move.end[1] + self.cancel_direction[1],
                     ),
                 )
-                c = _cancel_with_direction(a.element, virtual, a.d)
+                c = _cancel_with_direction(a.move, virtual, a.d)
             else:
                 role = (
                     "startup"
@@ -875,7 +889,7 @@ class OffsetStage:
                     else ("cancel" if nxt is not None and nxt.role == "cancel" else "offset")
                 )
                 d_b = None if nxt is None or nxt.role == "cancel" else nxt.d
-                c = corner(a.element, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
+                c = corner(a.move, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
         except CompensationError as err:
             err.line = err.line or line
             raise
@@ -894,15 +908,15 @@ class OffsetStage:
         """G39: a ends with the vector perpendicular to its end; an arc of radius |d| about the corner
         takes the tool to the vector perpendicular to the next block's start (or to the I/J direction)."""
         self.corner_arc_pending = False
-        p = a.element.end
-        end_a = a.element.offset_point(True, a.d)
+        p = a.move.end
+        end_a = a.move.offset_point(True, a.d)
         if self.corner_arc_direction is not None:
             virtual = PlaneElement(
                 p, (p[0] + self.corner_arc_direction[0], p[1] + self.corner_arc_direction[1])
             )
             target = virtual.offset_point(False, a.d)
         else:
-            target = nxt.element.offset_point(False, nxt.d)
+            target = nxt.move.offset_point(False, nxt.d)
         self._emit_block(a, [end_a])
         sweep = arc_sweep_between(p, end_a, target, 0.0)
         if abs(sweep) > SMOOTH:
@@ -946,9 +960,9 @@ class OffsetStage:
         The interference check and its correction (:func:`correct_interference`) run first and may drop
         vectors at both corners (an arc then runs as a straight line); returns the end corner's vectors
         that are left for the next block's lead. An arc whose start vector is not on its offset circle
-        (D changed in this block: the start vector keeps the old offset, L4480) steps radially onto it."""
+        (D changed in this block: the start vector keeps the old offset, §3.5.3) steps radially onto it."""
         self._set_machine_context(item.context)
-        element = item.element
+        element = item.move
         line = item.context[0]
         u, v, _w = PLANE_AXES[self.plane]
         pos = self.machine.position
@@ -966,9 +980,9 @@ class OffsetStage:
             start = _circle_point(element, item.d, starts[-1])
             if _dist(starts[-1], start) > 1e-7:
                 self._emit_plane_point(start, item)
-            sweep = arc_sweep_between(element.center, start, end, element.sweep)
+            sweep = arc_sweep_between(element.arc_center, start, end, element.sweep)
             center = list(target)
-            center[u], center[v] = element.center
+            center[u], center[v] = element.arc_center
             self.machine.arc_feed(target, (center[0], center[1], center[2]), self.plane, sweep, item.feed)
         else:
             self._emit_straight("line" if item.kind == "arc" else item.kind, target, item.feed)
@@ -1025,7 +1039,7 @@ def before_block(core: Seam, values: dict) -> None:
     length vector comes back with the next block that commands its axis."""
     comp = core.state.comp
     comp.stage.begin_block()
-    if comp.length_restore is not None:  # the tool length vector after G28/G30 (L3897)
+    if comp.length_restore is not None:  # the tool length vector after G28/G30 (§3.5.1)
         restore_length(core, values)
 
 
@@ -1064,7 +1078,7 @@ def _direction(core: Seam, values: dict) -> Point | None:
 
 # ---------------------------------------------------------------------- D and H words
 def offset_words(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """D and H words: select the offset numbers (D and H are modal, L4468, L3887); D and H in one block
+    """D and H words: select the offset numbers (D and H are modal, §3.5.3, §3.5.1); D and H in one block
     are one item."""
     if spec.name == "D" or "D" not in values:
         words(core, values)
@@ -1075,7 +1089,7 @@ def words(core: Seam, values: dict) -> None:
     if "D" in values:
         comp.d_number = int(values["D"])
         if comp.side and comp.stage is not None:
-            # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
+            # A D change in offset mode applies from this block's end vector (§3.5.3); D00 cancels.
             comp.stage.set_cutter(signed_offset(core), comp.plane)
     if "H" in values:
         comp.length_restore = None  # an H in G43/G44 mode sets the vector afresh
@@ -1105,7 +1119,7 @@ def cutter(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def check_plane(core: Seam, plane) -> None:
-    """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (L4175)."""
+    """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (§3.5.3)."""
     comp = core.state.comp
     if comp.side and plane != comp.plane:
         raise core.error(f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with G40 "
@@ -1113,7 +1127,7 @@ def check_plane(core: Seam, plane) -> None:
 
 
 def corner_arc(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G39 [I_J_]: corner arc of the compensation radius (L4646-L4666); only in offset mode."""
+    """G39 [I_J_]: corner arc of the compensation radius (§3.5.4); only in offset mode."""
     comp = core.state.comp
     if not comp.side or comp.stage is None or not comp.stage.active:
         raise core.error("G39 is only allowed in cutter compensation mode (G41/G42 after start-up)",
@@ -1138,7 +1152,8 @@ def length(core: Seam, spec: CodeSpec, values: dict) -> None:
         u, v, w = PLANE_AXES[st.plane]
         arc_words = ("IJK"[u], "IJK"[v], "R", _LETTERS[u], _LETTERS[v])
         if _LETTERS[w] in values and any(letter in values for letter in arc_words):
-            raise core.error(f"{spec.name} cannot be given in a helical block (L1103)", "length-helical")
+            raise core.error(f"{spec.name} cannot be given in a helical block (GSK 25i §3.2.3)",
+                             "length-helical")  # fmt: skip
     comp.length_sign = sign
     if sign:
         comp.length_axis = 2 if comp.settings.tool_length_type == "A" else PLANE_AXES[st.plane][2]
@@ -1165,7 +1180,7 @@ def _defer_length(core: Seam) -> None:
 
 def cancel_length_at_intermediate(core: Seam, axes) -> None:
     """G28/G30 reached the intermediate point: the tool length vector of the commanded axes is cancelled
-    (L3897: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
+    (§3.5.1: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
     G43/G44). The next block commanding the axis restores it (:func:`restore_length`)."""
     st = core.state
     comp = st.comp
@@ -1208,7 +1223,7 @@ def restore_length(core: Seam, values: dict) -> None:
 
 def _apply_length(core: Seam, values: dict) -> None:
     """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the
-    next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (L3913)."""
+    next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (§3.5.1)."""
     st = core.state
     comp = st.comp
     new = [0.0, 0.0, 0.0]
@@ -1225,19 +1240,20 @@ def _apply_length(core: Seam, values: dict) -> None:
         and not st.transformed
         and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
     ):
-        # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
+        # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, §3.5.1). The
         # transformed path does this by itself (its program position ignores the machine's).
         stage = install(core)
-        stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
+        moved = [delta[a] if _LETTERS[a] in values else 0.0 for a in range(3)]
+        stage.length_pending = (moved[0], moved[1], moved[2])
 
 
 # ---------------------------------------------------------------------- G45-G48
 def position_offset(core: Seam, spec: CodeSpec, values: dict) -> None:
     """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
-    value (L4785-L4862). Not in G41/G42 mode (L4825); ignored in canned-cycle mode (L4839)."""
+    value (§3.5.7). Not in G41/G42 mode (§3.5.7); ignored in canned-cycle mode (§3.5.7)."""
     comp = core.state.comp
     if comp.side:
-        raise core.error(f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
+        raise core.error(f"{spec.name} cannot be used in cutter compensation mode G41/G42 (GSK 25i §3.5.7)",
                          "position-offset-in-comp")  # fmt: skip
     if core.state.cycle.spec is not None:
         return
@@ -1255,7 +1271,7 @@ def before_machine_move(core: Seam) -> None:
 
 
 def finish(core: Seam) -> None:
-    """End of the program (a block hook): emit what the look-ahead still holds (the vector stays, L4112)."""
+    """End of the program (a block hook): emit what the look-ahead still holds (the vector stays, §3.5.3)."""
     stage = core.state.comp.stage
     if stage is not None:
         try:

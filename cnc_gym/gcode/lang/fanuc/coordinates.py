@@ -4,6 +4,8 @@ floating system, G10 data input (L2/L20 work offsets; L10-L13 tool offsets and L
 machine = program + G52 local + work origin; work origin = the G92 floating origin while one is set, else
 external offset (G10 L2 P0) + the active work system's offset (``canonical.OffsetStack``). Offsets are
 stored in mm: switching G20/G21 does not rescale them. docs/gcode.md "Coordinates and offsets".
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Seam
 
-EXTRA_WCS = 48  # G54.1 P1..P48 (L2131-L2187)
+EXTRA_WCS = 48  # G54.1 P1..P48 (§3.2.20)
 
 
 def wcs(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
@@ -38,8 +40,8 @@ def wcs(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
 
 
 def wcs_extra(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """``G54.1 Pn``: additional work coordinate system n = 1..48; no P = P1 (L2131-L2187). A P in the
-    block belongs to G54.1 alone (L2185: ``G54.1 G04 P1000`` is an error); ``spec.value`` holds the table
+    """``G54.1 Pn``: additional work coordinate system n = 1..48; no P = P1 (§3.2.20). A P in the
+    block belongs to G54.1 alone (§3.2.20: ``G54.1 G04 P1000`` is an error); ``spec.value`` holds the table
     keys of the codes whose P would collide."""
     st = core.state
     check_coordinate_command(core, "G54.1")
@@ -48,7 +50,7 @@ def wcs_extra(core: Seam, spec: CodeSpec, values: dict) -> None:
         text = word[-1]
         if word[0] == "G" and text is not None and round(float(text) * 10) in collide:  # type: ignore[operator]
             raise core.error(f"in a G54.1 block P is the work offset number; G{text} cannot use it "
-                             "(L2185)", "bad-combination")  # fmt: skip
+                             "(GSK 25i §3.2.20)", "bad-combination")  # fmt: skip
     number = values.get("P", 1.0)
     if number != int(number) or not 1 <= number <= EXTRA_WCS:
         raise core.error(f"G54.1 P{number:g}: additional work coordinate systems are P1..P{EXTRA_WCS}",
@@ -60,7 +62,7 @@ def wcs_extra(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def local_origin(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G52 IP_: local origin at IP in the current work system; IP0 cancels per axis (L1718-L1753).
+    """G52 IP_: local origin at IP in the current work system; IP0 cancels per axis (§3.2.14).
     The values are a setting, absolute whatever G90/G91 (docs/gcode.md)."""
     st = core.state
     if st.chain.active:
@@ -74,7 +76,7 @@ def local_origin(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def floating_origin(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G92 IP_: the current position gets coordinates IP in a floating system (L1670-L1716)."""
+    """G92 IP_: the current position gets coordinates IP in a floating system (§3.2.13)."""
     st = core.state
     if st.chain.active:
         check_coordinate_command(core, "G92")
@@ -93,7 +95,7 @@ def floating_origin(core: Seam, spec: CodeSpec, values: dict) -> None:
 def data_input(core: Seam, spec: CodeSpec, values: dict) -> None:
     """``G10 L2 Pp IP_`` (p = 0 external, 1..6 G54..G59), ``G10 L20 Pn IP_`` (G54.1 P1..P48), ``G10
     L10..L13 Pn R_`` (tool offsets, offsets.py), ``G10 L50`` (parameter input mode until G11). For L2 and
-    L20 G90 sets and G91 adds (L1567-L1573, L2162)."""
+    L20 G90 sets and G91 adds (§3.2.10, §3.2.20)."""
     st = core.state
     if "L" not in values:
         raise core.error("G10 needs an L word (L2/L20 work offsets, L10-L13 tool offsets, L50 parameters)",

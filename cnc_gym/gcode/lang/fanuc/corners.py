@@ -1,20 +1,22 @@
 """Chamfer and corner rounding between two G01/G02/G03 blocks: ``,L``/``,C`` (chamfer) and ``,R`` (corner
-radius) (GSK 25i programming manual §3.12, chamfer and corner rounding; Fanuc's ``,C``/``,R``).
+radius) (GSK 25i programming manual §3.2.11, chamfer and corner rounding; Fanuc's ``,C``/``,R``).
 
 The ``,L``/``,R`` block is held (its geometry captured in program coordinates, nothing emitted) in
 ``State.pending`` until the next block; then the first block is emitted cut short, the chamfer line or
 fillet arc, and the second block from the corner's end (or held in turn if it carries its own word).
 Everything goes through the coordinate seam, so corners are rotated, scaled and compensated with the
 contour. docs/gcode.md "Chamfer and corner rounding".
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
-from cnc_gym.toolpath import PLANE_AXES, Plane
+from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Seam
@@ -39,7 +41,7 @@ class PendingCorner:
     segment: tuple
     plane: Plane
     line: int
-    modes: object
+    modes: SegmentMode
     armed: bool = False
 
     def before_block(self, core: Seam) -> None:
@@ -50,7 +52,7 @@ def _capture(core: Seam, motion: int, x, y, z, values: dict):
     """This block's move as geometry in program coordinates, without emitting it (None: no motion)."""
     was = core.state.transformed
     saved = core.state.program_point
-    pending = core.state.pending
+    pending = cast("PendingCorner | None", core.state.pending)
     # The block starts where the waiting block ends (that one is not emitted yet).
     core.state.program_point = pending.segment[2] if pending is not None else core.program_position
     core.state.transformed = True
@@ -75,12 +77,16 @@ def _capture(core: Seam, motion: int, x, y, z, values: dict):
 
 class CoordinateChangeMark:
     """Set after G92, G52-G59, G54.1, G28-G30 or a plane change: the next block may not chamfer or round a
-    corner (L1633). It rides in ``State.pending`` so the plain path pays nothing for it."""
+    corner (§3.2.11). It rides in ``State.pending`` so the plain path pays nothing for it."""
 
     armed = False
 
     def before_block(self, core: Seam) -> None:
         arm_corner(core)
+
+
+def _word(corner: object) -> str:
+    return cast("PendingCorner", corner).word
 
 
 def is_pending_corner(pending: object) -> bool:
@@ -94,8 +100,8 @@ def mark_coordinate_change(core: Seam) -> None:
         core.state.pending = CoordinateChangeMark()
         return
     core.state.pending = None
-    raise core.error(f"a coordinate system or plane change between a chamfer/corner {corner.word} block "
-                     "and its next move (L1633)", "bad-corner")  # fmt: skip
+    raise core.error(f"a coordinate system or plane change between a chamfer/corner {_word(corner)} block "
+                     "and its next move (GSK 25i §3.2.11)", "bad-corner")  # fmt: skip
 
 
 def arm_corner(core: Seam) -> None:
@@ -107,25 +113,29 @@ def arm_corner(core: Seam) -> None:
         else:
             corner.armed = True
         return
+    corner = cast("PendingCorner", corner)
     if corner.armed:
         core.state.pending = None
         raise core.error(f"the block after a chamfer/corner {corner.word} block (line {corner.line}) must "
-                         "be a G01/G02/G03 move in the same plane (L1631)", "bad-corner")  # fmt: skip
+                         "be a G01/G02/G03 move in the same plane (GSK 25i §3.2.11)",
+                         "bad-corner")  # fmt: skip
     corner.armed = True
 
 
 def finish_corner(core: Seam) -> None:
-    """End of program with a chamfer/corner block still waiting: it has no next move (L1631)."""
+    """End of program with a chamfer/corner block still waiting: it has no next move (§3.2.11)."""
     corner = core.state.pending
     core.state.pending = None
     if isinstance(corner, CoordinateChangeMark):
         return
-    raise core.error(f"chamfer/corner {corner.word} in the last move block: no next move to meet (L1631)",
+    corner = cast("PendingCorner", corner)
+    raise core.error(f"chamfer/corner {corner.word} in the last move block: no next move to meet (GSK 25i "
+                     "§3.2.11)",
                      "bad-corner").located(core.state.file, corner.line)  # fmt: skip
 
 
 def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
-    """A motion block while a chamfer/corner is pending, or one that carries ``,L``/``,R`` (L1597-L1646)."""
+    """A motion block while a chamfer/corner is pending, or one that carries ``,L``/``,R`` (§3.2.11)."""
     words = [w for w in core.dialect.corner_words if w in values]
     has_geometry = x is not None or y is not None or z is not None or (motion >= 2 and "R" in values) or (
         motion >= 2 and any(k in values for k in "IJK"))  # fmt: skip
@@ -135,23 +145,25 @@ def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
         core.state.pending = None
         if words:
             raise core.error(f"chamfer/corner {words[0]} in the block right after a coordinate system or "
-                             "plane change or a reference return (L1633)", "bad-corner")  # fmt: skip
+                             "plane change or a reference return (GSK 25i §3.2.11)",
+                             "bad-corner")  # fmt: skip
         return core.run_action("motion", None, values)
     if len(words) > 1:
         raise core.error(f"a block takes either a chamfer {_chamfer_word(core)} or a corner radius ,R, not "
                          "both",
                          "bad-combination")  # fmt: skip
-    pending = core.state.pending
+    pending = cast("PendingCorner | None", core.state.pending)
     if words:
         word = words[0]
         if core.state.polar is not None:
-            raise core.error(f"chamfer/corner {word} in polar coordinate mode G16 (L1864)", "bad-corner")
+            raise core.error(f"chamfer/corner {word} in polar coordinate mode G16 (GSK 25i §3.2.16)",
+                             "bad-corner")
         if motion == 0:
             raise core.error(f"chamfer/corner {word} needs a G01/G02/G03 block", "bad-corner")
         if not has_geometry:
             raise core.error(f"chamfer/corner {word} in a block that does not move", "bad-corner")
         if core.state.restore_modes:  # G09 in this block; other group-00 codes own the axis words
-            raise core.error("G09 in a chamfer/corner block (L1646: no group-00 code but G04)",
+            raise core.error("G09 in a chamfer/corner block (GSK 25i §3.2.11: no group-00 code but G04)",
                              "bad-corner")  # fmt: skip
         size = values[word] * core.state.scale
         if size <= 0:
@@ -160,11 +172,11 @@ def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
     if not has_geometry:
         if pending is not None:
             raise core.error(f"the block after a chamfer/corner {pending.word} block must be a G01/G02/G03 "
-                             "move (L1631)", "bad-corner")  # fmt: skip
+                             "move (GSK 25i §3.2.11)", "bad-corner")  # fmt: skip
         return
     if pending is not None and motion == 0:
         raise core.error(f"the block after a chamfer/corner {pending.word} block must be a G01/G02/G03 "
-                         "move, not G00 (L1631)", "bad-corner")  # fmt: skip
+                         "move, not G00 (GSK 25i §3.2.11)", "bad-corner")  # fmt: skip
     segment = _capture(core, motion, x, y, z, values)
     if segment is None:
         if words or pending is not None:
@@ -173,7 +185,7 @@ def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
     u, v, w = _PLANE_AXES[int(core.state.plane)]
     if abs(segment[2][w] - segment[1][w]) > 1e-9 and (words or pending is not None):
         raise core.error("chamfer/corner: the block moves the axis normal to the plane; chamfers and "
-                         "corner rounding are in the selected plane only (L1627)",
+                         "corner rounding are in the selected plane only (GSK 25i §3.2.11)",
                          "bad-corner")  # fmt: skip
     if pending is None:
         out = core.state.out
@@ -181,7 +193,7 @@ def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
         return
     core.state.pending = None
     if pending.plane != core.state.plane:
-        raise core.error("chamfer/corner: the next block is in another plane (L1631)", "bad-corner")
+        raise core.error("chamfer/corner: the next block is in another plane (GSK 25i §3.2.11)", "bad-corner")
     first, element, second = corner_geometry(core, pending, segment, (u, v, w))
     line, modes = core.state.out.line, core.state.out.modes
     core.state.out.line, core.state.out.modes = pending.line, pending.modes
@@ -194,7 +206,8 @@ def corner_motion(core: Seam, motion: int, x, y, z, values: dict) -> None:
     if words:
         if second is None:  # the corner took all of this block: nothing is left for its own ,L/,R
             raise core.error(f"chamfer/corner {words[0]}: the previous corner {pending.word} takes all of "
-                             "this block, so no corner of its own fits (L1637)", "bad-corner")  # fmt: skip
+                             "this block, so no corner of its own fits (GSK 25i §3.2.11)",
+                             "bad-corner")  # fmt: skip
         core.state.pending = PendingCorner(words[0], size, second, core.state.plane, line, modes)
     elif second is not None:
         _emit(core, second)
@@ -318,8 +331,7 @@ def _within(segment, point, u: int, v: int, from_end: bool) -> bool:
         du, dv = _tangent(segment, True, u, v)
         t = (point[0] - start[u]) * du + (point[1] - start[v]) * dv
         return -tol <= t <= _length(segment, u, v) + tol
-    q = (0.0,) * 3
-    q = list(q)
+    q = [0.0, 0.0, 0.0]
     q[u], q[v] = point
     turned = _turn(_angle(centre, start, u, v), _angle(centre, q, u, v), sweep > 0)
     radius = math.hypot(start[u] - centre[u], start[v] - centre[v])
@@ -329,9 +341,9 @@ def _within(segment, point, u: int, v: int, from_end: bool) -> bool:
 def _with_point(segment, point, at_end: bool, u: int, v: int):
     """The block cut at ``point``: its new end (``at_end``) or its new start."""
     kind, start, end, centre, sweep, feed = segment
-    new = list(end if at_end else start)
-    new[u], new[v] = point
-    new = tuple(new)
+    cut = list(end if at_end else start)
+    cut[u], cut[v] = point
+    new = tuple(cut)
     if kind == "line":
         return (kind, start, new, None, 0.0, feed) if at_end else (kind, new, end, None, 0.0, feed)
     ccw = sweep > 0
@@ -364,7 +376,7 @@ def corner_geometry(core: Seam, pending: PendingCorner, second, axes):
         for segment in (first, second):
             if size > _length(segment, u, v) + 1e-9:
                 raise core.error(f"chamfer ,L{size / core.state.scale:g} is longer than the block "
-                                 f"({_length(segment, u, v) / core.state.scale:.4f}) (L1637)",
+                                 f"({_length(segment, u, v) / core.state.scale:.4f}) (GSK 25i §3.2.11)",
                                  "bad-corner")  # fmt: skip
         end_first = _along(first, size, True, u, v)
         start_second = _along(second, size, False, u, v)
@@ -383,7 +395,7 @@ def corner_geometry(core: Seam, pending: PendingCorner, second, axes):
             break
     if centre is None:
         raise core.error(f"corner rounding ,R{size / core.state.scale:g} does not fit the blocks (it would "
-                         "go beyond a block, L1637)", "bad-corner")  # fmt: skip
+                         "go beyond a block, GSK 25i §3.2.11)", "bad-corner")  # fmt: skip
     cut_first = _with_point(first, tangent_first, True, u, v)
     cut_second = _with_point(second, tangent_second, False, u, v)
     centre3 = list(corner)

@@ -1,5 +1,5 @@
 """Canned cycles of the Fanuc family (group 09): G73, G74, G76, G80-G89, G98/G99 return levels, M29 rigid
-tapping (GSK 25i programming manual §3.17, canned cycles).
+tapping (GSK 25i programming manual §3.4, canned cycles).
 
 **Where is G83?** The dialect's code table maps each cycle code onto a *kind* (its ``value``): G83 →
 ``"peck_deep"``. The kind's function below lists the cycle's steps in its docstring and returns them;
@@ -25,6 +25,8 @@ Steps are tuples (cheap to build, easy to compare in tests):
 Modality: the cycle code, Z, R, Q, P are modal until G80 or a group-01 code; a block in cycle mode drills
 when it has an axis word or R; the initial level is latched when the mode is entered; G98 returns to it,
 G99 to R; K repeats the block. docs/gcode.md "Canned cycles".
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -275,7 +277,7 @@ def emit(core: Seam, steps: list[Step]) -> None:
         if kind == "rapid":
             core.move_linear(True, step[1])
         elif kind == "feed":
-            if step[3]:  # tapping: override fixed at 100 % (L2557, L3194)
+            if step[3]:  # tapping: override fixed at 100 % (§3.4.2, §3.4.14)
                 saved = out.modes
                 out.modes = saved | SegmentMode.OVERRIDE_LOCKED
                 try:
@@ -318,7 +320,7 @@ def limit(core: Seam, count: float, what: str) -> None:
 
 
 def _dwell_from_p(core: Seam, values: dict) -> float:
-    """Cycle P: dwell in ms, an integer like G04 P (L2395)."""
+    """Cycle P: dwell in ms, an integer like G04 P (§3.4)."""
     text = core.word_text("P")
     if text is not None and "." in text:
         raise core.error(f"P{text}: the cycle dwell P is in milliseconds and takes no decimal point",
@@ -329,7 +331,7 @@ def _dwell_from_p(core: Seam, values: dict) -> float:
 
 
 def _repeats(core: Seam, values: dict) -> int:
-    """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (L2410)."""
+    """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (§3.4)."""
     if "K" not in values:
         return 1
     k = abs(values["K"])
@@ -339,7 +341,7 @@ def _repeats(core: Seam, values: dict) -> int:
 
 
 def _store_shift_ij(core: Seam, spec: CodeSpec, values: dict, scale: float) -> None:
-    """I/J of G76/G87: the shift increment when 022#6 SIJ is set (L2618), modal in the cycle mode (a block
+    """I/J of G76/G87: the shift increment when 022#6 SIJ is set (§3.4.3), modal in the cycle mode (a block
     with only I/J stores them, it does not bore); without SIJ they mean nothing (``unused-word``). I is the
     X and J the Y increment ("X and Y axes move"); one along the drilling axis (2000#0 FXY in G18/G19)
     would move the tool in the hole, which the shift never does: an error."""
@@ -391,7 +393,7 @@ def enter(core: Seam, spec: CodeSpec) -> None:
         raise core.error(f"{spec.name} while the drilling cycle {state.spec.name} is active: cancel it with "  # type: ignore[union-attr]
                          "G80", "cycle-argument", alarm=214)  # fmt: skip
     if state.spec is None:
-        state.initial = core.program_position[drilling_axes(core)[2]]  # latched on entering the mode (L2386)
+        state.initial = core.program_position[drilling_axes(core)[2]]  # latched on entering the mode (§3.4)
     state.spec = spec
     state.kind = kind
     st.modal_item = _modal_item(spec)
@@ -404,7 +406,7 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
                 hole_xy: tuple[float, float] | None = None) -> None:  # fmt: skip
     """One block in canned-cycle mode: ``spec`` is the block's cycle code (None: the modal one). Stores
     the hole data, then drills at the block's position (K times) if the block has an axis word or R
-    (L2629); otherwise the block only updates data. ``hole_xy``: a pattern's hole (program mm) instead of
+    (§3.4.3); otherwise the block only updates data. ``hole_xy``: a pattern's hole (program mm) instead of
     the block's axis words."""
     st = core.state
     state = st.cycle
@@ -412,6 +414,7 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
     if spec is not None:
         enter(core, spec)
     spec, kind = state.spec, state.kind
+    assert spec is not None and kind is not None  # enter() or the modal cycle set them
     if kind.special and st.plane != Plane.XY:
         raise core.error(f"{spec.name} works in the G17 plane only", "cycle-argument", alarm=227)
     s = st.scale
@@ -426,7 +429,7 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
         state.dwell_s = _dwell_from_p(core, values)
     drills = hole_xy is not None or "R" in values or any(letter in values for letter in letters)
     if "Q" in values and (drills or not kind.pecking):
-        state.q = abs(values["Q"]) * s  # the sign of Q is ignored (L2802); stored only when drilling (L2806)
+        state.q = abs(values["Q"]) * s  # the sign of Q is ignored; stored only when drilling (§3.4.7)
     if kind.shifting:
         _store_shift_ij(core, spec, values, s)
     else:
@@ -441,7 +444,7 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
         raise core.error(f"{spec.name} needs {missing}: the first drilling block gives all the hole data",
                          "cycle-missing-data", alarm=61)  # fmt: skip
     if st.comp.side:
-        # "In the canned cycle mode, the tool offset is ignored" (L2516): compensation is suspended for the
+        # "In the canned cycle mode, the tool offset is ignored" (§3.4.1): compensation is suspended for the
         # block like for G53/G27-G30 (compensation.py: the last compensated block ends with its vector
         # perpendicular, the cycle's moves run uncompensated, and the next move in the plane after the cycle
         # starts the compensation up again).
@@ -463,8 +466,8 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
                              f"{cycle_params.max_cutting_feed:g} (P1225)", "rigid-tap", alarm=61)  # fmt: skip
     roles = core.dialect.roles
     return_initial = st.modal.get(roles.return_group) != roles.return_r  # type: ignore[arg-type]
-    words = (values.get("X"), values.get("Y"), values.get("Z"))
-    words = tuple(None if a == w else t for a, t in enumerate(words))
+    axis_words = [None if a == w else values.get(letter) for a, letter in enumerate("XYZ")]
+    words = (axis_words[0], axis_words[1], axis_words[2])
     for _ in range(repeats):
         initial = state.initial
         r_level = state.r
@@ -498,14 +501,14 @@ def _machine_amounts(core: Seam, h: Hole, u: int, v: int) -> None:
     state = st.cycle
     params = h.params
     if params.shift_by_ij:
-        # SIJ (L2618): the shift is the programmed increment I (X), J (Y), cut at F.
+        # SIJ (§3.4.3): the shift is the programmed increment I (X), J (Y), cut at F.
         h.shift = (state.shift_i or 0.0, state.shift_j or 0.0, 0.0)
         h.shift_feed = h.feed
     else:
         h.shift = shift_vector(h.q, u, v, params.shift_direction)
     chain = st.chain
     if chain.active:
-        # Scaling does not scale Q, d or the shift (L1962): they are machine amounts, so in program
+        # Scaling does not scale Q, d or the shift (§3.2.17): they are machine amounts, so in program
         # coordinates they are divided by the map's factor along the drilling axis. The Q shift is the
         # program vector the map sends onto the machine-axis shift (2000#4/#5 name a machine direction);
         # the I/J shift is a programmed increment, so it turns and mirrors with the map like any other but
@@ -533,7 +536,7 @@ def cancel(core: Seam) -> None:
     st.cycle.cancel()
     st.modal_item = None
     roles = core.dialect.roles
-    st.modal[roles.cycle_group] = roles.cycle_cancel  # type: ignore[index]
+    st.modal[roles.cycle_group] = roles.cycle_cancel  # type: ignore[index,assignment]
     _sync_general_path(core)
 
 
@@ -549,7 +552,7 @@ def cycle_cancel(core: Seam, spec: CodeSpec, values: dict | None = None) -> None
 
 
 def rigid_tap(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """M29: rigid tapping for the next G74/G84 (L3198-L3212)."""
+    """M29: rigid tapping for the next G74/G84 (§3.4.14)."""
     state = core.state.cycle
     if state.rigid or state.rigid_pending:
         raise core.error("M29 while rigid tapping is already selected", "rigid-tap", alarm=61)
@@ -558,7 +561,7 @@ def rigid_tap(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def check_codes(core: Seam, plan: BlockPlan) -> CodeSpec | None:
-    """A group-01 code in the block of a cycle code is alarm 61 (L2514). (Block check.)"""
+    """A group-01 code in the block of a cycle code is alarm 61 (§3.4.1). (Block check.)"""
     roles = core.dialect.roles
     core.state.cycle.block_spec = None
     cycle_spec = plan.by_group.get(roles.cycle_group)  # type: ignore[arg-type]
@@ -576,9 +579,9 @@ _NOT_IN_CYCLE = {"reference_check": 44, "reference_return": 44, "reference_retur
 
 
 def check_mode(core: Seam, plan: BlockPlan) -> CodeSpec | None:
-    """The cycle mode's block rules (block check): between M29 and G74/G84 no S and no axis move (L3212);
-    G80 or a group-01 code ends the mode (L2655); G27-G30 in cycle mode are alarm 44, G10 must cancel
-    first (L1500); with FXY the plane may not change (L2620)."""
+    """The cycle mode's block rules (block check): between M29 and G74/G84 no S and no axis move (§3.4.14);
+    G80 or a group-01 code ends the mode (§3.4.4); G27-G30 in cycle mode are alarm 44, G10 must cancel
+    first (§3.2.9); with FXY the plane may not change (§3.4.3)."""
     st = core.state
     state = st.cycle
     roles = core.dialect.roles
@@ -600,7 +603,7 @@ def check_mode(core: Seam, plan: BlockPlan) -> CodeSpec | None:
         plane = by_group.get(2)
         follows = core.dialect.cycle_params.drilling_axis_follows_plane
         if plane is not None and follows and plane.value != st.plane:
-            # With FXY = 1 the plane picks the drilling axis, which may not change in a cycle (L2620).
+            # With FXY = 1 the plane picks the drilling axis, which may not change in a cycle (§3.4.3).
             raise core.error(f"{plane.name} changes the drilling axis in canned-cycle mode: cancel the "
                              "cycle with G80 first", "cycle-not-allowed", alarm=61)  # fmt: skip
     return plan.axis_owner

@@ -12,12 +12,14 @@ Nodes are plain tuples (cheap to build, easy to test):
 ``("and"|"or", a, b)``       conditions combined (dialects with ``condition_operators``)
 ===========================  =======================================================
 
-Null ("vacant") semantics follow GSK L5162-L5211: reading a null variable gives ``None``; ``#2=#1`` keeps
+Null ("vacant") semantics follow GSK §3.7.2: reading a null variable gives ``None``; ``#2=#1`` keeps
 null; arithmetic treats null as 0 (``#1*5`` and ``#1+#1`` give 0). A unary sign on a bare null keeps it
 null (so ``X-#1`` with #1 vacant drops the word, as ``X#1`` does). In conditions, EQ and NE tell null from 0
-while GT GE LT LE read null as 0 (L5195-L5211). Comparisons allow a relative difference of 1e-9 (the
-controller computes with 8 significant digits, L5604-L5660, so a loop counter summed from 0.1 steps must
+while GT GE LT LE read null as 0 (§3.7.2). Comparisons allow a relative difference of 1e-9 (the
+controller computes with 8 significant digits, §3.7.4, so a loop counter summed from 0.1 steps must
 still reach its bound).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -141,7 +143,7 @@ class ExpressionParser:
         return ("neg", node) if signs % 2 else node
 
     def condition(self) -> Node:
-        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (L5663-L5720).
+        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (§3.7.5).
 
         With the dialect's condition operators (``Dialect.condition_operators``: Fanuc's AND, OR)
         comparisons combine, AND before OR: ``[#1 GT 0 AND #2 LT 5]``, ``[[#1 GT 0] OR [#2 EQ 1]]``. At
@@ -303,15 +305,15 @@ def evaluate_condition(node: Node, variables: VariableStore, dialect: Dialect) -
     """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring), or of an ``("and"|"or",
     a, b)`` combination (both sides are evaluated, as a controller computing the truth values does)."""
     if node[0] in ("and", "or"):
-        a = evaluate_condition(node[1], variables, dialect)
-        b = evaluate_condition(node[2], variables, dialect)
-        return (a and b) if node[0] == "and" else (a or b)
+        first = evaluate_condition(node[1], variables, dialect)
+        second = evaluate_condition(node[2], variables, dialect)
+        return (first and second) if node[0] == "and" else (first or second)
     _, op, left, right = node
     a = evaluate(left, variables, dialect)
     b = evaluate(right, variables, dialect)
     if op in ("EQ", "NE"):
         if a is None or b is None:
-            same = a is None and b is None  # null equals only null (L5195-L5203)
+            same = a is None and b is None  # null equals only null (§3.7.2)
         else:
             same = abs(a - b) <= COMPARE_TOLERANCE * max(1.0, abs(a), abs(b))
         return same if op == "EQ" else not same
@@ -342,7 +344,7 @@ def _binary(op: str, a: float, b: float, dialect: Dialect) -> float:
         if b == 0:
             raise dialect.error(f"division by zero ({_fmt([a])} MOD 0)", "division-by-zero")
         result = math.fmod(a, b)
-    else:  # AND OR XOR: on 32-bit integers (L5515-L5522)
+    else:  # AND OR XOR: on 32-bit integers (§3.7.4)
         ia, ib = _int32(a, op, dialect), _int32(b, op, dialect)
         result = float(ia & ib if op == "AND" else ia | ib if op == "OR" else ia ^ ib)
     return _finite(result, dialect, op)

@@ -1,7 +1,6 @@
 """Program flow of the Fanuc family: the program-counter loop, Macro B statements (GOTO, IF, WHILE/DO/END),
-program units and files (seed notes §1.9, §6.5-§6.7; manual L461-L495 (subprograms), L5663-L5850 (GOTO,
-IF, WHILE), L5852-L6379 (calls)). The language's runner (:attr:`Language.runner
-<cnc_gym.gcode.dialect.Language.runner>`).
+program units and files (§1.3.1 subprograms, §3.7.5 GOTO, IF, WHILE, §3.7.6-§3.7.7 calls). The language's
+runner (:attr:`Language.runner <cnc_gym.gcode.dialect.Language.runner>`).
 
 * :class:`~cnc_gym.gcode.lang.fanuc.units.Unit` — one program (``O`` number … next ``O``), in the main
   file or in another file of the program directory, with its sequence-number index and its DO/END table
@@ -13,13 +12,15 @@ IF, WHILE), L5852-L6379 (calls)). The language's runner (:attr:`Language.runner
 
 Bounds: ``max_blocks`` executed blocks (runaway loops end with ``too-many-blocks``), subprogram nesting 4
 and macro nesting 4 (alarm 77), DO nesting 3 per level (alarm 96).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.codes import gkey
@@ -31,6 +32,7 @@ from cnc_gym.toolpath import SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import ProgramReader, Seam
+    from cnc_gym.gcode.lang.fanuc.variables import VariableStore
     from cnc_gym.gcode.program import Block
 
 _DWELL = int(SegmentKind.DWELL)
@@ -60,6 +62,8 @@ class FlowRunner(CallConvention):
         self._macro_depth = 0
         core.state.flow = self
         core.state.flow_request = None
+        #: The Fanuc family's variable store (locals per macro level).
+        self._variables = cast("VariableStore", core.state.variables)
 
     # ------------------------------------------------------------------ the loop
     def run(self) -> None:
@@ -67,8 +71,9 @@ class FlowRunner(CallConvention):
         of ``max_blocks`` is charged in bulk whenever control leaves the fast path (a straight run through
         a program is finite, so only jumps, loops and calls need the check)."""
         core = self.core
+        st = core.state
         execute = core.execute
-        skip_mask = core.state.skip_mask
+        skip_mask = st.skip_mask
         budget = self.options.max_blocks
         unit = self.main
         blocks, end = unit.blocks, unit.end
@@ -93,19 +98,19 @@ class FlowRunner(CallConvention):
                     execute(block)
                 except ProgramError as err:
                     raise err.located(unit.file, block.line) from None
-                if core.state.flow_request is None and not core.state.ended:
+                if st.flow_request is None and not st.ended:
                     continue
                 slow = False
             else:
                 slow = True
             budget -= pc - mark
             if budget < 0:
-                err = self.dialect.error(
+                runaway = self.dialect.error(
                     f"more than {self.options.max_blocks} blocks executed: a runaway loop? "
                     "(raise max_blocks if the program is really this long)",
                     "too-many-blocks",
                 )
-                raise err.located(unit.file, block.line)
+                raise runaway.located(unit.file, block.line)
             self.pc = pc
             try:
                 pc = self._special(block, pc) if slow else self._after(block, pc, moved=False)
@@ -124,7 +129,7 @@ class FlowRunner(CallConvention):
             self.core.state.out.line = block.line  # for #3006's stop and #4113/#4114
         if kind == "assign":
             target, value = block.assign
-            variables = self.core.state.variables
+            variables = self._variables
             self.message = block.message
             variables.write(
                 evaluate(target, variables, self.dialect), evaluate(value, variables, self.dialect)
@@ -139,7 +144,7 @@ class FlowRunner(CallConvention):
     def _ordinary(self, block: Block, pc: int) -> int:
         """An ordinary block while G66 is active (or after a call block's own words): watch for motion.
 
-        "A block containing a move command" (L6147) is read from the block itself — a non-null axis word
+        "A block containing a move command" (§3.7.6) is read from the block itself — a non-null axis word
         not taken by a code that only sets something (G04 G10 G52 G92 G51 G68 G50.1 G51.1) — or from the
         segments it produced (a move with no axis word of its own). The segments alone would miss moves
         that cutter compensation's look-ahead emits a block later."""
@@ -161,9 +166,9 @@ class FlowRunner(CallConvention):
             if isinstance(value, str):
                 value = float(value)
             elif not isinstance(value, float):
-                value = evaluate(value, self.core.state.variables, self.dialect)
+                value = evaluate(value, self._variables, self.dialect)
                 if value is None:
-                    continue  # a null word is dropped (L5136)
+                    continue  # a null word is dropped (§3.7.2)
             if letter == "G":
                 spec = self.dialect.gcodes.get(gkey(value))
                 if spec is not None and spec.action in _SETTING_ACTIONS:
@@ -198,7 +203,7 @@ class FlowRunner(CallConvention):
         return pc
 
     def _count_part(self) -> None:
-        system = self.core.state.variables.system
+        system = self._variables.system
         if system is not None:
             system.count_part()
 
@@ -206,7 +211,7 @@ class FlowRunner(CallConvention):
     def _statement(self, block: Block, pc: int) -> int:
         stmt = block.stmt
         op = stmt[0]
-        variables = self.core.state.variables
+        variables = self._variables
         dialect = self.dialect
         unit = self.frames[-1].unit
         here = pc - 1
@@ -232,14 +237,15 @@ class FlowRunner(CallConvention):
         raise AssertionError(f"unknown statement {stmt!r}")
 
     def _goto(self, target_node: tuple, unit: Unit, here: int) -> int:
-        value = evaluate(target_node, self.core.state.variables, self.dialect)
+        value = evaluate(target_node, self._variables, self.dialect)
         number = self._sequence_number(value, "GOTO")
         target = unit.find(number, here + 1)
         if target is None:
             raise self.dialect.error(f"GOTO{number}: no block N{number} in {unit.name}", "sequence-not-found")
         if not unit.loops(self.dialect).may_jump(here, target):
             raise self.dialect.error(
-                f"GOTO{number} jumps into a DO range (only jumps out of one are allowed, L5826)", "do-end"
+                f"GOTO{number} jumps into a DO range (only jumps out of one are allowed, GSK 25i §3.7.5)",
+                "do-end",
             )
         return target
 
@@ -343,11 +349,11 @@ class FlowRunner(CallConvention):
         if frame.repeats > 0:
             frame.repeats -= 1
             if frame.macro:
-                self.core.state.variables.locals = dict(frame.args)
+                self._variables.locals = dict(frame.args)
             return frame.unit.start
         self.frames.pop()
         if frame.macro:
-            self.core.state.variables.pop_locals()
+            self._variables.pop_locals()
             self._macro_depth -= 1
         if frame.subprogram:
             self._sub_depth -= 1

@@ -1,10 +1,10 @@
-"""G37 automatic tool length measurement (manual L4692-L4783) with a simulated measuring instrument.
+"""G37 automatic tool length measurement (manual §3.5.6) with a simulated measuring instrument.
 
 ``G90 G37 Z_`` (H given in an earlier block) moves the tool at rapid toward the measurement position M,
 changes to the measurement feed (P2651) a distance r (P2652) before it, and moves on until the
 instrument's approach-end signal. The signal must come within ±e (P2653) of M: while the tool is still
 more than e short of M ("B to C") or not by e past it ("point F") it is alarm 80. The tool stops at the
-signal; the offset of the current H number changes by (signal coordinate − M) (L4731).
+signal; the offset of the current H number changes by (signal coordinate − M) (§3.5.6).
 
 The simulation has no instrument, so :class:`ToolMeasurement` says where its signal comes: per H number,
 the work coordinate of the measured axis at which the tool tip meets it (the manual's example: H01 reaches
@@ -12,7 +12,7 @@ the instrument at Z198 when G37 Z200 was commanded, so the offset falls by 2.0).
 list reaches it exactly at M: the offset is right and does not change.
 
 Choices where the manual is silent (docs/gcode.md):
-* the offset memory has a geometry and a wear value per number (memory C), so — per note 3 (L4745) —
+* the offset memory has a geometry and a wear value per number (memory C), so — per note 3 (§3.5.6) —
   the H *wear* value is changed;
 * the change is written to the offset memory only; a G43/G44 vector already in force keeps its value
   until H or G43/G44 is given again (the next block uses the vector in force, as with G10);
@@ -20,6 +20,8 @@ Choices where the manual is silent (docs/gcode.md):
   G68/G51/G51.1 is an error rather than a guess;
 * P2652 and P2653 are lengths in the least increment (0.0001 mm) when written by ``G10 L50`` (R takes
   no decimal point); standard 1000 mm/min, 0, 0 (so only a signal exactly at M passes).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -40,13 +42,13 @@ def _g37(core: Seam, spec: CodeSpec, values: dict) -> None:
     """``G90 G37 IP_``: measure, move to the signal point, correct the H offset (module docstring)."""
     letters = [letter for letter in core.dialect.axes if letter in values]
     if "H" in values:
-        raise core.error("G37: specify H in an earlier block, not in the G37 block (L4741)",
+        raise core.error("G37: specify H in an earlier block, not in the G37 block (GSK 25i §3.5.6)",
                          "g37-h-in-block")  # fmt: skip
     if len(letters) != 1:
         raise core.error(f"G37 takes one axis word (X, Y or Z), got {len(letters) or 'none'}",
                          "g37-axis")  # fmt: skip
     if core.state.incremental:
-        raise core.error("G37 is an absolute command (G90 G37 IP_, L4708)", "g37-incremental")
+        raise core.error("G37 is an absolute command (G90 G37 IP_, GSK 25i §3.5.6)", "g37-incremental")
     if core.state.comp.side:
         raise core.error("G37 in cutter compensation mode: cancel it with G40 first", "bad-combination")
     if core.state.chain.active or core.state.polar is not None:
@@ -85,7 +87,7 @@ def _g37(core: Seam, spec: CodeSpec, values: dict) -> None:
         raise core.error(f"G37: no approach-end signal by {letter}{(start + direction * to_f) / unit:g} "
                          f"({letter}{target / unit:g} + {band / unit:g})", "g37-signal")  # fmt: skip
     _move(core, axis, origin, start, to_b, signal, feed)
-    # Offset = current + (measured coordinate − commanded coordinate) (L4731): the H wear value (memory C).
+    # Offset = current + (measured coordinate − commanded coordinate) (§3.5.6): the H wear value (memory C).
     offsets = core.state.comp.offsets
     offsets.set("H", number, offsets.get("H", number, wear=True) + (signal - target), wear=True,
                 error=lambda message, code: core.error(message, code))  # fmt: skip

@@ -3,6 +3,8 @@ coolant, tool change, program stops, dwell.
 
 Each function is an action of the registry (``lang/fanuc/__init__.py``): ``action(core, spec, values)``,
 with ``values`` None when the code is put in force at power-on.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -64,10 +66,10 @@ def units(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
     st = core.state
     if values is not None and spec.value != st.inch and (
             len(st.builder) or st.offsets.floating is not None or any(st.offsets.local)):  # fmt: skip
-        # L2110, L2127: G20/G21 go at the start, before the work coordinate system is set, and must not
+        # §3.2.19: G20/G21 go at the start, before the work coordinate system is set, and must not
         # switch in the middle of a program (positions and offsets already given would change meaning).
         raise core.error(f"{spec.name}: inch/metric input cannot switch after the program has moved or "
-                         "set a coordinate system (give it alone at the start, L2110, L2127)",
+                         "set a coordinate system (give it alone at the start, GSK 25i §3.2.19)",
                          "units-switch")  # fmt: skip
     st.inch = bool(spec.value)
     st.scale = INCH_MM if spec.value else 1.0
@@ -175,7 +177,7 @@ def stop(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G04: P in ms (integer), X in s; P wins; neither = exact stop (L1305-L1320)."""
+    """G04: P in ms (integer), X in s; P wins; neither = exact stop (§3.2.6)."""
     for letter in "YZ":
         if letter in values:
             raise core.error(f"address {letter} has no meaning with G04", "unused-word")

@@ -3,6 +3,8 @@ axes, and G53 positioning in machine coordinates.
 
 :func:`motion` is the action of every motion code and of axis-only blocks; it is on the interpreter's hot
 path, so the plain G00/G01 move is written out here rather than through :meth:`Seam.move_linear`.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ _ARC_WORDS = frozenset("IJKR")
 
 def motion(core: Seam, spec: CodeSpec | None = None, values: dict | None = None) -> None:
     """G00/G01/G02/G03, or an axis-only block in the modal motion. A motion code without axis words only
-    sets the mode (L938)."""
+    sets the mode (§3.2.1)."""
     st = core.state
     if spec is not None and spec.value is not None:
         st.motion = spec.value  # type: ignore[assignment]
@@ -47,9 +49,10 @@ def motion(core: Seam, spec: CodeSpec | None = None, values: dict | None = None)
             return
         if x is None and y is None and z is None and not _ARC_WORDS.intersection(values):
             return  # no geometry in the block: the arc mode is only (re)selected
-        return core.dialect.hooks.arc(core, mode, x, y, z, values)  # type: ignore[misc]
+        core.dialect.hooks.arc(core, mode, x, y, z, values)  # type: ignore[misc]
+        return
     if x is None and y is None and z is None:
-        return  # a motion code with no axis words only sets the mode (L938)
+        return  # a motion code with no axis words only sets the mode (§3.2.1)
     if st.transformed:
         core.move_linear(mode == 0, core.resolve_target(x, y, z))
         return
@@ -81,7 +84,7 @@ def motion_mode(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def rotary_motion(core: Seam, mode: int, x, y, z, values: dict) -> None:
-    """A G00/G01 block with rotary axis words (L981-L995): the rotary axes move linearly with the XYZ
+    """A G00/G01 block with rotary axis words (§3.2.2): the rotary axes move linearly with the XYZ
     move (or alone). F is the rate along the composite vector, degrees counted as mm (inch in G20):
     the tool path carries the angles, ``Toolpath.path_feed`` the resulting XYZ feed."""
     st = core.state
@@ -113,10 +116,10 @@ def rotary_motion(core: Seam, mode: int, x, y, z, values: dict) -> None:
 
 
 def machine_move(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G53 IP_: rapid to machine coordinates; one-shot; ignored in G91 (L1656)."""
+    """G53 IP_: rapid to machine coordinates; one-shot; ignored in G91 (§3.2.12)."""
     st = core.state
     if st.chain.stages["rotation"] is not None:
-        transforms.check_coordinate_command(core, "G53", local=True)  # "G52 to G59" in G68 mode (L2041)
+        transforms.check_coordinate_command(core, "G53", local=True)  # "G52 to G59" in G68 mode (§3.2.18)
     if st.incremental:
         return
     compensation.before_machine_move(core)

@@ -1,5 +1,4 @@
-"""G05 P10000 / G05 P0 high-precision contour control and G06.2 NURBS interpolation (manual L1201-L1303,
-seed notes §3.21).
+"""G05 P10000 / G05 P0 high-precision contour control and G06.2 NURBS interpolation (manual §3.2.5).
 
 Program format (one curve)::
 
@@ -14,12 +13,14 @@ The curve is carried to the tool path as one exact :class:`~cnc_gym.toolpath.Nur
 ``nurbs``): its control points go through the active transforms and offsets (``Interpreter.to_machine``:
 mirror, scaling, rotation, work offsets and tool length). An affine map of the control points maps the
 curve exactly (a NURBS curve is an affine combination of its control points, since its rational basis sums
-to 1), so unequal scaling gives the exact image curve too (unlike arcs, L1936).
+to 1), so unequal scaling gives the exact image curve too (unlike arcs, §3.2.17).
 
 K and R of NURBS blocks are plain numbers, not lengths: ``K0.008286`` keeps its six decimals (the address
-rule of K as a length would truncate it to 0.0001, L685) and R is a weight, never converted by G20. The
+rule of K as a length would truncate it to 0.0001, §2.5) and R is a weight, never converted by G20. The
 G06.2 code's ``address_rules`` carry that (dialect.py); the blocks after the G06.2 block have no code, so
 this module re-reads K and R with those rules (:func:`word_value`).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -53,6 +54,7 @@ def word_value(core: Seam, letter: str, rule: AddressRule, words) -> float | Non
         if word[0] != letter:
             continue
         text = word[-1]
+        value: float | None
         if text is not None:
             value = float(text)
         else:
@@ -81,7 +83,7 @@ def _reread(core: Seam, values: dict, words) -> dict:
 
 # ---------------------------------------------------------------------- G05
 def contour_control(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """``G05 P10000`` / ``G05 P0``: high-precision contour control on / off (L1205-L1215). Alone in its
+    """``G05 P10000`` / ``G05 P0``: high-precision contour control on / off (§3.2.5). Alone in its
     block; a NURBS curve must be complete before P0."""
     others = sorted({w[0] for w in core.state.block_words} - set("GNOP"))
     if others or sum(1 for w in core.state.block_words if w[0] == "G") > 1:
@@ -93,8 +95,8 @@ def contour_control(core: Seam, spec: CodeSpec, values: dict) -> None:
     elif p == 0:
         if state.curve is not None:
             raise _error(core, f"G05 P0 before the NURBS curve of line {state.curve.line} is complete "
-                         f"(it needs {state.curve.rank} knot-only blocks after its control points, L1256)",
-                         "nurbs-incomplete")  # fmt: skip
+                         f"(it needs {state.curve.rank} knot-only blocks after its control points, "
+                         "GSK 25i §3.2.5)", "nurbs-incomplete")  # fmt: skip
         state.hpcc = False
     else:
         raise _error(core, "G05 needs P10000 (high-precision contour control on) or P0 (off)"
@@ -107,19 +109,20 @@ def start(core: Seam, spec: CodeSpec, values: dict) -> None:
     state = core.state.nurbs
     if not state.hpcc:
         raise _error(core, "G06.2 NURBS needs high-precision contour control: program G05 P10000 first "
-                     "(L1209)", "nurbs-outside-hpcc")  # fmt: skip
+                     "(GSK 25i §3.2.5)", "nurbs-outside-hpcc")  # fmt: skip
     if core.state.comp.side:
         raise _error(core, "G06.2 cannot be used with cutter compensation: cancel G41/G42 with G40 first "
-                     "(L1289)", "nurbs-in-compensation")  # fmt: skip
+                     "(GSK 25i §3.2.5)", "nurbs-in-compensation")  # fmt: skip
     if core.state.polar is not None:
         raise _error(core, "G06.2 in polar coordinate mode G16: cancel it with G15 first", "nurbs")
     forbidden = sorted({w[0] for w in core.state.block_words} - set("GNO" + NURBS_WORDS + core.dialect.axes))
     if forbidden:
-        raise _error(core, f"address {forbidden[0]} cannot be given in a G06.2 block (L1281: no M, S, T, "
-                     "B, D, H in NURBS mode)", "nurbs-forbidden")  # fmt: skip
+        raise _error(core, f"address {forbidden[0]} cannot be given in a G06.2 block (GSK 25i §3.2.5: "
+                     "no M, S, T, B, D, H in NURBS mode)", "nurbs-forbidden")  # fmt: skip
     rank = values.get("P", 4.0)
     if rank not in (2.0, 3.0, 4.0):
-        raise _error(core, f"G06.2 P{rank:g}: the NURBS rank P is 2, 3 or 4 (L1233)", "nurbs-bad-rank")
+        raise _error(core, f"G06.2 P{rank:g}: the NURBS rank P is 2, 3 or 4 (GSK 25i §3.2.5)",
+                     "nurbs-bad-rank")  # fmt: skip
     feed = core.state.feed
     if not feed:
         raise core.error("G06.2 needs a feed: no F programmed yet" if feed is None else
@@ -158,7 +161,7 @@ def block_hook(core: Seam, block) -> bool:
                 raise _error(core, f"{gcodes[group01[0]].name} before the NURBS curve of line {curve.line} "
                              f"is complete (it needs {curve.rank} knot-only blocks after its control points)",
                              "nurbs-incomplete")  # fmt: skip
-            core.state.block_hook = None  # another group-01 code ends NURBS mode (L1229)
+            core.state.block_hook = None  # another group-01 code ends NURBS mode (§3.2.5)
             return False
         if keys == [core.dialect.roles.contour_control]:
             if curve is not None:
@@ -168,7 +171,7 @@ def block_hook(core: Seam, block) -> bool:
             return False  # G05 P0 after a complete curve (G05 checks its P)
         name = gcodes[keys[0]].name if keys[0] in gcodes else f"G{gs[0]:g}"
         raise _error(core, f"{name} in NURBS mode: no other G code may be given until a group-01 code "
-                     "(G00-G03) ends G06.2 (L1281)", "nurbs-forbidden")  # fmt: skip
+                     "(G00-G03) ends G06.2 (GSK 25i §3.2.5)", "nurbs-forbidden")  # fmt: skip
     if not state.hpcc:
         # G06.2 is still the modal motion after G05 P0, but NURBS cannot run outside contour control.
         if "K" in values or any(letter in values for letter in core.dialect.axes):
@@ -176,11 +179,11 @@ def block_hook(core: Seam, block) -> bool:
                          "and a new G06.2)", "nurbs-outside-hpcc")  # fmt: skip
         return False
     if ms:
-        raise _error(core, "M codes cannot be given in NURBS mode (L1281)", "nurbs-forbidden")
+        raise _error(core, "M codes cannot be given in NURBS mode (GSK 25i §3.2.5)", "nurbs-forbidden")
     for letter in values:
         if letter not in "KR" and letter not in core.dialect.axes:
             what = "the feed cannot change" if letter == "F" else f"address {letter} cannot be given"
-            raise _error(core, f"{what} in NURBS mode (L1281)", "nurbs-forbidden")
+            raise _error(core, f"{what} in NURBS mode (GSK 25i §3.2.5)", "nurbs-forbidden")
     if not values:
         return True  # N only: nothing to do
     if curve is None:
@@ -196,11 +199,11 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
     letters = core.dialect.axes
     named = frozenset(a for a, letter in enumerate(letters) if letter in values)
     if "K" not in values:
-        raise _error(core, "every NURBS block carries its knot K (L1244)", "nurbs-missing-knot")
+        raise _error(core, "every NURBS block carries its knot K (GSK 25i §3.2.5)", "nurbs-missing-knot")
     knot = values["K"]
     if curve.knots and knot < curve.knots[-1]:
         raise _error(core, f"K{knot:g} is smaller than the previous knot {curve.knots[-1]:g}: knots never "
-                     "decrease (L1262)", "nurbs-bad-knot")  # fmt: skip
+                     "decrease (GSK 25i §3.2.5)", "nurbs-bad-knot")  # fmt: skip
     limit = core.dialect.nurbs_params.max_blocks
     if len(curve.knots) + 1 > limit:  # every block of the curve carries one knot
         raise _error(core, f"the NURBS curve of line {curve.line} has more than {limit} blocks (P1407)",
@@ -208,14 +211,14 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
     if named:
         if curve.knot_only:
             raise _error(core, "a control point after the knot-only blocks: the last `rank` blocks carry "
-                         "only a knot (L1244)", "nurbs-missing-knot")  # fmt: skip
+                         "only a knot (GSK 25i §3.2.5)", "nurbs-missing-knot")  # fmt: skip
         weight = values.get("R", 1.0)
         if not weight > 0.0 or not math.isfinite(weight):
             raise _error(core, f"R{weight:g}: a NURBS weight must be positive", "nurbs-bad-weight")
         s = core.state.scale
         if curve.axes is None:
-            # The first control point: all the NURBS axes are named here (L1276) and it must be the
-            # current position (L1293).
+            # The first control point: all the NURBS axes are named here (§3.2.5) and it must be the
+            # current position (§3.2.5).
             curve.axes = named
             here = core.program_position
             point = [here[a] if a not in named else
@@ -226,13 +229,13 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
                 where = ", ".join(f"{letters[a]}{point[a] / s:g}" for a in sorted(named))
                 now = ", ".join(f"{letters[a]}{here[a] / s:.4f}" for a in range(3))
                 raise _error(core, f"the first NURBS control point ({where}) is not the current position "
-                             f"({now}) (L1293; in G91 write G06.2 X0 Y0 Z0 K_)", "nurbs-start-point")
+                             f"({now}) (GSK 25i §3.2.5; in G91 write G06.2 X0 Y0 Z0 K_)", "nurbs-start-point")
             point = list(here)
-            start = core.to_machine(point)
+            start = core.to_machine(here)
             tool = core.state.out.position
             if max(abs(start[a] - tool[a]) for a in range(3)) > tolerance:
                 # G51/G68/G51.1 came into force since the last move: the tool is not yet at the image of
-                # its program position (the transforms keep it where it is, L1932).
+                # its program position (the transforms keep it where it is, §3.2.17).
                 raise _error(core, "the tool is not at the start of the NURBS curve: a transform came into "
                              "force since the last move; move to the first control point first",
                              "nurbs-start-point")  # fmt: skip
@@ -240,7 +243,8 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
             extra = named - curve.axes
             if extra:
                 raise _error(core, f"axis {letters[min(extra)]} was not named in the first NURBS control "
-                             "point: every NURBS axis is given there (L1276)", "nurbs-axes")  # fmt: skip
+                             "point: every NURBS axis is given there (GSK 25i §3.2.5)",
+                             "nurbs-axes")  # fmt: skip
             prev = curve.points[-1]
             point = [prev[a] if a not in named else
                      (prev[a] + values[letters[a]] * s if core.state.incremental else values[letters[a]] * s)
@@ -251,7 +255,7 @@ def _add_block(core: Seam, curve: CurveInProgress, values: dict) -> None:
         if "R" in values:
             raise _error(core, "R (weight) without a control point", "nurbs-bad-weight")
         if not curve.points:
-            raise _error(core, "a knot-only block before the first NURBS control point (L1244)",
+            raise _error(core, "a knot-only block before the first NURBS control point (GSK 25i §3.2.5)",
                          "nurbs-missing-knot")  # fmt: skip
         curve.knot_only += 1
     curve.knots.append(knot)
@@ -263,7 +267,7 @@ def _finish(core: Seam, curve: CurveInProgress) -> None:
     """The last knot-only block: build the exact curve in machine coordinates and emit it."""
     state = core.state.nurbs
     state.curve = None
-    machine = [core.to_machine(p) for p in curve.points]
+    machine = [core.to_machine((p[0], p[1], p[2])) for p in curve.points]
     machine[0] = core.state.out.position  # the path stays joined exactly
     try:
         exact = NurbsCurve(np.array(machine, dtype=float), np.array(curve.weights), np.array(curve.knots),
@@ -271,7 +275,8 @@ def _finish(core: Seam, curve: CurveInProgress) -> None:
     except ValueError as exc:
         raise _error(core, f"the NURBS curve of line {curve.line}: {exc}", "nurbs-bad-curve") from None
     if core.state.transformed:
-        core.state.program_point = tuple(curve.points[-1])
+        last = curve.points[-1]
+        core.state.program_point = (last[0], last[1], last[2])
     if exact.length <= 1e-9:
         return  # all control points at the current position: nothing to move
     out = core.state.out
@@ -289,7 +294,7 @@ def finish(core: Seam) -> None:
     curve = core.state.nurbs.curve
     if curve is not None:
         raise core.error(f"the program ends before the NURBS curve of line {curve.line} is complete (it "
-                         f"needs {curve.rank} knot-only blocks after its control points, L1244)",
+                         f"needs {curve.rank} knot-only blocks after its control points, GSK 25i §3.2.5)",
                          "nurbs-incomplete").located(core.state.builder.files[curve.file_index], curve.line)
 
 

@@ -1,5 +1,5 @@
 """Controller parameters written by the program: G10 L50 parameter input … G11 (GSK 25i programming manual
-§3.9, programmable parameter input), and what the features read from them.
+§3.2.9, programmable parameter input), and what the features read from them.
 
 Inside G10 L50 mode every block is ``N<number> [P<axis>] R<value>``: parameter number, axis (P1..P5 for
 an axis parameter), raw value. R takes no decimal point, so a value is an integer in the parameter's unit.
@@ -7,6 +7,8 @@ Every write is kept (:class:`~cnc_gym.gcode.state.Parameters`); the features rea
 *meaning* (:data:`MEANINGS`), which the dialect maps to its own number (``Dialect.parameter_numbers``:
 GSK 25i P1051-P1053 reference positions 2-4, P1860 rotation angle, P1861/P1862 magnifications, P1880 G60
 overrun, P2651-P2653 G37 feed, deceleration distance and band).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -86,15 +88,15 @@ def scale(core: Seam, axis: int | None) -> float:
 
 # ---------------------------------------------------------------------- G10 L50 … G11
 def open_input(core: Seam, values: dict) -> None:
-    """``G10 L50;`` opens parameter input; it must be alone in its block (L1496)."""
+    """``G10 L50;`` opens parameter input; it must be alone in its block (§3.2.9)."""
     words = core.state.block_words
     others = [w[0] for w in words if w[0] not in "GLNO"]
     gs = [w for w in words if w[0] == "G"]
     if others or len(gs) > 1:
-        raise core.error("G10 L50 must be alone in its block (L1496)", "bad-g10")
+        raise core.error("G10 L50 must be alone in its block (GSK 25i §3.2.9)", "bad-g10")
     roles = core.dialect.roles
     if core.state.modal.get(roles.cycle_group, roles.cycle_cancel) != roles.cycle_cancel:  # type: ignore[arg-type]
-        raise core.error("G10 L50 in a canned cycle: cancel it with G80 first (L1500)", "bad-g10")
+        raise core.error("G10 L50 in a canned cycle: cancel it with G80 first (GSK 25i §3.2.9)", "bad-g10")
     core.state.block_hook = parameter_hook
 
 
@@ -105,7 +107,7 @@ def parameter_hook(core: Seam, block: Block) -> bool:
 
 
 def parameter_block(core: Seam, block: Block) -> None:
-    """A block inside G10 L50 mode: ``N_ R_`` or ``N_ P_ R_``, or ``G11`` (L1466-L1517)."""
+    """A block inside G10 L50 mode: ``N_ R_`` or ``N_ P_ R_``, or ``G11`` (§3.2.9)."""
     # (letter, digits) or (letter, value, text), text None = an expression; a plain block keeps its N word.
     words = [w for w in block.words if w[0] not in "NO"]
     letters = [w[0] for w in words]
@@ -115,7 +117,7 @@ def parameter_block(core: Seam, block: Block) -> None:
         return
     if block.number is None or not set(letters) <= {"P", "R"} or "R" not in letters:
         raise core.error("inside G10 L50 only parameter blocks N_ R_ / N_ P_ R_ and G11 are allowed "
-                         "(L1466-L1517)", "bad-g10")  # fmt: skip
+                         "(GSK 25i §3.2.9)", "bad-g10")  # fmt: skip
     fields = {}
     wide = core.dialect.parameter_input_r
     for word in words:
@@ -127,9 +129,9 @@ def parameter_block(core: Seam, block: Block) -> None:
                                  "value-out-of-range", alarm=wide.alarm)  # fmt: skip
         if text is None:
             raise core.error(f"{letter} of a parameter block takes a plain number (no variable: R has no "
-                             "decimal point even from a variable, L1512)", "bad-g10")  # fmt: skip
+                             "decimal point even from a variable, GSK 25i §3.2.9)", "bad-g10")  # fmt: skip
         if "." in text:
-            raise core.error(f"{letter}{text}: no decimal point in a parameter block (L1512)",
+            raise core.error(f"{letter}{text}: no decimal point in a parameter block (GSK 25i §3.2.9)",
                              "decimal-point-not-allowed")  # fmt: skip
         fields[letter] = int(float(text))
     write(core, int(block.number), fields.get("P", 0), fields["R"])

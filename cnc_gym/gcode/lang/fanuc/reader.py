@@ -1,16 +1,16 @@
 """The Fanuc family's lexer and block reader: program text → :class:`~cnc_gym.gcode.program.Program` (the
 default :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`).
 
-Lexical rules (GSK 25i, seed notes §1; the dialect supplies the number formats):
+Lexical rules (GSK 25i, §1.2.3; the dialect supplies the number formats):
 
-* a line is a block; ``;`` also ends a block (EOB, L392); a line holding only ``%`` is a tape mark and a
+* a line is a block; ``;`` also ends a block (EOB, §1.2); a line holding only ``%`` is a tape mark and a
   second one ends the tape (text after it is not read);
 * ``( … )`` is a comment; upper and lower case are the same; spaces and tabs are ignored;
 * ``/`` or ``/n`` (n = 1..9, several as ``/1/3``) at the head of a block marks it for optional block
-  skip; a ``/`` later in the block discards the rest of the block (L533-L535);
+  skip; a ``/`` later in the block discards the rest of the block (§1.3.4);
 * ``O`` program number and ``N`` sequence number at the head; then words: an address letter and a number,
   ``#i``, ``#[e]``, ``[e]`` or a signed form of these; or one macro assignment ``#i = e``;
-* literal numbers are truncated to the least input increment (L685-L690); without a decimal point they are
+* literal numbers are truncated to the least input increment (§2.5); without a decimal point they are
   in mm/inch/s (DPI = 1) or in least increments (DPI = 0), per the dialect.
 
 Plain blocks (no ``#``, ``[``, ``/`` or keywords) go through one regex match and one ``findall``; the rest
@@ -21,6 +21,8 @@ blocks of kind ``"stmt"``; blocks that may call a macro (G65, G66, and the G/M/T
 :class:`~cnc_gym.gcode.dialect.MacroCalls` maps) are of kind ``"call"`` and keep their words in order
 (argument specification II repeats I/J/K). A file may hold several programs, each starting at an ``O``
 block; the first is the main program (:attr:`Program.units`).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ if TYPE_CHECKING:
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 # Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".". The plain-block
 # pattern is built per reader (_plain_block_pattern) so that it admits only words within the dialect's
-# length limit (GSK alarm 13, notes §9 E1): a longer literal falls to the scanner, which names it
+# length limit (GSK alarm 13, docs/gsk25i_alarms.md E1): a longer literal falls to the scanner, which names it
 # (``word-too-long``), and the hot path pays nothing for the check.
 _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 
@@ -80,7 +82,7 @@ class Reader:
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
-        # Macro arguments (G65 A1.0 D5.0 …, L5892): every sign and a decimal point; lengths still follow
+        # Macro arguments (G65 A1.0 D5.0 …, §3.7.6): every sign and a decimal point; lengths still follow
         # the increment and decimal-point mode.
         self._arg_rules = {a: (rule if a in _CALL_CONTROL else (-1e9, 1e9, True, rule[3]))
                            for a, rule in self._fast_rules.items()}  # fmt: skip
@@ -232,7 +234,7 @@ class Reader:
             block = self.read_block(text, line)
             blocks = [block] if block is not None else []
         if self._last_comment is not None:
-            # The message of #3000=n (…) / #3006=1 (…) (L5286, L5380): the comment of an assignment line.
+            # The message of #3000=n (…) / #3006=1 (…) (§3.7.3): the comment of an assignment line.
             for block in blocks:
                 if block.assign is not None:
                     block.message = self._last_comment
@@ -297,7 +299,7 @@ class Reader:
                         or letter in self._deferred_letters):  # fmt: skip
                     # macro arguments have their own rules; so do the words of some codes (L2.5 in G110,
                     # also in a later block of the modal cycle: checked when it runs)
-                    return self._scan_block(text, line)
+                    return self._rescan(text, line)
                 raise
             if letter == "G":
                 if gs is None:
@@ -311,15 +313,15 @@ class Reader:
                     ms.append(value)
             elif letter in values:
                 if letter in "IJK":
-                    return self._scan_block(text, line)  # argument specification II, if a call block
+                    return self._rescan(text, line)  # argument specification II, if a call block
                 raise self.error(f"address {letter} appears twice in the block", "duplicate-word", line)
             else:
                 values[letter] = value
         if ((gs is not None and not self._call_g.isdisjoint(gs))
                 or (ms is not None and not self._call_m.isdisjoint(ms)) or (self._call_t and "T" in values)):
-            return self._scan_block(text, line)  # a possible macro call: words kept in order
+            return self._rescan(text, line)  # a possible macro call: words kept in order
         if gs is not None and not self._override_codes.isdisjoint(gs):
-            return self._scan_block(text, line)  # a code with its own number formats (CodeSpec.address_rules)
+            return self._rescan(text, line)  # a code with its own number formats (CodeSpec.address_rules)
         number = None
         has_o = False
         if "N" in values or "O" in values:
@@ -345,6 +347,12 @@ class Reader:
             self._o_blocks.append(block)
         return block
 
+    def _rescan(self, text: str, line: int) -> Block:
+        """A plain line that needs the scanner after all (it is not empty, so it gives a block)."""
+        block = self._scan_block(text, line)
+        assert block is not None
+        return block
+
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:
         low, high, point_allowed, is_length = rule
         has_point = "." in digits
@@ -355,7 +363,7 @@ class Reader:
             if is_length:
                 dot = digits.index(".")
                 if len(digits) - dot - 1 > self._decimals:
-                    # Finer than the least input increment: truncated (L685-L690), on the text, so
+                    # Finer than the least input increment: truncated (§2.5), on the text, so
                     # 9.87654 becomes exactly 9.8765 (no binary rounding on the way).
                     digits = digits[: dot + 1 + self._decimals]
         value = float(digits)
@@ -375,13 +383,13 @@ class Reader:
         rest = list(words)
         if rest and rest[0][0] == "O":
             if not isinstance(rest[0][1], float):
-                raise self.error("O cannot be a variable (L5158)", "variable-not-allowed", line)
+                raise self.error("O cannot be a variable (GSK 25i §3.7.2)", "variable-not-allowed", line)
             rest = rest[1:]
             if rest and rest[0][0] == "O":
                 raise self.error("two program numbers O in one block", "duplicate-word", line)
         if rest and rest[0][0] == "N":
             if not isinstance(rest[0][1], float):
-                raise self.error("N cannot be a variable (L5160)", "variable-not-allowed", line)
+                raise self.error("N cannot be a variable (GSK 25i §3.7.2)", "variable-not-allowed", line)
             number = int(rest[0][1])
             rest = rest[1:]
         for letter, _, _ in rest:
@@ -449,7 +457,7 @@ class Reader:
               defer: bool = False) -> Block | None:  # fmt: skip
         pos = 0
         skip = 0
-        # Optional block skip: /, /n, /1/3 at the head (L520-L524).
+        # Optional block skip: /, /n, /1/3 at the head (§1.3.4).
         while pos < len(text) and text[pos] == "/":
             pos += 1
             if pos < len(text) and text[pos].isdigit():
@@ -458,10 +466,12 @@ class Reader:
                     raise self.error("block skip switch must be 1 to 9", "bad-block-skip", line, pos + 1)
                 pos += 1
             elif pos < len(text) and text[pos] == "#":
-                raise self.error("a variable cannot follow '/' (L5159)", "variable-not-allowed", line,
+                raise self.error("a variable cannot follow '/' (GSK 25i §3.7.2)", "variable-not-allowed",
+                                 line,
                                  pos + 1)  # fmt: skip
             elif pos < len(text) and text[pos] == "/":
-                raise self.error("'//n' is not a block skip; write /1/n (L522-L524)", "bad-block-skip", line,
+                raise self.error("'//n' is not a block skip; write /1/n (GSK 25i §1.3.4)", "bad-block-skip",
+                                 line,
                                  pos + 1)  # fmt: skip
             else:
                 n = 1
@@ -476,7 +486,7 @@ class Reader:
         while pos < len(text):
             c = text[pos]
             if c == "/":
-                break  # a slash inside the block: the rest of the block is ignored (L533-L535)
+                break  # a slash inside the block: the rest of the block is ignored (§1.3.4)
             if c == "#":
                 if any(w[0] not in "ON" for w in words):
                     raise self.error("a macro assignment must be alone in its block", "bad-expression", line,
@@ -560,7 +570,8 @@ class Reader:
 
     # ------------------------------------------------------------------ macro statements
     def _statement(self, keyword: str, text: str, pos: int, line: int) -> tuple[tuple, int]:
-        """``IF[c]GOTOn``, ``IF[c]THEN #i=e``, ``GOTOn``, ``WHILE[c]DOm``, ``DOm``, ``ENDm`` (L5663-L5850)."""
+        """``IF[c]GOTOn``, ``IF[c]THEN #i=e``, ``GOTOn``, ``WHILE[c]DOm``, ``DOm``, ``ENDm``
+        (§3.7.4-§3.7.5)."""
         parser = ExpressionParser(text, pos + len(keyword), self.dialect)
         if keyword == "IF":
             if parser._peek() != "[":
@@ -629,7 +640,7 @@ class Reader:
             raise self.error(f"{word} needs its identifier 1, 2 or 3 ({word}1)", "do-end", line, start + 1)
         m = int(digits)
         if not 1 <= m <= 3:
-            raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (L5712)", "do-end", line,
+            raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (GSK 25i §3.7.5)", "do-end", line,
                              start + 1, alarm=97)  # fmt: skip  # alarm 97 ILLEGAL CYCLE NUMBER
         return m
 

@@ -3,6 +3,8 @@ from it, G30 2nd-4th reference positions, and G60 single-direction positioning.
 
 Reference positions come from the machine preset (``AxisConfig.reference_1_mm`` … ``reference_4_mm``),
 overridden for 2-4 by the parameters G10 L50 writes. Cutter compensation is suspended for these moves.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -45,9 +47,9 @@ def _return_via(core: Seam, name: str, values: dict, n: int) -> None:
     letters = core.dialect.axes
     target = core.resolve_target(*(values.get(letter) for letter in letters))
     for a in axes:
-        core.state.g28_intermediate[a] = target[a]  # stored in work coordinates, per axis (L2256)
+        core.state.g28_intermediate[a] = target[a]  # stored in work coordinates, per axis (§3.3.2)
     core.move_linear(True, target)
-    compensation.cancel_length_at_intermediate(core, axes)  # the tool length vector, L3897
+    compensation.cancel_length_at_intermediate(core, axes)  # the tool length vector, §3.5.1
     reference = reference_point(core, n)
     m = core.state.out.position
     machine_target = tuple(reference[a] if a in axes else m[a] for a in range(3))
@@ -57,13 +59,13 @@ def _return_via(core: Seam, name: str, values: dict, n: int) -> None:
 
 
 def _g28(core: Seam, spec, values: dict) -> None:
-    """``G28 IP_`` (L2215-L2260): via the intermediate point IP to reference position 1, commanded axes
+    """``G28 IP_`` (§3.3.2): via the intermediate point IP to reference position 1, commanded axes
     only, both legs at rapid."""
     _return_via(core, "G28", values, 1)
 
 
 def _g30(core: Seam, spec, values: dict) -> None:
-    """``G30 [P2|P3|P4] IP_`` (L2296-L2336): like G28 to reference position 2 (default), 3 or 4."""
+    """``G30 [P2|P3|P4] IP_`` (§3.3.3): like G28 to reference position 2 (default), 3 or 4."""
     p = values.get("P", 2.0)
     if p not in (2.0, 3.0, 4.0):
         raise core.error(f"G30 P{p:g}: the reference position is P2, P3 or P4", "bad-reference")
@@ -71,10 +73,10 @@ def _g30(core: Seam, spec, values: dict) -> None:
 
 
 def _g29(core: Seam, spec, values: dict) -> None:
-    """``G29 IP_`` (L2262-L2294): rapid to the stored intermediate point, then to IP; in G91, IP is relative
+    """``G29 IP_`` (§3.3.3): rapid to the stored intermediate point, then to IP; in G91, IP is relative
     to the intermediate point. An axis not commanded but with an intermediate point stored returns to it
-    and stays there ("the relative intermediate point in the axis doesn't have any move amount", L2270):
-    the reading the manual's example X29 prints, (60, 30), against L2270's last sentence "other axes
+    and stays there ("the relative intermediate point in the axis doesn't have any move amount", §3.3.3):
+    the reading the manual's example X29 prints, (60, 30), against §3.3.3's last sentence "other axes
     remain still". Axes with no intermediate point stay where they are (X28)."""
     check_coordinate_command(core, "G29", reference=True)
     axes = _commanded(core, values)
@@ -83,12 +85,14 @@ def _g29(core: Seam, spec, values: dict) -> None:
     if missing:
         raise core.error(f"G29 {''.join(missing)}: no intermediate point stored for that axis (G28/G30 "
                          "first)", "bad-reference", alarm=46)  # fmt: skip
-    middle = tuple(core.state.g28_intermediate)
+    stored = core.state.g28_intermediate
+    middle = (stored[0], stored[1], stored[2])
     core.move_linear(True, middle)
     s = core.state.scale
     if core.state.polar is None:
         base = middle if core.state.incremental else (0.0, 0.0, 0.0)
-        target = tuple(None if a not in axes else values[letters[a]] * s + base[a] for a in range(3))
+        each = [None if a not in axes else values[letters[a]] * s + base[a] for a in range(3)]
+        target = (each[0], each[1], each[2])
     else:
         target = core.resolve_target(*(values.get(letter) for letter in letters))
     core.move_linear(True, target)
@@ -100,7 +104,7 @@ REFERENCE_CHECK_MM = 0.0001
 
 
 def _g27(core: Seam, spec, values: dict) -> None:
-    """``G27 IP_`` (L2193-L2213): rapid to IP, then check that the commanded axes are on reference
+    """``G27 IP_`` (§3.3.1): rapid to IP, then check that the commanded axes are on reference
     position 1; if not, alarm (46, the list's "ILLEGAL REFER. RETURN COMMAND")."""
     check_coordinate_command(core, "G27", reference=True)
     axes = _commanded(core, values)
@@ -115,12 +119,12 @@ def _g27(core: Seam, spec, values: dict) -> None:
                          alarm=46)  # fmt: skip
 
 
-#: Dwell at the overshoot point of G60 (L1350: "the defaulted dwell time is 1s").
+#: Dwell at the overshoot point of G60 (§3.2.7: "the defaulted dwell time is 1s").
 G60_DWELL_S = 1.0
 
 
 def _g60(core: Seam, spec, values: dict) -> None:
-    """``G60 IP_`` (L1340-L1381): rapid to the end point less the overrun (P1880, per axis, in machine
+    """``G60 IP_`` (§3.2.7): rapid to the end point less the overrun (P1880, per axis, in machine
     coordinates, not mirrored), dwell 1 s, then rapid in the approach direction to the end point. Axes
     with no overrun or no movement get none; with none at all it is a plain rapid."""
     letters = core.dialect.axes
@@ -128,7 +132,8 @@ def _g60(core: Seam, spec, values: dict) -> None:
     if target == (None, None, None):
         return
     p = core.program_position
-    full = tuple(p[a] if t is None else t for a, t in enumerate(target))
+    full = (p[0] if target[0] is None else target[0], p[1] if target[1] is None else target[1],
+            p[2] if target[2] is None else target[2])  # fmt: skip
     start = core.state.out.position
     end = list(core.to_machine(full))
     if not core.state.transformed:  # an omitted axis keeps its machine position (as in move_linear)

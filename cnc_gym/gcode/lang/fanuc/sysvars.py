@@ -3,7 +3,7 @@
 The numbering is Fanuc's, as the GSK 25i manual documents it (its table is the same as a Fanuc 0i-M's,
 memory C offsets included); the dialect's ``system_variables`` ranges say which exist.
 
-Seed notes §6.3; manual L5241-L5508. Lengths are in the program's input unit (mm, or inch in G20),
+§3.7.3-§3.7.4. Lengths are in the program's input unit (mm, or inch in G20),
 like every value a program sees; the interpreter stores mm.
 
 ======================  =====  ================================================================
@@ -36,13 +36,15 @@ emitted so far — feed moves at their programmed F, rapids at :data:`NOMINAL_RA
 plus whatever the program wrote to them. The 4th and 5th axis positions (#5004, #5024, #5044 …) are the
 machine's rotary axes in A, B, C order (degrees; null where the machine has none); their work offsets
 (#2800-#2906 4th/5th columns) do not exist here (rotary axes have only the G92 origin).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.toolpath import SegmentKind, SegmentMode
@@ -51,7 +53,8 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Seam
     from cnc_gym.gcode.offsets import ToolOffsets
 
-#: Rapid rate for the nominal clock (#3001/#3002), mm/min: the manual's example rate (L8946).
+#: Rapid rate for the nominal clock (#3001/#3002), mm/min: the manual's example rate (GSK 25i operation manual
+#: §4.1.3).
 NOMINAL_RAPID_MM_MIN = 6000.0
 _RAPID = int(SegmentKind.RAPID)
 _LINE = int(SegmentKind.LINE)
@@ -262,7 +265,7 @@ class SystemVariables:
         work = offsets.work_origin()
         return [work[a] + offsets.local[a] for a in range(3)]
 
-    def _missing(self, index: int) -> None:
+    def _missing(self, index: int) -> NoReturn:
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
 
     # ------------------------------------------------------------------ write
@@ -332,7 +335,7 @@ class SystemVariables:
                 self.parts_required = value
             return
         if index in (3011, 3012) or 1000 <= index <= 1035 or 4001 <= index <= 5105:
-            raise self._error(f"system variable #{index} is read-only (L5441, L5450)", "read-only-variable")
+            raise self._error(f"system variable #{index} is read-only (GSK 25i §3.7.3)", "read-only-variable")
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
 
     def _small_int(self, index: int, value: float | None, high: int) -> float:
@@ -344,12 +347,13 @@ class SystemVariables:
     def _user_alarm(self, value: float | None) -> None:
         number = value or 0.0
         if number != int(number) or not 0 <= number <= 200:
-            raise self._error(f"#3000={number:g}: the user alarm number is 0..200 (L5286)", "bad-variable")
+            raise self._error(f"#3000={number:g}: the user alarm number is 0..200 (GSK 25i §3.7.3)",
+                              "bad-variable")
         runner = self.core.state.flow
         message = getattr(runner, "message", None) or f"user alarm {int(number)}"
         raise self._error(message[:26], "user-alarm", alarm=3000 + int(number))
 
     def count_part(self) -> None:
-        """M02/M30: one more part done (L6757)."""
+        """M02/M30: one more part done (§4.1.3)."""
         self.parts_done += 1.0
 

@@ -4,6 +4,8 @@ programmable mirror, G16/G15 polar input, and the restrictions the transform mod
 The stages themselves live in :mod:`cnc_gym.gcode.canonical` (:class:`~cnc_gym.gcode.canonical.
 TransformChain`, :class:`~cnc_gym.gcode.canonical.PolarState`); the actions here put them in force from a
 block's words. See docs/gcode.md, "Coordinates and transforms".
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -23,27 +25,29 @@ if TYPE_CHECKING:
 def check_coordinate_command(core: Seam, name: str, *, reference: bool = False,
                              local: bool = False) -> None:  # fmt: skip
     """Codes the transform modes forbid: G27-G30 (``reference``), G52 (``local``, G68 only), G54-G59,
-    G54.1, G92 in G51 mode (alarm 109, L1935) and in G68 mode (L2041)."""
+    G54.1, G92 in G51 mode (alarm 109, §3.2.17) and in G68 mode (§3.2.18)."""
     if core.state.chain.stages["scaling"] is not None and not local:
-        raise core.error(f"{name} is not allowed in scaling mode G51: cancel it with G50 first (L1935)",
+        raise core.error(f"{name} is not allowed in scaling mode G51: cancel it with G50 first (GSK 25i "
+                         "§3.2.17)",
                          "forbidden-in-scaling")  # fmt: skip
     if core.state.chain.stages["rotation"] is not None:
-        raise core.error(f"{name} is not allowed in rotation mode G68: cancel it with G69 first (L2041)",
+        raise core.error(f"{name} is not allowed in rotation mode G68: cancel it with G69 first (GSK 25i "
+                         "§3.2.18)",
                          "forbidden-in-rotation")  # fmt: skip
     del reference
 
 
 def check_plane_change(core: Seam, plane: Plane) -> None:
-    """G17/G18/G19 in G68 mode: alarm (L2039) unless it selects the plane already in use."""
+    """G17/G18/G19 in G68 mode: alarm (§3.2.18) unless it selects the plane already in use."""
     rotation = core.state.chain.stages["rotation"]
     if rotation is not None and plane != core.state.plane:
-        raise core.error(f"plane change to {plane.name} in rotation mode G68 (L2039)",
+        raise core.error(f"plane change to {plane.name} in rotation mode G68 (GSK 25i §3.2.18)",
                          "plane-change-in-rotation")  # fmt: skip
 
 
 # --------------------------------------------------------------------------- G68 / G69
 def _centre(core: Seam, values: dict, axes) -> tuple[float, float, float]:
-    """A centre given by absolute axis words whatever G90/G91 (L1905, L2036), Cartesian even in G16;
+    """A centre given by absolute axis words whatever G90/G91 (§3.2.17, §3.2.18), Cartesian even in G16;
     an omitted axis takes the current program position."""
     p = core.program_position
     s = core.state.scale
@@ -53,9 +57,9 @@ def _centre(core: Seam, values: dict, axes) -> tuple[float, float, float]:
 
 
 def rotation(core: Seam, spec, values: dict) -> None:
-    """``G68 α_ β_ R_`` (L2018-L2098): rotate the program about the centre (α, β in the plane, absolute;
+    """``G68 α_ β_ R_`` (§3.2.18): rotate the program about the centre (α, β in the plane, absolute;
     omitted = current position) by R degrees CCW. In G91, R adds to the angle in force (explanation 3,
-    L2036: parameter 1850#0 RIN = 1). A G68 in G68 mode replaces the rotation (example 3 re-issues it)."""
+    §3.2.18: parameter 1850#0 RIN = 1). A G68 in G68 mode replaces the rotation (example 3 re-issues it)."""
     u, v, w = PLANE_AXES[core.state.plane]
     letters = core.dialect.axes
     if letters[w] in values:
@@ -71,7 +75,7 @@ def rotation(core: Seam, spec, values: dict) -> None:
             angle += core.state.rotation_deg
     else:
         angle = parameters.rotation_deg(core)  # P1860
-    angle = round(angle * 1000.0) / 1000.0  # least increment 0.001° (L2031)
+    angle = round(angle * 1000.0) / 1000.0  # least increment 0.001° (§3.2.18)
     core.state.rotation_deg = angle
     core.state.chain.set("rotation", rotation_stage(core.state.plane, centre, angle))
     core.set_transform_state()
@@ -79,7 +83,7 @@ def rotation(core: Seam, spec, values: dict) -> None:
 
 def rotation_cancel(core: Seam, spec, values: dict) -> None:
     """G69: rotation off. The tool's position is the start of the next move, which must be absolute
-    (L2044: an incremental one "will not perform correctly": we make it an error)."""
+    (§3.2.18: an incremental one "will not perform correctly": we make it an error)."""
     if core.state.chain.stages["rotation"] is None:
         return
     core.state.chain.set("rotation", None)
@@ -90,7 +94,7 @@ def rotation_cancel(core: Seam, spec, values: dict) -> None:
 
 
 # --------------------------------------------------------------------------- G51 / G50, G51.1 / G50.1
-SCALE_RANGE = (0.001, 99.999)  # L1892
+SCALE_RANGE = (0.001, 99.999)  # §3.2.17
 
 
 def _factor(core: Seam, letter: str, value: float) -> float:
@@ -102,11 +106,12 @@ def _factor(core: Seam, letter: str, value: float) -> float:
 
 
 def scaling(core: Seam, spec, values: dict) -> None:
-    """``G51 X_Y_Z_ P_`` or ``G51 X_Y_Z_ I_J_K_`` (L1866-L2016): scale about the centre (absolute;
-    omitted = current position); a negative factor mirrors that axis. Alone in its block (L1898)."""
+    """``G51 X_Y_Z_ P_`` or ``G51 X_Y_Z_ I_J_K_`` (§3.2.17): scale about the centre (absolute;
+    omitted = current position); a negative factor mirrors that axis. Alone in its block (§3.2.17)."""
     letters = [w[0] for w in core.state.block_words]
     if letters.count("G") > 1 or any(letter in "MFSTHD" for letter in letters):
-        raise core.error("G51 must be alone in its block (L1898): no other G, M, F, S, T, H or D word",
+        raise core.error("G51 must be alone in its block (GSK 25i §3.2.17): no other G, M, F, S, T, H or D "
+                         "word",
                          "g51-not-alone")  # fmt: skip
     if "P" in values and any(k in values for k in "IJK"):
         raise core.error("G51 takes either P (all axes) or I/J/K (per axis), not both", "bad-combination")
@@ -114,16 +119,17 @@ def scaling(core: Seam, spec, values: dict) -> None:
     if "P" in values:
         factors = (_factor(core, "P", values["P"]),) * 3
     elif any(k in values for k in "IJK"):
-        factors = tuple(_factor(core, k, values[k]) if k in values else parameters.scale(core, a)
-                        for a, k in enumerate("IJK"))  # fmt: skip
+        each = [_factor(core, k, values[k]) if k in values else parameters.scale(core, a)
+                for a, k in enumerate("IJK")]  # fmt: skip
+        factors = (each[0], each[1], each[2])
     else:
-        factors = (parameters.scale(core, None),) * 3  # P1861, latched now (L1954)
-    core.state.chain.set("scaling", scaling_stage("G51", centre, factors))  # type: ignore[arg-type]
+        factors = (parameters.scale(core, None),) * 3  # P1861, latched now (§3.2.17)
+    core.state.chain.set("scaling", scaling_stage("G51", centre, factors))
     core.set_transform_state()
 
 
 def scaling_cancel(core: Seam, spec, values: dict) -> None:
-    """G50: scaling off; the tool's position is the start of the next move (L1932)."""
+    """G50: scaling off; the tool's position is the start of the next move (§3.2.17)."""
     if core.state.chain.stages["scaling"] is None:
         return
     core.state.chain.set("scaling", None)
@@ -167,14 +173,14 @@ def _install_mirror(core: Seam) -> None:
 
 # --------------------------------------------------------------------------- G16 / G15
 def polar(core: Seam, spec, values: dict) -> None:
-    """G16: polar coordinate input on (L1775-L1865)."""
+    """G16: polar coordinate input on (§3.2.16)."""
     if core.state.polar is None:
         core.state.polar = PolarState(core.program_position, core.state.plane)
         core.set_transform_state()
 
 
 def polar_cancel(core: Seam, spec, values: dict) -> None:
-    """G15: polar input off; the next move starts from the current tool position (L1843)."""
+    """G15: polar input off; the next move starts from the current tool position (§3.2.16)."""
     if core.state.polar is not None:
         core.state.polar = None
         core.resync_program_position()

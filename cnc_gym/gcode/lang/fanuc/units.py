@@ -1,6 +1,8 @@
 """Program units and call frames of the Fanuc family's runner: one ``O`` program (:class:`Unit`) with its
 sequence-number index and DO/END table (:class:`LoopTable`), one call level (:class:`Frame`), one G66
 modal call (:class:`ModalCall`). Used by ``flow.py`` (the loop) and ``calls.py`` (the call convention).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -38,9 +40,10 @@ class LoopTable:
                 if stmt[0] == "while":
                     m = stmt[2]
                     if any(mm == m for mm, _ in stack):
-                        raise fail(index, f"DO{m} inside DO{m}: DO and END must pair one to one (L5752)")
+                        raise fail(index, f"DO{m} inside DO{m}: DO and END must pair one to one (GSK 25i "
+                                          "§3.7.5)")
                     if len(stack) >= max_depth:
-                        raise fail(index, f"DO{m}: DO loops nest at most {max_depth} deep (L5792)")
+                        raise fail(index, f"DO{m}: DO loops nest at most {max_depth} deep (GSK 25i §3.7.5)")
                     if stack:
                         self.inner[index] = stack[-1][1]
                     self.parent[index] = stack[-1][1] if stack else -1
@@ -53,9 +56,9 @@ class LoopTable:
                             raise fail(
                                 index,
                                 f"END{m} closes DO{m} across DO{stack[-1][0]}: DO ranges may not "
-                                "cross (L5805)",
+                                "cross (GSK 25i §3.7.5)",
                             )
-                        raise fail(index, f"END{m} without DO{m} before it (L5740)")
+                        raise fail(index, f"END{m} without DO{m} before it (GSK 25i §3.7.5)")
                     _, do_index = stack.pop()
                     self.inner[index] = do_index
                     self.do_end[do_index] = index
@@ -68,7 +71,7 @@ class LoopTable:
             raise fail(index, f"DO{m} without END{m}")
 
     def may_jump(self, source: int, target: int) -> bool:
-        """GOTO may leave DO ranges but not enter one (L5820-L5836)."""
+        """GOTO may leave DO ranges but not enter one (§3.7.5)."""
         target_loop = self.inner.get(target, -1)
         if target_loop == -1:
             return True
@@ -106,7 +109,7 @@ class Unit:
 
     def find(self, number: int, after: int) -> int | None:
         """Index of the block with sequence number ``number``: the first at or after ``after``, else the
-        first from the start of the unit (the search wraps, L5678)."""
+        first from the start of the unit (the search wraps, §3.7.5)."""
         if self._sequence is None:
             index: dict[int, list[int]] = {}
             for i in range(self.start, self.end):
@@ -139,7 +142,7 @@ class Frame:
 
 @dataclass
 class ModalCall:
-    """One G66 entry: program, repeat count and the arguments of the G66 block (L6136-L6175)."""
+    """One G66 entry: program, repeat count and the arguments of the G66 block (§3.7.6)."""
 
     number: int
     count: int

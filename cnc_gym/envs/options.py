@@ -1,0 +1,235 @@
+"""The arguments of ``cnc_gym/Feedrate-v0``: one schema, checked once, shared with the task and training
+configs.
+
+:class:`EnvArguments` declares every keyword argument of :class:`~cnc_gym.envs.feedrate.FeedrateEnv`
+with its type, range and meaning (docs/env.md's argument table is written from it);
+:func:`env_arguments` checks a call's arguments against it, so a bad argument is one
+:class:`~cnc_gym.errors.ConfigError` line naming it. The task file (``configs/tasks``) and the training
+config's ``env:`` section declare their keys with the same specs (:data:`CONTROL_PERIOD`,
+:data:`PROGRAM_NAMES`, :class:`RewardWeights` …), so a value means the same and has the same range
+everywhere. :func:`parse_action` is the env's check of an action (real numbers only),
+:func:`reset_choice` its check of ``reset(options=...)``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import gymnasium
+import numpy as np
+
+from cnc_gym.config import (
+    MAX_TEXT,
+    Choice,
+    Invalid,
+    Items,
+    Number,
+    Spec,
+    Text,
+    declared,
+    number,
+    parse_value,
+    schema,
+    shown,
+)
+from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.motion import ActionError
+from cnc_gym.programs import PROGRAM_TYPES, ProgramLike
+
+if TYPE_CHECKING:
+    from cnc_gym.machine import MachineConfig
+
+ACTION_MODES = ("override", "feed")
+RENDER_MODES = (None, "rgb_array")
+#: Where argument errors come from, in their messages.
+SOURCE = "FeedrateEnv"
+
+_WEIGHT_WHY = "keeps every step's reward finite, and a return within float32 precision."
+
+
+@dataclass(frozen=True)
+class RewardWeights:
+    """Reward weights, per control step:
+    ``r = -time·dt/T + progress·Δp - contour_error·min(e/tol, cap)² - violation·[e > tol]``
+    (Δp: path progress in the step as a fraction of the program's length; see FeedrateEnv's docstring).
+    """
+
+    time: float = number(10.0, 0, 1e6, why=_WEIGHT_WHY,
+                         doc="w_time: the whole episode's time cost at nominal (100 %) speed")  # fmt: skip
+    contour_error: float = number(0.05, 0, 1e6, why=_WEIGHT_WHY,
+                                  doc="w_error: per step, per (e_max / tol)²")  # fmt: skip
+    violation: float = number(
+        1.0, 0, 1e6, why=_WEIGHT_WHY, doc="w_violation: per control step whose contour error exceeds tol")
+    error_ratio_cap: float = number(
+        10.0, 0, 1e6, low_open=True, why=_WEIGHT_WHY,
+        doc="c: e_max / tol is capped here so that one bad step cannot dominate a return")  # fmt: skip
+    # Paid per unit of path progress; sums to exactly this over a finished episode whatever the policy,
+    # so it leaves the undiscounted ranking of finishing policies unchanged but pays for progress when it
+    # happens, which a discounted (γ < 1) learner needs to see that slow costs (see docs/env.md).
+    progress: float = number(
+        10.0, 0, 1e6, why=_WEIGHT_WHY, doc="w_progress: paid over the whole path, in proportion to progress")
+
+
+# Specs shared by the env's arguments, the task file and the training config's env section.
+CONTROL_PERIOD = Number(
+    low=0,
+    high=1.0,
+    low_open=True,
+    unit="s",
+    doc="seconds between decisions: a whole multiple of the machine's interpolation period",
+    why="a decision at least every second; the step's buffers grow with it (10⁶ s needed 11 GiB).",
+)
+PROGRAM_NAMES = Items(
+    item=Text(max_length=MAX_TEXT), single=True, max_items=1000, noun="program",
+    doc="built-in program names or `.nc` paths (a single name is a list of one)")  # fmt: skip
+DIALECT = Text(max_length=100, doc="controller dialect of the programs")
+MACHINE_NAME = Text(max_length=MAX_TEXT, doc="machine preset name or YAML path")
+ACTION_MODE = Choice(choices=ACTION_MODES, doc="what the action sets: the override knob or the feed")
+MAX_EPISODE_STEPS = Number(
+    low=1, high=10**9, integer=True, optional=True,
+    doc="step budget of an episode (null: 5 × the program's nominal time plus 1 s)")  # fmt: skip
+
+
+class ProgramRefs(Spec):
+    """Programs given to the env: a name, path, G-code text, ``ProgramText`` or interpreted ``Program``
+    (the rule of :mod:`cnc_gym.programs`), or a non-empty sequence of them."""
+
+    def _parse(self, raw: Any) -> Any:
+        refs = [raw] if isinstance(raw, PROGRAM_TYPES) else raw
+        if isinstance(refs, bytes) or not isinstance(refs, list | tuple):
+            raise Invalid(f"must be a program name, path or G-code text, or a list of them, got {shown(raw)}")
+        if not refs:
+            raise Invalid("must name at least one program")
+        for ref in refs:
+            if not isinstance(ref, PROGRAM_TYPES):
+                raise Invalid(f"entries must be program names, paths or G-code text, got {shown(ref)}")
+        return tuple(refs)
+
+    def _allowed(self) -> str:
+        return "name, path, G-code text, `ProgramText` or `Program`, or a list of them"
+
+
+class MachineRef(Spec):
+    """A machine: preset name, YAML path or ``MachineConfig``."""
+
+    def _parse(self, raw: Any) -> Any:
+        from cnc_gym.machine import MachineConfig
+
+        if isinstance(raw, MachineConfig | str | os.PathLike):
+            return raw
+        raise Invalid(f"must be a preset name, a YAML path or a MachineConfig, got {shown(raw)}")
+
+    def _allowed(self) -> str:
+        return "preset name, YAML path or `MachineConfig`"
+
+
+class RewardRef(Spec):
+    """Reward weights: None (the default task's), a task YAML path, a dict of weights or RewardWeights
+    (None is one of its values, not "optional")."""
+
+    def _parse(self, raw: Any) -> Any:
+        if raw is None or isinstance(raw, str | os.PathLike | dict | RewardWeights):
+            return raw
+        raise Invalid(f"must be None, a task YAML path or a dict of weights, got {shown(raw)}")
+
+    def _allowed(self) -> str:
+        return "null, task YAML path, dict of weights or `RewardWeights`"
+
+
+@dataclass(frozen=True)
+class EnvArguments:
+    """The keyword arguments of ``cnc_gym/Feedrate-v0``, checked."""
+
+    programs: tuple[ProgramLike, ...] | None = declared(ProgramRefs(
+        optional=True, doc="programs of the episodes: built-in names, `.nc` paths, G-code text, "
+                           "`ProgramText` or interpreted `Program`s (None: the default task's set)",
+    ))  # fmt: skip
+    dialect: str = declared(DIALECT, "gsk25i")
+    machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
+    action_mode: str = declared(ACTION_MODE, "override")
+    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    reward: Any = declared(RewardRef(doc="reward weights (None: configs/tasks/default.yaml)"))  # noqa: RUF009
+    max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
+    render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
+    lookahead_mm: float = number(
+        24.0, 0, 10_000, low_open=True, unit="mm", doc="how far ahead the observation's look-ahead reads",
+        why="the look-ahead scans the path this far every step; no machine brakes over 10 m.")  # fmt: skip
+    lookahead_points: int = number(
+        8, 1, 256, integer=True, doc="look-ahead points in the observation (4 entries each)",
+        why="the observation has 9 + 4 × this entries.")  # fmt: skip
+
+
+def env_arguments(**kwargs: Any) -> EnvArguments:
+    """The env's keyword arguments checked against :class:`EnvArguments` (one ConfigError line naming the
+    first bad one)."""
+    specs = schema(EnvArguments)
+    unknown = sorted(set(kwargs) - set(specs))
+    if unknown:
+        raise ConfigError(f"{SOURCE}: unknown argument {unknown[0]} (allowed: {', '.join(specs)})")
+    return EnvArguments(**{key: parse_value(specs[key], raw, SOURCE, key) for key, raw in kwargs.items()})
+
+
+def control_ticks(control_period_s: float, machine: MachineConfig) -> int:
+    """Interpolation periods per control step; ConfigError unless the control period is a whole multiple
+    of the machine's interpolation period."""
+    period = machine.controller.interpolation_period_s
+    ticks = round(control_period_s / period)
+    if ticks < 1 or abs(ticks * period - control_period_s) > 1e-9 * max(1.0, ticks):
+        raise ConfigError(
+            f"{SOURCE}: control_period_s ({control_period_s} s) must be a whole multiple of the "
+            f"interpolation period ({period} s) of machine {machine.name!r}"
+        )
+    return int(ticks)
+
+
+def reset_choice(options: Any) -> int | ProgramLike | None:
+    """The program that ``reset(options=...)`` asks for (None: draw one); ConfigError on a bad option."""
+    if options is None:
+        return None
+    if not isinstance(options, dict):
+        raise ConfigError(f"reset: options must be a dict, got {shown(options)}")
+    unknown = sorted(shown(key, 40) for key in options if key != "program")
+    if unknown:
+        raise ConfigError(f"reset: unknown option {unknown[0]} (allowed: program)")
+    choice = options.get("program")
+    if choice is None or isinstance(choice, PROGRAM_TYPES):
+        return choice
+    if isinstance(choice, int | np.integer) and not isinstance(choice, bool | np.timedelta64):
+        return int(choice)
+    raise ConfigError(f"reset: options['program'] must be a name, path, text or index, got {shown(choice)}")
+
+
+class EnvNotReset(CncGymError, gymnasium.error.ResetNeeded):
+    """``step()`` before the first ``reset()`` (the same error Gymnasium's order wrapper raises)."""
+
+
+def parse_action(action: Any) -> float:
+    """The knob value in [-1, 1] of an action: one real number, as a scalar or an array of shape (1,).
+
+    Out-of-range values are clipped (a Python integer of any size included); NaN, infinity, strings,
+    booleans, complex numbers, dates, objects and wrong shapes are an :class:`ActionError` line.
+    """
+    if isinstance(action, bool | np.bool_):
+        raise ActionError(f"action must be a real number, got {shown(action)}")
+    if type(action) is int:  # exact, so 10**400 clips to 1 instead of overflowing a float
+        return float(min(max(action, -1), 1))
+    if isinstance(action, str | bytes):
+        raise ActionError(f"action must be a real number, got {shown(action)}")
+    try:
+        value = np.asarray(action)
+    except Exception:  # an object numpy cannot even look at
+        value = None
+    if value is None or value.dtype.kind not in "fiu":
+        kind = "" if value is None else f" (dtype {value.dtype})"
+        raise ActionError(f"action must be a real number or an array of shape (1,), got {shown(action)}"
+                          f"{kind}")  # fmt: skip
+    if value.size != 1 or value.ndim > 1:
+        raise ActionError(f"action must have shape (1,), got shape {value.shape}")
+    knob = float(value.reshape(()))
+    if not math.isfinite(knob):
+        raise ActionError(f"action must be finite, got {knob}")
+    return min(max(knob, -1.0), 1.0)

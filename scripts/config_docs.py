@@ -1,0 +1,89 @@
+"""Write (or check) the docs' config key tables from the schemas, so the docs never drift from the code.
+
+    .venv/bin/python scripts/config_docs.py           # rewrite the tables in place
+    .venv/bin/python scripts/config_docs.py --check   # exit 1 and name the table if one differs
+
+A table sits in a Markdown file between ``<!-- config-table NAME -->`` and ``<!-- end config-table -->``;
+NAME is a key of :data:`TABLES`, which maps it to the dataclass whose declared keys
+(:func:`cnc_gym.config.markdown_table`) fill it. ``tests/test_config.py`` runs the check.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from agents.training import EnvSettings, PPOSettings, TrainConfig
+from cnc_gym.config import markdown_table
+from cnc_gym.envs.options import EnvArguments, RewardWeights
+from cnc_gym.envs.task import TaskConfig
+from cnc_gym.machine import AxisConfig, ControllerConfig, MachineConfig, RotaryAxisConfig
+
+REPO = Path(__file__).resolve().parent.parent
+#: Table name → (schema, key prefix shown in the table).
+TABLES: dict[str, tuple[type, str]] = {
+    "machine": (MachineConfig, ""),
+    "machine.controller": (ControllerConfig, "controller."),
+    "machine.axis": (AxisConfig, ""),
+    "machine.rotary": (RotaryAxisConfig, ""),
+    "task": (TaskConfig, ""),
+    "reward": (RewardWeights, ""),
+    "train": (TrainConfig, ""),
+    "train.env": (EnvSettings, "env."),
+    "train.ppo": (PPOSettings, "ppo."),
+    "env.arguments": (EnvArguments, ""),
+}
+#: Files that hold tables.
+DOCS = ("docs/configs.md", "docs/env.md")
+_BLOCK = re.compile(r"(<!-- config-table ([\w.]+) -->\n)(.*?)(<!-- end config-table -->)", re.S)
+
+
+def render(text: str) -> tuple[str, list[str]]:
+    """``text`` with every table block rewritten, and the names of the blocks found."""
+    names: list[str] = []
+
+    def fill(match: re.Match[str]) -> str:
+        name = match.group(2)
+        if name not in TABLES:
+            raise SystemExit(f"config_docs: unknown table {name!r} (known: {', '.join(TABLES)})")
+        names.append(name)
+        cls, prefix = TABLES[name]
+        return f"{match.group(1)}{markdown_table(cls, prefix)}\n{match.group(4)}"
+
+    return _BLOCK.sub(fill, text), names
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="report differences instead of writing")
+    args = parser.parse_args(argv)
+    stale, found = [], []
+    for doc in DOCS:
+        path = REPO / doc
+        text = path.read_text()
+        new, names = render(text)
+        found += names
+        if new != text:
+            stale.append(doc)
+            if not args.check:
+                path.write_text(new)
+    missing = sorted(set(TABLES) - set(found))
+    if missing:
+        where = ", ".join(DOCS)
+        print(f"config_docs: no block for table(s) {', '.join(missing)} in {where}", file=sys.stderr)
+        return 1
+    if stale and args.check:
+        stale_docs = ", ".join(stale)
+        print(f"config_docs: stale table(s) in {stale_docs}; run scripts/config_docs.py", file=sys.stderr)
+        return 1
+    for doc in stale:
+        print(f"rewrote {doc}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

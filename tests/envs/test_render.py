@@ -1,0 +1,88 @@
+"""Plotting support: the bounded series (exact per bin, constant memory) and the choice of side views."""
+
+from __future__ import annotations
+
+from itertools import pairwise
+
+import numpy as np
+import pytest
+
+from cnc_gym.envs.render import BinnedSeries, wants_z_views
+from cnc_gym.errors import ConfigError
+
+
+def bins_by_brute_force(x: np.ndarray, counts: np.ndarray) -> dict[str, np.ndarray]:
+    edges = np.concatenate(([0], np.cumsum(counts)))
+    parts = [x[a:b] for a, b in pairwise(edges)]
+    return {
+        "max": np.array([p.max() for p in parts]),
+        "min": np.array([p.min() for p in parts]),
+        "mean": np.array([p.mean() for p in parts]),
+        "last": np.array([p[-1] for p in parts]),
+    }
+
+
+@pytest.mark.parametrize("n", [1, 7, 64, 65, 1000, 4099])
+def test_each_bin_holds_the_exact_reductions_of_its_samples(n):
+    x = np.random.default_rng(n).normal(size=n)
+    series = BinnedSeries({"hi": "max", "lo": "min", "avg": "mean", "end": "last"}, max_bins=64)
+    for value in x:
+        series.add(value, value, value, value)
+    data = series.arrays()
+    counts = data["samples"]
+    assert counts.sum() == n == series.count
+    assert len(counts) <= 64 + 1  # the closed bins plus the one being filled
+    assert np.all(counts[:-1] == series.width)  # equal bins; only the last may be partial
+    expected = bins_by_brute_force(x, counts)
+    np.testing.assert_array_equal(data["hi"], expected["max"])
+    np.testing.assert_array_equal(data["lo"], expected["min"])
+    np.testing.assert_array_equal(data["end"], expected["last"])
+    np.testing.assert_allclose(data["avg"], expected["mean"], rtol=1e-12, atol=1e-12)
+    # The envelope keeps the extremes of the whole series exactly.
+    assert data["hi"].max() == x.max() and data["lo"].min() == x.min()
+
+
+def test_memory_does_not_grow_with_the_number_of_samples():
+    series = BinnedSeries({"t": "last", "e": "max"}, max_bins=16)
+    arrays_before = (series._bins.nbytes, series._weights.nbytes, len(series._acc))
+    for k in range(100_000):
+        series.add(float(k), float(k % 7))
+    assert (series._bins.nbytes, series._weights.nbytes, len(series._acc)) == arrays_before
+    data = series.arrays()
+    assert len(data["t"]) <= 17 and data["t"][-1] == 99_999.0 and data["e"].max() == 6.0
+
+
+def test_clear_starts_over():
+    series = BinnedSeries({"v": "mean"}, max_bins=4)
+    series.extend([[1.0]] * 10)
+    series.clear()
+    series.add(5.0)
+    data = series.arrays()
+    assert series.width == 1 and list(data["v"]) == [5.0] and list(data["samples"]) == [1]
+
+
+@pytest.mark.parametrize(("columns", "max_bins"), [({}, 8), ({"v": "median"}, 8), ({"v": "max"}, 7),
+                                                   ({"v": "max"}, 0), ({"v": "max"}, True)])  # fmt: skip
+def test_bad_arguments_are_config_errors(columns, max_bins):
+    with pytest.raises(ConfigError):
+        BinnedSeries(columns, max_bins)
+
+
+def path(*points: tuple[float, float, float]) -> np.ndarray:
+    return np.array(points, dtype=float)
+
+
+def test_side_views_for_depth_changes_and_drilling_not_for_a_plunge():
+    # A plunge to one depth, then an XY contour: the XY view says it all.
+    plunge_then_contour = path((0, 0, 5), (0, 0, -1), (10, 0, -1), (10, 10, -1))
+    assert not wants_z_views(plunge_then_contour, np.array([True, True, True, True]))
+    # Two depths of XY cutting (a step-down): side views.
+    two_depths = path((0, 0, -1), (10, 0, -1), (10, 0, -2), (0, 0, -2))
+    assert wants_z_views(two_depths, np.array([True, True, True, True]))
+    # A ramp (X and Z together): side views.
+    assert wants_z_views(path((0, 0, 0), (10, 0, -1)), np.array([True, True]))
+    # Drilling: Z-only cutting moves with rapids between holes.
+    drill = path((0, 0, 2), (0, 0, -10), (0, 0, 2), (20, 0, 2), (20, 0, -10), (20, 0, 2))
+    cutting = np.array([True, False, False, True, False, False])
+    assert wants_z_views(drill, cutting)
+    assert not wants_z_views(np.zeros((0, 3)), np.zeros(0, dtype=bool))
