@@ -102,4 +102,4 @@ def data(core: Seam) -> SyntecData:
 
 
 def options(core: Seam) -> SyntecOptions:
-    return core.dialect.options  # type: ignore[no-any-return]
+    return core.dialect.options

@@ -55,7 +55,7 @@ def line_holes(start: Point, spacing: float, angle_deg: float, count: int) -> li
 
 def grid_holes(start: Point, dx: float, columns: int, dy: float, rows: int) -> list[Point]:
     """G137.1: ``rows`` rows of ``columns`` holes, row by row, alternating direction (zig-zag)."""
-    holes = []
+    holes: list[Point] = []
     for row in range(rows):
         order = range(columns) if row % 2 == 0 else range(columns - 1, -1, -1)
         holes.extend((start[0] + col * dx, start[1] + row * dy) for col in order)

@@ -90,7 +90,7 @@ class SyntecReader(Reader):
         try:
             return super()._plain_block(text, line)
         except _Rescan:
-            return self._scan_block(text, line)
+            return self._scan_block(text, line)  # type: ignore[return-value]  # a plain block is never empty
         finally:
             self._mode = "off"
 
