@@ -59,8 +59,6 @@ DIALECT = Dialect(
     cycles=cycles.CYCLES,
     language=LANGUAGE,
     hooks=HOOKS,
-    axes="XYZ",
-    other_axes="ABCUVW",
     functions=codes.FUNCTIONS,
     alarms=ALARMS,
     # §G70/G71 and the decimal-point rule: a length without a decimal point is in least input units,
@@ -75,14 +73,11 @@ DIALECT = Dialect(
     # the drilling axis normal to the plane (G17 Z, G18 Y, G19 X).
     cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5, drilling_axis_follows_plane=True,
                                  shift_direction=0),
-    max_words_per_block=32,
-    max_m_per_block=3,
     m_groups=M_GROUPS,
     corner_words=frozenset(),
-    max_bracket_depth=5,
+    # The macro language is the family's Macro B (the manual does not describe one; docs/syntec.md).
     keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),
     condition_operators=frozenset({"AND", "OR"}),
-    variables=((1, 33), (100, 199), (500, 999)),
     system_variables=(
         (1000, 1135), (2001, 2906), (3000, 3012), (3901, 3902), (4001, 4130), (5001, 5105), (10001, 13400),
     ),
