@@ -1,28 +1,43 @@
-"""Policies that drive cnc-gym envs: baselines and trained models.
+"""Policies that drive cnc-gym envs: baselines, the oracle and trained models.
 
 ``make_policy(spec)`` turns a command-line spec into a policy:
 
 =====================  ======================================================================
 ``constant:<x>``       :class:`~agents.constant.ConstantOverride` at override x (1.0 = 100 %)
-``classical``          :class:`~agents.classical.ClassicalPlanner` (tolerance-aware look-ahead)
+``classical``          :class:`~agents.classical.ClassicalPlanner`: deployable look-ahead planner
+                       (machine parameters and its own servo model; never runs the env)
+``oracle``             :class:`~agents.oracle.OraclePlanner`: simulate-and-correct on copies of the
+                       exact env; an oracle, not deployable
 a path (``*.zip``)     :class:`~agents.model.ModelPolicy`, an SB3 model rebuilt without unpickling
+``module:callable``    your own policy: ``callable`` in importable ``module`` is a Policy, or is
+                       called with no arguments to make one (a class or a factory), or is a plain
+                       function ``act(observation, info) -> action``
 =====================  ======================================================================
 """
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import re
 from pathlib import Path
+from typing import Any
 
 from agents.base import Policy, override_action
 from agents.classical import ClassicalPlanner
 from agents.constant import ConstantOverride
+from agents.oracle import OraclePlanner
 from cnc_gym.errors import CncGymError
 
-__all__ = ["ClassicalPlanner", "ConstantOverride", "Policy", "make_policy", "override_action"]
+__all__ = ["ClassicalPlanner", "ConstantOverride", "OraclePlanner", "Policy", "make_policy",
+           "override_action"]
+
+_MODULE_CALLABLE = re.compile(r"[A-Za-z_][\w.]*:[A-Za-z_][\w.]*")
 
 
-def make_policy(spec: str) -> Policy:
-    """Build a policy from ``constant:<override>``, ``classical`` or a path to a trained SB3 model."""
+def make_policy(spec: str, *, progress: bool | None = None) -> Policy:
+    """Build a policy from a spec (module docstring). ``progress`` is passed to planners that show a
+    planning bar (None: on a terminal only)."""
     spec = spec.strip()
     if spec.startswith("constant:"):
         value = spec.removeprefix("constant:")
@@ -37,12 +52,77 @@ def make_policy(spec: str) -> Policy:
         return ConstantOverride(1.0)
     if spec == "classical":
         return ClassicalPlanner()
+    if spec == "oracle":
+        return OraclePlanner(progress=progress)
     path = Path(spec)
     if path.suffix == ".zip" or path.exists():
         from agents.model import ModelPolicy
 
         return ModelPolicy(path)
+    if _MODULE_CALLABLE.fullmatch(spec):
+        return _user_policy(spec)
     raise CncGymError(
-        f"unknown policy {spec!r}: use constant:<override> (e.g. constant:1.0), classical, "
-        "or the path of a trained model (.zip)"
+        f"unknown policy {spec!r}: use constant:<override> (e.g. constant:1.0), classical, oracle, "
+        "the path of a trained model (.zip), or module:callable"
     )
+
+
+class _FunctionPolicy:
+    """A plain ``act(observation, info) -> action`` function as a policy."""
+
+    def __init__(self, name: str, function: Any) -> None:
+        self.name = name
+        self._function = function
+
+    def reset(self, env: Any) -> None:
+        return None
+
+    def act(self, observation: Any, info: dict[str, Any]) -> Any:
+        return self._function(observation, info)
+
+
+def _user_policy(spec: str) -> Policy:
+    module_name, attr = spec.split(":", 1)
+    try:
+        target: Any = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise CncGymError(f"policy {spec!r}: cannot import module {module_name!r} ({exc})") from None
+    for part in attr.split("."):
+        if not hasattr(target, part):
+            raise CncGymError(f"policy {spec!r}: module {module_name!r} has no {attr!r}")
+        target = getattr(target, part)
+    if _is_policy(target):
+        policy = target
+    elif isinstance(target, type) or _takes_no_arguments(target):
+        try:
+            policy = target()
+        except Exception as exc:  # the user's code: report it in one line
+            raise CncGymError(f"policy {spec!r}: calling {attr}() failed: "
+                              f"{type(exc).__name__}: {exc}") from None
+        if not _is_policy(policy):
+            raise CncGymError(f"policy {spec!r}: {attr}() returned {type(policy).__name__}, which has no "
+                              "reset(env) and act(observation, info)")  # fmt: skip
+    elif callable(target):
+        policy = _FunctionPolicy(spec, target)
+    else:
+        raise CncGymError(f"policy {spec!r}: {attr} is neither a policy nor callable")
+    if not getattr(policy, "name", None):
+        with contextlib.suppress(AttributeError):
+            policy.name = spec
+    return policy
+
+
+def _is_policy(obj: Any) -> bool:
+    methods = (getattr(obj, "act", None), getattr(obj, "reset", None))
+    return not isinstance(obj, type) and all(callable(m) for m in methods)
+
+
+def _takes_no_arguments(function: Any) -> bool:
+    import inspect
+
+    try:
+        signature = inspect.signature(function)
+    except (TypeError, ValueError):
+        return False
+    return all(p.default is not p.empty or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
+               for p in signature.parameters.values())  # fmt: skip

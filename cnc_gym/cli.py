@@ -4,11 +4,13 @@
                           [--max-blocks N]
     cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png|DIR/]
                         [--max-time SECONDS] [--max-blocks N] [--no-progress]
+    cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
 the rule of :mod:`cnc_gym.programs`. ``trace`` prints the canonical tool path as JSON Lines (``kind``,
 ``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run``
-simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`).
+simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`). ``bench``
+benchmarks policies on a suite or your programs (:mod:`cnc_gym.benchmark.cli`).
 
 Exit status: 0 success; 2 an error a user can cause, as one line on stderr (for a program:
 ``FILE:LINE: message [code]``), with nothing on stdout and never a traceback; 3 (``run``) the run stopped
@@ -71,6 +73,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="stop after this much simulated time (the run then counts as truncated, exit 3)")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.set_defaults(func=cmd_run)
+
+    from cnc_gym.benchmark.cli import register as register_bench  # all bench code: cnc_gym/benchmark/
+
+    register_bench(sub)
     return parser
 
 

@@ -1,12 +1,14 @@
-"""Evaluate a trained model against the baselines on the same programs.
+"""Evaluate a trained model against the baselines on the same programs, ranked as the benchmark ranks.
 
     .venv/bin/python scripts/evaluate.py --model runs/ppo/model.zip [--programs star pocket]
-        [--overrides 0.5,1.0,1.5,2.0] [--no-classical] [--json]
+        [--overrides 0.5,1.0,1.5,2.0] [--no-classical] [--oracle] [--json]
 
 Every policy runs one deterministic episode per program through the env configured as in training (read
 from the ``config.yaml`` saved beside the model, or ``--config``). The table shows return, cycle time,
-max/RMS contour error and violations; the summary compares the model's total return with the best
-constant override's and the classical planner's.
+max/RMS contour error and violations; the summary ranks policies by the benchmark's primary score
+(docs/benchmark.md: the time-optimal bound ÷ cycle time for an episode that finished with no path cut over
+tolerance, 0 otherwise), so a truncated or violating run can never be the "best constant". For a whole
+suite split use ``cnc-gym bench``.
 """
 
 from __future__ import annotations
@@ -25,32 +27,53 @@ DEFAULT_OVERRIDES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0)
 
 
 def evaluate(policies: list[Any], env_kwargs: dict[str, Any], programs: list[str]) -> list[dict[str, Any]]:
-    """One episode per (policy, program); rows are RunResult summaries."""
+    """One episode per (policy, program); rows carry the ``cnc-gym run --json`` keys plus the benchmark's
+    metrics (``bound_s``, ``time_ratio``, ``violation_length_mm``, ``feasible``, ``score``)."""
     import gymnasium
 
     import cnc_gym  # noqa: F401
-    from cnc_gym.runner import run_episode
+    from cnc_gym.benchmark.metrics import episode_score, is_feasible
+    from cnc_gym.benchmark.runner import run_one_episode
+    from cnc_gym.motion.bound import time_optimal_bound
 
     rows = []
     for program in programs:
         kwargs = {**env_kwargs, "programs": [program]}
         env = gymnasium.make("cnc_gym/Feedrate-v0", **kwargs)
         try:
+            base = env.unwrapped
+            bound = time_optimal_bound(base.toolpath, base.machine, action_mode=base.action_mode).total_s
             for policy in policies:
-                rows.append(run_episode(env, policy, seed=0, record=False).summary())
+                info, total_return, steps, finished = run_one_episode(env, policy, 0)
+                row = {key: info[key] for key in ("program", "cycle_time_s", "contour_error_max_mm",
+                                                  "contour_error_rms_mm", "tolerance_mm", "violations")}
+                length, ratio = float(info["violation_length_mm"]), info["cycle_time_s"] / bound
+                row.update(machine=base.machine.name, policy=str(getattr(policy, "name", policy)),
+                           steps=steps, total_return=total_return, finished=finished, bound_s=bound,
+                           time_ratio=ratio, violation_length_mm=length,
+                           feasible=is_feasible(finished, length),
+                           score=episode_score(finished, length, ratio))  # fmt: skip
+                rows.append(row)
         finally:
             env.close()
     return rows
 
 
 def totals(rows: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
-    """Per policy: total return, total cycle time and violations over all programs."""
+    """Per policy: total return, cycle time, violations, and the benchmark score (100 × mean over programs
+    of bound ÷ cycle for feasible episodes, 0 for the others)."""
     out: dict[str, dict[str, float]] = {}
     for r in rows:
-        t = out.setdefault(r["policy"], {"return": 0.0, "cycle_time_s": 0.0, "violations": 0})
+        t = out.setdefault(r["policy"], {"return": 0.0, "cycle_time_s": 0.0, "violations": 0, "score": 0.0,
+                                         "programs": 0, "feasible": 0})  # fmt: skip
         t["return"] += r["total_return"]
         t["cycle_time_s"] += r["cycle_time_s"]
         t["violations"] += r["violations"]
+        t["score"] += r["score"]
+        t["programs"] += 1
+        t["feasible"] += int(r["feasible"])
+    for t in out.values():
+        t["score"] = 100.0 * t["score"] / t["programs"]
     return out
 
 
@@ -70,10 +93,12 @@ def main(argv: list[str] | None = None) -> int:
         help="constant overrides to compare, comma separated",
     )
     parser.add_argument("--no-classical", action="store_true", help="leave the classical planner out")
+    parser.add_argument("--oracle", action="store_true",
+                        help="add the oracle planner (simulates the exact env; slow on long programs)")
     parser.add_argument("--json", action="store_true", help="print rows and totals as one JSON object")
     args = parser.parse_args(argv)
     try:
-        from agents import ClassicalPlanner, ConstantOverride
+        from agents import ClassicalPlanner, ConstantOverride, OraclePlanner
         from agents.model import ModelPolicy
         from agents.training import load_config
 
@@ -95,6 +120,8 @@ def main(argv: list[str] | None = None) -> int:
         policies: list[Any] = [ConstantOverride(x) for x in overrides]
         if not args.no_classical:
             policies.append(ClassicalPlanner())
+        if args.oracle:
+            policies.append(OraclePlanner(progress=False))
         if args.model:
             policies.append(ModelPolicy(args.model))
         rows = evaluate(policies, env_kwargs, programs)
@@ -110,15 +137,17 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(rows))
     print()
     constants = {k: v for k, v in summary.items() if k.startswith("constant:")}
-    best_name = max(constants, key=lambda k: constants[k]["return"]) if constants else None
-    for name, t in sorted(summary.items(), key=lambda kv: -kv[1]["return"]):
+    # Ranked by the benchmark score: a truncated or violating run scores 0, so it cannot be the best.
+    best_name = max(constants, key=lambda k: constants[k]["score"]) if constants else None
+    for name, t in sorted(summary.items(), key=lambda kv: -kv[1]["score"]):
         mark = "  <- best constant" if name == best_name else ""
-        print(f"{name:>24}: return {t['return']:9.2f}  cycle {t['cycle_time_s']:8.3f} s  "
-              f"violations {int(t['violations'])}{mark}")  # fmt: skip
+        print(f"{name:>24}: score {t['score']:6.1f}  feasible {int(t['feasible'])}/{int(t['programs'])}  "
+              f"cycle {t['cycle_time_s']:8.3f} s  violations {int(t['violations'])}  "
+              f"return {t['return']:9.2f}{mark}")  # fmt: skip
     if args.model and best_name:
         model_name = Path(args.model).name
-        gap = summary[model_name]["return"] - constants[best_name]["return"]
-        print(f"\nmodel − best constant ({best_name}): {gap:+.2f} return")
+        gap = summary[model_name]["score"] - constants[best_name]["score"]
+        print(f"\nmodel − best constant ({best_name}): {gap:+.1f} score")
     return 0
 
 

@@ -22,7 +22,7 @@ from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 # Columns of the controller's rows (Controller.advance_rows) the step reads.
-_O_X, _O_Z1, _O_SEG = _kernel.O_X, _kernel.O_Z + 1, _kernel.O_SEG
+_O_X, _O_Z1, _O_SEG, _O_S = _kernel.O_X, _kernel.O_Z + 1, _kernel.O_SEG, _kernel.O_S
 
 #: Scalar observation entries, in order (the look-ahead block follows them).
 SCALAR_FEATURES = (
@@ -220,7 +220,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``cycle_time_s``, ``contour_error_mm`` (max in this step), ``contour_error_max_mm``,
     ``contour_error_rms_mm`` (over cutting samples so far), ``tolerance_mm``, ``violations`` (control
-    steps so far with ``e_max > tol``), ``cost``, ``line`` (source line of the current block),
+    steps so far with ``e_max > tol``), ``violation_length_mm`` and ``violation_time_s`` (path length
+    the reference advanced, and time, over the servo samples with contour error above ``tol``: these do
+    not depend on the control period), ``cost``, ``line`` (source line of the current block),
     ``override`` (applied), ``feed_mm_min`` (current path speed × 60), ``path_s``, ``progress``,
     ``program``, ``steps``. At the end of an episode these are the episode's totals.
 
@@ -375,6 +377,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._error_sq_sum = 0.0
         self._error_samples = 0
         self._violations = 0
+        self._violation_length_mm = 0.0
+        self._violation_time_s = 0.0
+        self._last_path_s = self.controller.path_s
         self._knob = 0.0
         self._last_segment = 0
         self._last_reference = self._start
@@ -429,15 +434,18 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                 rows = controller.advance_rows(n, feed_mm_min=(knob + 1.0) * 0.5 * self.max_feed_mm_min)
             reference = rows[:, _O_X:_O_Z1]
             segment = rows[:, _O_SEG].astype(np.int64)
+            path_s = rows[:, _O_S]
             if len(reference) < n:  # the program ended inside this step: hold the end point
                 reference = np.concatenate((reference, np.repeat(reference[-1:], n - len(reference), axis=0)))
                 segment = np.concatenate((segment, np.repeat(segment[-1:], n - len(segment))))
+                path_s = np.concatenate((path_s, np.repeat(path_s[-1:], n - len(path_s))))
             self._last_segment = int(segment[-1])
             self._last_reference = reference[-1]
         else:  # settling at the end: the reference rests at the last point
             reference = self._settle_reference
             reference[:] = self._last_reference
             segment = np.full(n, self._last_segment)
+            path_s = None
         actual = self.plant.step(reference[None])[0]
         # In-position check (P1471), sampled once per control step: the controller holds the reference on
         # an exact stop, a rapid end or start, or the program end until the servo is settled there.
@@ -465,6 +473,14 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             self._error_max_mm = e_max
         violated = e_max > self.tolerance_mm
         self._violations += violated
+        if violated:  # per servo sample: the reference's path advance and time while over tolerance
+            over = error > self.tolerance_mm
+            if path_s is not None:
+                advance = np.diff(path_s, prepend=self._last_path_s)
+                self._violation_length_mm += float(np.sum(advance[over]))
+            self._violation_time_s += int(np.count_nonzero(over)) * self.interpolation_period_s
+        if path_s is not None:
+            self._last_path_s = float(path_s[-1])
         self._last_error_step = e_max
         self._last_error_now = e_now
 
@@ -524,6 +540,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             "contour_error_rms_mm": rms,
             "tolerance_mm": self.tolerance_mm,
             "violations": self._violations,
+            "violation_length_mm": self._violation_length_mm,
+            "violation_time_s": self._violation_time_s,
             "cost": cost,
             "line": self._source_lines[segment] if self._source_lines else 0,
             "override": controller.override_applied,

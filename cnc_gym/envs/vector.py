@@ -29,8 +29,8 @@ from cnc_gym.errors import ConfigError
 
 #: Numeric info keys, gathered into one float array per step; the integer ones are cast back.
 _NUMERIC_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm",
-                 "tolerance_mm", "violations", "cost", "line", "override", "feed_mm_min", "path_s",
-                 "progress", "steps")  # fmt: skip
+                 "tolerance_mm", "violations", "violation_length_mm", "violation_time_s", "cost", "line",
+                 "override", "feed_mm_min", "path_s", "progress", "steps")  # fmt: skip
 _INT_KEYS = frozenset(("violations", "line", "steps"))
 
 

@@ -17,7 +17,8 @@ from cnc_gym.programs import BUILTIN_PROGRAMS, ProgramText, load_program
 ENV_ID = "cnc_gym/Feedrate-v0"
 INFO_KEYS = {
     "cycle_time_s", "contour_error_mm", "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm",
-    "violations", "cost", "line", "override", "feed_mm_min", "path_s", "progress", "program", "steps",
+    "violations", "violation_length_mm", "violation_time_s", "cost", "line", "override", "feed_mm_min",
+    "path_s", "progress", "program", "steps",
 }  # fmt: skip
 # circle.nc at 100 % with infinite acceleration, by hand (test_nominal_time_by_hand).
 T_NOMINAL_CIRCLE = 2 * math.pi * 30 / 50 + 0.5 + 0.084

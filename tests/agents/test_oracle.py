@@ -1,4 +1,4 @@
-"""The classical planner as a policy: within tolerance and faster than every constant override that is."""
+"""The oracle planner as a policy: within tolerance and faster than every constant override that is."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
-from agents import ClassicalPlanner, ConstantOverride
+from agents import ConstantOverride, OraclePlanner
 from cnc_gym.runner import run_episode
 
 OVERRIDES = np.round(np.arange(1, 21) * 0.1, 1)  # 10 %, 20 %, … 200 %
@@ -52,9 +52,9 @@ def _constant_verdict(env, override: float, time_to_beat: float, allowed_violati
 @pytest.mark.parametrize(
     "program", [ZIGZAG, "star", "pocket", "freeform"], ids=["zigzag", "star", "pocket", "freeform"]
 )
-def test_classical_beats_every_compliant_constant_override(program):
+def test_oracle_beats_every_compliant_constant_override(program):
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program], machine="vmc-small")
-    classical = run_episode(env, ClassicalPlanner(), record=False)
+    classical = run_episode(env, OraclePlanner(), record=False)
     assert classical.finished
     # Within tolerance: no violation at all. (The controller waits in position at the rapid's end, so the
     # plunge that follows an approach rapid starts from a settled servo; no step is left that no feed avoids.)
@@ -73,9 +73,20 @@ def test_classical_beats_every_compliant_constant_override(program):
     env.close()
 
 
-def test_classical_uses_override_above_100_percent_where_geometry_allows():
+def test_oracle_uses_override_above_100_percent_where_geometry_allows():
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"], machine="vmc-small")
-    result = run_episode(env, ClassicalPlanner())
+    result = run_episode(env, OraclePlanner())
     assert result.override.max() > 1.2
     assert result.override.min() < 1.0
+    env.close()
+
+
+def test_planning_shows_a_bar_when_asked_and_nothing_otherwise(capsys):
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["circle"], machine="vmc-small")
+    env.reset(seed=0)
+    OraclePlanner(progress=True).reset(env)
+    assert "oracle: planning circle" in capsys.readouterr().err
+    env.reset(seed=0)
+    OraclePlanner().reset(env)  # progress=None: a bar only when stderr is a terminal (not under pytest)
+    assert capsys.readouterr().err == ""
     env.close()

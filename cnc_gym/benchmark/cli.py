@@ -1,0 +1,127 @@
+"""``cnc-gym bench``: benchmark policies on a suite split or on your own programs.
+
+    cnc-gym bench [--suite NAME | --programs FILE ...] [--split train|val|test] [--policy P ...]
+                  [--per-family N] [--seeds 0,1,2] [--machine M] [--dialect D] [--workers N] [--ray [ADDRESS]]
+                  [--json OUT.jsonl] [--plot DIR] [--no-progress]
+
+:func:`register` adds the subcommand to the ``cnc-gym`` parser; everything else is imported when the
+command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+EPILOG = """policies: constant:<x>, classical (deployable planner), oracle (simulate-and-correct, an oracle),
+bound (the time-optimal reference, no episode), a trained model (.zip), or module:callable.
+Default: the default suite's test split with constant:1.0, classical, oracle and bound.
+Score: 100 x the mean over programs of bound/cycle for finished episodes with no path cut over
+tolerance, 0 otherwise (docs/benchmark.md)."""
+
+
+def register(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``bench`` to the ``cnc-gym`` subcommands."""
+    bench = subparsers.add_parser("bench", help="benchmark policies on a suite split or your own programs",
+                                  epilog=EPILOG,
+                                  formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    source = bench.add_mutually_exclusive_group()
+    source.add_argument("--suite", default=None, help="suite name (default: cnc-bench-v1)")
+    source.add_argument("--programs", nargs="+", metavar="FILE", help="benchmark these program files instead")
+    bench.add_argument("--split", default=None, choices=("train", "val", "test"), help="default: test")
+    bench.add_argument("--policy", action="append", default=None, metavar="P",
+                       help="a policy to run (repeatable); see below")  # fmt: skip
+    bench.add_argument("--per-family", type=int, default=None, metavar="N",
+                       help="at most N programs of each family of the split (a quick look)")  # fmt: skip
+    bench.add_argument("--seeds", default="0", help="comma-separated episode seeds (default 0)")
+    bench.add_argument("--machine", default=None, help="machine preset or YAML (default: the suite's)")
+    bench.add_argument("--dialect", default=None, help="program dialect (default: the suite's, gsk25i)")
+    bench.add_argument("--workers", type=int, default=1, metavar="N",
+                       help="local worker processes (default 1)")  # fmt: skip
+    bench.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+                       help="run episodes on Ray (a local instance, or the cluster at ADDRESS); "
+                            "needs pip install 'cnc-gym[ray]'")  # fmt: skip
+    bench.add_argument("--json", metavar="OUT.jsonl", help="write one JSON record per episode")
+    bench.add_argument("--plot", metavar="DIR", help="write pareto.png and families.png into DIR")
+    bench.add_argument("--no-progress", action="store_true", help="no progress bar")
+    bench.set_defaults(func=cmd_bench)
+    return bench
+
+
+def _seeds(text: str) -> list[int]:
+    from cnc_gym.errors import CncGymError
+
+    try:
+        seeds = [int(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise CncGymError(f"--seeds must be integers separated by commas, got {text!r}") from None
+    if not seeds or any(s < 0 for s in seeds) or len(set(seeds)) != len(seeds):
+        raise CncGymError(f"--seeds must be distinct non-negative integers, got {text!r}")
+    return seeds
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    import time
+
+    from cnc_gym.benchmark.metrics import format_table, summarize
+    from cnc_gym.benchmark.runner import (
+        DEFAULT_POLICIES,
+        BenchConfig,
+        run_bench,
+        suite_programs,
+        user_programs,
+        write_jsonl,
+    )
+    from cnc_gym.benchmark.suites import DEFAULT_SUITE
+    from cnc_gym.errors import CncGymError
+
+    if args.workers < 1:
+        raise CncGymError(f"--workers must be at least 1, got {args.workers}")
+    seeds = _seeds(args.seeds)
+    policies = [p.strip() for p in (args.policy or DEFAULT_POLICIES)]
+    if len(set(policies)) != len(policies):
+        raise CncGymError("each --policy may be given once")
+    if args.programs:
+        machine, dialect = args.machine or "vmc-small", args.dialect or "gsk25i"
+        programs = user_programs(args.programs, machine, dialect)
+        config = BenchConfig(programs=programs, policies=policies, seeds=seeds, machine=machine,
+                             dialect=dialect)  # fmt: skip
+        title = f"{len(programs)} program(s)"
+    else:
+        name = args.suite or DEFAULT_SUITE
+        split = args.split or "test"
+        programs, suite = suite_programs(name, split)
+        if args.per_family is not None:
+            if args.per_family < 1:
+                raise CncGymError(f"--per-family must be at least 1, got {args.per_family}")
+            kept, counts = [], dict.fromkeys((p.family for p in programs), 0)
+            for program in programs:
+                if counts[program.family] < args.per_family:
+                    counts[program.family] += 1
+                    kept.append(program)
+            programs = kept
+        config = BenchConfig(programs=programs, policies=policies, seeds=seeds,
+                             machine=args.machine or suite.machine, dialect=args.dialect or suite.dialect,
+                             suite=suite.name, suite_version=suite.version,
+                             suite_sha256=suite.sha256)  # fmt: skip
+        title = f"{suite.name} {split}"
+    config.workers = args.workers
+    if args.ray is not None:
+        config.use_ray, config.ray_address = True, args.ray or None
+    config.progress = not args.no_progress and sys.stderr.isatty()
+    started = time.perf_counter()
+    records = run_bench(config)
+    elapsed = time.perf_counter() - started
+    if args.json:
+        write_jsonl(records, args.json)
+    if args.plot:
+        from cnc_gym.benchmark.plots import write_plots
+
+        write_plots(records, args.plot, title=title)
+    machine_name = records[0]["machine"] if records else config.machine
+    print(f"{title}: {len(config.programs)} programs, machine {machine_name}, seeds "
+          f"{','.join(map(str, seeds))}, commit {records[0]['commit'] if records else '?'}")  # fmt: skip
+    print(format_table(summarize(records)), flush=True)
+    print(f"{len(records)} episodes in {elapsed:.1f} s", file=sys.stderr)
+    return 0

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-test-000, family holes)
+(bolt circle of 4 on R23.6 mm, G83 G98 to Z-5.5, F590)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X23.624 Y0.000
+G98 G83 X23.624 Y0.000 Z-5.523 R2.000 Q1.423 F590.000
+X0.000 Y23.624
+X-23.624 Y0.000
+X0.000 Y-23.624
+G80
+G00 Z5.000
+M05
+M30

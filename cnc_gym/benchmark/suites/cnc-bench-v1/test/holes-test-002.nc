@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-test-002, family holes)
+(bolt circle of 4 on R16.4 mm, G81 G98 to Z-5.6, F320)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X16.415 Y0.000
+G98 G81 X16.415 Y0.000 Z-5.627 R2.000 F320.000
+X0.000 Y16.415
+X-16.415 Y0.000
+X0.000 Y-16.415
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,16 @@
+(cnc-gym benchmark program holes-test-005, family holes)
+(bolt circle of 6 on R11.6 mm, G73 G99 to Z-5.2, F370)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X11.563 Y0.000
+G99 G73 X11.563 Y0.000 Z-5.217 R2.000 Q2.937 F370.000
+X5.782 Y10.014
+X-5.782 Y10.014
+X-11.563 Y0.000
+X-5.782 Y-10.014
+X5.782 Y-10.014
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,13 @@
+(cnc-gym benchmark program holes-test-008, family holes)
+(bolt circle of 3 on R20.8 mm, G73 G98 to Z-2.5, F520)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.762 Y0.000
+G98 G73 X20.762 Y0.000 Z-2.518 R2.000 Q1.875 F520.000
+X-10.381 Y17.980
+X-10.381 Y-17.980
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,18 @@
+(cnc-gym benchmark program contour-train-014, family contour)
+(closed contour, 5 corners turning 42-96 deg, 1 fillets, F4000)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X9.707 Y14.213
+G00 Z1.000
+G01 Z-1.000 F600.000
+G01 X0.761 Y22.247 F4000.000
+G01 X-18.055 Y11.427
+G03 X-19.622 Y4.174 I2.492 J-4.334
+G01 X-2.473 Y-19.681
+G01 X13.146 Y-10.757
+G01 X18.654 Y6.180
+G01 X9.707 Y14.213
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,17 @@
+(cnc-gym benchmark program contour-train-032, family contour)
+(closed contour, 5 corners turning 44-97 deg, 0 fillets, F4700)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X0.902 Y23.631
+G00 Z1.000
+G01 Z-1.000 F600.000
+G01 X-9.361 Y23.123 F4700.000
+G01 X-12.039 Y1.074
+G01 X-5.004 Y-7.602
+G01 X10.755 Y-9.626
+G01 X11.165 Y24.140
+G01 X0.902 Y23.631
+G00 Z5.000
+M05
+M30

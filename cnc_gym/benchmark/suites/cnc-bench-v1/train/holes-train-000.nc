@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-000, family holes)
+(bolt circle of 4 on R21.0 mm, G83 G99 to Z-5.0, F590)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.974 Y0.000
+G99 G83 X20.974 Y0.000 Z-5.025 R2.000 Q1.935 F590.000
+X0.000 Y20.974
+X-20.974 Y0.000
+X0.000 Y-20.974
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,15 @@
+(cnc-gym benchmark program holes-train-005, family holes)
+(bolt circle of 5 on R14.8 mm, G73 G99 to Z-3.4, F320)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X14.794 Y0.000
+G99 G73 X14.794 Y0.000 Z-3.375 R2.000 Q1.306 F320.000
+X4.572 Y14.070
+X-11.969 Y8.696
+X-11.969 Y-8.696
+X4.572 Y-14.070
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-006, family holes)
+(bolt circle of 4 on R20.8 mm, G81 G98 to Z-3.2, F500)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.766 Y0.000
+G98 G81 X20.766 Y0.000 Z-3.202 R2.000 F500.000
+X0.000 Y20.766
+X-20.766 Y0.000
+X0.000 Y-20.766
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,16 @@
+(cnc-gym benchmark program holes-train-011, family holes)
+(bolt circle of 6 on R16.3 mm, G81 G98 to Z-6.1, F380)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X16.344 Y0.000
+G98 G81 X16.344 Y0.000 Z-6.094 R2.000 F380.000
+X8.172 Y14.154
+X-8.172 Y14.154
+X-16.344 Y0.000
+X-8.172 Y-14.154
+X8.172 Y-14.154
+G80
+G00 Z5.000
+M05
+M30

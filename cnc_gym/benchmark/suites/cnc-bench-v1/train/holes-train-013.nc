@@ -1,0 +1,13 @@
+(cnc-gym benchmark program holes-train-013, family holes)
+(bolt circle of 3 on R20.6 mm, G73 G98 to Z-6.1, F490)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.606 Y0.000
+G98 G73 X20.606 Y0.000 Z-6.117 R2.000 Q1.052 F490.000
+X-10.303 Y17.845
+X-10.303 Y-17.845
+G80
+G00 Z5.000
+M05
+M30

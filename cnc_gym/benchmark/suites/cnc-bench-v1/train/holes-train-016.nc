@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-016, family holes)
+(bolt circle of 4 on R20.1 mm, G73 G99 to Z-4.9, F300)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.068 Y0.000
+G99 G73 X20.068 Y0.000 Z-4.916 R2.000 Q2.151 F300.000
+X0.000 Y20.068
+X-20.068 Y0.000
+X0.000 Y-20.068
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,13 @@
+(cnc-gym benchmark program holes-train-018, family holes)
+(bolt circle of 3 on R19.6 mm, G73 G99 to Z-2.4, F260)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X19.556 Y0.000
+G99 G73 X19.556 Y0.000 Z-2.390 R2.000 Q1.892 F260.000
+X-9.778 Y16.936
+X-9.778 Y-16.936
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-021, family holes)
+(bolt circle of 4 on R14.2 mm, G81 G98 to Z-7.9, F290)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X14.159 Y0.000
+G98 G81 X14.159 Y0.000 Z-7.937 R2.000 F290.000
+X0.000 Y14.159
+X-14.159 Y0.000
+X0.000 Y-14.159
+G80
+G00 Z5.000
+M05
+M30

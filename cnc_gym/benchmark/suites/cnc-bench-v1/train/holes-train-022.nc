@@ -1,0 +1,13 @@
+(cnc-gym benchmark program holes-train-022, family holes)
+(bolt circle of 3 on R20.2 mm, G81 G98 to Z-3.1, F470)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.225 Y0.000
+G98 G81 X20.225 Y0.000 Z-3.061 R2.000 F470.000
+X-10.112 Y17.515
+X-10.112 Y-17.515
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-026, family holes)
+(2 x 2 grid, pitch 9.5 mm, G81 G99 to Z-4.2, F230)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X0.000 Y0.000
+G99 G81 X0.000 Y0.000 Z-4.224 R2.000 F230.000
+X9.467 Y0.000
+X0.000 Y9.467
+X9.467 Y9.467
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-030, family holes)
+(bolt circle of 4 on R24.0 mm, G83 G98 to Z-5.9, F490)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X24.032 Y0.000
+G98 G83 X24.032 Y0.000 Z-5.914 R2.000 Q2.009 F490.000
+X0.000 Y24.032
+X-24.032 Y0.000
+X0.000 Y-24.032
+G80
+G00 Z5.000
+M05
+M30

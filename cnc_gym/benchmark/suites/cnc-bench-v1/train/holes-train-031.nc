@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-031, family holes)
+(2 x 2 grid, pitch 8.7 mm, G83 G98 to Z-4.5, F260)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X0.000 Y0.000
+G98 G83 X0.000 Y0.000 Z-4.518 R2.000 Q1.723 F260.000
+X8.748 Y0.000
+X0.000 Y8.748
+X8.748 Y8.748
+G80
+G00 Z5.000
+M05
+M30

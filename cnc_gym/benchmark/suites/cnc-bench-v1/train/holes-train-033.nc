@@ -1,0 +1,16 @@
+(cnc-gym benchmark program holes-train-033, family holes)
+(2 x 3 grid, pitch 6.9 mm, G81 G99 to Z-4.2, F490)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X0.000 Y0.000
+G99 G81 X0.000 Y0.000 Z-4.235 R2.000 F490.000
+X6.859 Y0.000
+X13.717 Y0.000
+X0.000 Y6.859
+X6.859 Y6.859
+X13.717 Y6.859
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,15 @@
+(cnc-gym benchmark program holes-train-034, family holes)
+(bolt circle of 5 on R19.1 mm, G81 G99 to Z-3.4, F580)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X19.117 Y0.000
+G99 G81 X19.117 Y0.000 Z-3.448 R2.000 F580.000
+X5.908 Y18.182
+X-15.466 Y11.237
+X-15.466 Y-11.237
+X5.908 Y-18.182
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-train-035, family holes)
+(2 x 2 grid, pitch 10.0 mm, G81 G98 to Z-3.9, F240)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X0.000 Y0.000
+G98 G81 X0.000 Y0.000 Z-3.943 R2.000 F240.000
+X9.986 Y0.000
+X0.000 Y9.986
+X9.986 Y9.986
+G80
+G00 Z5.000
+M05
+M30

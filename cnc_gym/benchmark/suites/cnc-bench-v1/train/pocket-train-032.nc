@@ -1,0 +1,22 @@
+(cnc-gym benchmark program pocket-train-032, family pocket)
+(pocket 20.5 x 17.9 mm, zigzag, step-over 3.6 mm, 1 levels, plunge entry, F4450)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X-6.683 Y-5.358
+G00 Z1.000
+G01 Z-1.000 F600.000
+G01 X6.683 Y-5.358 F4450.000
+G01 X6.683 Y-1.773
+G01 X-6.683 Y-1.773
+G01 X-6.683 Y1.813
+G01 X6.683 Y1.813
+G01 X-9.269 Y-7.944
+G01 X9.269 Y-7.944
+G01 X9.269 Y7.944
+G01 X-9.269 Y7.944
+G01 X-9.269 Y-7.944
+G00 Z1.000
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,13 @@
+(cnc-gym benchmark program holes-val-000, family holes)
+(bolt circle of 3 on R23.1 mm, G73 G99 to Z-5.4, F160)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X23.137 Y0.000
+G99 G73 X23.137 Y0.000 Z-5.368 R2.000 Q2.835 F160.000
+X-11.569 Y20.037
+X-11.569 Y-20.037
+G80
+G00 Z5.000
+M05
+M30

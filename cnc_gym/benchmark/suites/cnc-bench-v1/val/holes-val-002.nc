@@ -1,0 +1,15 @@
+(cnc-gym benchmark program holes-val-002, family holes)
+(bolt circle of 5 on R24.6 mm, G73 G99 to Z-5.3, F580)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X24.607 Y0.000
+G99 G73 X24.607 Y0.000 Z-5.343 R2.000 Q1.424 F580.000
+X7.604 Y23.403
+X-19.908 Y14.464
+X-19.908 Y-14.464
+X7.604 Y-23.403
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-val-005, family holes)
+(bolt circle of 4 on R20.1 mm, G73 G98 to Z-3.7, F270)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X20.098 Y0.000
+G98 G73 X20.098 Y0.000 Z-3.725 R2.000 Q1.359 F270.000
+X0.000 Y20.098
+X-20.098 Y0.000
+X0.000 Y-20.098
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,16 @@
+(cnc-gym benchmark program holes-val-006, family holes)
+(bolt circle of 6 on R10.7 mm, G73 G98 to Z-7.6, F160)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X10.706 Y0.000
+G98 G73 X10.706 Y0.000 Z-7.618 R2.000 Q2.270 F160.000
+X5.353 Y9.272
+X-5.353 Y9.272
+X-10.706 Y0.000
+X-5.353 Y-9.272
+X5.353 Y-9.272
+G80
+G00 Z5.000
+M05
+M30

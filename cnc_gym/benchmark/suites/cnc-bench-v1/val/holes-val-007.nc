@@ -1,0 +1,14 @@
+(cnc-gym benchmark program holes-val-007, family holes)
+(bolt circle of 4 on R16.9 mm, G83 G98 to Z-5.8, F300)
+G90 G54 G17 G21
+S8000 M03
+G00 Z5.000
+G00 X16.913 Y0.000
+G98 G83 X16.913 Y0.000 Z-5.811 R2.000 Q1.474 F300.000
+X0.000 Y16.913
+X-16.913 Y0.000
+X0.000 Y-16.913
+G80
+G00 Z5.000
+M05
+M30

@@ -1,0 +1,291 @@
+"""The time-optimal reference: a lower bound on the cycle time of a program, computed with TOPP-RA.
+
+No policy can run a program faster than :func:`time_optimal_bound` says (to within the grid resolution,
+see below), whatever it does with the override knob. The bound is the minimum time of the programmed
+path under every *static* limit the controller enforces, with jerk and contour tolerance dropped:
+
+=========================  ========================================================================
+cutting moves              time-optimal path parameterization (TOPP-RA, Pham & Pham, IEEE T-RO 2018,
+                           with the ``toppra`` package) over every cutting move between two stops:
+path speed                 ≤ programmed feed × max override (× 1 on override-locked blocks) and
+                           ≤ the controller's static cap of the move: composite clamp P1224,
+                           per-axis max feed, curvature limits (centripetal acceleration P1442,
+                           chord error P1472, centripetal jerk, floor P1505)
+tangential acceleration    each axis's share ``|u_k(s)|·|s̈|`` ≤ its acceleration limit, pointwise
+                           (the controller limits tangential acceleration by the axes' limits and the
+                           centripetal part separately, by the curvature caps above)
+junctions                  ≤ the controller's junction limit (corner step P1227 over the change of
+                           direction, both neighbours' caps); 0 at every mandatory stop (exact stop,
+                           dwell, rapid ↔ cut, tool/spindle change, program end)
+rapids                     rest to rest at the rapid rate, rapid acceleration and rapid jerk projected
+                           on the move (closed form, :func:`~cnc_gym.motion.limits.rest_to_rest_time`)
+dwells                     as programmed (rotary-only moves: their closed-form jerk-limited time)
+=========================  ========================================================================
+
+What the bound leaves out, each of which only makes the real controller slower: jerk on cutting
+moves, the look-ahead window, the override's slew rate, in-position waits, the servo's settling at the
+program end, the interpolation period's sampling, and the contour tolerance itself. It is therefore a
+*lower bound*, not a feasible plan: a policy's ``time_ratio`` (cycle ÷ bound) is at least 1, and how far
+above 1 it lies says how much time is left on the table.
+
+With the override mode of the env the path-speed cap is the programmed feed × the machine's
+``max_override``; in ``feed`` mode (the agent commands the feed) it is the controller's clamp P1224.
+
+Discretization: TOPP-RA solves on a grid of path positions (every junction plus subdivisions of at
+most ``grid_mm``, ``max_gridpoints`` in all); constraints hold at grid points and the time is integrated
+exactly for constant acceleration between them. On a line the result matches the closed form to better
+than 0.1 % (tests/motion/test_bound.py).
+
+Results are cached in memory and on disk (``$CNC_GYM_CACHE_DIR/bound`` or ``~/.cache/cnc-gym/bound``),
+keyed by a hash of the tool path, the machine's parameters, the action mode and :data:`BOUND_VERSION`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from cnc_gym.errors import CncGymError
+from cnc_gym.machine import MachineConfig
+from cnc_gym.motion import kernel as K
+from cnc_gym.motion.limits import build_limits, rest_to_rest_time
+from cnc_gym.toolpath import Toolpath
+
+#: Bump when the bound's definition or numerics change: it is part of every cache key and record.
+BOUND_VERSION = 1
+
+_DEFAULT_GRID_MM = 0.5
+_DEFAULT_MAX_GRIDPOINTS = 40_000
+
+
+@dataclass(frozen=True)
+class BoundResult:
+    """The time-optimal bound of one program on one machine (seconds)."""
+
+    total_s: float  # the bound: cutting + rapid + dwell
+    cutting_s: float  # TOPP-RA time over the cutting moves
+    rapid_s: float  # rapids, rest to rest
+    dwell_s: float  # dwells and rotary-only moves
+    gridpoints: int  # TOPP-RA grid size (0 when there is nothing to cut)
+    version: int = BOUND_VERSION
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+class _ChainPath:
+    """The cutting moves as a geometric path for toppra: one unit tangent per grid interval.
+
+    Second derivatives are zero on purpose: toppra's joint-acceleration constraint then bounds each axis's
+    share of the *tangential* acceleration, ``|u_k|·|s̈| ≤ A_k`` (the centripetal part is limited by the
+    speed caps, as the controller does). toppra evaluates the path only at the grid points it was given;
+    the tangent at a grid point is that of the interval starting there.
+    """
+
+    def __init__(self, gridpoints: np.ndarray, tangent: np.ndarray) -> None:
+        self._grid = gridpoints
+        self._tangent = np.vstack((tangent, tangent[-1:]))
+        self.dof = 3
+        self.path_interval = np.array([gridpoints[0], gridpoints[-1]])
+
+    def __call__(self, positions, order: int = 0) -> np.ndarray:
+        s = np.atleast_1d(np.asarray(positions, dtype=float))
+        if order == 1:
+            index = np.clip(np.searchsorted(self._grid, s, side="right") - 1, 0, len(self._tangent) - 1)
+            return self._tangent[index]
+        return np.zeros((len(s), 3))  # positions and second derivatives: not needed / zero by design
+
+
+def _speed_cap(cap: np.ndarray):
+    """A toppra linear constraint: path speed ``ṡ ≤ cap[i]`` at grid point i (toppra's ``x = ṡ²``)."""
+    from toppra.constraint import LinearConstraint
+
+    class PathSpeedCap(LinearConstraint):
+        def __init__(self) -> None:
+            super().__init__()
+            self.dof = 3
+            self._format_string = "    path speed cap per grid point\n"
+
+        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+            return None, None, None, None, None, None, np.column_stack((np.zeros(len(cap)), cap * cap))
+
+    return PathSpeedCap()
+
+
+def _cutting_problem(tp: Toolpath, limits, machine: MachineConfig, action_mode: str, grid_mm: float,
+                     max_gridpoints: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:  # fmt: skip
+    """``(grid, speed cap per grid point, unit tangent per interval)`` over the cutting pieces.
+
+    The coordinate is cutting length (rapids removed). A rapid's ends are mandatory stops, so the cutting
+    pieces on either side of it meet at one grid point whose cap is 0.
+    """
+    seg_f, seg_i, pt_f, pt_i = limits.seg_f, limits.seg_i, limits.pt_f, limits.pt_i
+    n = len(seg_f)
+    cutting = seg_i[:, K.I_RAPID] == 0
+    rows = np.flatnonzero(cutting)
+    if len(rows) == 0:
+        return None
+    ctl = machine.controller
+    if action_mode == "feed":  # the agent commands the feed: only the clamp P1224 and the caps remain
+        target = np.full(n, ctl.max_feed_mm_min / 60.0)
+    else:  # override-locked blocks (G63) run at 100 %
+        target = seg_f[:, K.F_BASE] * np.where(seg_i[:, K.I_LOCKED] != 0, 1.0, float(ctl.max_override))
+    cap = np.minimum(target, seg_f[:, K.F_CAP])
+    # Speed allowed at the start of each cutting piece (its limit point q = the piece's index): the
+    # junction limit after a cutting piece (never more than the faster side's cap), 0 after a rapid, at the
+    # program start and at every mandatory stop.
+    after_cut = np.zeros(len(rows), dtype=bool)
+    after_cut[1:] = rows[1:] == rows[:-1] + 1
+    start = np.minimum(pt_f[rows, K.P_HARD], np.maximum(cap[rows], np.where(after_cut, cap[rows - 1], 0.0)))
+    start = np.where(after_cut & (pt_i[rows, K.Q_STOP] == 0), start, 0.0)
+    # ... and at its end (the next piece's start, or 0 before a rapid and at the end).
+    end = np.zeros(len(rows))
+    end[:-1] = np.where(after_cut[1:], start[1:], 0.0)
+    length = seg_f[rows, K.F_LEN]
+    cut_length = float(np.sum(length))
+    h = max(float(grid_mm), cut_length / max(max_gridpoints - 2 * len(rows), 1))
+    turn = seg_f[rows, K.F_CURV] * length
+    pieces = np.maximum(np.ceil(length / h), np.ceil(turn / math.radians(5.0)))
+    # A piece between two stops needs an interior point to move at all.
+    pieces = np.maximum(pieces, np.where((start == 0) & (end == 0), 2, 1)).astype(np.int64)
+    row_of = np.repeat(np.arange(len(rows)), pieces)
+    j = np.arange(len(row_of)) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+    frac = j / pieces[row_of]
+    cut_start = np.concatenate(([0.0], np.cumsum(length)))[:-1]
+    grid = np.concatenate((cut_start[row_of] + frac * length[row_of], [cut_length]))
+    speed = np.where(j == 0, start[row_of], cap[rows][row_of])
+    speed = np.concatenate((speed, [0.0]))
+    # Tangent of each interval at its middle (toolpath arc length).
+    s_mid = seg_f[rows[row_of], K.F_S0] + (j + 0.5) / pieces[row_of] * length[row_of]
+    _, tangent, _ = tp.evaluate(s_mid)
+    keep = np.concatenate(([True], np.diff(grid) > 0))  # zero-length pieces add nothing
+    if not np.all(keep):
+        grid, speed = grid[keep], speed[keep]
+        tangent = tangent[keep[1:]]
+    return grid, speed, tangent
+
+
+def _cutting_time(grid: np.ndarray, speed: np.ndarray, tangent: np.ndarray, accel: np.ndarray) -> float:
+    import logging
+
+    import toppra
+    from toppra.constraint import DiscretizationType, JointAccelerationConstraint
+
+    logging.getLogger("toppra").setLevel(logging.ERROR)
+    acceleration = JointAccelerationConstraint(np.asarray(accel, dtype=float),
+                                               discretization_scheme=DiscretizationType.Collocation)
+    problem = toppra.algorithm.TOPPRA([acceleration, _speed_cap(speed)], _ChainPath(grid, tangent),
+                                      gridpoints=grid, solver_wrapper="seidel")  # fmt: skip
+    _, sd, _, _ = problem.compute_parameterization(0.0, 0.0, return_data=True)
+    if sd is None or not np.all(np.isfinite(sd)):
+        raise CncGymError("time-optimal bound: TOPP-RA found no parameterization of the cutting moves")
+    pair = sd[:-1] + sd[1:]
+    if np.any(pair <= 0):
+        raise CncGymError("time-optimal bound: a grid interval with zero speed at both ends")
+    # Constant acceleration between grid points: Δt = 2·Δs / (ṡ_i + ṡ_{i+1}), exact.
+    return float(np.sum(2.0 * np.diff(grid) / pair))
+
+
+def _rapid_and_dwell_time(limits) -> tuple[float, float]:
+    seg_f, seg_i = limits.seg_f, limits.seg_i
+    rapid = seg_i[:, K.I_RAPID] != 0
+    rapid_s = 0.0
+    if np.any(rapid):
+        rapid_s = float(np.sum(rest_to_rest_time(seg_f[rapid, K.F_LEN], seg_f[rapid, K.F_CAP],
+                                                 seg_f[rapid, K.F_ACC], seg_f[rapid, K.F_JERK])))  # fmt: skip
+    # The dwell table has one row per dwell (a single row of zeros when there is none).
+    return rapid_s, float(np.sum(limits.dwell_f[:, 0]))
+
+
+def compute_bound(tp: Toolpath, machine: MachineConfig, *, action_mode: str = "override",
+                  grid_mm: float = _DEFAULT_GRID_MM,
+                  max_gridpoints: int = _DEFAULT_MAX_GRIDPOINTS) -> BoundResult:  # fmt: skip
+    """The bound of ``tp`` on ``machine``, computed now (no cache). See the module docstring."""
+    if action_mode not in ("override", "feed"):
+        raise CncGymError(f"action_mode must be 'override' or 'feed', got {action_mode!r}")
+    limits = build_limits(tp, machine)
+    rapid_s, dwell_s = _rapid_and_dwell_time(limits)
+    problem = _cutting_problem(tp, limits, machine, action_mode, grid_mm, max_gridpoints)
+    cutting_s, gridpoints = 0.0, 0
+    if problem is not None:
+        grid, speed, tangent = problem
+        accel = np.array(machine.axis_array("max_accel_mm_s2"))
+        cutting_s, gridpoints = _cutting_time(grid, speed, tangent, accel), len(grid)
+    return BoundResult(total_s=cutting_s + rapid_s + dwell_s, cutting_s=cutting_s, rapid_s=rapid_s,
+                       dwell_s=dwell_s, gridpoints=gridpoints)  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------- cache
+def toolpath_digest(tp: Toolpath) -> str:
+    """SHA-256 of a tool path's geometry, feeds and modes (what the bound depends on)."""
+    h = hashlib.sha256()
+    for name in ("kind", "start", "end", "center", "plane", "radius", "start_angle", "sweep", "feed",
+                 "dwell_s", "modes", "tool", "spindle_rpm", "length", "rotary_start", "rotary_end"):
+        arr = np.ascontiguousarray(getattr(tp, name))
+        h.update(name.encode())
+        h.update(str(arr.dtype).encode() + str(arr.shape).encode())
+        h.update(arr.tobytes())
+    h.update(tp.rotary_axes.encode())
+    for row in sorted(tp.nurbs):  # NURBS: sampled points stand for the curve
+        point, _, _ = tp.nurbs[row].at_length(np.linspace(0.0, float(tp.length[row]), 17))
+        h.update(np.ascontiguousarray(point).tobytes())
+    return h.hexdigest()
+
+
+def machine_digest(machine: MachineConfig) -> str:
+    """SHA-256 of a machine's parameters (its name, description and source file left out)."""
+    text = repr((machine.controller, machine.axes, tuple(sorted(machine.rotary_axes.items()))))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def cache_dir() -> Path:
+    """Where bounds are cached: ``$CNC_GYM_CACHE_DIR/bound``, else ``$XDG_CACHE_HOME/cnc-gym/bound``."""
+    root = os.environ.get("CNC_GYM_CACHE_DIR")
+    if root:
+        return Path(root) / "bound"
+    xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(xdg) / "cnc-gym" / "bound"
+
+
+_MEMORY: dict[str, BoundResult] = {}
+
+
+def time_optimal_bound(tp: Toolpath, machine: MachineConfig, *, action_mode: str = "override",
+                       cache: bool = True) -> BoundResult:  # fmt: skip
+    """The bound of ``tp`` on ``machine`` (cached by tool path and machine hash; see the module docstring).
+
+    A cache file that cannot be read or written is ignored (the bound is computed again).
+    """
+    key = hashlib.sha256(
+        f"{BOUND_VERSION}:{action_mode}:{toolpath_digest(tp)}:{machine_digest(machine)}".encode()
+    ).hexdigest()
+    if cache and key in _MEMORY:
+        return _MEMORY[key]
+    path = cache_dir() / f"{key}.json"
+    if cache:
+        try:
+            data = json.loads(path.read_text())
+            if data.get("version") == BOUND_VERSION:
+                result = BoundResult(**data)
+                _MEMORY[key] = result
+                return result
+        except (OSError, ValueError, TypeError):
+            pass
+    result = compute_bound(tp, machine, action_mode=action_mode)
+    if cache:
+        _MEMORY[key] = result
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(json.dumps(result.to_dict()))
+            tmp.replace(path)
+        except OSError:
+            pass
+    return result

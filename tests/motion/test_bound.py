@@ -1,0 +1,115 @@
+"""The TOPP-RA time-optimal bound against closed forms, its cache, and against the controller itself."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cnc_gym.gcode import interpret
+from cnc_gym.machine import load_machine
+from cnc_gym.motion import Controller
+from cnc_gym.motion.bound import compute_bound, time_optimal_bound
+
+VMC = load_machine("vmc-small")
+A = 3000.0  # vmc-small: per-axis acceleration, mm/s²
+
+
+def _bound(text: str, **kw):
+    return compute_bound(interpret(text), VMC, **kw)
+
+
+def test_line_along_an_axis_is_the_trapezoid():
+    # F3000 × max override 2 = 100 mm/s; from rest to rest over 100 mm: T = L/v + v/A.
+    b = _bound("G90 G21\nG01 X100 F3000\nM30\n")
+    assert b.cutting_s == pytest.approx(100 / 100 + 100 / A, rel=1e-3)
+    assert b.rapid_s == 0 and b.dwell_s == 0
+
+
+def test_diagonal_line_gets_each_axis_share_of_the_acceleration():
+    # At 45° each axis carries cos 45° of the tangential acceleration: the path may accelerate at √2·A.
+    length = 100.0
+    d = length / math.sqrt(2)
+    b = _bound(f"G90 G21\nG01 X{d:.6f} Y{d:.6f} F3000\nM30\n")
+    assert b.cutting_s == pytest.approx(length / 100 + 100 / (math.sqrt(2) * A), rel=1e-3)
+
+
+def test_short_line_is_the_triangle():
+    # 2 mm at F6000 × 2: the feed is never reached, T = 2·√(L/A).
+    b = _bound("G90 G21\nG01 X2 F6000\nM30\n")
+    assert b.cutting_s == pytest.approx(2 * math.sqrt(2 / A), rel=2e-3)
+
+
+def test_full_circle_at_the_feed_cap():
+    # R 30, F3000 × 2 = 100 mm/s (below every curvature cap): T = 2πR/v + v/A (the start and end tangent is
+    # along Y, so the ramps load Y alone).
+    circle = _bound("G90 G21\nG92 X30 Y0\nG03 X30 Y0 I-30 J0 F3000\nM30\n")
+    assert circle.cutting_s == pytest.approx(2 * math.pi * 30 / 100 + 100 / A, rel=2e-3)
+
+
+def test_tight_circle_runs_at_the_controllers_curvature_cap():
+    # R 2 at F6000: the controller's cap is min(√(a_n·R), (J·R²)^(1/3), chord (2/T)·√(2Rδ − δ²)).
+    r, dt, delta = 2.0, 0.002, 0.001
+    cap = min(math.sqrt(3000 * r), (30000 * r * r) ** (1 / 3), (2 / dt) * math.sqrt(2 * r * delta - delta**2))
+    b = _bound(f"G90 G21\nG92 X{r} Y0\nG03 X{r} Y0 I-{r} J0 F6000\nM30\n")
+    assert b.cutting_s == pytest.approx(2 * math.pi * r / cap + cap / A, rel=3e-3)
+
+
+def test_rapids_and_dwells_are_timed_rest_to_rest():
+    b = _bound("G90 G21\nG00 X100\nG04 X1.5\nM30\n")
+    # Rapid 30 m/min = 500 mm/s, 5000 mm/s², 70000 mm/s³: jerk-limited rest to rest (closed form).
+    v, a, j, d = 500.0, 5000.0, 70000.0, 100.0
+    ramp = v / a + a / j
+    assert b.rapid_s == pytest.approx(2 * ramp + (d - v * ramp) / v, rel=1e-9)
+    assert b.dwell_s == pytest.approx(1.5)
+    assert b.cutting_s == 0 and b.gridpoints == 0
+    assert b.total_s == pytest.approx(b.rapid_s + b.dwell_s)
+
+
+def test_feed_mode_is_capped_by_the_clamp_only():
+    # In feed mode the agent may command up to P1224 (15 000 mm/min = 250 mm/s).
+    b = _bound("G90 G21\nG01 X100 F300\nM30\n", action_mode="feed")
+    assert b.cutting_s == pytest.approx(100 / 250 + 250 / A, rel=1e-3)
+
+
+@pytest.mark.parametrize("program", ["circle", "star", "freeform", "pocket"])
+def test_the_controller_at_max_override_never_beats_the_bound(program):
+    from cnc_gym.programs import load_program
+
+    _, tp = load_program(program, "gsk25i", VMC)
+    controller = Controller(tp, VMC)
+    run = controller.run_to_end(override=VMC.controller.max_override)
+    assert run.time_s[-1] >= time_optimal_bound(tp, VMC, cache=False).total_s
+
+
+def test_cache_on_disk(tmp_path, monkeypatch):
+    from cnc_gym.motion import bound
+
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    tp = interpret("G90 G21\nG01 X10 Y3 F1200\nG02 X20 Y3 R5\nM30\n")
+    first = time_optimal_bound(tp, VMC)
+    files = list((tmp_path / "bound").glob("*.json"))
+    assert len(files) == 1
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    monkeypatch.setattr(bound, "compute_bound", lambda *a, **k: pytest.fail("not read from the cache"))
+    assert time_optimal_bound(tp, VMC) == first
+    # Another machine is another key.
+    monkeypatch.setattr(bound, "compute_bound", compute_bound)
+    time_optimal_bound(tp, load_machine("p-loop-30"))
+    assert len(list((tmp_path / "bound").glob("*.json"))) == 2
+
+
+def test_a_broken_cache_file_is_recomputed(tmp_path, monkeypatch):
+    from cnc_gym.motion import bound
+
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    tp = interpret("G90 G21\nG01 X10 F1200\nM30\n")
+    first = time_optimal_bound(tp, VMC)
+    for f in (tmp_path / "bound").glob("*.json"):
+        f.write_text("{not json")
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    assert time_optimal_bound(tp, VMC).total_s == pytest.approx(first.total_s)
+    assert np.isfinite(first.total_s)
