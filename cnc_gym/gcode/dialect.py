@@ -413,6 +413,9 @@ class Dialect:
     parameter_numbers: Mapping[str, int] = field(default_factory=dict)
     #: Parameters whose raw value is range-checked when written: number → largest magnitude.
     parameter_ranges: Mapping[int, int] = field(default_factory=dict)
+    #: The dialect's own parameters: a record its folder declares and only its own features read (Syntec's
+    #: peck-tapping type, polar-angle sign …); the core and the language families never read it.
+    options: Any = None
     #: Whether a dialect that is listed but not built yet (raises on use).
     implemented: bool = True
     #: The codes that play a special part (derived from the tables, see :class:`Roles`).
@@ -441,7 +444,7 @@ DIALECT_MODULES: dict[str, str | None] = {
     "gsk25i": "cnc_gym.gcode.dialects.gsk25i",
     "fanuc": "cnc_gym.gcode.dialects.fanuc",
     "h4cm": None,
-    "syntec": None,
+    "syntec": "cnc_gym.gcode.dialects.syntec",
     "azmc1": None,
 }
 

@@ -209,6 +209,9 @@ class State:
     # ------------------------------------------------------------------ features
     cycle: CycleState = field(default_factory=CycleState)
     nurbs: NurbsState = field(default_factory=NurbsState)
+    #: The dialect's own features' state: a record its folder declares (next to ``Dialect.options``),
+    #: created by those features on first use; None until then. The core and the families never read it.
+    dialect_data: Any = None
     #: A feature waiting for the next block (chamfer/corner, coordinate-change mark), or None.
     pending: PendingBlock | None = None
     #: While a chamfer/corner block is captured: the moves it would make, as geometry (not emitted).

@@ -31,7 +31,8 @@ def _g(x: float) -> float:
 def toolpath_records(tp: Toolpath) -> list[dict]:
     """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
     data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
-    coordinates) with ``rotary_start`` on the rows that move them."""
+    coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that
+    carry one."""
     records = []
     rotary = tp.rotary_axes
     for i in range(len(tp)):
@@ -61,6 +62,8 @@ def toolpath_records(tp: Toolpath) -> list[dict]:
             rec["control_points"] = [[_r(x) for x in p] for p in curve.control_points]
             rec["weights"] = [_g(w) for w in curve.weights]
             rec["knots"] = [_g(k) for k in curve.knots]
+        if tp.smoothing_tolerance_mm[i]:
+            rec["smoothing_tolerance_mm"] = _r(tp.smoothing_tolerance_mm[i])
         if tp.modes[i]:
             rec["modes"] = [m.name.lower() for m in type_modes(int(tp.modes[i]))]
         records.append(rec)
