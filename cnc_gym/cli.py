@@ -24,12 +24,12 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from cnc_gym.errors import CncGymError
-from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS
+from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
-DIALECTS = ("gsk25i", "h4cm", "syntec", "azmc1")
+DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
 
 
 EXIT_STATUS_HELP = """exit status:
@@ -177,7 +177,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_line(message: str) -> str:
-    return " ".join(message.split()) or "error"
+    return printable(message, MAX_LINE_CHARS) or "error"
 
 
 if __name__ == "__main__":

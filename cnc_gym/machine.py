@@ -135,9 +135,10 @@ class AxisConfig:
 class RotaryAxisConfig:
     """One rotary axis (A, B or C), in degrees: the limits the controller keeps while timing its moves.
 
-    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (programming manual, G01 with
-    rotary axes): in a block that moves linear and rotary axes together, F is the rate along the composite
-    vector √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01 runs at F deg/min.
+    The GSK 25i treats a rotary axis's degrees like millimetres in the feed (GSK 25i programming manual
+    §3.2.2, G01 with rotary axes): in a block that moves linear and rotary axes together, F is the rate
+    along the composite vector √(ΔX² + ΔY² + ΔZ² + ΔB²) with degrees counted as mm; a rotary-only G01
+    runs at F deg/min.
     """
 
     rapid_deg_min: float = _rate(3600.0, "rapid traverse rate (P1226)", "deg/min", _ROTARY_WHY)

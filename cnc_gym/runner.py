@@ -27,7 +27,7 @@ import numpy as np
 from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries
 from cnc_gym.errors import CncGymError, ConfigError
 
-#: Keys of the ``--json`` object (the contract in DESIGN.md, plus a few extras).
+#: Keys of the ``--json`` object (the contract of docs/architecture.md, plus a few extras).
 JSON_KEYS = (
     "program", "machine", "policy", "cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm",
     "tolerance_mm", "violations", "steps", "total_return", "finished", "stopped_by", "nominal_time_s",

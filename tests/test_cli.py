@@ -1,4 +1,4 @@
-"""The `cnc-gym` command: the trace contract and the error contract (DESIGN.md)."""
+"""The `cnc-gym` command: the trace contract and the error contract (docs/architecture.md)."""
 
 from __future__ import annotations
 
@@ -228,7 +228,7 @@ def test_one_line_gcode_with_a_slash_is_text_not_a_path(capsys):
 def test_docs_cli_matches_the_code():
     # docs/cli.md is derived from these constants; a change to one without the other fails here.
     from cnc_gym.envs.render import DEFAULT_MAX_BINS
-    from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS
+    from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
     from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PLOT_FORMATS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")

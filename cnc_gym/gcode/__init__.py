@@ -3,9 +3,13 @@
     toolpath = interpret(text, dialect="gsk25i", file="part.nc")
     toolpath = interpret_file("part.nc")
 
-Read (:mod:`~cnc_gym.gcode.reader`) → check and execute (:mod:`~cnc_gym.gcode.interpreter`) → canonical
-output (:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. Dialects are data
-(:mod:`~cnc_gym.gcode.dialect`, :mod:`cnc_gym.gcode.dialects`). See docs/gcode.md.
+Read (the dialect's lexer, ``lang/fanuc/reader.py`` for the Fanuc family) → check and execute (the core,
+:mod:`~cnc_gym.gcode.interpreter`, with the dialect's actions and hooks) → canonical output
+(:mod:`~cnc_gym.gcode.canonical`) → :class:`~cnc_gym.toolpath.Toolpath`. A dialect is a folder of tables
+and hooks (:mod:`cnc_gym.gcode.dialects`) on a language family (:mod:`cnc_gym.gcode.lang`); the contract
+between them and the core is :mod:`~cnc_gym.gcode.dialect`. See docs/gcode.md and docs/dialects.md.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -17,17 +21,23 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
-from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS, FlowOptions
-from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, MacroCalls, get_dialect
+from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.interpreter import Interpreter
-from cnc_gym.gcode.reader import Program, Reader
+from cnc_gym.gcode.program import Program
+from cnc_gym.gcode.settings import (
+    DEFAULT_MAX_BLOCKS,
+    DEFAULT_MAX_SECONDS,
+    DEFAULT_MAX_SEGMENTS,
+    FlowOptions,
+    MacroCalls,
+)
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
     from cnc_gym.toolpath import Toolpath
 
-__all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "Reader", "get_dialect", "interpret",
+__all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "get_dialect", "interpret",
            "interpret_file", "read_program"]  # fmt: skip
 
 
@@ -41,7 +51,8 @@ def _skip_switches(block_skip) -> frozenset[int]:
 
 def read_program(text: str, *, dialect: str | Dialect = "gsk25i", file: str = "<program>") -> Program:
     """Read phase only: text → blocks (syntax errors raise ProgramError)."""
-    return Reader(get_dialect(dialect)).read(text, file)
+    spec = get_dialect(dialect)
+    return spec.language.reader(spec, None).read(text, file)
 
 
 def interpret(
@@ -52,16 +63,22 @@ def interpret(
     machine: MachineConfig | None = None,
     block_skip: frozenset[int] = frozenset(),
     max_blocks: int = DEFAULT_MAX_BLOCKS,
+    max_seconds: float = DEFAULT_MAX_SECONDS,
+    max_segments: int = DEFAULT_MAX_SEGMENTS,
     program_dir: str | Path | None = None,
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
     tool_offsets=None,
     tool_measurement=None,
     skip_signal=None,
+    units: str | None = None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
-    ``max_blocks``: bound on executed blocks (a runaway macro loop raises ``too-many-blocks``).
+    ``max_blocks``: bound on executed blocks (a runaway macro loop raises ``too-many-blocks``);
+    ``max_seconds``: bound on the CPU seconds of the interpretation (``time-budget``); ``max_segments``:
+    bound on the tool path's segments (``segment-budget``). The defaults (2 000 000 blocks, 60 s,
+    2 000 000 segments) are far above real programs; raise them for a really long one.
     ``program_dir``: where M98/G65 look for programs not in the text (files ``O1002``, ``O1002.nc``,
     ``1002.nc``); default the folder of ``file`` when that is a real file.
     ``macro_calls``: G/M/T codes that call programs (GSK parameters 6050-6089, 6001#0), as a
@@ -73,13 +90,16 @@ def interpret(
     #2001…/#10001… set them from the program).
 
     ``tool_measurement``: G37's simulated measuring instrument and parameters, a
-    :class:`~cnc_gym.gcode.measurement.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
+    :class:`~cnc_gym.gcode.settings.ToolMeasurement` or ``{"signal_at": {1: 198.0}, "decel_mm": 10,
     "band_mm": 5}`` (H number → work coordinate where the approach-end signal comes; default: exactly at
     the commanded position, with the manual's standard P2651-P2653).
     ``skip_signal``: G31's simulated probe, ``{"Z": -5.0}``: a G31 move stops where it first reaches one of
     these program coordinates (mm); default none (every G31 move completes).
     ``block_skip``: the optional-block-skip switches that are ON (1..9; ``/`` alone is switch 1).
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
+    ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (the controller parameter a
+    machine sets; shop programs for inch machines often carry no G20); the program's own G20/G21 still
+    rules. Default: the dialect's power-on code (G21 on the GSK 25i and ``fanuc``).
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
@@ -93,14 +113,21 @@ def interpret(
         calls = _macro_calls(macro_calls, spec)
         if main_m99 not in ("end", "restart"):
             raise ConfigError(f"main_m99 must be 'end' or 'restart', got {main_m99!r}")
-        if isinstance(max_blocks, bool) or not isinstance(max_blocks, int) or max_blocks < 1:
-            raise ConfigError(f"max_blocks must be a positive integer, got {max_blocks!r}")
+        for name, value in (("max_blocks", max_blocks), ("max_segments", max_segments)):
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        if isinstance(max_seconds, bool) or not isinstance(max_seconds, int | float) or not max_seconds > 0:
+            raise ConfigError(f"max_seconds must be a positive number of seconds, got {max_seconds!r}")
         folder = None if program_dir is None else str(program_dir)
-        options = FlowOptions(max_blocks=max_blocks, program_dir=folder, macro_calls=calls, main_m99=main_m99)
-        program = Reader(spec, calls).read(text, file)
+        options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
+                              max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
+                              main_m99=main_m99)  # fmt: skip
+        if units is not None and units not in ("mm", "inch"):
+            raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
+        program = spec.language.reader(spec, calls).read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
-                               tool_measurement=tool_measurement,
-                               skip_signal=skip_signal).run(options)  # fmt: skip
+                               tool_measurement=tool_measurement, skip_signal=skip_signal,
+                               units=units).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()
@@ -119,8 +146,8 @@ def interpret_file(
 ) -> Toolpath:
     """Interpret a program file (errors name the path). An unreadable file raises OSError.
 
-    ``options``: as :func:`interpret` (``max_blocks``, ``program_dir`` — default the file's folder —,
-    ``macro_calls``, ``main_m99``, ``tool_offsets``).
+    ``options``: as :func:`interpret` (``max_blocks``, ``max_seconds``, ``max_segments``, ``program_dir``
+    — default the file's folder —, ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
     """
     path = Path(path)
     raw = path.read_bytes()
@@ -133,7 +160,7 @@ def interpret_file(
 
 def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCalls:
     """``macro_calls=`` → MacroCalls, checked (ConfigError): G 1-255 but not G00/G65/G66/G67, M 1-255 but
-    not the stop/call codes, at most 10 of each kind (L6232, L6281, L6301), programs 1-9999."""
+    not the stop/call codes, at most 10 of each kind (§3.7.6), programs 1-9999."""
     if value is None:
         return dialect.macro_calls
     if isinstance(value, MacroCalls):
@@ -143,7 +170,7 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
         if unknown:
             raise ConfigError(f"macro_calls: unknown keys {sorted(unknown)} (g_macro, m_macro, m_sub, t_sub)")
         try:
-            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})
+            calls = MacroCalls(**{k: (dict(v) if k != "t_sub" else v) for k, v in value.items()})  # type: ignore[arg-type]
         except (TypeError, ValueError) as exc:
             raise ConfigError(f"macro_calls: {exc}") from None
     else:
@@ -153,7 +180,7 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
         if isinstance(number, bool) or not isinstance(number, int) or not 1 <= number <= 9999:
             raise ConfigError(f"macro_calls[{what}]: program number {number!r} is not 1..9999")
 
-    reserved = {"g_macro": {0, 65, 66, 67}, "m_macro": {0, 1, 2, 30, 98, 99}, "m_sub": {0, 1, 2, 30, 98, 99}}
+    reserved = _reserved_codes(dialect)
     for kind in ("g_macro", "m_macro", "m_sub"):
         table = getattr(calls, kind)
         if len(table) > 10:
@@ -172,13 +199,23 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
     return calls
 
 
+def _reserved_codes(dialect: Dialect) -> dict[str, set[int]]:
+    """Codes that cannot call a program: G00 and the macro-call codes (G65-G67); the stop and call M codes
+    (M00-M02, M30, M98, M99). Found in the dialect's tables by action."""
+    g_codes = {key // 10 for key, spec in dialect.gcodes.items() if key % 10 == 0 and (
+        spec.action in ("macro_call", "modal_call_cancel") or (spec.action == "motion" and spec.value == 0))}
+    m_codes = {key // 10 for key, spec in dialect.mcodes.items()
+               if spec.action in ("stop", "subprogram_call", "subprogram_return")}  # fmt: skip
+    return {"g_macro": g_codes, "m_macro": m_codes, "m_sub": m_codes}
+
+
 def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
     """Stored stroke check: every point of the path within each axis's [min, max] travel.
 
     Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
     270° in the plane). The first offending segment is reported, with the operation volume's stored
     stroke limit 1 alarm: 500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side
-    (n = the axis number, L7250).
+    (n = the axis number, GSK 25i operation manual §2.5.4).
     """
     n = len(toolpath)
     if not n:

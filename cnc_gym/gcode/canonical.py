@@ -2,7 +2,7 @@
 
 Everything the interpreter emits passes through here. A program point (work coordinates, mm, after
 G20 conversion and G16 polar conversion) becomes a machine point through the stages, in the manual's
-order (L2046: "the scaling is applied firstly and then the coordinates are rotated"):
+order (§3.2.18: "the scaling is applied firstly and then the coordinates are rotated"):
 
     program ─▶ mirror G51.1 ─▶ scaling/mirror G51 ─▶ rotation G68 ─▶ + origin ─▶ machine
     origin = local (G52) + work origin + tool length vector (G43/G44, owned by compensation),
@@ -13,13 +13,17 @@ them into one affine map ``work = A·p + t``; with no stage active it is the ide
 skips it altogether (the plain-G-code hot path does ``program + origin`` only). :class:`OffsetStack`
 holds the translations. :class:`CanonicalMachine` keeps the current machine position and appends
 segments.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
+from cnc_gym.errors import ProgramError
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind, SegmentMode, ToolpathBuilder
 
 Vec = tuple[float, float, float]
@@ -28,6 +32,11 @@ IDENTITY: Mat = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 _PLANE_AXES = {int(p): axes for p, axes in PLANE_AXES.items()}
 _ARC = SegmentKind.ARC
 ZERO: Vec = (0.0, 0.0, 0.0)
+TWO_PI = 2.0 * math.pi
+#: No move may reach a machine coordinate beyond this, mm (1 000 km: far beyond any stroke, so only a
+#: runaway chain of offsets or transforms meets it, e.g. G51 applied again and again in a loop, which
+#: would otherwise double a coordinate to infinity).
+MAX_COORDINATE_MM = 1e9
 
 
 def mat_mul(a: Mat, b: Mat) -> Mat:
@@ -58,7 +67,7 @@ class AffineStage:
     """One program-side stage: ``p' = centre + linear·(p - centre)``.
 
     ``centre`` is the program point the stage was commanded about; the chain carries it through the
-    stages before this one (the G68 centre "will also be scaled", L2046).
+    stages before this one (the G68 centre "will also be scaled", §3.2.18).
     """
 
     name: str
@@ -148,11 +157,129 @@ class TransformChain:
         return a, b, c, d, m[w][w], similar
 
 
+
+class PolarState:
+    """G16 polar input: the plane's first axis word is the radius, the second the angle (degrees, CCW
+    from the first axis's + direction). GSK 25i programming manual §3.2.16 (polar coordinate command).
+
+    * radius word in G90: the origin is the work zero; in G91: the origin is the current position;
+    * angle word in G90: the angle itself; in G91: added to the last angle;
+    * an omitted radius or angle keeps the last one (with the last origin), so ``G91 Y120`` steps round
+      the same circle;
+    * the plane's normal axis is an ordinary Cartesian word.
+    """
+
+    def __init__(self, program_position, plane: Plane) -> None:
+        u, v, _ = _PLANE_AXES[int(plane)]
+        # Start from the current point seen from the work zero.
+        self.origin = (0.0, 0.0)
+        self.radius = math.hypot(program_position[u], program_position[v])
+        self.angle_deg = math.degrees(math.atan2(program_position[v], program_position[u]))
+
+    def resolve(self, words, plane: Plane, scale: float, incremental: bool, position) -> tuple:
+        """Program-unit words (x, y, z; None = absent) → program target in mm (None = not commanded), with
+        ``plane``'s axes as (radius, angle), from the program ``position``."""
+        u, v, w = _PLANE_AXES[int(plane)]
+        s = scale
+        p = position
+        out: list[float | None] = [None, None, None]
+        radius_word, angle_word = words[u], words[v]
+        if radius_word is not None or angle_word is not None:
+            if radius_word is not None:
+                self.origin = (p[u], p[v]) if incremental else (0.0, 0.0)
+                self.radius = radius_word * s
+            if angle_word is not None:
+                self.angle_deg = self.angle_deg + angle_word if incremental else angle_word
+            a = math.radians(self.angle_deg)
+            out[u] = self.origin[0] + self.radius * math.cos(a)
+            out[v] = self.origin[1] + self.radius * math.sin(a)
+        normal = words[w]
+        if normal is not None:
+            out[w] = p[w] + normal * s if incremental else normal * s
+        return tuple(out)
+
+
+class MapError(ValueError):
+    """An arc the transform chain cannot map (``code``: the stable error code)."""
+
+    def __init__(self, message: str, code: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+def map_arc(chain: TransformChain, plane: Plane, sweep: float, start_m: Vec,
+            mapped) -> tuple[Vec, Vec, float]:  # fmt: skip
+    """An arc given in program coordinates → (end, centre, sweep) in machine coordinates.
+
+    ``start_m``: the machine start point; ``mapped()`` gives the machine images of the program end and
+    centre (the centre's normal coordinate set to the start's). The chain is affine and keeps the arc's
+    plane (G68 rotates only in the selected plane, and a plane change in G68 mode is an error). With equal
+    in-plane factors the image of the circle is a circle: the sweep keeps its size and flips its sign
+    under a mirror (G02 ↔ G03). With unequal factors the controller traces no ellipse (GSK 25i programming
+    manual §3.2.17, note 5; the figures are lost): we keep the mapped centre and the mapped start, so the
+    radius is the mapped start's distance from the mapped centre, and move the mapped end radially onto
+    that circle; a full circle stays a full circle. Raises :class:`MapError`.
+    """
+    u, v, w = _PLANE_AXES[int(plane)]
+    shape = chain.plane_map(plane)
+    if shape is None:
+        raise MapError(f"an arc in the {plane.name} plane while G68 rotates another plane",
+                       "plane-change-in-rotation")  # fmt: skip
+    a, b, c, d, _, similar = shape
+    mirror = a * d - b * c < 0
+    end_image, centre_image = mapped()
+    end_m = list(end_image)
+    centre_m = list(centre_image)
+    centre_m[w] = start_m[w]
+    centre = (centre_m[0], centre_m[1], centre_m[2])
+    if similar:
+        return (end_m[0], end_m[1], end_m[2]), centre, -sweep if mirror else sweep
+    radius = math.hypot(start_m[u] - centre_m[u], start_m[v] - centre_m[v])
+    full = abs(abs(sweep) - TWO_PI) < 1e-12
+    ccw = (sweep > 0) != mirror
+    if full:
+        end_m[u], end_m[v] = start_m[u], start_m[v]
+        return (end_m[0], end_m[1], end_m[2]), centre, TWO_PI if ccw else -TWO_PI
+    r_end = math.hypot(end_m[u] - centre_m[u], end_m[v] - centre_m[v])
+    if radius < 1e-9 or r_end < 1e-9:
+        raise MapError("the scaled arc has radius 0", "arc-impossible")
+    k = radius / r_end
+    end_m[u] = centre_m[u] + (end_m[u] - centre_m[u]) * k
+    end_m[v] = centre_m[v] + (end_m[v] - centre_m[v]) * k
+    a0 = math.atan2(start_m[v] - centre_m[v], start_m[u] - centre_m[u])
+    a1 = math.atan2(end_m[v] - centre_m[v], end_m[u] - centre_m[u])
+    turned = (a1 - a0) % TWO_PI if ccw else -((a0 - a1) % TWO_PI)
+    return (end_m[0], end_m[1], end_m[2]), centre, turned
+
+
+class Output(Protocol):
+    """The output stage the interpreter moves: :class:`CanonicalMachine`, or a stage in front of it that
+    has the same interface (cutter compensation's)."""
+
+    position: Vec
+    rotary: tuple[float, ...]
+    rotary_next: tuple[float, ...] | None
+    line: int
+    file_index: int
+    modes: SegmentMode
+    tool: int
+    spindle_rpm: float
+
+    def straight_traverse(self, target: Vec) -> None: ...
+
+    def straight_feed(self, target: Vec, feed: float) -> None: ...
+
+    def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None: ...
+
+    def nurbs_feed(self, curve, feed: float) -> None: ...
+
+    def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None: ...
+
 class OffsetStack:
     """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them).
 
     ``tool_length`` is the tool length offset vector (G43/G44; owned by the compensation module): it is
-    added to the origin by :meth:`update`, after the program-side transforms (L2045).
+    added to the origin by :meth:`update`, after the program-side transforms (§3.2.18).
     """
 
     def __init__(self, n_wcs: int = 6, n_extra_wcs: int = 48) -> None:
@@ -188,7 +315,7 @@ class OffsetStack:
 
     def select_wcs(self, index: int) -> None:
         """G54..G59 (0..5), G54.1 P1..P48 (6..53). GSK: selecting any work coordinate system drops a G92
-        floating system (L1707-L1712)."""
+        floating system (§3.2.13)."""
         self.active_wcs = index
         self.floating = None
         self.update()
@@ -213,8 +340,12 @@ class OffsetStack:
 class CanonicalMachine:
     """Current machine position plus the per-segment context; appends segments to a builder."""
 
-    def __init__(self, builder: ToolpathBuilder, start: Vec = ZERO, rotary: tuple[float, ...] = ()) -> None:
+    def __init__(self, builder: ToolpathBuilder, start: Vec = ZERO, rotary: tuple[float, ...] = (),
+                 error=None) -> None:  # fmt: skip
         self.builder = builder
+        # ``error(message, code)`` makes the ProgramError of a move beyond MAX_COORDINATE_MM (the dialect's,
+        # with its alarm number).
+        self.error = error or (lambda message, code: ProgramError(message, code=code))
         self.position: Vec = tuple(float(c) for c in start)  # type: ignore[assignment]
         # Rotary axes (machine degrees); ``rotary_next`` is the target the next rapid/feed move takes them
         # to (set by the interpreter for a block with rotary words, consumed by that move).
@@ -230,8 +361,16 @@ class CanonicalMachine:
         return {"line": self.line, "file_index": self.file_index, "modes": self.modes, "tool": self.tool,
                 "spindle_rpm": self.spindle_rpm}  # fmt: skip
 
+    def _check(self, point) -> None:
+        limit = MAX_COORDINATE_MM
+        if not (-limit <= point[0] <= limit and -limit <= point[1] <= limit and -limit <= point[2] <= limit):
+            where = ", ".join(f"{'XYZ'[a]}{point[a]:.6g}" for a in range(3))
+            raise self.error(f"a move to ({where}) (machine) is beyond ±{limit:.0e} mm: a runaway offset or "
+                             "transform", "value-out-of-range")  # fmt: skip
+
     def straight_traverse(self, target: Vec) -> None:
         """Rapid to a machine-coordinate target (no segment for a zero-length move)."""
+        self._check(target)
         if self.rotary_next is not None:
             return self._rotary_move(target, None)
         if target != self.position:
@@ -241,6 +380,7 @@ class CanonicalMachine:
 
     def straight_feed(self, target: Vec, feed: float) -> None:
         """Feed move to a machine-coordinate target at ``feed`` mm/min."""
+        self._check(target)
         if self.rotary_next is not None:
             return self._rotary_move(target, feed)
         if target != self.position:
@@ -250,7 +390,8 @@ class CanonicalMachine:
 
     def _rotary_move(self, target: Vec, feed: float | None) -> None:
         """A rapid (``feed`` None) or feed move that also takes the rotary axes to ``rotary_next``."""
-        rotary, self.rotary_next = self.rotary_next, None
+        rotary: tuple[float, ...] = self.rotary_next or ()
+        self.rotary_next = None
         if target == self.position and rotary == self.rotary:
             return
         context = self._context()
@@ -265,6 +406,8 @@ class CanonicalMachine:
 
     def arc_feed(self, end: Vec, center: Vec, plane: Plane, sweep: float, feed: float) -> None:
         """Arc or helix (signed sweep in rad, + = CCW about the plane normal) to ``end``."""
+        self._check(end)
+        self._check(center)
         self.builder.arc(self.position, end, center, plane, sweep, feed, line=self.line,
                          file_index=self.file_index, modes=self.modes, tool=self.tool,
                          spindle_rpm=self.spindle_rpm)  # fmt: skip
@@ -273,6 +416,8 @@ class CanonicalMachine:
     def nurbs_feed(self, curve, feed: float) -> None:
         """An exact NURBS segment (``NurbsCurve`` in machine coordinates, from the current position) at
         ``feed`` mm/min; the position becomes its last control point."""
+        self._check(curve.control_points.min(axis=0))  # the curve lies in its control points' hull
+        self._check(curve.control_points.max(axis=0))
         self.builder.nurbs(curve, feed, line=self.line, file_index=self.file_index, modes=self.modes,
                            tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
         end = curve.control_points[-1]

@@ -1,18 +1,20 @@
 """Tool offset memory: H (tool length) and D (cutter radius / tool position) tables, geometry and wear.
 
-GSK 25i (seed notes §5.1, §5.2, §3.12; manual L3879-L3885, L3935-L3942, L4670-L4690):
+GSK 25i (§3.5.1, §3.5.2, §3.5.5):
 
 * numbers 0..256; number 0 (H00, D00) is always 0 and cannot be set;
 * each number has a geometry and a wear value; the offset in use is their sum;
 * ``G10 L10 P_ R_`` H geometry, ``L11`` H wear, ``L12`` D geometry, ``L13`` D wear; G90 sets, G91 adds;
   geometry within ±999.999 mm, wear within ±99.999 mm (inch: ±99.9999 / ±9.9999 in) else alarm 32;
 * D holds a radius or a diameter by parameter 2601#7 (ODI). The manual's printed standard setting is
-  "diameter" but every worked example treats D as a radius (seed notes §5.2 [CONFLICT]); we follow the
-  examples: ``d_is_diameter=False`` by default, a switch for the other reading.
+  "diameter" but every worked example treats D as a radius (§3.5.2, where the text and the examples disagree);
+  we follow the examples: ``d_is_diameter=False`` by default, a switch for the other reading.
 
 Values are stored in mm. The macro system variables (#2001-#2400, #10001-#13400) read and write the same
 tables through :meth:`ToolOffsets.get` / :meth:`ToolOffsets.set`; ``G10 L10-L13`` through
 :func:`apply_g10`.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -77,8 +79,8 @@ class ToolOffsets:
         return self.tables[("D", False)][number] + self.tables[("D", True)][number]
 
     # ------------------------------------------------------------------ writing
-    def set(self, letter: str, number: int, value_mm: float, *, wear: bool = False, incremental: bool = False,
-            error: ErrorFactory = _plain_error) -> None:  # fmt: skip
+    def set(self, letter: str, number: float, value_mm: float, *, wear: bool = False,
+            incremental: bool = False, error: ErrorFactory = _plain_error) -> None:  # fmt: skip
         """Store H/D ``number`` (geometry or wear); ``incremental`` adds to the stored value (G91).
 
         Errors (from ``error(message, code)``): ``bad-offset-number`` for 0 or beyond ``count``,
@@ -147,7 +149,7 @@ class ToolOffsets:
 
 def apply_g10(offsets: ToolOffsets, kind: int, number: float | None, value_mm: float | None, *,
               incremental: bool, error: ErrorFactory) -> None:  # fmt: skip
-    """``G10 L10..L13 P<number> R<value>``: write one tool offset (G90 sets, G91 adds; L4670-L4690).
+    """``G10 L10..L13 P<number> R<value>``: write one tool offset (G90 sets, G91 adds; §3.5.5).
 
     ``value_mm`` is R already converted to mm. A missing P is ``bad-g10``; a missing R is
     ``missing-value``; range errors as :meth:`ToolOffsets.set`.
@@ -158,32 +160,3 @@ def apply_g10(offsets: ToolOffsets, kind: int, number: float | None, value_mm: f
     if value_mm is None:
         raise error(f"G10 L{kind} needs R (the offset value)", "missing-value")
     offsets.set(letter, number, value_mm, wear=wear, incremental=incremental, error=error)
-
-
-@dataclass(frozen=True)
-class CompensationSettings:
-    """A controller's tool compensation parameters (a :class:`~cnc_gym.gcode.dialect.Dialect` field).
-
-    ``tool_length_type``: ``A`` (the offset always on Z) or ``B`` (on the axis normal to the plane of the
-    G43/G44 block); GSK 2600#1 TLB, standard setting 1 = B. ``startup_type``: ``A`` or ``B`` start-up and
-    cancel at outer corners (GSK "2602#2 TPH", not in the parameter volume; Fanuc's standard is A, and the
-    manual's worked example describes A: "offset by the radius vertical to the next block", L4083).
-    ``d_is_diameter``: 2601#7 ODI (see the module docstring). ``offset_count``: H/D numbers 0..count.
-    """
-
-    tool_length_type: str = "B"
-    startup_type: str = "A"
-    d_is_diameter: bool = False
-    offset_count: int = 256
-    geometry_limit_mm: float = 999.999
-    wear_limit_mm: float = 99.999
-
-    def new_offsets(self, initial: Mapping | ToolOffsets | None = None) -> ToolOffsets:
-        """A fresh offset memory with these limits, filled from ``initial`` (as ToolOffsets.from_mapping)."""
-        return ToolOffsets.from_mapping(
-            initial,
-            count=self.offset_count,
-            geometry_limit_mm=self.geometry_limit_mm,
-            wear_limit_mm=self.wear_limit_mm,
-            d_is_diameter=self.d_is_diameter,
-        )

@@ -24,6 +24,8 @@ after every rapid, tool or spindle change, program end, or every junction when l
 the acceleration bound on arrival ``a_in`` (a backward pass so that a lower acceleration limit ahead can
 always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k), restarted at every mandatory stop), and the
 lowest acceleration bound and jerk from each point to the next mandatory stop (the braking limits).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -140,7 +142,7 @@ def _rotary_only_profiles(tp: Toolpath, machine: MachineConfig, rows: np.ndarray
                           limits: dict[str, np.ndarray]) -> np.ndarray:  # fmt: skip
     """Rotary-only moves (no XYZ travel), one row each: toolpath row, seconds, travel, speed, acceleration,
     jerk. Each is the fastest jerk-limited move along the rotary vector at F (deg/min: the composite rate
-    with no linear part, L981-L995) or the rapid rate, each axis's speed, acceleration and jerk limit
+    with no linear part, §3.2.2) or the rapid rate, each axis's speed, acceleration and jerk limit
     projected on the vector. Timed at 100 % override."""
     delta = np.abs(tp.rotary_end[rows] - tp.rotary_start[rows])
     travel = np.linalg.norm(delta, axis=1)
@@ -259,9 +261,64 @@ def _backward_bounds(acc: np.ndarray, jerk: np.ndarray, length: np.ndarray, cap:
 #: NURBS curves are cut into pieces of at most this arc length (and at least NURBS_MIN_PIECES), mm.
 NURBS_PIECE_MM = 0.5
 NURBS_MIN_PIECES = 4
+#: At most this many pieces per curve: a curve longer than 10 m gets longer pieces (bounded work).
+NURBS_MAX_PIECES = 20_000
 NURBS_SAMPLES = 9  # samples per piece (at least): limits are sampled there, positions interpolated between
 NURBS_TABLE_TOL_MM = 1e-10  # the Hermite table is refined until it is this close to the exact curve
 NURBS_MAX_SAMPLES = 1025
+#: At most this many curve evaluations per curve for its table (a curve full of near-cusps stops refining).
+NURBS_MAX_EVALUATIONS = 1 << 19
+_EVALUATION_CHUNK = 1 << 15  # points per at_length call: bounds the temporary arrays
+
+
+def _at_length(curve, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``curve.at_length`` in chunks (its Newton iterations hold some 100 floats per point)."""
+    parts = [curve.at_length(s[i : i + _EVALUATION_CHUNK]) for i in range(0, len(s), _EVALUATION_CHUNK)]
+    if not parts:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    return tuple(np.concatenate(x) for x in zip(*parts, strict=True))  # type: ignore[return-value]
+
+
+def _curve_table(curve, length: float, k: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per piece of ``curve`` (``k`` pieces of equal arc length over ``length``): point, unit tangent and
+    curvature at its equally spaced samples. Each piece is refined on its own (samples 9, 17, 33, …,
+    NURBS_MAX_SAMPLES) until the cubic Hermite between its samples is within NURBS_TABLE_TOL_MM of the
+    exact curve at every interval midpoint, so a near-cusp refines its own piece, not the whole curve."""
+    h = length / k
+    samples = np.full(k, NURBS_SAMPLES, dtype=np.int64)
+    table: list = [None] * k
+    pending = np.arange(k)
+    evaluations = 0
+    while pending.size:
+        n_int = samples[pending] - 1
+        # Sample positions of every pending piece, then the interval midpoints, in one evaluation.
+        counts = n_int + 1
+        first = np.repeat(np.cumsum(counts) - counts, counts)
+        j = np.arange(int(counts.sum())) - first
+        local = np.minimum(np.repeat(pending * h, counts) + j * np.repeat(h / n_int, counts), curve.length)
+        interval = np.ones(len(local), dtype=bool)
+        interval[np.cumsum(counts) - 1] = False  # the last sample of a piece starts no interval
+        mid = np.minimum(local[:-1][interval[:-1]] + 0.5 * np.repeat(h / n_int, n_int), curve.length)
+        point, tangent, curvature = _at_length(curve, np.concatenate((local, mid)))
+        exact = point[len(local) :]
+        point, tangent, curvature = point[: len(local)], tangent[: len(local)], curvature[: len(local)]
+        evaluations += len(local) + len(mid)
+        starts = np.flatnonzero(interval)
+        step = np.repeat(h / n_int, n_int)[:, None]
+        hermite = (point[starts] + point[starts + 1]) / 2 + step / 8 * (tangent[starts] - tangent[starts + 1])
+        error = np.linalg.norm(hermite - exact, axis=1)
+        worst = np.maximum.reduceat(error, np.cumsum(n_int) - n_int)
+        more = (worst > NURBS_TABLE_TOL_MM) & (samples[pending] < NURBS_MAX_SAMPLES)
+        if evaluations + 2 * int(np.sum(2 * n_int[more] + 1)) > NURBS_MAX_EVALUATIONS:
+            more[:] = False  # bounded work: keep what the pieces have
+        offsets = np.cumsum(counts) - counts
+        for piece, start, count, again in zip(pending, offsets, counts, more, strict=True):
+            if not again:
+                rows = slice(start, start + count)
+                table[piece] = (point[rows], tangent[rows], curvature[rows])
+        samples[pending[more]] = 2 * n_int[more] + 1
+        pending = pending[more]
+    return table
 
 
 def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple | None]:
@@ -274,10 +331,10 @@ def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     counts = np.ones(len(rows), dtype=np.int64)
     lengths = tp.length[rows]
     pieces = np.ceil(lengths[nurbs] / NURBS_PIECE_MM)
-    counts[nurbs] = np.clip(pieces, NURBS_MIN_PIECES, 1_000_000).astype(np.int64)
+    counts[nurbs] = np.clip(pieces, NURBS_MIN_PIECES, NURBS_MAX_PIECES).astype(np.int64)
     idx = np.repeat(rows, counts)
     first = np.repeat(np.cumsum(counts) - counts, counts)
-    j = np.arange(len(idx)) - first  # piece number within its row
+    j = np.arange(len(idx)) - first
     count = np.repeat(counts, counts)
     piece_len = tp.length[idx] / count
     s0 = tp.s_start[idx] + j * piece_len
@@ -285,44 +342,26 @@ def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     table = []
     table_rows = 0
     for r in rows[nurbs]:
-        curve = tp.nurbs[int(r)]
         k = int(counts[np.searchsorted(rows, r)])
         length = float(tp.length[r])
-        samples = NURBS_SAMPLES
-        while True:  # refine until the cubic Hermite between samples matches the exact curve
-            n_int = samples - 1
-            local = np.minimum(np.linspace(0.0, length, k * n_int + 1), curve.length)
-            point, tangent, curvature = curve.at_length(local)
-            mid = np.minimum((local[:-1] + local[1:]) / 2, curve.length)
-            exact, _, _ = curve.at_length(mid)
-            h = np.diff(local)[:, None]
-            hermite = (point[:-1] + point[1:]) / 2 + h / 8 * (tangent[:-1] - tangent[1:])
-            if np.max(np.linalg.norm(hermite - exact, axis=1)) <= NURBS_TABLE_TOL_MM:
-                break
-            if samples >= NURBS_MAX_SAMPLES:
-                break  # ≤ 0.5 mm / 1024 spacing: whatever is left is below what a servo can show
-            samples = 2 * n_int + 1
-        ends = np.arange(0, len(local), n_int)
-        blocks = ends[:-1, None] + np.arange(samples)[None, :]  # (k, samples)
-        kappa_max = curvature[blocks].max(axis=1)
-        spacing = length / (k * n_int)
-        # Between samples a tangent component moves by at most κ·(spacing/2): add it, so the sampled
-        # extent bounds the true one (given the sampled curvature).
-        bound = np.abs(tangent[blocks]).max(axis=1) + (kappa_max * spacing / 2)[:, None]
-        geo[0].append(np.minimum(bound, 1.0))
-        geo[1].append(tangent[ends[:-1]])
-        geo[2].append(tangent[ends[1:]])
-        geo[3].append(kappa_max)
-        geo[4].append(point[ends[:-1]])
-        geo[5].append(point[ends[1:]])
-        # Each piece's rows in the table (pieces share their end samples: store per piece for simplicity).
-        for piece in range(k):
-            sl = slice(piece * n_int, piece * n_int + samples)
-            table.append(np.hstack((point[sl], tangent[sl])))
+        for point, tangent, curvature in _curve_table(tp.nurbs[int(r)], length, k):
+            samples = len(point)
+            spacing = length / k / (samples - 1)
+            kappa_max = float(curvature.max())
+            # Between samples a tangent component moves by at most κ·(spacing/2): add it, so the sampled
+            # extent bounds the true one (given the sampled curvature).
+            geo[0].append(np.minimum(np.abs(tangent).max(axis=0) + kappa_max * spacing / 2, 1.0))
+            geo[1].append(tangent[0])
+            geo[2].append(tangent[-1])
+            geo[3].append(kappa_max)
+            geo[4].append(point[0])
+            geo[5].append(point[-1])
             geo[6].append(table_rows)
             geo[7].append(samples)
+            table.append(np.hstack((point, tangent)))
             table_rows += samples
-    out = tuple(np.concatenate(g) for g in geo[:6])
+    out = (np.array(geo[0]), np.array(geo[1]), np.array(geo[2]), np.array(geo[3]), np.array(geo[4]),
+           np.array(geo[5]))  # fmt: skip
     return idx, s0, piece_len, (*out, np.array(geo[6]), np.array(geo[7]), np.concatenate(table))
 
 
@@ -454,7 +493,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         aux_change = (tp.tool[prev] != tp.tool[nxt]) | (tp.spindle_rpm[prev] != tp.spindle_rpm[nxt])
         # Without look-ahead every block ends at rest — but the pieces of one NURBS block are one block, and
         # a block in tapping mode (G63, TAPPING_MODE) "is not decelerated at the end point of a block, but
-        # the next block is executed" (manual L6423): it runs on as in G64 with look-ahead.
+        # the next block is executed" (manual §3.8): it runs on as in G64 with look-ahead.
         tapping_prev = (modes[prev] & SegmentMode.TAPPING_MODE) != 0
         no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt) & ~tapping_prev
         stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead

@@ -1,7 +1,7 @@
 """Contour error: the exact distance from the actual tool point to the programmed path.
 
-The rule (the ``cnc-gym run`` contract): contour error is measured at every plant sample, on cutting moves
-only, against the programmed path after compensation (the tool path's segments).
+The rule (docs/architecture.md, the ``cnc-gym run`` contract): contour error is measured at every plant
+sample, on cutting moves only, against the programmed path after compensation (the tool path's segments).
 
 - **Which samples count.** A sample counts when the *reference* is on a cutting segment (line, arc,
   helix, NURBS). Where the reference segment is a rapid or a dwell the error is 0 by definition: rapids

@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Literal, NamedTuple
 
 from cnc_gym.errors import ConfigError
-from cnc_gym.gcode.calls import DEFAULT_MAX_BLOCKS
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import Toolpath
 

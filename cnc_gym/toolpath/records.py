@@ -1,4 +1,4 @@
-"""The tool path as plain records: the ``cnc-gym trace`` JSON Lines contract.
+"""The tool path as plain records: the ``cnc-gym trace`` JSON Lines contract (docs/architecture.md).
 
 :func:`toolpath_records` gives one dict per row; :func:`toolpath_jsonl` the same records as JSON Lines
 text, written directly for the rows of the usual kinds (rounding and printing each number as
@@ -41,7 +41,8 @@ def _g(x: float) -> float:
 def toolpath_records(tp: Toolpath) -> list[dict]:
     """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
     data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
-    coordinates) with ``rotary_start`` on the rows that move them."""
+    coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that
+    carry one."""
     return [_record(tp, i) for i in range(len(tp))]
 
 
@@ -75,6 +76,8 @@ def _record(tp: Toolpath, i: int) -> dict:
         rec["control_points"] = [[_r(x) for x in p] for p in curve.control_points]
         rec["weights"] = [_g(w) for w in curve.weights]
         rec["knots"] = [_g(k) for k in curve.knots]
+    if tp.smoothing_tolerance_mm[i]:
+        rec["smoothing_tolerance_mm"] = _r(tp.smoothing_tolerance_mm[i])
     if tp.modes[i]:
         rec["modes"] = [m.name.lower() for m in type_modes(int(tp.modes[i]))]
     return rec
@@ -91,11 +94,12 @@ class _NumberTexts(dict):
 def toolpath_jsonl(tp: Toolpath) -> str:
     """The records as JSON Lines: ``"".join(json.dumps(r) + "\\n" for r in toolpath_records(tp))``, built
     without the dicts for rapids, lines, arcs and dwells (the bulk of a program; ``cnc-gym trace``'s hot
-    path). Rows with a file, rotary axes, NURBS data or a number that is not finite go through
-    ``json.dumps``."""
+    path). Rows with a file, rotary axes, NURBS data, a smoothing tolerance or a number that is not finite
+    go through ``json.dumps``."""
     n = len(tp)
     points = np.column_stack((tp.start, tp.end))
     general = (tp.file_index != 0) | (tp.kind == SegmentKind.NURBS) | ~np.all(np.isfinite(points), axis=1)
+    general |= tp.smoothing_tolerance_mm != 0
     general |= (tp.kind == SegmentKind.ARC) & ~np.all(np.isfinite(tp.center), axis=1)
     cutting = np.isin(tp.kind, (SegmentKind.LINE, SegmentKind.ARC))
     general |= cutting & ~np.isfinite(tp.feed)

@@ -8,6 +8,8 @@ Arc convention (the same as the ``cnc-gym trace`` contract): a plane is named by
 ``(u, v)`` and its normal ``w`` with ``u × v = w`` — XY (normal +Z), ZX (normal +Y), YZ (normal +X). The
 sweep is signed: positive is counter-clockwise seen from the + end of the normal (G03), negative is
 clockwise (G02). The centre's normal coordinate is the start's; a helix rises linearly in ``w``.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -119,6 +121,7 @@ class Toolpath:
     rotary_axes: str = ""
     rotary_start: np.ndarray | None = None
     rotary_end: np.ndarray | None = None
+    smoothing_tolerance_mm: np.ndarray | None = None
     # Derived geometry, filled in __post_init__.
     length: np.ndarray = field(init=False, repr=False)
     planar_length: np.ndarray = field(init=False, repr=False)
@@ -152,6 +155,11 @@ class Toolpath:
             arr = getattr(self, name)
             arr = np.zeros((n, k)) if arr is None else np.asarray(arr, dtype=np.float64).reshape(n, k)
             object.__setattr__(self, name, arr)
+        smoothing = (np.zeros(n) if self.smoothing_tolerance_mm is None else
+                     np.asarray(self.smoothing_tolerance_mm, dtype=np.float64).reshape(n))  # fmt: skip
+        if np.any(~(smoothing >= 0.0)):
+            raise ValueError("toolpath smoothing tolerances must be non-negative numbers")
+        object.__setattr__(self, "smoothing_tolerance_mm", smoothing)
         if k:
             moved = np.any(self.rotary_start != self.rotary_end, axis=1)
             bad = moved & (self.kind != SegmentKind.LINE) & (self.kind != SegmentKind.RAPID)
@@ -163,7 +171,8 @@ class Toolpath:
         object.__setattr__(self, "length", length)
         object.__setattr__(self, "planar_length", planar)
         object.__setattr__(self, "s_start", s_start)
-        for name in (*_FIELDS, "length", "planar_length", "s_start", "rotary_start", "rotary_end"):
+        for name in (*_FIELDS, "length", "planar_length", "s_start", "rotary_start", "rotary_end",
+                     "smoothing_tolerance_mm"):
             getattr(self, name).flags.writeable = False
 
     # ------------------------------------------------------------------ basics
@@ -185,7 +194,7 @@ class Toolpath:
     @property
     def rotary_length(self) -> np.ndarray:
         """The rotary travel as the feed counts it: degrees as mm, or as inch in a G20 program (so 25.4 mm
-        per degree there), mm. F covers √(length² + rotary_length²) per minute (L981-L995)."""
+        per degree there), mm. F covers √(length² + rotary_length²) per minute (§3.2.2)."""
         inch = (self.modes & SegmentMode.INCH_PROGRAM) != 0
         return self.rotary_travel * np.where(inch, 25.4, 1.0)
 
@@ -193,9 +202,9 @@ class Toolpath:
     def path_feed(self) -> np.ndarray:
         """Programmed feed along the 3-D path, mm/min.
 
-        GSK 25i (manual L1097): on a helix, F is the speed of the arc's projection on the plane, so the
+        GSK 25i (manual §3.2.3): on a helix, F is the speed of the arc's projection on the plane, so the
         speed along the helix is F · length / planar_length. Lines and flat arcs: F itself.
-        With rotary axes (L981-L995) F is the rate along the composite vector with degrees counted as mm,
+        With rotary axes (§3.2.2) F is the rate along the composite vector with degrees counted as mm,
         so the XYZ feed of a line is F · length / √(length² + rotary_travel²).
         """
         ratio = np.divide(self.length, self.planar_length, out=np.ones_like(self.length),
@@ -352,6 +361,9 @@ class ToolpathBuilder:
         self.rotary_axes = rotary_axes
         self.rotary_origin = tuple(rotary_position or (0.0,) * len(rotary_axes))
         self._rotary_moves: list[tuple[int, tuple[float, ...], tuple[float, ...]]] = []
+        # Smoothing tolerances: (first row, {segment kind: tolerance mm}) from that row on (sparse: the
+        # rows in between cost nothing while they are appended; build() fills the column).
+        self._smoothing: list[tuple[int, dict[int, float]]] = []
 
     def __len__(self) -> int:
         return len(self._rows["kind"])
@@ -430,6 +442,21 @@ class ToolpathBuilder:
         """The row just appended (a rapid or a line) also moves the rotary axes from ``start`` to ``end``."""
         self._rotary_moves.append((len(self) - 1, tuple(start), tuple(end)))
 
+    def smoothing(self, tolerances: Mapping[SegmentKind, float]) -> None:
+        """From the next row on, rows of each kind in ``tolerances`` carry its smoothing tolerance (mm);
+        rows of other kinds carry 0. ``{}`` ends smoothing."""
+        self._smoothing.append((len(self), {int(k): float(v) for k, v in tolerances.items() if v > 0}))
+
+    def _smoothing_array(self, kinds: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(kinds))
+        runs = self._smoothing
+        for index, (first, tolerances) in enumerate(runs):
+            last = runs[index + 1][0] if index + 1 < len(runs) else len(kinds)
+            for kind, tolerance in tolerances.items():
+                rows = np.flatnonzero(kinds[first:last] == kind) + first
+                out[rows] = tolerance
+        return out
+
     def _rotary_arrays(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         k = len(self.rotary_axes)
         start = np.empty((n, k))
@@ -457,6 +484,7 @@ class ToolpathBuilder:
                 arr = arr.reshape(-1, 3)
             arrays[name] = arr
         rotary_start, rotary_end = self._rotary_arrays(len(self))
+        smoothing = self._smoothing_array(arrays["kind"]) if self._smoothing else None
         return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves),
                         rotary_axes=self.rotary_axes, rotary_start=rotary_start,
-                        rotary_end=rotary_end)  # fmt: skip
+                        rotary_end=rotary_end, smoothing_tolerance_mm=smoothing)  # fmt: skip

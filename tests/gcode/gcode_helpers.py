@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+from contextvars import ContextVar
 
 import pytest
 
@@ -31,3 +33,46 @@ def close(a, b, tol: float = 1e-6) -> bool:
     if isinstance(a, int | float):
         return math.isclose(a, b, abs_tol=tol)
     return len(a) == len(b) and all(math.isclose(x, y, abs_tol=tol) for x, y in zip(a, b, strict=True))
+
+
+# A property "a ProgramError or a good tool path" passes vacuously if every program is rejected: the
+# properties count their outcomes (``tally``) and ``success_share`` asserts that enough ran to the end.
+_SHARE: ContextVar[list[int] | None] = ContextVar("success_share", default=None)
+
+
+def tally(ok: bool) -> None:
+    """Count one example of the running property: ``ok`` = the program ran to a tool path."""
+    counts = _SHARE.get()
+    if counts is not None:
+        counts[bool(ok)] += 1
+
+
+def success_share(minimum: float):
+    """Decorate a hypothesis property (above ``@settings``/``@given``) whose examples call :func:`tally`:
+    after all examples, at least ``minimum`` of them must have run to a tool path (a regression that
+    rejected every program would otherwise stay green). ``CNC_GYM_SHARE_REPORT=1 pytest -s`` prints the
+    shares (the minimums are about a third of the shares measured under CI's derandomized examples)."""
+
+    def wrap(test):
+        def run() -> None:
+            counts = [0, 0]
+            token = _SHARE.set(counts)
+            try:
+                test()
+            finally:
+                _SHARE.reset(token)
+            total = sum(counts)
+            assert total > 0, "the property ran no example"
+            assert counts[1] >= minimum * total, (
+                f"only {counts[1]} of {total} programs ran to a tool path (at least {minimum:.0%} expected)")
+            if _REPORT:
+                print(f"{test.__name__}: {counts[1]} of {total} ran ({counts[1] / total:.0%})")
+
+        for name in ("__name__", "__qualname__", "__doc__", "__module__"):
+            setattr(run, name, getattr(test, name))
+        return run
+
+    return wrap
+
+
+_REPORT = bool(os.environ.get("CNC_GYM_SHARE_REPORT"))

@@ -1,13 +1,15 @@
 """The index of the manual's program alarms (docs/gsk25i_alarms.md) stays complete and true.
 
-The table lists the error conditions of the seed notes §9 (E1-E11, M1-M23, D1-D7, C1-C10, T1-T12, S1-S15) and
-the alarm-list classes §9 lacks (L1-L25) with the tests that check each one. These tests fail when a row is
-missing, doubled or out of order; when a test the table names disappears or is renamed; when a "missing
-check" row's test is no longer a strict xfail (the check was built: update the row) or a strict xfail is not
-indexed; when a rejected code is not refused by name; when a code in "Our code" is raised nowhere in
+The table lists the error conditions the manual states in its text (E1-E11, M1-M23, D1-D7, C1-C10, T1-T12,
+S1-S15) and the alarm-list classes those lack (L1-L25) with the tests that check each one. These tests fail
+when a row is missing, doubled or out of order; when a test the table names disappears or is renamed; when a
+"missing check" row's test is no longer a strict xfail (the check was built: update the row) or a strict xfail
+is not indexed; when a rejected code is not refused by name; when a code in "Our code" is raised nowhere in
 cnc_gym/gcode; when a row's codes and alarms differ from the minimal programs of
 tests/gcode/test_manual_alarms.py's ``CASES``; or when the counts under the table no longer add up. Test nodes
 are found by parsing the test files (no pytest subprocess, no imports of test modules).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -25,16 +27,16 @@ from cnc_gym.gcode import interpret
 INDEX = ROOT / "docs" / "gsk25i_alarms.md"
 MANUAL_ALARMS = "tests/gcode/test_manual_alarms.py"
 CASES_TEST = "test_manual_alarm"
-# The §9 tables' row ids (notes seed000_programming.md §9.1-§9.6), then the alarm-list rows.
-SECTION_9 = [f"{prefix}{n}" for prefix, count in (("E", 11), ("M", 23), ("D", 7), ("C", 10), ("T", 12),
+# The row ids of the conditions the manual states in its text, then the alarm-list rows.
+CONDITIONS = [f"{prefix}{n}" for prefix, count in (("E", 11), ("M", 23), ("D", 7), ("C", 10), ("T", 12),
                                                   ("S", 15)) for n in range(1, count + 1)]  # fmt: skip
 ALARM_LIST = [f"L{n}" for n in range(1, 26)]
-ROWS = SECTION_9 + ALARM_LIST
-HEADER = ["#", "Condition", "Manual line", "GSK alarm", "Our code", "Our alarm", "Status", "Note"]
+ROWS = CONDITIONS + ALARM_LIST
+HEADER = ["#", "Condition", "Manual section", "GSK alarm", "Our code", "Our alarm", "Status", "Note"]
 KINDS = ("tested", "missing check", "deviation", "not applicable", "rejected")
 CODE = re.compile(r"`(G\d+(?:\.\d)?)`")
 ERROR_CODE = re.compile(r"`([a-z0-9]+(?:-[a-z0-9]+)*)`")
-LINES = re.compile(r"-|(OP-VOL )?L\d+(-L\d+)?(, L\d+(-L\d+)?)*")
+SECTIONS = re.compile(r"-|(GSK 25i [a-z]+ manual )?§\d+(\.\d+)*(, §\d+(\.\d+)*)*")
 NONE = "—"
 
 
@@ -123,7 +125,7 @@ def test_every_condition_has_exactly_one_row_in_order():
 def test_rows_are_well_formed():
     for row in rows():
         assert row["Condition"] and row["GSK alarm"], row
-        assert LINES.fullmatch(row["Manual line"]), row
+        assert SECTIONS.fullmatch(row["Manual section"]), row
         kind = status_kind(row["Status"])
         codes, alarms = our_codes(row), our_alarms(row)
         if kind == "not applicable":
@@ -190,11 +192,11 @@ def test_rejected_codes_are_refused_by_name(row_id):
 def test_counts_under_the_table_add_up():
     counts: dict[tuple[str, str], int] = {}
     for row in rows():
-        group = "§9" if row["#"] in SECTION_9 else "alarm list"
+        group = "conditions" if row["#"] in CONDITIONS else "alarm list"
         key = (status_kind(row["Status"]), group)
         counts[key] = counts.get(key, 0) + 1
     text = INDEX.read_text(encoding="utf-8")
     for kind in KINDS:
-        per_group = [counts.get((kind, group), 0) for group in ("§9", "alarm list")]
+        per_group = [counts.get((kind, group), 0) for group in ("conditions", "alarm list")]
         line = f"| {kind} | " + " | ".join(map(str, per_group)) + f" | {sum(per_group)} |"
         assert line in text, f"counts table out of date: expected the line {line!r}"

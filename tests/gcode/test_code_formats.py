@@ -1,9 +1,11 @@
 """Number formats that depend on the code a word belongs to (CodeSpec.address_rules).
 
-The L of the pocket, boss and face-milling cycles (G110-G137, G126/G127) is a step-over length (notes
-§4.4-§4.10; every example steps L10, and a fractional step is ordinary), while the L of M98/G65 (a repeat
-count) and G10 (a data type) is a whole number without a decimal point (Table 1-1, alarm 7). G06.2's K
-(knot) and R (weight) are plain numbers: test_nurbs.py.
+The L of the pocket, boss and face-milling cycles (G110-G137, G126/G127) is a step-over length (§3.4.16; every
+example steps L10, and a fractional step is ordinary), while the L of M98/G65 (a repeat count) and G10 (a data
+type) is a whole number without a decimal point (Table 1-1, alarm 7). G06.2's K (knot) and R (weight) are
+plain numbers: test_nurbs.py.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ def _ring_radii(text: str) -> list[float]:
 
 
 def test_pocket_step_over_takes_a_decimal_point():
-    # G110: rings of radius L, 2L, … up to I - r (notes §4.4): I10, tool radius 2.5 → the last ring at 7.5.
+    # G110: rings of radius L, 2L, … up to I - r (§3.4.16): I10, tool radius 2.5 → the last ring at 7.5.
     # L2.5 → 2.5, 5, 7.5; the whole-number L5 → 5, 7.5. With L read as an integer, L2.5 would be alarm 7.
     assert _ring_radii(POCKET.format(L="2.5")) == [2.5, 5.0, 7.5]
     assert _ring_radii(POCKET.format(L="5")) == [5.0, 7.5]

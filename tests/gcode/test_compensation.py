@@ -1,9 +1,12 @@
-"""Cutter radius compensation C (G40/G41/G42, G39): seed notes §5.2-§5.3, manual L3921-L4666.
+"""Cutter radius compensation C (G40/G41/G42, G39): §3.5.2-§3.5.4.
 
 Expected tool-centre paths are worked out by hand in each test with the small closed forms below (offset
 lines as ``n·p = c``, line/line, line/circle and circle/circle intersections), written independently of
-``cnc_gym.gcode.compensation``. G41 puts the tool on the left of the direction of travel, G42 on the right;
-D holds the radius (the examples' reading, notes §5.2 [CONFLICT]).
+``cnc_gym.gcode.lang.fanuc.compensation``. G41 puts the tool on the left of the direction of travel, G42 on
+the right;
+D holds the radius (the examples' reading of §3.5.2, where the text says "diameter").
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -85,7 +88,7 @@ X57 = (
 
 
 def test_worked_example_x57_contour_with_g41():
-    # L4061-L4085 with the notes' two repairs: N7 restored (X1150) and N6 with I650 (the printed I250 fails
+    # §3.5.2 with two repairs: N7 restored (X1150) and N6 with I650 (the printed I250 fails
     # the radius check). D07 = 10. Left offset, r = 10.
     r = 10.0
     # N1 start-up (0,0)→(250,550), then N2 goes straight up: a left turn with the tool on the left = an
@@ -139,13 +142,13 @@ def test_worked_example_x57_contour_with_g41():
 
 
 def test_worked_example_x57_as_printed_fails_the_radius_check():
-    # N6 as printed (I250 J0): start radius 250, end radius 320: alarm 20 (notes §10 X57).
+    # N6 as printed (I250 J0): start radius 250, end radius 320: alarm 20 (docs/gsk25i_examples.md X57).
     bad = X57.replace("I650.0 J0", "I250.0 J0")
     assert program_error(R10 + bad).alarm == 20
 
 
 def test_x57_with_g42_and_negative_d_are_the_same_path():
-    # A negative offset swaps G41 and G42 (L4005, L4479): G42 with D = -10 is G41 with D = 10.
+    # A negative offset swaps G41 and G42 (§3.5.2, §3.5.3): G42 with D = -10 is G41 with D = 10.
     assert ends("G10 L12 P7 R-10\n" + X57.replace("G41", "G42")) == ends(R10 + X57)
 
 
@@ -195,7 +198,7 @@ def test_acute_outer_corner_inserts_extension_points():
     b_end = points[4]
     cross = (b_end[0] - q2[0]) * t[1] - (b_end[1] - q2[1]) * t[0]
     assert abs(cross) < 1e-7
-    assert out[3]["line"] == out[4]["line"] == 5  # the extension move belongs to block B (L4452)
+    assert out[3]["line"] == out[4]["line"] == 5  # the extension move belongs to block B (§3.5.3)
 
 
 def test_arc_to_arc_inner_corner_and_line_to_arc_tangent():
@@ -222,12 +225,12 @@ def test_arc_to_arc_inner_corner_and_line_to_arc_tangent():
 
 
 def test_program_ending_in_offset_mode_keeps_the_vector_perpendicular_to_the_last_block():
-    # L4112: the end point is offset by one vector. Last block along +x with G41 r = 2: ends at (20, 2).
+    # §3.5.3: the end point is offset by one vector. Last block along +x with G41 r = 2: ends at (20, 2).
     assert ends("G10 L12 P1 R2\nG01 G41 D1 X10 F100\nX20\n")[-1] == [20.0, 2.0]
 
 
 def test_d00_does_not_start_compensation():
-    # Start-up needs D ≠ 00 (L4107): with D00 the path is the programmed one.
+    # Start-up needs D ≠ 00 (§3.5.3): with D00 the path is the programmed one.
     assert ends("G01 G41 D0 X10 Y10 F100\nY50\nG40 X0\n") == [[10.0, 10.0], [10.0, 50.0], [0.0, 50.0]]
 
 
@@ -237,7 +240,7 @@ def test_zero_offset_with_d_number_is_the_programmed_path():
 
 
 def test_d00_in_offset_mode_cancels():
-    # L4240 (a): D00 cancels like G40. G41 r = 2 along +y, then D0 X10: the corner at (0, 20) turning right
+    # §3.5.3 (a): D00 cancels like G40. G41 r = 2 along +y, then D0 X10: the corner at (0, 20) turning right
     # is outer; start-up type A cancel: the vector perpendicular to the last block, then straight to (10, 20).
     out = ends("G10 L12 P1 R2\nG01 G41 D1 X0 Y10 F100\nY20\nD0 X10 Y20\n")
     assert close(out[-2], (-2.0, 20.0)) and close(out[-1], (10.0, 20.0))
@@ -246,7 +249,7 @@ def test_d00_in_offset_mode_cancels():
 def test_type_a_and_b_start_up_at_an_outer_corner():
     # Start-up from (0, 0) along +x to (10, 0), then up-right at 45°... a left turn; use G42 (tool on the
     # right) to make it an outer corner (obtuse, alpha = 135°). r = 1.
-    # Type A (L3980): the start-up ends at the vector perpendicular to the NEXT block: the next block's
+    # Type A (§3.5.2): the start-up ends at the vector perpendicular to the NEXT block: the next block's
     # right normal at its start: t = (1,1)/√2 → right normal (1,-1)/√2.
     # Type B: the intersection of the start-up line's offset (y = -1) and the next block's offset line.
     text = "G10 L12 P1 R1\nG01 G42 D1 X10 Y0 F100\nX20 Y10\nG40 X30 Y10\n"
@@ -283,7 +286,7 @@ def test_type_b_acute_start_up_uses_extension_points():
 
 
 def test_cancel_with_ij_direction():
-    # L4420-L4436: (G42) G40 X_ Y_ I_ J_: the previous block ends where its offset path meets the offset
+    # §3.5.3: (G42) G40 X_ Y_ I_ J_: the previous block ends where its offset path meets the offset
     # line of the (I, J) direction from its end. G41 r = 1 along +x to (10, 0); G40 I0 J1: the virtual
     # direction +y; offsets y = 1 and x = 9 meet at (9, 1). Then straight to (20, 20).
     out = ends("G10 L12 P1 R1\nG01 G41 D1 X0 Y0 F100\nX10\nG40 X20 Y20 I0 J1\n")
@@ -291,16 +294,16 @@ def test_cancel_with_ij_direction():
 
 
 def test_g40_without_a_move_leaves_the_vector_until_the_next_move():
-    # L4418: G40 in a block without movement: the vector stays perpendicular to the previous block and is
+    # §3.5.3: G40 in a block without movement: the vector stays perpendicular to the previous block and is
     # cancelled by the next move. G41 r = 1 along +x to (10, 0): the tool stops at (10, 1), then (10, 10).
     out = ends("G10 L12 P1 R1\nG01 G41 D1 X0 Y0 F100\nX10\nG40\nY10\n")
     assert close(out[-2], (10.0, 1.0)) and close(out[-1], (10.0, 10.0))
 
 
 def test_switching_g41_to_g42_uses_the_intersection_of_both_offsets():
-    # L4335-L4349: the inside/outside concept is dropped; the offset paths intersect: left offset of +x
+    # §3.5.3: the inside/outside concept is dropped; the offset paths intersect: left offset of +x
     # (y = 1) and right offset of the 45° line. r = 1.
-    # (Switching is not allowed between the start-up block and the next one, L4305: the start-up here is
+    # (Switching is not allowed between the start-up block and the next one, §3.5.3: the start-up here is
     # the move to (0, 0).)
     text = "G10 L12 P1 R1\nG00 X-10\nG01 G41 D1 X0 Y0 F100\nX10\nG42 X20 Y10\nX30 Y10\nG40 X40 Y0\n"
     out = ends(text)
@@ -308,7 +311,7 @@ def test_switching_g41_to_g42_uses_the_intersection_of_both_offsets():
 
 
 def test_changing_d_in_offset_mode_applies_from_the_end_vector_of_the_block():
-    # L4471-L4473: the new value applies to the end vector of the block that carries it. r1 = 1, r2 = 3,
+    # §3.5.3: the new value applies to the end vector of the block that carries it. r1 = 1, r2 = 3,
     # +x then the D2 block up: the corner at (10, 0) still uses r1 (11 ... outer 90° corner with G42:
     # (11, -1)); the D2 block's end vector uses 3.
     text = "G10 L12 P1 R1\nG10 L12 P2 R3\nG00 X-10\nG01 G42 D1 X0 Y0 F100\nX10\nD2 Y10\nX0\nG40 X0 Y-10\n"
@@ -318,7 +321,7 @@ def test_changing_d_in_offset_mode_applies_from_the_end_vector_of_the_block():
 
 
 def test_changing_d_in_an_arc_block_keeps_the_old_offset_at_its_start_vector():
-    # L4480 for an arc: the arc block carrying D2 starts from the vector of the old offset and ends with
+    # §3.5.3 for an arc: the arc block carrying D2 starts from the vector of the old offset and ends with
     # the new one. G42 r1 = 1 along +x to (10, 0), then D2 (r2 = 3) CCW quarter about (10, 10) to
     # (20, 10): G42 is the outside of a CCW arc (radius 10 + r). The join is tangent: one point, the
     # arc's start vector with r1, (10, -1). The tool then steps radially onto the r2 circle, (10, -3),
@@ -334,7 +337,7 @@ def test_changing_d_in_an_arc_block_keeps_the_old_offset_at_its_start_vector():
 # ------------------------------------------------------------------------------------------ look-ahead
 def _fanuc_units():
     """The examples copied from Fanuc are printed in 0.001 mm units without decimal points (X50000 = 50 mm,
-    notes §1.7): a dialect variant with DPI = 0 and a 0.001 mm least increment reads them as printed."""
+    §2.5): a dialect variant with DPI = 0 and a 0.001 mm least increment reads them as printed."""
     from dataclasses import replace
 
     from cnc_gym.gcode import get_dialect
@@ -343,7 +346,7 @@ def _fanuc_units():
 
 
 def test_x59_one_z_block_between_is_read_ahead():
-    # L4515-L4533, as printed (0.001 mm units): N1 start-up to (50, 50), N3 a Z move, N6 along +y. The NC
+    # §3.5.3, as printed (0.001 mm units): N1 start-up to (50, 50), N3 a Z move, N6 along +y. The NC
     # reads N3 and N6 with N1: the start-up corner is computed with N6 (a left turn after the 45°
     # start-up, inner for G41): the intersection of both offset lines; D1 = 5 mm.
     text = "G10 L12 P1 R5.0\nN1 G91 G00 G41 X50000 Y50000 D1\nN3 G01 Z-30000 F1\nN6 Y100000 F2\n"
@@ -355,7 +358,7 @@ def test_x59_one_z_block_between_is_read_ahead():
 
 def test_x59_two_z_blocks_starve_the_look_ahead():
     # Z split into N3 and N5: N6 is not in the buffer when N1 runs, the start-up vector is perpendicular to
-    # N1 itself (the overcut of L4535-L4545): (50, 50) + 5·(-1, 1)/√2.
+    # N1 itself (the overcut of §3.5.3): (50, 50) + 5·(-1, 1)/√2.
     text = "G10 L12 P1 R5.0\nN1 G91 G00 G41 X50000 Y50000 D1\nN3 Z-25000\nN5 G01 Z-5000 F1\nN6 Y100000 F2\n"
     out = moves(text, dialect=_fanuc_units())
     assert close(xy(out[0]), (50 - 5 / math.sqrt(2), 50 + 5 / math.sqrt(2)))
@@ -364,7 +367,7 @@ def test_x59_two_z_blocks_starve_the_look_ahead():
 
 
 def test_x59_the_n2_fix_restores_the_corner():
-    # L4547-L4553: N2 Y10 (same direction as N6) before the Z moves: N1's corner is computed with N2:
+    # §3.5.3: N2 Y10 (same direction as N6) before the Z moves: N1's corner is computed with N2:
     # N1 (0,0)→(50,40), then +y: inner for G41: intersection with x = 45.
     text = (
         "G10 L12 P1 R5.0\nN1 G91 G00 G41 X50000 Y40000 D1\nN2 Y10000\nN3 Z-25000\nN5 G01 Z-5000 F1\n"
@@ -386,7 +389,7 @@ def test_dwell_and_m_codes_count_as_blocks_without_motion():
 
 # ------------------------------------------------------------------------------------------------- G39
 def test_g39_corner_arc_of_the_offset_radius():
-    # L4646-L4666: G39 at an outer corner inserts an arc of radius = offset about the corner; its end vector
+    # §3.5.4: G39 at an outer corner inserts an arc of radius = offset about the corner; its end vector
     # is perpendicular to the next block's start. G41 r = 2, up to (0, 10) then +x: the first block ends
     # at (-2, 10) (perpendicular), an arc about (0, 10) to (0, 12), then along y = 12.
     out = moves("G10 L12 P1 R2\nG00 Y-10\nG01 G41 D1 X0 Y0 F100\nY10\nG39\nX10\nG40 X20 Y0\n")
@@ -407,21 +410,21 @@ def test_g39_outside_offset_mode_is_an_error():
 @pytest.mark.parametrize(
     ("text", "code", "alarm"),
     [
-        # T1: arc in the start-up block (L4117) and in the cancel block (L4245).
+        # T1: arc in the start-up block (§3.5.3) and in the cancel block (§3.5.3).
         ("G10 L12 P1 R1\nG41 D1 G02 X10 Y0 R5 F100\n", "comp-arc-startup", 34),
         ("G10 L12 P1 R1\nG01 G41 D1 X10 F100\nY10\nG40 G02 X20 Y20 R10\n", "comp-arc-startup", 34),
-        # T3: plane change in offset mode (L4175).
+        # T3: plane change in offset mode (§3.5.3).
         ("G10 L12 P1 R1\nG01 G41 D1 X10 F100\nG18\n", "comp-plane-change", 37),
         # T4: the tool-centre arc degenerates: radius of an inner arc = the offset (centre = start = end).
         ("G10 L12 P1 R5\nG01 G41 D1 X10 F100\nG03 X20 Y0 R5\nG01 X30\n", "comp-arc-centre", 38),
-        # T6: inner arc radius smaller than the tool radius (L4496): a quarter fillet R 1 joining +x and
+        # T6: inner arc radius smaller than the tool radius (§3.5.3): a quarter fillet R 1 joining +x and
         # +y tangentially, r = 5 on its centre side. Both joins are smooth, one vector each, so the single
-        # pair cannot be corrected (L4606). (A half-circle dip R 5 with r = 6 used to be here: its 90°
+        # pair cannot be corrected (§3.5.3). (A half-circle dip R 5 with r = 6 used to be here: its 90°
         # corners give two vectors each and the manual's correction now runs the tool straight over it,
         # tests/gcode/test_compensation_interference.py.)
         ("G10 L12 P1 R5\nG00 X-20\nG01 G41 D1 X-10 Y0 F100\nX10\nG03 X11 Y1 I0 J1\nG01 Y10\nG40 X0\n",
          "comp-interference", 41),
-        # T6: a groove narrower than the tool diameter (L4505): 4 mm wide, r = 3.
+        # T6: a groove narrower than the tool diameter (§3.5.3): 4 mm wide, r = 3.
         # (G41: going down the left side is +x, inside the groove; the walls' offsets x = 13 and x = 11 make
         # the bottom move run backwards.)
         ("G10 L12 P1 R3\nG01 G41 D1 X10 F100\nY-10\nX14\nY0\nX30\nG40 X40\n", "comp-interference", 41),
@@ -433,7 +436,7 @@ def test_g39_outside_offset_mode_is_an_error():
             "comp-interference",
             41,
         ),
-        # T2: no inner intersection (L4227): CCW arcs about (0,0) R5 and (4,2) R5 meet at (0,5) turning
+        # T2: no inner intersection (§3.5.3): CCW arcs about (0,0) R5 and (4,2) R5 meet at (0,5) turning
         # left; with G41 both offset circles shrink to R 2, and centres 4.47 apart: no intersection.
         ("G10 L12 P1 R3\nG00 X5 Y-5\nG01 G41 D1 X5 Y0 F100\nG03 X0 Y5 R5\nG03 X1 Y-2 I4 J-3\n"
          "G40 G01 X10 Y-2\n", "comp-no-intersection", 33),
@@ -444,7 +447,7 @@ def test_g39_outside_offset_mode_is_an_error():
         ("G10 L12 P1 R1000\n", "bad-offset-value", 32),
         ("G10 L13 P1 R100\n", "bad-offset-value", 32),
         ("G10 L12 P0 R1\n", "bad-offset-number", 30),
-        # T10: G45-G48 in G41/G42 mode (L4825).
+        # T10: G45-G48 in G41/G42 mode (§3.5.7).
         ("G41 D1\nG45 G01 X10 F100\n", "position-offset-in-comp", None),
     ],
 )  # fmt: skip
@@ -476,7 +479,7 @@ X60 = (
 # In the test coordinates (a start-up block G41/G42 X1000 first): N5 (1, 0) -> P = (9, 2); N6 CW about
 # C = (7, -6), R = |(2, 8)| = 8.246, to Q = (12.2, 0.4) (|(5.2, 6.4)| = R: a one-quadrant arc from 76.0°
 # to 50.9°, sweep -25.1°); N7 along (2, -5). r1 = 2 (D01), r2 = 6 (D02, given in N6: it applies from N6's
-# end vector, L4480, so N6's start vector keeps r1).
+# end vector, §3.5.3, so N6's start vector keeps r1).
 X60_P, X60_C, X60_Q, X60_R = (9.0, 2.0), (7.0, -6.0), (12.2, 0.4), math.hypot(2, 8)
 
 
@@ -486,7 +489,7 @@ def _unit(dx, dy):
 
 
 def test_x60_interference_example_as_we_read_it():
-    # L4574-L4580 as printed, "(G41)": G41 puts the tool on the left, which for this CW arc (and the
+    # §3.5.3 as printed, "(G41)": G41 puts the tool on the left, which for this CW arc (and the
     # right turns at P and Q) is the convex side: both corners are outer, the offset circles grow
     # (R + r), and the tool-centre arc keeps its quadrant. No alarm; the manual's "four quadrants" needs
     # the tool on the concave side (next test). By hand:
@@ -528,7 +531,7 @@ def test_x60_with_the_tool_on_the_concave_side_is_the_manuals_check_b_alarm():
     i2 = line_circle((X60_Q[0] + 6 * right7[0], X60_Q[1] + 6 * right7[1]), t7, X60_C, X60_R - 6, X60_Q)
     # I1 lies at 71.7° about C, I2 at 79.4°: clockwise from I1 to I2 is -(360 - 7.7)° = -352.3°, against
     # the programmed -25.1°: the arc would run through all four quadrants. Each corner has one vector,
-    # so there is nothing to ignore (L4606): alarm 41 on N6 (line 5).
+    # so there is nothing to ignore (§3.5.3): alarm 41 on N6 (line 5).
     a1, a2 = angle_deg(X60_C, i1), angle_deg(X60_C, i2)
     assert 71 < a1 < 72 and 79 < a2 < 80
     sweep = -(360.0 - (a2 - a1))
@@ -569,7 +572,7 @@ def test_d_as_diameter_switch():
 
 
 def test_g10_l12_in_g91_adds_and_wear_adds_to_geometry():
-    # L4676-L4686: G91 adds to the stored value; the offset in use is geometry + wear.
+    # §3.5.5: G91 adds to the stored value; the offset in use is geometry + wear.
     text = "G01 G41 D1 X10 Y0 F100\nY10\nG40 X0\n"
     assert ends("G10 L12 P1 R1\nG91 G10 L12 P1 R0.5\nG10 L13 P1 R0.5\nG90\n" + text) == ends(
         "G10 L12 P1 R2\n" + text
@@ -593,7 +596,7 @@ def test_line_to_arc_outer_obtuse_corner_is_the_intersection():
 
 
 def test_helical_full_circle_is_compensated_in_projection():
-    # L3960: compensation in the plane only; the helix's Z moves with it. G41 r = 2 inside a CCW circle
+    # §3.5.2: compensation in the plane only; the helix's Z moves with it. G41 r = 2 inside a CCW circle
     # R 10 about (0, 0), entered along +y at (10, 0): the tool runs on R 8 and drops 5 in Z over the turn.
     text = "G10 L12 P1 R2\nG00 X0 Y-20\nG01 G41 D1 X10 Y-10 F100\nX10 Y0\nG03 I-10 Z-5\nG01 X10 Y10\n"
     out = moves(text)
@@ -614,7 +617,7 @@ def test_mirror_image_interchanges_g41_and_g42():
 def test_pure_compensate_function_gives_the_interpreter_path():
     # compensation.compensate() runs the same corner rules on plane elements without the interpreter:
     # the X57 contour as elements (start, end, centre, signed sweep) gives the same tool-centre points.
-    from cnc_gym.gcode.compensation import PlaneElement, compensate
+    from cnc_gym.gcode.lang.fanuc.compensation import PlaneElement, compensate
 
     def arc(start, end, center, ccw):
         a0 = math.atan2(start[1] - center[1], start[0] - center[0])
@@ -670,11 +673,11 @@ M99
 
 
 def test_worked_example_x26_rotated_scaled_copies_keep_the_unscaled_offset():
-    # L2058-L2095 (Ex.3 of G68): 8 copies of O2100 rotated by 45° each (G68 G91 R45 in O2200), scaled 1.2
+    # §3.2.18 (Ex.3 of G68): 8 copies of O2100 rotated by 45° each (G68 G91 R45 in O2200), scaled 1.2
     # about the origin, with G42 D01 (= 2 here) active. Scaling and rotation apply to the programmed path
-    # first; the offset is not scaled (L1907, notes §5.1): every N22 edge (X8.284 at Y-20) of copy k lies at
+    # first; the offset is not scaled (§3.2.17, §3.5.1): every N22 edge (X8.284 at Y-20) of copy k lies at
     # exactly 2 mm to the right of the edge from R_k·1.2·(0, -20) to R_k·1.2·(8.284, -20).
-    # (The notes flag that the example sets G42 before G68, against the manual's own advice.)
+    # (The example sets G42 before G68, against the manual's own advice.)
     out = [r for r in moves(X26) if r["kind"] != "dwell"]
     n22 = [(i, r) for i, r in enumerate(out) if r["line"] == 22]
     assert len(n22) == 8
@@ -685,16 +688,17 @@ def test_worked_example_x26_rotated_scaled_copies_keep_the_unscaled_offset():
         b = (1.2 * (8.284 * c - (-20) * s_), 1.2 * (8.284 * s_ + (-20) * c))
         n, c0 = offset_line(a, b, -2.0)  # right of the edge
         for point in (out[i - 1]["end"][:2], record["end"][:2]):  # within the 0.0001 mm rounding of
-            # scaled results (L1966): each coordinate is off by at most 0.00005, the distance by √2 times that
+            # scaled results (§3.2.17): each coordinate is off by at most 0.00005, the distance by √2 times
+            # that
             assert math.isclose(n[0] * point[0] + n[1] * point[1], c0, abs_tol=1e-4), (k, point)
         assert math.isclose(record["end"][2], -22.0)  # G01 Z-2 with G92 Z20 at machine Z0: machine -22
     assert out[-1]["end"] == [0.0, 0.0, 0.0]
 
 
 def test_worked_example_x58_direction_switch_right_after_start_up():
-    # L4034-L4036 (figures lost, values ours): "G1G41 D_X_Y_; G42 D_X_Y_;" and the reverse. The manual also
-    # says the switch is not allowed between the start-up block and the next one (L4305); its own example
-    # does exactly that, so we accept it with the switch rule (L4335): the start-up ends where its left
+    # §3.5.2 (figures lost, values ours): "G1G41 D_X_Y_; G42 D_X_Y_;" and the reverse. The manual also
+    # says the switch is not allowed between the start-up block and the next one (§3.5.3); its own example
+    # does exactly that, so we accept it with the switch rule (§3.5.3): the start-up ends where its left
     # offset meets the next block's right offset (and vice versa). r = 1.
     left_then_right = ends("G10 L12 P1 R1\nG1 G41 D1 X10 Y0 F100\nG42 D1 X20 Y10\nG40 X30 Y10\n")
     assert close(
@@ -734,7 +738,7 @@ def test_starved_look_ahead_then_an_arc_connects_to_its_offset_start():
 
 
 def test_g53_in_offset_mode_clears_the_vector_and_restarts():
-    # L1664: G53 clears the compensation. The block before it ends perpendicular ((10, 2)); the G53 rapid
+    # §3.2.12: G53 clears the compensation. The block before it ends perpendicular ((10, 2)); the G53 rapid
     # goes to its machine position (X and Y uncommanded: the programmed (10, 0)); the next move is a new
     # start-up: (10, 0)→(20, 0) then up, a left turn (inner): x = 18, y = 2.
     out = ends(

@@ -1,9 +1,11 @@
 """Coordinate systems and positioning: G54.1 P1-P48 with G10 L20, G10 L50 parameter input, reference
 returns G27/G28/G29/G30, skip G31, single-direction positioning G60, the one-shot exact stop G09, and the
-coordinate seam itself (seed notes §3.5-§3.8, §3.12; manual L1340-L1595, L2131-L2336).
+coordinate seam itself (§3.2.7-§3.2.10, §3.2.19-§3.3, §3.8).
 
 The machine starts at the machine origin with every offset zero; reference positions are the machine
 origin unless a machine preset says otherwise. Expected points are worked out by hand in each test.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -33,26 +35,26 @@ def machine_with_references(**per_axis) -> MachineConfig:
 
 # --------------------------------------------------------------------------- G54.1 and G10 L20
 def test_g54_1_selects_additional_work_systems_set_by_g10_l20():
-    # L2131-L2187: G10 L20 Pn IP_ sets system n (1..48); G54.1 Pn selects it; no P = P1; G91 adds.
+    # §3.2.20: G10 L20 Pn IP_ sets system n (1..48); G54.1 Pn selects it; no P = P1; G91 adds.
     text = ("G10 L20 P1 X1 Y2\nG10 L20 P48 X-5\nG91 G10 L20 P48 X1 Z3\nG90\n"
             "G54.1 P48 G00 X0 Y0 Z0\nG54.1 X10\nG54 X0 Y0\n")  # fmt: skip
     # G54.1 X10 (P1, offset (1, 2, 0)): X to 1 + 10; Y and Z are not commanded and keep their machine
-    # position (L1550).
+    # position (§3.2.10).
     assert ends(text) == [[-4.0, 0.0, 3.0], [11.0, 0.0, 3.0], [0.0, 0.0, 3.0]]
 
 
 def test_g54_1_drops_a_g92_floating_system_like_g54():
-    # GSK G92 is replaced by any work system selection (L1707-L1712); G54.1 is one.
+    # GSK G92 is replaced by any work system selection (§3.2.13); G54.1 is one.
     assert ends("G00 X10\nG92 X0\nG54.1 P2 X1\n") == [[10.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
 
 
 @pytest.mark.parametrize(
     ("text", "code", "alarm"),
     [
-        ("G54.1 P0\n", "bad-offset-number", 30),  # L2185, alarm 30
+        ("G54.1 P0\n", "bad-offset-number", 30),  # §3.2.20, alarm 30
         ("G54.1 P49\n", "bad-offset-number", 30),
         ("G54.1 P1.5\n", "bad-offset-number", 30),
-        ("G54.1 P1 G04\n", "bad-combination", None),  # "P codes other than offset numbers" (L2185)
+        ("G54.1 P1 G04\n", "bad-combination", None),  # "P codes other than offset numbers" (§3.2.20)
         ("G10 L20 P0 X1\n", "bad-g10", 31),
         ("G10 L20 X1\n", "bad-g10", 31),
         ("G10 L20 P1 R1\n", "unused-word", None),
@@ -67,28 +69,29 @@ def test_work_system_errors(text, code, alarm):
 def test_g54_1_is_recorded_for_the_system_variables():
     interp = Interpreter(read_program("G10 L20 P7 X3\nG54.1 P7\n"), get_dialect("gsk25i"))
     interp.run()
-    assert interp.extra_wcs == 7 and interp.offsets.active_wcs == 6 + 6  # G54..G59 are 0..5, P1 is 6
+    st = interp.state
+    assert st.extra_wcs == 7 and st.offsets.active_wcs == 6 + 6  # G54..G59 are 0..5, P1 is 6
     assert interp.program_position == (-3.0, 0.0, 0.0)
 
 
 # --------------------------------------------------------------------------- G10 L50
 def test_worked_example_x16_parameter_input_blocks_are_parsed_and_stored():
-    # L1502-L1517: `G10L50; N1082 P3 R4500; N1082 P4 R120; G11;` (axis parameter, axes 3 and 4). The
+    # §3.2.9: `G10L50; N1082 P3 R4500; N1082 P4 R120; G11;` (axis parameter, axes 3 and 4). The
     # first example's R10000000 (bit pattern of P2501) is beyond the reader's R range of ±999999.9999
     # (a known gap, see docs/gcode.md); a bit parameter within it is stored the same way.
     interp = Interpreter(read_program("G10L50\nN1082 P3 R4500\nN1082 P4 R120\nN2501 R999999\nG11\nG00 X1\n"),
                          get_dialect("gsk25i"))  # fmt: skip
-    interp.parameters.raw.clear()
+    interp.state.parameters.raw.clear()
     toolpath = interp.run()
-    assert interp.parameters.raw == {(1082, 3): 4500, (1082, 4): 120, (2501, 0): 999999}
-    assert not interp.parameter_input and len(toolpath) == 1  # G11 closed the mode; X1 ran
+    assert interp.state.parameters.raw == {(1082, 3): 4500, (1082, 4): 120, (2501, 0): 999999}
+    assert interp.state.block_hook is None and len(toolpath) == 1  # G11 closed the mode; X1 ran
 
 
 @pytest.mark.parametrize(
     ("text", "code"),
     [
-        ("G10 L50 X1\nG11\n", "bad-g10"),  # G10 alone in its block (L1496)
-        ("G10 L50\nN1880 P1 R1.5\nG11\n", "decimal-point-not-allowed"),  # R has no point (L1512)
+        ("G10 L50 X1\nG11\n", "bad-g10"),  # G10 alone in its block (§3.2.9)
+        ("G10 L50\nN1880 P1 R1.5\nG11\n", "decimal-point-not-allowed"),  # R has no point (§3.2.9)
         ("G10 L50\nN1880 P1 R#1\nG11\n", "bad-g10"),  # not even from a variable
         ("G10 L50\nG00 X1\nG11\n", "bad-g10"),  # only parameter blocks inside the mode
         ("G10 L50\nN1880 R5\nG11\n", "bad-g10"),  # 1880 is an axis parameter: P1..P5
@@ -104,7 +107,7 @@ def test_parameter_input_errors(text, code):
 
 # --------------------------------------------------------------------------- G28 / G29 / G30 / G27
 def test_worked_example_x28_intermediate_point_is_kept_per_axis_and_read_in_the_current_system():
-    # L2238-L2252 with G55 at (100, 200) so the re-reading in G55 shows; reference position 1 = machine 0.
+    # §3.3.2 with G55 at (100, 200) so the re-reading in G55 shows; reference position 1 = machine 0.
     #   N1 G90 G54 X0 Y10 → (0, 10)
     #   N2 G28 X40        → X only: (40, 10), then X to the reference: (0, 10)   [intermediate X40]
     #   N3 G29 X30        → X only: to the intermediate (40, 10), then (30, 10)
@@ -117,19 +120,19 @@ def test_worked_example_x28_intermediate_point_is_kept_per_axis_and_read_in_the_
     out = moves(text)
     assert [r["end"][:2] for r in out] == [[0, 10], [40, 10], [0, 10], [40, 10], [30, 10], [20, 10], [20, 60],
                                           [20, 0], [140, 260], [160, 220]]  # fmt: skip
-    assert all(r["kind"] == "rapid" for i, r in enumerate(out) if i != 5)  # both legs like G00 (L2236)
+    assert all(r["kind"] == "rapid" for i, r in enumerate(out) if i != 5)  # both legs like G00 (§3.3.2)
 
 
 def test_worked_example_x29_g29_in_g91_is_relative_to_the_intermediate_point():
-    # L2294: G90 G0 X10 Y10; G91 G28 X20 Y20 → intermediate (30, 30), then the reference (0, 0).
+    # §3.3.3: G90 G0 X10 Y10; G91 G28 X20 Y20 → intermediate (30, 30), then the reference (0, 0).
     # G29 X30 (G91): via (30, 30) to X = 30 + 30 = 60 ("the vector of X axial direction is 60"). Y is not
     # commanded but has an intermediate point: it returns to it and has no further move amount, so the
-    # end is the manual's printed (60, 30) (L2270's "other axes remain still" is the minority reading; see
+    # end is the manual's printed (60, 30) (§3.3.3's "other axes remain still" is the minority reading; see
     # transforms.do_g29 and tests/gcode/test_manual_examples.py).
     out = ends("G90 G0 X10 Y10\nG91 G28 X20 Y20\nG29 X30\n")
     assert out == [[10.0, 10.0, 0.0], [30.0, 30.0, 0.0], [0.0, 0.0, 0.0], [30.0, 30.0, 0.0],
                    [60.0, 30.0, 0.0]]  # fmt: skip
-    # Example 1 (L2292): G91 G28 X1000 Y200 (from the origin); M06; G29 X500 Y-400 → via (1000, 200) to
+    # Example 1 (§3.3.3): G91 G28 X1000 Y200 (from the origin); M06; G29 X500 Y-400 → via (1000, 200) to
     # (1500, -200).
     out = ends("G91 G28 X1000 Y200\nM06\nG29 X500 Y-400\n")
     assert out[-2:] == [[1000.0, 200.0, 0.0], [1500.0, -200.0, 0.0]]
@@ -171,7 +174,7 @@ def test_machine_preset_reference_positions_load_from_yaml_keys():
 
 # --------------------------------------------------------------------------- G31
 def test_worked_example_x15_skip_without_a_signal_completes_the_move():
-    # L1405-L1414: G31 G91 X100; Y50; — no skip signal in simulation, so X runs to 100 and the
+    # §3.2.8: G31 G91 X100; Y50; — no skip signal in simulation, so X runs to 100 and the
     # incremental Y50 starts there. G31 G90 X200; Y100; likewise ends at (200, 100). G31 moves at the
     # feed like G01; the next block is in the modal G00/G01 of before (G31 is one-shot).
     out = moves("G01 F300\nG31 G91 X100\nY50\n")
@@ -184,10 +187,10 @@ def test_worked_example_x15_with_a_simulated_skip_signal():
     # The probe's surface at X60 (program coordinates). 1) G31 G91 X100; Y50;: the move stops at X60 (the
     # signal) and the incremental Y50 runs from the break point: (60, 50). 2) G31 G90 X200; Y100; with the
     # surface at X150: the absolute Y100 moves Y only, X stays where the signal came: (150, 100)
-    # (L1405-L1414).
+    # (§3.2.8).
     out = moves("G01 F300\nG31 G91 X100\nY50\n", skip_signal={"X": 60.0})
     assert [r["end"] for r in out] == [[60.0, 0.0, 0.0], [60.0, 50.0, 0.0]]
-    # The signal stops the axis; override is disabled on a G31 move (L1398).
+    # The signal stops the axis; override is disabled on a G31 move (§3.2.8).
     assert out[0]["modes"] == ["exact_stop", "override_locked"] and "modes" not in out[1]
     got = ends("G01 F300\nG31 G90 X200\nY100\n", skip_signal={"X": 150.0})
     assert got == [[150.0, 0.0, 0.0], [150.0, 100.0, 0.0]]
@@ -196,7 +199,7 @@ def test_worked_example_x15_with_a_simulated_skip_signal():
     interp = Interpreter(read_program("G01 F100\nG31 X10 Y20 Z-4\n"), get_dialect("gsk25i"),
                          skip_signal={"Z": -1.0, "Y": -3.0})  # fmt: skip
     interp.run()
-    assert interp.skip_position == pytest.approx((2.5, 5.0, -1.0))
+    assert interp.state.skip_position == pytest.approx((2.5, 5.0, -1.0))
     # without a signal configured nothing stops (and the move is still override-locked)
     assert moves("G31 X5 F100\n")[0]["modes"] == ["override_locked"]
     for bad in ({"A": 1.0}, {"X": "1"}, {"X": float("nan")}, [1]):
@@ -205,15 +208,15 @@ def test_worked_example_x15_with_a_simulated_skip_signal():
 
 
 def test_g31_skip_position_is_the_block_end_in_work_coordinates():
-    # L5486: with no skip the variables #5061.. get the block end point (work coordinates).
+    # §3.7.3: with no skip the variables #5061.. get the block end point (work coordinates).
     interp = Interpreter(read_program("G10 L2 P1 X10\nG54 G01 F100\nG31 X5 Y7\n"), get_dialect("gsk25i"))
     interp.run()
-    assert interp.skip_position == (5.0, 7.0, 0.0)
+    assert interp.state.skip_position == (5.0, 7.0, 0.0)
 
 
 def test_g31_is_an_alarm_in_cutter_compensation():
     interp = Interpreter(read_program("G31 X5 F100\n"), get_dialect("gsk25i"))
-    interp.modal[7] = 410  # G41 in force (the compensation module sets the modal table)
+    interp.state.modal[7] = 410  # G41 in force (the compensation module sets the modal table)
     with pytest.raises(ProgramError) as info:
         interp.run()
     assert info.value.code == "g31-in-cutter-compensation" and info.value.alarm == 36
@@ -221,8 +224,8 @@ def test_g31_is_an_alarm_in_cutter_compensation():
 
 # --------------------------------------------------------------------------- G60
 def test_worked_example_x14_single_direction_positioning():
-    # L1360: P1880 = (-8, 5, 0) mm; G90 G00 X-10 Y10; G60 X20 Y25: rapid to the end less the overrun,
-    # (20 + 8, 25 - 5) = (28, 20), dwell 1 s (L1350), then to (20, 25) in the final approach direction
+    # §3.2.7: P1880 = (-8, 5, 0) mm; G90 G00 X-10 Y10; G60 X20 Y25: rapid to the end less the overrun,
+    # (20 + 8, 25 - 5) = (28, 20), dwell 1 s (§3.2.7), then to (20, 25) in the final approach direction
     # (X negative, Y positive, the signs of the overrun). P1880 in 0.0001 mm through G10 L50.
     text = "G10 L50\nN1880 P1 R-80000\nN1880 P2 R50000\nG11\nG90 G00 X-10 Y10\nG60 X20 Y25\n"
     out = records(text)
@@ -232,7 +235,7 @@ def test_worked_example_x14_single_direction_positioning():
 
 
 def test_g60_without_overrun_or_movement_is_a_plain_rapid():
-    # The standard P1880 is 0 (L1374-L1381): a plain rapid. An axis that does not move gets no overrun.
+    # The standard P1880 is 0 (§3.2.7): a plain rapid. An axis that does not move gets no overrun.
     assert [r["kind"] for r in records("G60 X5\n")] == ["rapid"]
     text = "G10 L50\nN1880 P1 R-80000\nN1880 P2 R50000\nG11\nG00 X5 Y5\nG60 Y9\n"
     out = records(text)
@@ -258,38 +261,38 @@ def test_path_modes_g61_to_g64_reach_the_segments():
 # --------------------------------------------------------------------------- the seam
 def test_seam_move_linear_and_program_position_follow_the_chain():
     interp = Interpreter(read_program(""), get_dialect("gsk25i"))
-    interp.offsets.wcs[0] = [100.0, 0.0, 0.0]
-    interp.offsets.update()
-    interp.chain.set("rotation", rotation_stage(Plane.XY, (0.0, 0.0, 0.0), 90.0))
+    interp.state.offsets.wcs[0] = [100.0, 0.0, 0.0]
+    interp.state.offsets.update()
+    interp.state.chain.set("rotation", rotation_stage(Plane.XY, (0.0, 0.0, 0.0), 90.0))
     interp.set_transform_state()
-    interp.feed = 500.0
+    interp.state.feed = 500.0
     interp.move_linear(False, (10.0, None, 5.0))
     # program (10, 0, 5) → rotated (0, 10, 5) → + G54 (100, 0, 0)
-    assert close(interp.out.position, [100.0, 10.0, 5.0])
+    assert close(interp.state.out.position, [100.0, 10.0, 5.0])
     assert close(interp.program_position, [10.0, 0.0, 5.0])
     assert close(interp.to_machine((0.0, 10.0, 0.0)), [90.0, 0.0, 0.0])
 
 
 def test_seam_tool_length_vector_is_added_after_the_transforms_and_kept_by_g92():
     interp = Interpreter(read_program(""), get_dialect("gsk25i"))
-    interp.chain.set("scaling", None)
-    interp.offsets.tool_length[2] = 25.0  # what G43 H_ will write (compensation module)
-    interp.offsets.update()
+    interp.state.chain.set("scaling", None)
+    interp.state.offsets.tool_length[2] = 25.0  # what G43 H_ will write (compensation module)
+    interp.state.offsets.update()
     interp.move_linear(True, (None, None, 0.0))
-    assert interp.out.position == (0.0, 0.0, 25.0) and interp.program_position == (0.0, 0.0, 0.0)
-    interp.offsets.set_floating(2, interp.out.position[2], 7.0)  # G92 Z7 with the length active
-    interp.offsets.update()
+    assert interp.state.out.position == (0.0, 0.0, 25.0) and interp.program_position == (0.0, 0.0, 0.0)
+    interp.state.offsets.set_floating(2, interp.state.out.position[2], 7.0)  # G92 Z7 with the length active
+    interp.state.offsets.update()
     assert interp.program_position == (0.0, 0.0, 7.0)
 
 
 def test_seam_without_transforms_keeps_the_machine_position_of_omitted_axes():
-    # L1550: an omitted axis does not move when the work system changes (the plain path).
+    # §3.2.10: an omitted axis does not move when the work system changes (the plain path).
     interp = Interpreter(read_program(""), get_dialect("gsk25i"))
     interp.move_linear(True, (1.0, 2.0, 3.0))
-    interp.offsets.wcs[0] = [10.0, 10.0, 10.0]
-    interp.offsets.update()
+    interp.state.offsets.wcs[0] = [10.0, 10.0, 10.0]
+    interp.state.offsets.update()
     interp.move_linear(True, (5.0, None, None))
-    assert interp.out.position == (15.0, 2.0, 3.0)
+    assert interp.state.out.position == (15.0, 2.0, 3.0)
 
 
 def test_system_variables_read_the_g54_1_number_and_the_g31_skip_position():
@@ -300,7 +303,7 @@ def test_system_variables_read_the_g54_1_number_and_the_g31_skip_position():
 
 
 def test_parameter_input_r_has_its_own_eight_digit_range():
-    # G10 L50's R is the raw parameter value (L1480, L1503): up to 8 digits (a bit parameter's bits 7..0),
+    # G10 L50's R is the raw parameter value (§3.2.9): up to 8 digits (a bit parameter's bits 7..0),
     # beyond the R address's ±999999.9999. Outside parameter input the R address's range still holds.
     assert ends("G10 L50\nN2501 R10000000\nG11\nG00 X1\n") == [[1.0, 0.0, 0.0]]
     err = program_error("G10 L50\nN2501 R100000000\nG11\n")

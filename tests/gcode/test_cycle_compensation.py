@@ -1,10 +1,12 @@
-"""Canned cycles while cutter compensation G41/G42 is in force (manual L2516: "In the canned cycle mode,
-the tool offset is ignored"; notes §4.1).
+"""Canned cycles while cutter compensation G41/G42 is in force (manual §3.4.1: "In the canned cycle mode,
+the tool offset is ignored"; §3.4).
 
 The compensation is suspended for each cycle block as for G53/G27-G30 (compensation.py): the last
 compensated block ends with its vector perpendicular to it, the cycle drills at the programmed hole
 positions, and the first move in the plane after G80 starts the compensation up again (type A).
 D1 = 5 mm, G17, G41 (tool on the left of the travel).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations

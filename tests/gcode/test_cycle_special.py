@@ -1,9 +1,12 @@
-"""Hole patterns G120-G125, face milling G126/G127 and the pocket/boss cycles G110-G137 (cycles.py), plus
+"""Hole patterns G120-G125, face milling G126/G127 and the pocket/boss cycles G110-G137 (dialects/gsk25i:
+patterns.py, pockets.py), plus
 a property test: random cycle blocks give a ProgramError or a finite tool path that keeps the level rules.
 
-The pocket figures are lost (notes §4.4-§4.8, examples X47-X54 are quality C): those tests check the
+The pocket figures are lost (§3.4.16, examples X47-X54 are quality C): those tests check the
 geometry the step lists fix (pocket wall = I, tool-centre radius I - r, layer depths W then Q to the
 bottom, direction of the finishing arc, the transition arcs' direction) rather than a printed path.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -12,20 +15,14 @@ import math
 
 import numpy as np
 import pytest
-from gcode_helpers import close, program_error
+from gcode_helpers import close, program_error, success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
-from cnc_gym.gcode.cycles import (
-    CYCLE_WORDS,
-    PATTERN_WORDS,
-    check_pocket,
-    pattern_holes,
-    pocket_steps,
-    rectangle_holes,
-)
+from cnc_gym.gcode.dialects.gsk25i.patterns import PATTERN_WORDS, pattern_holes, rectangle_holes
+from cnc_gym.gcode.dialects.gsk25i.pockets import POCKET_WORDS, check_pocket, pocket_steps
 from cnc_gym.toolpath import SegmentKind
 
 
@@ -40,7 +37,7 @@ def bottoms(tp) -> list[tuple[float, float]]:
 
 # ------------------------------------------------------------------ hole patterns
 def test_g120_bolt_circle_drills_with_the_modal_cycle():
-    """G120 X0 Y0 I50 J0. K4 with G81 stored (K0: data only; a Z or R word would drill, L2629):
+    """G120 X0 Y0 I50 J0. K4 with G81 stored (K0: data only; a Z or R word would drill, §3.4.3):
     holes at 0°, 90°, 180°, 270° on radius 50."""
     tp = interpret("G90 G99 G81 Z-5 R2 F100 K0;\nG120 X0 Y0 I50 J0. K4;\nG80;\n")
     assert close(sum(bottoms(tp), ()), (50, 0, 0, 50, -50, 0, 0, -50))
@@ -75,7 +72,7 @@ def test_pattern_hole_count_alarm(text):
 
 
 def test_x63_g124_rectangle_drilling():
-    """X63 (L5011), our reading of the conflicting text (docs/gcode.md): X90 Y40 is the first corner
+    """X63 (§3.6.5), our reading of the conflicting text (docs/gcode.md): X90 Y40 is the first corner
     (the example's prose), side 1 along +X of I40, side 2 of J10 turning right (G124 = CW); P3 holes on
     sides 1 and 3, K2 on sides 2 and 4, each side's holes from its first corner, length/n apart."""
     text = ("G90 G17 G0 X0 Y0 Z25 M03 F1000;\nG124 G81 X90 Y40 R5 Z-25 I40 J10 P3 K2 F800;\n"
@@ -99,7 +96,7 @@ def test_g124_needs_a_drilling_code_and_j():
 
 
 def test_x64_g126_zigzag_face_milling():
-    """X64 (L5047): from X90 Y40 at Z-10 (R5), passes along +X of I70 stepping L10 over J30: four passes
+    """X64 (§3.6.6): from X90 Y40 at Z-10 (R5), passes along +X of I70 stepping L10 over J30: four passes
     at Y40, 50, 60, 70 alternating direction; back up to R and the initial level Z25."""
     tp = interpret("G90 G17 G0 X0 Y0 Z25 M03 F1000;\nG126 X90 Y40 Z-10 R5 I70 J30 L10 F800;\nM30;\n")
     cuts = [(round(float(tp.end[n][0]), 6), round(float(tp.end[n][1]), 6)) for n in range(len(tp.kind))
@@ -126,7 +123,7 @@ def _extent(steps, cx, cy):
 
 
 def test_x47_g111_circular_pocket_roughing():
-    """X47 (L3397): I50 with D1 = 5: the tool centre reaches radius 45 (wall at 50); layers W20 below R5
+    """X47 (§3.4.16): I50 with D1 = 5: the tool centre reaches radius 45 (wall at 50); layers W20 below R5
     (-15), then Q10: -25, -35, -45, and the bottom -50; CW (G111) circles; rings 10, 20, 30, 40, 45."""
     steps = pocket_steps(111, 25, 25, 5, -50, 50, return_initial=False, feed=800, tool_radius=5, i=50,
                          l_step=10, w_first=20, q_step=10, v_clear=10)  # fmt: skip
@@ -144,7 +141,7 @@ def test_x47_g111_circular_pocket_roughing():
 @pytest.mark.parametrize(("code", "ccw_finish", "lead_sign"),
                          [(112, True, 1), (113, False, -1), (116, True, -1), (117, False, 1)])
 def test_circular_finishing_directions(code, ccw_finish, lead_sign):
-    """G112/G113 (inside) lead in with the finishing direction; G116/G117 (outside) against it (L3568)."""
+    """G112/G113 (inside) lead in with the finishing direction; G116/G117 (outside) against it (§3.4.19)."""
     j = 10 if code < 116 else 60
     steps = pocket_steps(code, 0, 0, 5, -50, 50, return_initial=True, feed=800, tool_radius=5, i=50, j=j)
     arcs = [s for s in steps if s[0] == "arc"]
@@ -196,7 +193,7 @@ def test_special_cycle_alarms(code, kw, alarm):
 
 
 def test_pocket_cycle_in_a_program_with_d0_and_plane_rule():
-    """D0 = tool radius 0 (L3350): G112 finishes on radius I itself; G110-G137 only in G17 (alarm 227);
+    """D0 = tool radius 0 (§3.4.16): G112 finishes on radius I itself; G110-G137 only in G17 (alarm 227);
     D missing is alarm 221."""
     tp = interpret("G90 G00 X50 Y50 Z50;\nG99 G112 X25 Y25 R5 Z-50 I50 J10 F800 D0;\nG80 X50 Y50 Z50;\n"
                    "M30;\n")
@@ -211,6 +208,7 @@ _CODES = ["G73", "G74", "G76", "G81", "G82", "G83", "G84", "G85", "G86", "G87", 
 _num = st.one_of(st.integers(-60, 60).map(str), st.floats(-60, 60, allow_nan=False).map(lambda v: f"{v:.3f}"))
 
 
+@success_share(0.08)
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(code=st.sampled_from(_CODES), ret=st.sampled_from(["G98", "G99"]),
        dist=st.sampled_from(["G90", "G91"]), start_z=st.integers(-20, 60),
@@ -231,12 +229,14 @@ def test_random_cycle_blocks_give_an_error_or_a_path_that_keeps_the_levels(code,
     try:
         tp = interpret(text)
     except ProgramError:
+        tally(False)
         return
+    tally(True)
     assert np.isfinite(tp.end).all() and np.isfinite(tp.start).all()
     if "R" not in words or "Z" not in words or code == "G87" or any("Z" in w or "R" in w for w in more):
         return  # the level rule below needs the levels of the first block for the whole run
     r, bottom = float(words["R"]), float(words["Z"])
-    if dist == "G91":  # R from the initial level, Z from R (L2403)
+    if dist == "G91":  # R from the initial level, Z from R (§3.4)
         r = start_z + r
         bottom = r + bottom
     if start_z < r:
@@ -272,10 +272,10 @@ def test_random_cycle_blocks_give_an_error_or_a_path_that_keeps_the_levels(code,
     ("G99 G136 X25 Y25 R5 Z-50 I80 J50 L30 U5 F800 D1", (70, 30)),        # X54: start L30 outside, J/2 + r
 ])  # fmt: skip
 def test_x47_x54_special_cycle_examples(block, reach):
-    """The manual's examples (L3397-L3818; the paths are our design, notes: quality C) run with D1 = 5:
-    cut to the bottom Z-50, never beyond the reach the example's numbers give, back over the centre at R
-    (G99; G132's block has no G98/G99 and returns to the power-on G98 initial level Z50), then G80's
-    move to X50 Y50 Z50."""
+    """The manual's examples (§3.4.16-§3.4.23; the paths are our design: quality C in docs/gsk25i_examples.md)
+    run with D1 = 5: cut to the bottom Z-50, never beyond the reach the example's numbers give, back over the
+    centre at R (G99; G132's block has no G98/G99 and returns to the power-on G98 initial level Z50), then
+    G80's move to X50 Y50 Z50."""
     text = f"G90 G00 X50 Y50 Z50;\n{block};\nG80 X50 Y50 Z50;\nM30;\n"
     tp = interpret(text, tool_offsets={"D": {1: 5.0}})
     below = tp.end[:, 2] < 5 - 1e-9
@@ -296,6 +296,7 @@ _PATTERN = [f"G{n}" for n in range(120, 128)]
 _small = st.one_of(st.integers(-5, 60).map(str), st.floats(-5, 60, allow_nan=False).map(lambda v: f"{v:.2f}"))
 
 
+@success_share(0.03)
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(code=st.sampled_from(_SPECIAL + _PATTERN), drill=st.sampled_from(["", "G81 Z-3 R1 F100 K0;\n"]),
        words=st.dictionaries(st.sampled_from("XYZRIJLWQVUEKPD"), _small, max_size=12))  # fmt: skip
@@ -303,7 +304,7 @@ def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, 
     """Pocket, boss, pattern and face-milling blocks with random words: a ProgramError, or a finite path
     that stays within the bottom and the start height (D1 = 4)."""
     number = int(code[1:])
-    allowed = set("XYZ") | set(CYCLE_WORDS.get(number, "") or PATTERN_WORDS[number])
+    allowed = set("XYZ") | set(POCKET_WORDS.get(number, "") or PATTERN_WORDS[number])
     words = {k: v for k, v in words.items() if k in allowed}  # mostly well-formed: reach the geometry
     for letter in "LKPD":
         if letter in words:
@@ -315,7 +316,9 @@ def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, 
     try:
         tp = interpret(text, tool_offsets={"D": {1: 4.0, 2: 1.5}})
     except ProgramError:
+        tally(False)
         return
+    tally(True)
     assert np.isfinite(tp.end).all() and np.isfinite(tp.start).all()
     assert np.isfinite(tp.radius).all() and np.isfinite(tp.sweep).all()
     assert tp.end[:, 2].max() <= 60 + 1e-6
@@ -324,7 +327,7 @@ def test_random_special_and_pattern_blocks_give_an_error_or_a_finite_path(code, 
 
 
 def test_pattern_origin_follows_g91_and_radius_must_be_positive():
-    """X, Y of a pattern are absolute in G90 and from the current position in G91 (L4877); G120's radius
+    """X, Y of a pattern are absolute in G90 and from the current position in G91 (§3.5.7); G120's radius
     must be positive (alarm 215, ours: "represented by the positive number")."""
     a = interpret("G00 X10 Y10;\nG91 G121 X5 Y0 I2 J0. K2;\n")
     assert close(a.end[-1].tolist(), (17, 10, 0))

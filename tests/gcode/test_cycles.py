@@ -1,10 +1,13 @@
-"""Canned cycles G73-G89 (cycles.py): the manual's worked examples (seed notes §10 X30-X45) as exact tool
-paths, the modal rules (Table 3-7, G98/G99, G91, K), rigid tapping, and every cycle alarm of notes §9.4.
+"""Canned cycles G73-G89 (cycles.py): the manual's worked examples (docs/gsk25i_examples.md X30-X45) as exact
+tool paths, the modal rules (Table 3-7, G98/G99, G91, K), rigid tapping, and every cycle alarm of
+docs/gsk25i_alarms.md.
 
-Expected paths are written out by hand from the manual's step lists (notes §4.2), never produced by the
+Expected paths are written out by hand from the manual's step lists (§3.4), never produced by the
 code under test. The machine starts at the machine origin (Z0), so the initial level of these programs
 is Z0. The manual's examples end with ``G28 G91 X0 Y0 Z0`` (reference return, another part of the
 issue); the tests stop at G80.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -27,8 +30,8 @@ def records(text: str, **kw) -> list[dict]:
              "feed": float(tp.feed[n]), "dwell_s": float(tp.dwell_s[n]), "modes": int(tp.modes[n]),
              "spindle_rpm": float(tp.spindle_rpm[n]), "line": int(tp.line[n])} for n in range(len(tp.kind))]
 
-# The six holes of the standard examples X32-X43, as the literal program visits them (notes §10: hole 6
-# repeats hole 4's position; we follow the literal program).
+# The six holes of the standard examples X32-X43, as the literal program visits them (docs/gsk25i_examples.md:
+# hole 6 repeats hole 4's position; we follow the literal program).
 SIX = "X300. Y-250. {data};\nY-550.;\nY-750.;\nX1000.;\nY-550.;\nG98 Y-750.;\nG80;\n"
 HOLES = [(300, -250), (300, -550), (300, -750), (1000, -750), (1000, -550), (1000, -750)]
 
@@ -95,7 +98,7 @@ def drop_zero_moves(expected):
 
 # ------------------------------------------------------------------ X35 G81, X36 G82, X39 G85, X43 G89
 @pytest.mark.parametrize(("code", "data", "r", "feed_out", "dwell"), [
-    ("G81", "Z-150. R-10. F120", -10, False, None),        # X35 (L2699-L2713)
+    ("G81", "Z-150. R-10. F120", -10, False, None),        # X35 (§3.4.5)
     ("G82", "Z-150. R-100. P1000 F120", -100, False, 1.0),  # X36: P1000 = 1 s at the bottom
     ("G85", "Z-150. R-120. F120", -120, True, None),        # X39: feed out to R
     ("G89", "Z-150. R-120. P1000 F120", -120, True, 1.0),   # X43: dwell, then feed out
@@ -113,7 +116,7 @@ def test_six_hole_examples(code, data, r, feed_out, dwell):
 
 
 def test_x34_g88_six_holes():
-    """X34 (the G80 example, L2652-L2667): G88 without P: at each bottom a feed hold (0 s exact-stop
+    """X34 (the G80 example, §3.4.4): G88 without P: at each bottom a feed hold (0 s exact-stop
     dwell) for the operator, whose retract we model as a rapid to R (G99) or the initial level (G98)."""
     text = "M3 S100;\nG90 G99 G88 " + SIX.format(data="Z-150. R-120. F120")
     expected = []
@@ -127,14 +130,14 @@ def test_g81_feed_and_rapid_kinds():
     recs = records("G90 G99 G81 X300. Y-250. Z-150. R-10. F120;\nG80;\n")
     lines = [r for r in recs if r["kind"] == "line"]
     assert len(lines) == 1 and lines[0]["feed"] == 120.0
-    # F survives G80 (L2418): a later G01 runs at F120 without an F word.
+    # F survives G80 (§3.4): a later G01 runs at F120 without an F word.
     recs = records("G90 G99 G81 X300. Y-250. Z-150. R-10. F120;\nG80;\nG01 X0\n")
     assert recs[-1]["kind"] == "line" and recs[-1]["feed"] == 120.0
 
 
 # ------------------------------------------------------------------ X31 G73, X37 G83: pecking
 def test_x31_g73_high_speed_peck():
-    """X31 (L2518-L2529): R-10, Z-15, Q5: one peck of 5 reaches the bottom exactly, so each hole is
+    """X31 (§3.4.1): R-10, Z-15, Q5: one peck of 5 reaches the bottom exactly, so each hole is
     rapid to R, feed to -15, rapid back to R (G99) or the initial level Z0 (hole 6, G98)."""
     text = ("M3 S1500;\nG90 G99 G73 X0 Y0 Z-15. R-10. Q5 F120;\nY-50.;\nY-80.;\nX10.;\nY10.;\nG98 Y75.;\n"
             "G80;\nM5;\nM30;\n")  # fmt: skip
@@ -147,7 +150,7 @@ def test_x31_g73_high_speed_peck():
 
 def test_g73_pecks_retract_by_p2010():
     """Q2 from R-10 to Z-15: feeds end at -12, -14, -15; after each peck a rapid up by d = 0.5 (P2010),
-    and the next feed starts there (notes §4.2)."""
+    and the next feed starts there (§3.4)."""
     got = path(records("G90 G98 G73 X0 Y0 Z-15. R-10. Q2 F120;\n"))
     assert got == [("rapid", (0, 0, -10)), ("line", (0, 0, -12)), ("rapid", (0, 0, -11.5)),
                    ("line", (0, 0, -14)), ("rapid", (0, 0, -13.5)), ("line", (0, 0, -15)),
@@ -155,7 +158,7 @@ def test_g73_pecks_retract_by_p2010():
 
 
 def test_x37_g83_peck_returns_to_r_and_reapproaches_to_d():
-    """X37 (L2814-L2828) first hole: R-100, Z-150, Q15: depths -115, -130, -145, -150; after each peck a
+    """X37 (§3.4.7) first hole: R-100, Z-150, Q15: depths -115, -130, -145, -150; after each peck a
     rapid to R and a rapid down to d = 0.5 (P2011) above the last depth; then rapid back to R (G99)."""
     got = path(records("G90 G99 G83 X300. Y-250. Z-150. R-100. Q15 F120;\n"))
     p = (300, -250)
@@ -174,7 +177,7 @@ def test_negative_q_is_used_as_positive_and_q_is_modal():
 
 
 def test_g83_q_in_a_block_that_does_not_drill_is_not_stored():
-    """L2806: Q only becomes modal from a drilling block; so the next hole has no Q (alarm 45)."""
+    """§3.4.7: Q only becomes modal from a drilling block; so the next hole has no Q (alarm 45)."""
     err = program_error("G90 G99 G83 F100 Q5;\nX5 Z-20. R0\n")
     assert err.alarm == 45 and err.line == 2
 
@@ -189,7 +192,7 @@ def test_missing_q_is_alarm_45(code):
 @pytest.mark.parametrize(("code", "tap_rpm", "back_rpm"), [("G84", 100.0, -100.0), ("G74", -100.0, 100.0)])
 def test_tapping_reverses_the_spindle_and_locks_the_override(code, tap_rpm, back_rpm):
     """X38/X32 first hole: R-120, Z-150, P300: spindle in the tapping direction (G84 CW, G74 CCW) at R,
-    feed in with the override locked, dwell 0.3 s, spindle reversed, feed out to R (L2533-L2895)."""
+    feed in with the override locked, dwell 0.3 s, spindle reversed, feed out to R (§3.4.2-§3.4.8)."""
     m = "M3" if code == "G84" else "M4"
     recs = records(f"{m} S100;\nG90 G99 {code} X300. Y-250. Z-150. R-120. P300 F120;\n")
     assert path(recs) == [("rapid", (300, -250, 0)), ("rapid", (300, -250, -120)), ("line", (300, -250,
@@ -203,7 +206,7 @@ def test_tapping_reverses_the_spindle_and_locks_the_override(code, tap_rpm, back
 
 @pytest.mark.parametrize("code", ["G74", "G84"])
 def test_x44_x45_rigid_tapping(code):
-    """X44/X45 (L3216, L3280): G00 X120 Y100; M29 S1000; G84 Z-100 R-20 F1000 (lead 1 mm). In, spindle
+    """X44/X45 (§3.4.14, §3.4.15): G00 X120 Y100; M29 S1000; G84 Z-100 R-20 F1000 (lead 1 mm). In, spindle
     stop, out to R with the spindle reversed, spindle stop, G98 (power-on) rapid to the initial level."""
     m = "M3" if code == "G84" else "M4"
     recs = records(f"{m} S500;\nG00 X120 Y100;\nM29 S1000;\n{code} Z-100 R-20 F1000;\nG80;\n")
@@ -214,9 +217,9 @@ def test_x44_x45_rigid_tapping(code):
 
 
 @pytest.mark.parametrize(("text", "alarm"), [
-    ("M29 S1000;\nG00 X10;\nG84 Z-10 R-2 F100;\n", 61),     # axis move between M29 and G84 (L3212)
+    ("M29 S1000;\nG00 X10;\nG84 Z-10 R-2 F100;\n", 61),     # axis move between M29 and G84 (§3.4.14)
     ("M29 S1000;\nS900;\nG84 Z-10 R-2 F100;\n", 61),        # S between M29 and G84
-    ("M29 S1000;\nM29;\n", 61),                              # M29 while in M29 (L3276)
+    ("M29 S1000;\nM29;\n", 61),                              # M29 while in M29 (§3.4.15)
     ("M29 S1000;\nG81 Z-10 R-2 F100;\n", 61),               # M29 then a cycle that does not tap
     ("M29 S1200;\nG84 Z-10 R-2 F100;\n", 200),              # S above the gear maximum (P2141/2142 = 1000)
     ("M29 S1000;\nG84 Z-10 R-2 F5000;\n", 61),              # F above the cutting-feed limit (P1225 = 4000)
@@ -228,9 +231,9 @@ def test_rigid_tapping_alarms(text, alarm):
 
 # ------------------------------------------------------------------ G76, G86, G87, G88 (X33, X40, X41, X42)
 def test_x33_g76_as_printed_is_an_error_and_joined_is_fine_boring():
-    """X33 (L2622-L2633) splits the first hole's data over three blocks; as written the first block drills
-    with no Z/R, which the rule "the first cycle block must carry all required data" (L2418) rejects.
-    Joined into one block (the notes' repair) it bores: feed in, dwell 1 s, oriented stop, rapid shift
+    """X33 (§3.4.3) splits the first hole's data over three blocks; as written the first block drills
+    with no Z/R, which the rule "the first cycle block must carry all required data" (§3.4) rejects.
+    Joined into one block (the corrected reading) it bores: feed in, dwell 1 s, oriented stop, rapid shift
     +X by Q5 (2000#4/#5 = 00 in G17), rapid out, shift back, M03."""
     err = program_error("M3 S500;\nG90 G99 G76 X300. Y-250.;\nZ-150. R-100. Q5;\nP1000 F120;\n")
     assert err.code == "cycle-missing-data" and err.alarm == 61 and err.line == 2
@@ -265,7 +268,7 @@ def test_x40_g86_spindle_stop_and_rapid_out():
 
 
 def test_x41_g87_back_boring():
-    """X41 (L3060-L3070): Z-120 above R-150, Q5, P1000. At the initial level: oriented stop, shift +X 5,
+    """X41 (§3.4.11): Z-120 above R-150, Q5, P1000. At the initial level: oriented stop, shift +X 5,
     rapid down to R (under the part), shift back, M03, feed up to Z, dwell 1 s, oriented stop, shift,
     rapid up to the initial level, shift back, M03. The return is the initial level even under G99."""
     recs = records("M3 S500;\nG90 G99 G87 X300. Y-250. Z-120. R-150. Q5. P1000 F120;\n")
@@ -290,7 +293,7 @@ def test_x42_g88_feed_hold_then_operator_retract():
 
 # ------------------------------------------------------------------ modal rules
 def test_x30_table_3_7_data_retention():
-    """Table 3-7 (L2428-L2446) step by step, positions chosen so each step is visible."""
+    """Table 3-7 (§3.4) step by step, positions chosen so each step is visible."""
     text = ("G00 X0 Y0 M3 S100;\n"            # 1 not a cycle
             "G99 G81 X10 Y0 Z-20 R-5 F100;\n"  # 2 first hole: Z R F given
             "Y10;\n"                            # 3 G81 again at Y10
@@ -327,27 +330,27 @@ def test_group01_code_in_the_cycle_block_is_alarm_61(motion):
 
 
 def test_a_cycle_code_leaves_group_01_as_it_was():
-    """After G80 the motion mode before the cycle (G01 here) continues (notes §2 rule 5); the G98 hole
+    """After G80 the motion mode before the cycle (G01 here) continues (§3 rule 5); the G98 hole
     left the tool at the initial level Z0."""
     got = path(records("G01 X1 F100;\nG81 X0 Y0 Z-10 R-1;\nG80;\nX4;\n"))
     assert got[-1] == ("line", (4, 0, 0))
 
 
 def test_block_without_position_only_stores_data():
-    """L2629: no X/Y/Z/R: no hole (P and F only change the data)."""
+    """§3.4.3: no X/Y/Z/R: no hole (P and F only change the data)."""
     got = path(records("G99 G82 X0 Y0 Z-10 R-1 P100 F100;\nP2000 F50;\nX1;\n"))
     assert got[-3:] == [("line", (1, 0, -10)), ("dwell", 2.0), ("rapid", (1, 0, -1))]
 
 
 def test_g91_r_from_the_initial_level_and_z_from_r():
-    """G91 (L2403): R-20 = 20 below the initial level Z50, Z-30 = 30 below R: R level 30, bottom 0."""
+    """G91 (§3.4): R-20 = 20 below the initial level Z50, Z-30 = 30 below R: R level 30, bottom 0."""
     got = path(records("G00 Z50;\nG91 G99 G81 X10 Y5 R-20 Z-30 F100;\n"))
     assert got[1:] == [("rapid", (10, 5, 50)), ("rapid", (10, 5, 30)), ("line", (10, 5, 0)), ("rapid",
         (10, 5, 30))]
 
 
 def test_k_repeats_in_g91_make_a_row_and_k0_stores_only():
-    """K3 in G91: three holes 10 apart (notes §4.1); K0: data only; K-2 = K2."""
+    """K3 in G91: three holes 10 apart (§3.4); K0: data only; K-2 = K2."""
     got = path(records("G00 Z10;\nG91 G98 G81 X10 R-5 Z-5 K3 F100;\n"))
     bottoms = [e for k, e in got if k == "line"]
     assert bottoms == [(10, 0, 0), (20, 0, 0), (30, 0, 0)]
@@ -359,7 +362,7 @@ def test_k_repeats_in_g91_make_a_row_and_k0_stores_only():
 
 
 def test_initial_level_is_latched_when_the_cycle_starts():
-    """G99 holes leave the tool at R; the initial level stays the Z at cycle start (L2461)."""
+    """G99 holes leave the tool at R; the initial level stays the Z at cycle start (§3.4)."""
     got = path(records("G00 Z25;\nG99 G81 X0 Y0 Z-10 R2 F100;\nX5;\nG98 X10;\n"))
     assert got[-1] == ("rapid", (10, 0, 25))
 
@@ -377,7 +380,7 @@ def test_cycle_block_in_inch_mode_scales_r_z_q():
     ("G81 X0 Y0 Z-5 R1;\n", "missing-feed", 11),              # no F ever
     ("G82 X0 Y0 Z-5 R1 P1.5 F10;\n", "decimal-point-not-allowed", 7),  # P is in ms
     ("G81 X0 Y0 Z-5 R1 K1.5 F10;\n", "bad-cycle", 61),
-    ("G81 X0 Y0 Z-5 R1 F10;\nG10 L2 P1 X0;\n", "cycle-not-allowed", 61),  # cancel before G10 (L1500)
+    ("G81 X0 Y0 Z-5 R1 F10;\nG10 L2 P1 X0;\n", "cycle-not-allowed", 61),  # cancel before G10 (§3.2.9)
     ("G81 X0 Y0 Z-5 R1 I3 F10;\n", "unused-word", None),     # I means nothing to G81
     ("G121 G81 X0 Y0 Z-5 R1 I3 J0 K2 F10;\n", "cycle-conflict", 61),
 ])  # fmt: skip
@@ -398,7 +401,7 @@ def test_g28_in_cycle_mode_is_alarm_44():
 # ------------------------------------------------------------------ with polar input and tool length offsets
 @pytest.mark.parametrize("positions", ["Y150;\nY270;\n", "G91 Y120;\nY120;\n"])
 def test_x21_polar_bolt_circle(positions):
-    """X21 (L1815-L1845): G16 with G81: X = radius 100, Y = angle 30°, 150°, 270° (absolute), or +120°
+    """X21 (§3.2.16): G16 with G81: X = radius 100, Y = angle 30°, 150°, 270° (absolute), or +120°
     each (G91 angles): holes at (86.603, 50), (-86.603, 50), (0, -100). The G91 version keeps the hole
     depth: R and Z were programmed in G90 and stay absolute levels (docs/gcode.md: the manual's two G91
     examples, X21 and X46 N024, both mean the same holes)."""
@@ -409,7 +412,7 @@ def test_x21_polar_bolt_circle(positions):
 
 
 def test_x46_canned_cycles_with_tool_length_offset():
-    """X46 (L3293-L3330, notes §4.3 reconstruction) with H11 = 200, H15 = 190, H31 = 150. G43 Z0 Hn puts
+    """X46 (§3.4.15 reconstruction) with H11 = 200, H15 = 190, H31 = 150. G43 Z0 Hn puts
     the machine at Z = 0 + H, the initial level; every program level is shifted by +H (machine = program +
     H). Holes #1-#6: R-97, Z-153 (machine 103 / 47), G98 after #3 and #6 back to 200. #7-#10 (G82 P30 =
     0.03 s): R-97, Z-130 (machine 93 / 60). #11-#13 (G85): R-47, Z-153 with H31 (machine 103 / -3), N024
@@ -434,7 +437,7 @@ def test_x46_canned_cycles_with_tool_length_offset():
 
 
 def test_scaling_does_not_scale_q_d_or_the_shift():
-    """L1962: under G51 P2 the levels scale (R-10 → -20, Z-20 → -40, X5 → 10) but the peck depth Q2, the
+    """§3.2.17: under G51 P2 the levels scale (R-10 → -20, Z-20 → -40, X5 → 10) but the peck depth Q2, the
     G73 retract d = 0.5 and the G76 shift Q2 stay machine amounts: pecks end at -22, -24, …, -40 with
     0.5 retracts, and the G76 shift moves the machine 2 mm in +X."""
     got = path(records("G51 X0 Y0 Z0 P2;\nG90 G98 G73 X5 Y0 Z-20 R-10 Q2 F100;\nG80;\nG50;\n"))
@@ -449,15 +452,27 @@ def test_scaling_does_not_scale_q_d_or_the_shift():
 
 @pytest.mark.parametrize("text", ["G73 X0 Y0 Z-1000 R0 Q0.0001 F100;\n",
                                   "G81 Z-5 R1 F100 K0;\nG123 X0 Y0 I1 J1 P9999 K9999;\n",
-                                  "G126 X0 Y0 Z-1 R1 I10 J999999 L1 F100;\n"])
+                                  "G126 X0 Y0 Z-1 R1 I10 J999999 L1 F100;\n",
+                                  # 2273 pecks per hole are fine; times K9999 they grew past 15 GB
+                                  "G73 X0 Y0 Z-20 R5 Q0.011 K9999 F100;\n",
+                                  # K0 stores the data; the pattern's 99 x 99 holes each peck 2500 times
+                                  "G99 G83 X0 Y0 Z-20 R5 Q0.01 F100 K0;\nG123 X0 Y0 I1 J1 K99 P99;\n",
+                                  "G110 X0 Y0 Z-50 R1 I50 W1 V1 D0 Q0.1 L0.5 K9999 F100;\n"])
 def test_a_block_that_would_make_millions_of_moves_is_an_error(text):
     err = program_error(text)
-    assert err.code == "cycle-too-long"
+    assert err.code == "cycle-too-long" and err.line == text.count("\n")
+
+
+def test_the_move_bound_counts_repeats_and_holes_but_allows_real_cycles():
+    # A deep peck cycle: 1000 pecks of 0.1 mm, 9 holes; 99 x 99 plain holes; K = 99999 plain holes.
+    assert len(records("G99 G83 Z-100 R0 Q0.1 F100 K0;\nG123 X0 Y0 I5 J5 K3 P3;\nG80;\n")) > 9 * 1000
+    assert len(records("G99 G81 Z-2 R1 F100 K0;\nG123 X0 Y0 I1 J1 K99 P99;\nG80;\n")) == 99 * 99 * 3
+    assert len(records("G91 G81 X1 Z-2 R1 F100 K20000;\n")) == 20000 * 4
 
 
 def test_drilling_axis_follows_the_plane_with_fxy_and_cannot_change_in_the_cycle():
     """2000#0 FXY = 1: in G18 the drilling axis is Y (the bottom is the Y word, positions X/Z); a plane
-    change inside the cycle is an error (L2620). With FXY = 0 (standard) G18 still drills along Z."""
+    change inside the cycle is an error (§3.4.3). With FXY = 0 (standard) G18 still drills along Z."""
     from dataclasses import replace
 
     from cnc_gym.gcode.dialects.gsk25i import DIALECT

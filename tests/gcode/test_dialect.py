@@ -1,4 +1,7 @@
-"""Dialects are data: a variant is built from tables alone, and the core follows them."""
+"""Dialects are data: a variant is built from tables alone, and the core follows them.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -13,8 +16,8 @@ from cnc_gym.gcode.dialect import CodeSpec, gkey
 GSK = get_dialect("gsk25i")
 
 
-def test_registry_names_the_four_dialects_of_design_md():
-    assert set(DIALECT_MODULES) == {"gsk25i", "h4cm", "syntec", "azmc1"}
+def test_registry_names_the_seed_dialects_and_fanuc():
+    assert set(DIALECT_MODULES) == {"gsk25i", "fanuc", "h4cm", "syntec", "azmc1"}
     assert get_dialect(GSK) is GSK
 
 
@@ -55,7 +58,7 @@ def test_order_of_execution_is_table_data():
 
 
 def test_a_code_is_added_by_a_table_entry():
-    # G09 does not exist on the GSK 25i (seed notes §3.5). A dialect that has it as "exact stop, one shot
+    # G09 does not exist on the GSK 25i (§3.8). A dialect that has it as "exact stop, one shot
     # dwell-less" can map it onto an existing action — here G04's — with one table entry.
     gcodes = dict(GSK.gcodes)
     gcodes[gkey(9)] = CodeSpec("G09", 0, "dwell", step="dwell", uses_axes=True, words="P")
@@ -71,7 +74,7 @@ def test_a_dialect_naming_an_unknown_action_is_refused():
 
 
 def test_arc_tolerance_is_dialect_data():
-    # P1810 = 0 switches the radius check off (PARAM-VOL): the 0.02 mismatch is then accepted.
+    # P1810 = 0 switches the radius check off (GSK 25i parameter manual): the 0.02 mismatch is then accepted.
     lax = dataclasses.replace(GSK, arc_radius_tolerance_mm=0.0)
     arc = moves("G00 X10\nG03 X0 Y10.02 I-10 F100\n", dialect=lax)[-1]
     assert arc["radius"] == 10.0 and arc["end"] == [0.0, 10.0, 0.0]

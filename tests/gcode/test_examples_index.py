@@ -1,6 +1,6 @@
 """The index of the manual's worked examples (docs/gsk25i_examples.md) stays complete and true.
 
-The table lists X1-X80 of the seed notes §10 with the tests that check each one. These tests fail when a
+The table lists X1-X80 of docs/gsk25i_examples.md with the tests that check each one. These tests fail when a
 row is missing or doubled, when a test the table names disappears or is renamed, when a quality-A example
 is called out of scope without naming a code the dialect really rejects, or when the counts under the
 table no longer add up. Test nodes are found by parsing the test files (no pytest subprocess).
@@ -28,7 +28,7 @@ CODE = re.compile(r"`(G\d+(?:\.\d)?)`")
 @functools.cache
 def rows() -> list[dict[str, str]]:
     header, table = parse_table(INDEX.read_text(encoding="utf-8"))
-    assert header == ["#", "Manual lines", "What it tests", "Quality", "Status", "Reading"]
+    assert header == ["#", "Manual section", "What it tests", "Quality", "Status", "Reading"]
     return table
 
 
@@ -54,7 +54,7 @@ def test_every_example_has_exactly_one_row():
 def test_rows_are_well_formed():
     for row in rows():
         assert row["Quality"] in {"A", "B", "C"}, row
-        assert re.fullmatch(r"L\d+(-L\d+)?(, L\d+(-L\d+)?)*", row["Manual lines"]), row
+        assert re.fullmatch(r"§[\d.]+(-§[\d.]+)?(, §[\d.]+(-§[\d.]+)?)*", row["Manual section"]), row
         assert row["What it tests"] and row["Reading"], row
         status_kind(row["Status"])
 

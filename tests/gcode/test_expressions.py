@@ -1,4 +1,7 @@
-"""Expressions in [ ], # variables, null semantics and the GSK functions (seed notes §6.1-§6.4)."""
+"""Expressions in [ ], # variables, null semantics and the GSK functions (§3.7.2).
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -21,7 +24,7 @@ def x_of(expression: str, setup: str = "") -> float:
 @pytest.mark.parametrize(
     ("expression", "expected"),
     [
-        ("[1+2*3]", 7.0),  # * before + (L5589)
+        ("[1+2*3]", 7.0),  # * before + (§3.7.4)
         ("[[1+2]*3]", 9.0),
         ("[10-4-3]", 3.0),  # left to right
         ("[12/4/3]", 1.0),
@@ -32,7 +35,7 @@ def x_of(expression: str, setup: str = "") -> float:
         ("[6OR3]", 7.0),
         ("[6XOR3]", 5.0),
         ("[1+6AND3]", 3.0),  # AND is multiplicative: 1 + (6 AND 3)
-        ("[SIN[30]]", 0.5),  # degrees (L5527)
+        ("[SIN[30]]", 0.5),  # degrees (§3.7.4)
         ("[COS[60]]", 0.5),
         ("[TAN[45]]", 1.0),
         ("[ATAN[1]]", 45.0),
@@ -55,7 +58,7 @@ def test_expression_values(expression, expected):
 
 
 def test_round_in_an_assignment_rounds_to_an_integer():
-    # L5549-L5556: in an operation command ROUND rounds to an integer, half away from zero
+    # §3.7.4: in an operation command ROUND rounds to an integer, half away from zero
     # (ROUND[1.2345] = 1, ROUND[3.567] = 4). In an address it rounds to the address increment (below).
     assert x_of("#1", "#1=[ROUND[2.5]*100+ROUND[-2.5]*10+ROUND[1.2345]]\n") == 300 - 30 + 1
     assert x_of("#1", "#2=3.567\n#1=ROUND[#2]\n") == 4.0
@@ -73,12 +76,12 @@ def test_assignment_blocks_may_carry_n_and_o():
 
 
 def test_integer_literal_in_an_expression_is_a_plain_number():
-    # "#1=133 gives 133.000" (L5142); a constant without a point is read as if it had one (L5517).
+    # "#1=133 gives 133.000" (§3.7.2); a constant without a point is read as if it had one (§3.7.4).
     assert x_of("#1", "#1=133\n") == 133.0
 
 
 def test_null_variable_drops_the_word():
-    # L5136-L5140: with #1 = 0 and #2 null, "G00 X#1 Y#2" runs as "G00 X0".
+    # §3.7.2: with #1 = 0 and #2 null, "G00 X#1 Y#2" runs as "G00 X0".
     out = moves("G00 X5 Y5\n#1=0\nG00 X#1 Y#2\n")
     assert out[-1]["end"] == [0.0, 5.0, 0.0]
     # A sign on a bare null keeps it null: the word is still dropped.
@@ -86,7 +89,7 @@ def test_null_variable_drops_the_word():
 
 
 def test_null_arithmetic_rules():
-    # L5162-L5211: #2=#1 keeps null; #1*5 and #1+#1 give 0.
+    # §3.7.2: #2=#1 keeps null; #1*5 and #1+#1 give 0.
     setup = "G00 X9\n#2=#1\n#3=[#1*5]\n#4=[#1+#1]\n"
     out = moves(setup + "G00 X#2\nG00 Y#3 Z#4\n")
     assert out[0]["end"] == [9.0, 0.0, 0.0]  # only the first block moves: X#2 dropped (null)
@@ -94,7 +97,7 @@ def test_null_arithmetic_rules():
 
 
 def test_round_in_an_address_rounds_to_the_least_increment():
-    # L5549-L5585 (worked example X68) at the manual's 0.001 mm increment:
+    # §3.7.4 (worked example X68) at the manual's 0.001 mm increment:
     #   N3 X#1 moves 1.235, N4 X#2 moves 2.346, N5 X-[#1+#2] moves -3.580, leaving 0.001 off the start;
     #   N5 X-[ROUND[#1]+ROUND[#2]] moves -3.581 and returns exactly.
     coarse = dataclasses.replace(GSK, least_increment_mm=0.001, least_increment_inch=0.001)
@@ -108,7 +111,7 @@ def test_round_in_an_address_rounds_to_the_least_increment():
 
 
 def test_g_code_from_a_variable():
-    # "G#1" works (O9001 sample, L6291-L6299).
+    # "G#1" works (O9001 sample, §3.7.6).
     out = moves("#1=1\n#3=91\nG#1 G#3 X2 F100\nX2\n")
     assert [r["kind"] for r in out] == ["line", "line"] and out[-1]["end"][0] == 4.0
 
@@ -120,18 +123,18 @@ def test_g_code_from_a_variable():
         ("#1=0\nG00 X[2/#1]\n", "division-by-zero", 208),
         ("G00 X[5MOD0]\n", "division-by-zero", 208),
         ("G00 X[SQRT[-1]]\n", "math-domain", None),
-        ("G00 X[[[[[[1]]]]]]\n", "bracket-nesting", 209),  # 6 levels; the limit is 5 (L5593)
+        ("G00 X[[[[[[1]]]]]]\n", "bracket-nesting", 209),  # 6 levels; the limit is 5 (§3.7.4)
         ("G00 X[1+]\n", "missing-operand", 207),
         ("G00 X[1+2\n", "bad-expression", 206),
         ("G00 X[FOO[1]]\n", "bad-expression", 206),
         ("G00 X[POW[2]]\n", "bad-expression", 206),
-        ("#0=1\n", "bad-variable", 107),  # #0 is read-only (L5164)
+        ("#0=1\n", "bad-variable", 107),  # #0 is read-only (§3.7.2)
         ("#34=1\n", "bad-variable", 107),  # no such variable
         ("#1=2 X1\n", "bad-expression", 206),  # an assignment is alone in its block
-        ("#4001=1\n", "read-only-variable", 107),  # system variables #4001-#5105 cannot be assigned (L5441)
+        ("#4001=1\n", "read-only-variable", 107),  # system variables #4001-#5105 cannot be assigned (§3.7.3)
         ("#1=1\nIF[#1GT0]GOTO10\n", "sequence-not-found", 60),
         ("WHILE[#1LT3]DO1\n", "do-end", 96),  # DO1 without END1
-        ("G01 X10 ,C5 F100\n", "bad-character", 9),  # GSK chamfers with ,L (L1597), not Fanuc's ,C
+        ("G01 X10 ,C5 F100\n", "bad-character", 9),  # GSK chamfers with ,L (§3.2.11), not Fanuc's ,C
         ("G00 X[1.5AND1]\n", "math-domain", None),
     ],
 )
@@ -149,5 +152,44 @@ def test_pathological_expressions_are_errors_not_crashes():
 
 
 def test_deep_but_legal_nesting():
-    # Five levels, counting function brackets (L5593-L5597): SIN[[[[x]]]] is 5.
+    # Five levels, counting function brackets (§3.7.4): SIN[[[[x]]]] is 5.
     assert math.isclose(x_of("[SIN[[[[90]]]]]"), 1.0)
+
+
+HUGE = "1" + "0" * 400  # a float of it is inf
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        f"#{HUGE}=1\n",  # a variable number
+        f"#1=#{HUGE}\n",
+        f"GOTO{HUGE}\n",  # a GOTO target
+        f"IF[#1GT0]GOTO{HUGE}\n",
+        f"G00 X[{HUGE}]\n",  # an axis expression
+        f"#1=[{HUGE}AND3]\n",  # AND / MOD operands
+        f"#1=[3MOD{HUGE}]\n",
+        f"G65 P9000 A[{HUGE}]\nM30\nO9000\nM99\n",  # a macro argument
+        f"WHILE[1LT2]DO{HUGE}\nEND1\n",  # a loop identifier (int() of 4300+ digits is a ValueError)
+        "#1=" + "9" * 5000 + "\n",
+        "#1=123456789\n",  # 9 digits: beyond "max ±99999999"
+    ],
+)
+def test_constants_have_at_most_8_digits(text):
+    err = program_error(text)
+    assert (err.code, err.alarm, err.line) == ("too-many-digits", 3, 1)
+
+
+def test_8_digit_constants_and_long_decimals_are_fine():
+    assert x_of("[99999999/10000000]") == pytest.approx(9.9999999)
+    assert x_of("[000000001.5]") == 1.5  # leading zeros are no digits
+    assert x_of("[3.14159265358979]") == 3.1416  # neither are decimals (ROUND to the increment)
+    assert moves("#0000000001=2\nG01 X#1 F100\n")[0]["end"][0] == 2.0
+
+
+@pytest.mark.parametrize("text", [f"G65 P{HUGE}\n", f"G65 P9000 A{HUGE}\nM30\nO9000\nM99\n", f"M98 P{HUGE}\n",
+                                  f"G01 X{HUGE} F100\n", f"N{HUGE} G00 X1\n"])
+def test_huge_literal_words_are_too_long(text):
+    # As a word (not an expression), a 401-digit number is longer than the 16 characters of a word.
+    err = program_error(text)
+    assert (err.code, err.alarm, err.line) == ("word-too-long", 13, 1) and len(str(err)) < 600

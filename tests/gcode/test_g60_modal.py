@@ -1,8 +1,10 @@
-"""G60 single-direction positioning as a modal group-01 code (GSK 1870#0 MDL = 1; notes §3.6, L1340-L1381).
+"""G60 single-direction positioning as a modal group-01 code (GSK 1870#0 MDL = 1; §3.2.7).
 
 The standard setting (MDL = 0) keeps G60 one-shot (test_coordinates.py, X14). With MDL = 1 G60 stays in
 force, like G00, until another group-01 code. P1880 = (-8, 5, 0) mm as in X14: each move rapids to the end
-less the overrun, dwells 1 s (L1350) and rapids to the end (axes that do not move get no overrun).
+less the overrun, dwells 1 s (§3.2.7) and rapids to the end (axes that do not move get no overrun).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations

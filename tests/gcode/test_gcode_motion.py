@@ -1,6 +1,8 @@
-"""G00/G01/G02/G03/G04, planes, modality, feed and units (seed notes §3.1-§3.4, §3.13, §3.17-§3.19).
+"""G00/G01/G02/G03/G04, planes, modality, feed and units (§2.3.5, §3.2.1-§3.2.6, §3.2.15, §3.2.19, §5).
 
 Expected arc data are derived by hand from the geometry (stated per test), never from the code.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ def test_modal_motion_feed_and_axis_only_blocks():
 
 
 def test_f_in_a_g00_block_becomes_the_cutting_feed():
-    # L942-L944 (X7): "G0 X0 Y10 F800; G1 X20 Y50;" cuts at F800.
+    # §3.2.1 (X7): "G0 X0 Y10 F800; G1 X20 Y50;" cuts at F800.
     out = moves("G0 X0 Y10 F800\nG1 X20 Y50\n")
     assert out[0]["kind"] == "rapid" and "feed" not in out[0]
     assert out[1]["feed"] == 800.0
@@ -36,7 +38,7 @@ def test_motion_code_without_axes_only_sets_the_mode():
 
 
 def test_incremental_and_absolute_reach_the_same_point():
-    # X1 (L629-L633): from (100, 30), "G90 G0 X40 Y70" and "G91 G0 X-60 Y40" both end at (40, 70).
+    # X1 (§2.3.5): from (100, 30), "G90 G0 X40 Y70" and "G91 G0 X-60 Y40" both end at (40, 70).
     a = moves("G0 X100 Y30\nG90 G0 X40 Y70\n")[-1]["end"]
     b = moves("G0 X100 Y30\nG91 G0 X-60 Y40\n")[-1]["end"]
     assert a == b == [40.0, 70.0, 0.0]
@@ -62,7 +64,7 @@ def test_path_mode_flags_reach_the_segments():
 
 # ----------------------------------------------------------------------------- units
 def test_inch_program_converts_positions_and_feeds():
-    # G20: 1 inch = 25.4 mm; F in inch/min → mm/min (L2100-L2129).
+    # G20: 1 inch = 25.4 mm; F in inch/min → mm/min (§3.2.19).
     tp = interpret("G20\nG01 X1 Y-0.5 F10\nG91 X0.1\n")
     out = tp.to_records()
     assert close(out[0]["end"], [25.4, -12.7, 0.0]) and close(out[0]["feed"], 254.0)
@@ -85,7 +87,7 @@ def test_g20_in_the_same_block_applies_to_the_whole_block():
 
 # ----------------------------------------------------------------------------- dwell
 def test_dwell_p_is_milliseconds_x_is_seconds_p_wins():
-    # X13 (L1336): G04 X3.8 = G04 P3800 = 3.8 s. Both given: P wins (L1318).
+    # X13 (§3.2.6): G04 X3.8 = G04 P3800 = 3.8 s. Both given: P wins (§3.2.6).
     out = [r for r in records("G04 X3.8\nG04 P3800\nG04 P500 X9\n") if r["kind"] == "dwell"]
     assert [r["seconds"] for r in out] == [3.8, 3.8, 0.5]
 
@@ -97,9 +99,9 @@ def test_dwell_without_time_is_an_exact_stop():
 
 
 def test_dwell_errors():
-    assert program_error("G04 P1.5\n").code == "decimal-point-not-allowed"  # P takes no point (L1309)
+    assert program_error("G04 P1.5\n").code == "decimal-point-not-allowed"  # P takes no point (§3.2.6)
     err = program_error("G04 X-1\n")
-    assert (err.code, err.alarm) == ("bad-dwell", 18)  # L1319
+    assert (err.code, err.alarm) == ("bad-dwell", 18)  # §3.2.6
     assert program_error("G04 P-100\n").code == "bad-dwell"
     assert program_error("G04 Y1\n").code == "unused-word"
 
@@ -141,7 +143,7 @@ def test_arcs_in_all_planes_both_directions_ijk(plane, program, center, end, swe
 @pytest.mark.parametrize(("code", "sign"), [("G02", -1.0), ("G03", 1.0)])
 @pytest.mark.parametrize("r_sign", [1.0, -1.0])
 def test_r_arcs_in_every_plane_match_the_closed_form(plane_code, plane, axes, offsets, code, sign, r_sign):
-    # From (u, v) = (0, 0) to (6, 2) with |R| = 5 (the manual's X9 numbers, L1036-L1043). The two circles of
+    # From (u, v) = (0, 0) to (6, 2) with |R| = 5 (the manual's X9 numbers, §3.2.3). The two circles of
     # radius 5 through both points have centres on 6u + 2v = 20, u = 3 ± sqrt(1.5). The minor arc
     # (R > 0) subtends 2·asin(sqrt(10)/5) = 78.463°, the major (R < 0) 360° minus that. Going CW (G02)
     # along the minor arc the centre lies to the right of the chord: u = 3 + sqrt(1.5), v = 10 - 3u;
@@ -167,20 +169,20 @@ def test_r_arcs_in_every_plane_match_the_closed_form(plane_code, plane, axes, of
 
 
 def test_r_wins_over_ijk_regardless_of_order():
-    # L510, L1072: with R and I/J/K in one block, R is used and I/J/K are ignored.
+    # §1.3.3, §3.2.3: with R and I/J/K in one block, R is used and I/J/K are ignored.
     with_r = moves("G01 F100\nG02 I3 X6 Y2 R5 J-99\n")[-1]
     only_r = moves("G01 F100\nG02 X6 Y2 R5\n")[-1]
     assert with_r == only_r
 
 
 def test_ijk_are_incremental_even_in_g90():
-    # L1025-L1029: centre = start + (I, J) whatever G90/G91; from (10, 5), I-10 puts it at (0, 5).
+    # §3.2.3: centre = start + (I, J) whatever G90/G91; from (10, 5), I-10 puts it at (0, 5).
     arc = moves("G90 G00 X10 Y5\nG03 X0 Y15 I-10 F100\n")[-1]
     assert close(arc["center"], [0, 5, 0]) and close(arc["sweep_deg"], 90)
 
 
 def test_full_circles_with_ijk_and_no_motion_with_r():
-    # "G02 I_;" is a full circle (L1031); an R arc whose end is its start is 0°: no motion (L1036).
+    # "G02 I_;" is a full circle (§3.2.3); an R arc whose end is its start is 0°: no motion (§3.2.3).
     full = moves("G00 X10\nG02 I-10 F100\n")[-1]
     assert full["sweep_deg"] == -360 and full["end"] == [10.0, 0.0, 0.0] and close(full["center"], [0, 0, 0])
     ccw = moves("G00 X10\nG03 X10 Y0 I-10 J0 F100\n")[-1]
@@ -189,8 +191,8 @@ def test_full_circles_with_ijk_and_no_motion_with_r():
 
 
 def test_helix_full_turn_and_quarter_turn():
-    # G17 helix: X/Y follow the circle, Z rises linearly (L1078-L1097). Full turn of radius 10 with a
-    # 2 mm drop: length sqrt((2π·10)² + 2²); F is the speed of the projected arc (L1097), so the path
+    # G17 helix: X/Y follow the circle, Z rises linearly (§3.2.3). Full turn of radius 10 with a
+    # 2 mm drop: length sqrt((2π·10)² + 2²); F is the speed of the projected arc (§3.2.3), so the path
     # feed along the helix is F · length / planar length.
     tp = interpret("G00 X10\nG02 I-10 Z-2 F600\nG03 X0 Y10 Z0 I-10\n")
     full, quarter = tp.to_records()[1:]
@@ -248,7 +250,7 @@ def test_motion_errors(text, code, alarm):
 
 
 def test_worked_example_x10_arcs_absolute_radius_and_incremental():
-    # L1049-L1067 (X10): start (200, 40) set by G92 at the machine origin, so machine = program - (200, 40).
+    # §3.2.3 (X10): start (200, 40) set by G92 at the machine origin, so machine = program - (200, 40).
     # Arc 1: centre (140, 40), r 60, CCW 0° → 90°. Arc 2: centre (90, 100), r 50, CW from 0° to
     # atan2(-40, 30) = -53.1301°. The R and G91 versions describe the same two arcs.
     expected = [
@@ -272,11 +274,11 @@ def test_worked_example_x10_arcs_absolute_radius_and_incremental():
 
 
 def test_x27_g20_before_the_coordinate_system_and_no_switch_later():
-    # X27 (L2110): ``N10 G20; N20 G92 X_ Y_;`` — G20 alone at the start, then the coordinate system is set
+    # X27 (§3.2.19): ``N10 G20; N20 G92 X_ Y_;`` — G20 alone at the start, then the coordinate system is set
     # in inch: G92 X1 Y2 makes the machine origin read (1 in, 2 in), so X0 Y0 is machine (-25.4, -50.8).
     out = moves("N10 G20;\nN20 G92 X1 Y2;\nN30 G00 X0 Y0;\n")
     assert out[0]["end"][:2] == [-25.4, -50.8]
-    # "Inch and metric input must not be switched during a program" (L2127): after a move or a G92/G52
+    # "Inch and metric input must not be switched during a program" (§3.2.19): after a move or a G92/G52
     # the switch is an error; repeating the mode in force (a safety line "G21 G90 G40") is not a switch.
     for text in ("G21\nG01 X1 F10\nG20\n", "G92 X1\nG20\n", "G52 X1\nG20 G00 X0\n"):
         assert program_error(text).code == "units-switch"

@@ -1,7 +1,10 @@
-"""Golden traces from the manual's worked examples (seed notes §10) that fall inside this issue's scope.
+"""Golden traces from the manual's worked examples (docs/gsk25i_examples.md) that fall inside this issue's
+scope.
 
 Each expected trace is worked out by hand from the example's geometry; the reasoning is next to it. The
 comparison covers every record key of the ``cnc-gym trace`` contract.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ def assert_trace(actual: list[dict], expected: list[dict]) -> None:
                 assert close(got[key], value, 1e-6), (key, got[key], value)
 
 
-# X2 (L647-L663): modality of G0/G1/F/Y and the power-on G00.
+# X2 (§2.4): modality of G0/G1/F/Y and the power-on G00.
 X2 = """O00001
 G0 X100 Y100
 X20 Y30
@@ -43,8 +46,8 @@ def test_x2_modal_program():
     ])  # fmt: skip
 
 
-# X57 (L4061-L4085): the classic contour, without its G41 D07 (cutter compensation is a later issue), with
-# the two repairs the notes give: N7 restored from the Fanuc original, and N6's centre I650 (the printed
+# X57 (§3.5.2): the classic contour, without its G41 D07 (test_compensation.py runs it with), with
+# two repairs: N7 restored from the Fanuc original, and N6's centre I650 (the printed
 # I250 J0 fails the radius check: see test_x57_as_printed_fails_the_radius_check).
 X57 = """G92 X0 Y0 Z0
 N1 G90 G17 G00 X250.0 Y550.0
@@ -97,7 +100,7 @@ def test_x57_as_printed_fails_the_radius_check():
     assert str(err).startswith("x57.nc:7: ")
 
 
-# X10 + X13 + X7 in one program (L1049-L1067, L1336, L942): G92 origin, I/J arcs, dwells, F from a G00.
+# X10 + X13 + X7 in one program (§3.2.3, §3.2.6, §3.2.1): G92 origin, I/J arcs, dwells, F from a G00.
 X10 = """%
 O0010
 N1 G92 X200.0 Y40.0 Z0
@@ -113,7 +116,7 @@ N7 M30
 
 def test_x10_arcs_and_dwells():
     # G92 at the machine origin: machine = program - (200, 40, 0). N2 is no motion (already there) but its
-    # F300 becomes the cutting feed (L942). Arcs as in test_motion.test_worked_example_x10_*.
+    # F300 becomes the cutting feed (§3.2.1). Arcs as in test_motion.test_worked_example_x10_*.
     assert_trace(records(X10), [
         {"kind": "arc", "line": 5, "start": [0, 0, 0], "end": [-60, 60, 0], "center": [-60, 0, 0],
          "plane": "XY", "sweep_deg": 90, "radius": 60, "feed": 300},

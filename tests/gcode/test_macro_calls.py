@@ -1,5 +1,8 @@
-"""Macro calls: G65, G66/G67, calls by G/M/T code, and the manual's worked macro programs (seed notes §6.6,
-§6.8; §10 X65-X77). Each test derives its expected path by hand from the manual's rules."""
+"""Macro calls: G65, G66/G67, calls by G/M/T code, and the manual's worked macro programs (§3.7.3-
+§3.7.8; worked examples X65-X78). Each test derives its expected path by hand from the manual's rules.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -38,13 +41,13 @@ def locals_after(call: str) -> dict[int, float]:
 
 
 def test_argument_specification_i():
-    # L5892-L5914: A B C → #1-#3, I J K → #4-#6, D E F → #7-#9, H #11, M #13, Q R S T U V W X Y Z → #17-#26.
+    # §3.7.6: A B C → #1-#3, I J K → #4-#6, D E F → #7-#9, H #11, M #13, Q R S T U V W X Y Z → #17-#26.
     got = locals_after("G65 P9 A1 B2 C3 I4 J5 K6 D7 E8 F9 H11 M13 Q17 R18 S19 T20 U21 V22 W23 X24 Y25 Z26")
     assert got == {i: float(i) for i in (*range(1, 10), 11, 13, *range(17, 27))}
 
 
 def test_argument_specification_ii():
-    # L5916-L5960: I/J/K groups 1..10 fill #4-#33 in threes; an omitted letter leaves its variable null
+    # §3.7.6: I/J/K groups 1..10 fill #4-#33 in threes; an omitted letter leaves its variable null
     # ("I1 K1 I2" puts I2 in #7).
     got = locals_after("G65 P9 A1 I4 J5 K6 I7 J8 K9 I10 K12 J14 I16 I19 I22 I25 I28 I31 J32 K33")
     # I10 K12 | J14 (J after K: new group 4 → #14) | I16 (group 5) | I19 | I22 | I25 | I28 | I31 J32 K33
@@ -53,7 +56,7 @@ def test_argument_specification_ii():
 
 
 def test_mixed_specifications_later_wins():
-    # L5962-L5968 (Fanuc original of the lost figure): A1.0 B2.0 I-3.0 I4.0 D5.0 → #1 1, #2 2, #4 -3,
+    # §3.7.6 (Fanuc original of the lost figure): A1.0 B2.0 I-3.0 I4.0 D5.0 → #1 1, #2 2, #4 -3,
     # #7 = 5.0: I4.0 (second I → group 2 → #7) is overwritten by the later D5.0 (#7).
     got = locals_after("G65 A1.0 B2.0 I-3.0 I4.0 D5.0 P9")
     assert got == {1: 1.0, 2: 2.0, 4: -3.0, 7: 5.0}
@@ -92,7 +95,7 @@ def test_macro_nesting_four_levels_and_five_is_alarm_77():
 
 
 def test_macro_and_subprogram_nesting_are_counted_separately():
-    # Four M98 levels inside four G65 levels: each kind has its own limit of 4 (L6364, L6379).
+    # Four M98 levels inside four G65 levels: each kind has its own limit of 4 (§3.7.6, §3.7.7).
     macros = "".join(f"O{i}\nG65 P{i + 1}\nM99\n" for i in range(1, 4)) + "O4\nM98 P11\nM99\n"
     subs = "".join(f"O{i}\nM98 P{i + 1}\nM99\n" for i in range(11, 14)) + "O14\nG00 X1\nM99\n"
     assert ends("G65 P1\nM30\n" + macros + subs) == [(1.0, 0.0, 0.0)]
@@ -128,7 +131,7 @@ O9082 = "O9082\nG00 Z#18\nG01 Z#26\nG04 X#24\nG00 Z-[ROUND[#18]+ROUND[#26]]\nM99
 
 
 def test_g66_drilling_macro_x74():
-    # L6162-L6175 (the call's "X (point Z)" read as Z): G66 P9082 R-20 Z-10 X0.5 in G91. After each block
+    # §3.7.6 (the call's "X (point Z)" read as Z): G66 P9082 R-20 Z-10 X0.5 in G91. After each block
     # that moves, the macro rapids down 20, feeds down 10, dwells 0.5 s, rapids back up 30. The G66 block
     # itself and the M05 block (no motion) do not call; after G67 the move calls nothing.
     text = ("G90 G00 X0 Y0 Z50 F100\nG91\nG66 P9082 R-20 Z-10 X0.5\nX10\nY10\nM05\nG67\nX10\nM30\n"
@@ -143,7 +146,7 @@ def test_g66_drilling_macro_x74():
 
 
 def test_multiple_modal_calls_x75_order():
-    # L6196-L6230 (figure lost; Fanuc order): a move in the main program calls the latest G66 (P9200); a
+    # §3.7.6 (figure lost; Fanuc order): a move in the main program calls the latest G66 (P9200); a
     # move inside P9200 calls the earlier one (P9100); moves inside P9100 call nothing. Incremental moves
     # make every block a segment; the order of source lines must be 1-1, 2-1, 1-2, 3-1, 2-1, 3-2, 2-1, 1-3.
     text = """G91 G00
@@ -167,7 +170,7 @@ M99
 
 
 def test_g66_arguments_are_fixed_at_the_g66_block():
-    # "Local variables are not set each time a modal call is performed" (L6158): every call starts from the
+    # "Local variables are not set each time a modal call is performed" (§3.7.6): every call starts from the
     # G66 block's arguments, whatever the macro did to its copy last time.
     text = "G91 G00\nG66 P20 A1\nX1\nX1\nG67\nM30\nO20\n#1=#1+1\nY#1\nM99\n"
     assert [e[1] for e in ends(text)] == [0.0, 2.0, 2.0, 4.0]
@@ -194,7 +197,7 @@ def test_g66_modal_state_shows_in_4012():
 
 # --------------------------------------------------------------------------- calls by G, M and T codes
 def test_macro_call_by_g_code():
-    # Parameter 6050 = 12 → G12 calls O9010 like G65 (L6232-L6279). The manual's body is garbled (X76); this
+    # Parameter 6050 = 12 → G12 calls O9010 like G65 (§3.7.6). The manual's body is garbled (X76); this
     # one mills the same kind of full circle: radius = |I| - wear of offset D (#[2000+#7]).
     body = "O9010\n#1=ABS[#4]-#[2000+#7]\nG91 G01 X#1 F100\nG03 I-#1\nG01 X-#1\nM99\n"
     text = "#2001=2\nG12 I10 D1\nM30\n" + body
@@ -207,14 +210,14 @@ def test_macro_call_by_g_code():
 
 
 def test_code_is_ordinary_inside_its_own_macro():
-    # Inside a program called by M06 (6071 → O9001), M06 is the ordinary tool change (L6265, L6331).
+    # Inside a program called by M06 (6071 → O9001), M06 is the ordinary tool change (§3.7.6).
     text = "T5 M06\nM30\nO9001\nG00 Z10\nM06\nM99\n"
     tp = interpret(text, macro_calls={"m_sub": {6: 9001}})
     assert [tuple(e) for e in tp.end.tolist()] == [(0.0, 0.0, 10.0)]
 
 
 def test_subprogram_call_by_m_code_x77():
-    # L6291-L6299: M06 → O9001 saves and restores the modal groups 01 and 03 with #4001/#4003 and G#1 G#3.
+    # §3.7.6: M06 → O9001 saves and restores the modal groups 01 and 03 with #4001/#4003 and G#1 G#3.
     # The builder-specific M20-M23 and the G28 reference moves are left out (they need the machine's PLC);
     # what is tested is the save/restore and that the block's other words run before the call (T5).
     body = "O9001\n#1=#4001\n#3=#4003\nG91 G00 Z10\nZ-10\nG#1 G#3 M99\n"
@@ -236,7 +239,7 @@ def test_macro_call_by_m_code_with_arguments():
 
 
 def test_subprogram_call_by_t_code():
-    # 6001#0 TCS: "G00 X5 T7" ≡ "#149=7; G00 X5 M98 P9000" (L6321-L6333). The T is not a tool selection;
+    # 6001#0 TCS: "G00 X5 T7" ≡ "#149=7; G00 X5 M98 P9000" (§3.7.6). The T is not a tool selection;
     # inside O9000, T#149 is an ordinary T.
     text = "G00 X5 T7\nG00 X6\nM30\nO9000\nG00 Y#149\nT#149\nM99\n"
     tp = interpret(text, macro_calls=MacroCalls(t_sub=9000))
@@ -257,19 +260,19 @@ def test_bad_macro_call_tables(bad):
         interpret("G00 X1\n", macro_calls=bad)
 
 
-# --------------------------------------------------------------------------- §6.8 worked macro programs
+# ------------------------------------------------------------------ worked macro programs (§3.7.3-§3.7.8)
 O9081 = "O9081\n#3003=1\nG00 Z#18\nG01 Z#26\nG00 Z-[ROUND[#18]+ROUND[#26]]\n#3003=0\nM99\n"
 
 
 def test_o9081_g81_equivalent_x65():
-    # L5326-L5344: G65 P9081 L2 R-20 Z-10 in G91 from Z50: down 20 rapid, 10 feed, up 30 rapid; twice.
+    # §3.7.3: G65 P9081 L2 R-20 Z-10 in G91 from Z50: down 20 rapid, 10 feed, up 30 rapid; twice.
     text = "G90 G00 X10 Y10 Z50 F100\nG91\nG65 P9081 L2 R-20 Z-10\nM30\n" + O9081
     assert ends(text) == [(10, 10, 50), (10, 10, 30), (10, 10, 20), (10, 10, 50), (10, 10, 30), (10, 10, 20),
                           (10, 10, 50)]  # fmt: skip
 
 
 def test_o9084_tapping_with_3004_x66():
-    # L5357-L5375: #3004=7 makes feed hold, override and exact stop invalid for the tapping feed in and
+    # §3.7.3: #3004=7 makes feed hold, override and exact stop invalid for the tapping feed in and
     # out: those segments are OVERRIDE_LOCKED; the rapids before and after are not. M04 reverses the spindle
     # for the way out.
     body = ("O9084\n#3003=1\nG00Z#18\n#3004=7\nG01Z#26\nM05\nM04\nZ-#26\n#3004=0\nM05\nM03\nG00Z-#18\n"
@@ -290,7 +293,7 @@ def test_exact_stop_disabled_by_3004_bit_2():
 
 
 def test_o9086_restores_the_distance_mode_x67():
-    # L5429-L5440: the macro switches to G91 and restores group 03 from #4003 with G#1 at M99. The caller's
+    # §3.7.3: the macro switches to G91 and restores group 03 from #4003 with G#1 at M99. The caller's
     # X5 Z40 after the call is therefore absolute.
     body = "O9086\n#1=#4003\n#3003=1\nG00 G91 Z#18\nG01 Z#26\nM05\nG00 Z-[#18+#26]\nM03\n#3003=0\nG#1 M99\n"
     text = "G90 G00 Z50 F100 S100 M03\nG65 P9086 R-20 Z-10\nX5 Z40\nM30\n" + body
@@ -321,7 +324,7 @@ M99
     [(3, [30.0, 150.0, 270.0]), (-3, [30.0, -90.0, -210.0])],  # h < 0 counts clockwise
 )  # fmt: skip
 def test_bolt_circle_o9200_o9207_x71_x72(h, angles):
-    # L5970-L6080 (the X#101 Y#102 line and #100=#100+1 restored): datum (100, 50), R20, first hole at
+    # §3.7.6 (the X#101 Y#102 line and #100=#100+1 restored): datum (100, 50), R20, first hole at
     # A30, holes at A + 360(i-1)/H. After the macro the datum is restored and #100 counts the holes.
     call = f"G90 G00\nG65 P9200 X100 Y50\nG65 P9207 R20 A30 H{h}\nG00 X#101 Y#102 Z#100\nM30\n"
     text = call + O9200 + O9207
@@ -357,7 +360,7 @@ M99
 
 
 def test_unequal_pitch_line_o9203_x73():
-    # L6082-L6134 (the second "#2=#102" read as #3=#102, "D01"/"D02" as DO1/DO2, "LEO" as LE0): spec II
+    # §3.7.6 (the second "#2=#102" read as #3=#102, "D01"/"D02" as DO1/DO2, "LEO" as LE0): spec II
     # arguments I1 K1 I2 K2 …: K holes at pitch I, group after group, along angle A from the datum.
     # A30, I10 K2, I5 K3 → distances 10, 20, 25, 30, 35.
     text = "G90 G00\nG65 P9200 X1 Y2\nG65 P9203 A30 I10 K2 I5 K3\nG00 Z#100\nM30\n" + O9200 + O9203
@@ -369,7 +372,7 @@ def test_unequal_pitch_line_o9203_x73():
 
 
 def test_combined_holes_sample_2():
-    # L6178-L6194 with G00 positioning instead of G81: G66 P9207 makes every hole O9203 moves to the centre
+    # §3.7.6 with G00 positioning instead of G81: G66 P9207 makes every hole O9203 moves to the centre
     # of a bolt circle (O9207 reads the datum #101/#102 that O9203 has just set, and restores it).
     # Line A0 I10 K2 from (0, 0): holes at X10 and X20; each gets two holes of radius 2 at 0° and 180°.
     text = ("G90 G00\nG65 P9200 X0 Y0\nG66 P9207 R2 A0 H2\nG65 P9203 A0 I10 K2\nG67\nG00 Z#100\nM30\n"
@@ -417,7 +420,7 @@ N4 M99
 
 
 def test_grooving_o9802_runs_to_a_finite_path():
-    # L6386-L6403, quality C (heavily garbled; "D01"/"GOTO02"/"EQO" normalised, the lost DO1 put before the
+    # §3.7.8, quality C (heavily garbled; "D01"/"GOTO02"/"EQO" normalised, the lost DO1 put before the
     # depth step). Not a geometry oracle: it must run to a finite path or a clear error, never hang.
     # The body reads the width percentage from #23 (W), the call line prints T: W is passed.
     text = "#2001=5\nG90\nG65 P9802 X0 Y0 Z-10 R2 Q4 I100 J40 K1 W60 D1 F300 E100\nM30\n" + O9802

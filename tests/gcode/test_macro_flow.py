@@ -1,15 +1,19 @@
-"""Macro B control flow (seed notes §6.2, §6.4, §6.5; manual L5162-L5211, L5509-L5850).
+"""Macro B control flow (§3.7.2, §3.7.4-§3.7.5).
 
 Expected values are worked out by hand from the manual's rules; each test says how.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import pytest
 from gcode_helpers import close, moves, program_error
 
+from cnc_gym.errors import ConfigError
 from cnc_gym.gcode import get_dialect, interpret
 
 
@@ -21,7 +25,7 @@ def x_values(text: str, **kw) -> list[float]:
     return [round(r["end"][0], 6) for r in moves(text, **kw)]
 
 
-# --------------------------------------------------------------------------- null semantics (L5162-L5211)
+# --------------------------------------------------------------------------- null semantics (§3.7.2)
 @pytest.mark.parametrize(
     ("setup", "condition", "expected"),
     [
@@ -43,7 +47,7 @@ def test_conditions_tell_null_from_zero_only_in_eq_ne(setup, condition, expected
 
 
 def test_null_propagation_in_assignment_and_arithmetic():
-    # #2=#1 keeps null (the X word is dropped); #1*5 and #1+#1 are 0 (L5175-L5190).
+    # #2=#1 keeps null (the X word is dropped); #1*5 and #1+#1 are 0 (§3.7.2).
     text = "#2=#1\n#3=#1*5\n#4=#1+#1\nIF[#2EQ#0]THEN#10=1\nIF[#3EQ0]THEN#11=1\nIF[#4EQ0]THEN#12=1\n" \
            "G00 X#10 Y#11 Z#12\n"  # fmt: skip
     assert ends(text) == [(1.0, 1.0, 1.0)]
@@ -53,7 +57,7 @@ def test_null_propagation_in_assignment_and_arithmetic():
 @pytest.mark.parametrize(
     ("expression", "value"),
     [
-        ("1+2*3", 7.0),  # * binds tighter than + (L5589)
+        ("1+2*3", 7.0),  # * binds tighter than + (§3.7.4)
         ("[1+2]*3", 9.0),
         ("2OR1AND3", 3.0),  # AND is multiplicative: 2 OR (1 AND 3) = 2 | 1 = 3
         ("6XOR3", 5.0),  # 110 ^ 011 = 101
@@ -83,14 +87,15 @@ def test_bracket_nesting_beyond_five_levels_is_alarm_209():
 
 
 def test_values_beyond_1e47_overflow_alarm_102():
-    # §3.7.7 (L6386): variables hold at most ±10^47; 1E40 * 1E10 does not fit.
-    err = program_error("#1=10000000000*10000000000*10000000000*10000000000*10000000000\n")
+    # §3.7.7: variables hold at most ±10^47; 1E42 * 1E7 does not fit. (Constants have at most 8 digits,
+    # §3.7.4: 10000000 is 1E7.)
+    err = program_error("#1=10000000*10000000*10000000*10000000*10000000*10000000*10000000\n")
     assert (err.code, err.alarm) == ("overflow", 102)
-    assert x_values("#1=10000000000*10000000000*10000000000*10000000000\nG00 X[#1/#1]\n") == [1.0]
+    assert x_values("#1=10000000*10000000*10000000*10000000*10000000*10000000\nG00 X[#1/#1]\n") == [1.0]
 
 
 def test_roundoff_example_x68_with_a_0_001_increment():
-    # L5566-L5585 (notes X68) on a 0.001 mm controller: each variable is rounded to the address's increment
+    # §3.7.4 (example X68) on a 0.001 mm controller: each variable is rounded to the address's increment
     # when used, so N3 moves 1.235 and N4 2.346 but N5 moves -3.580 (#1+#2 = 3.5801 → 3.580): the tool ends
     # 0.001 from the start; with ROUND on each term it returns exactly (-[1.235 + 2.346] = -3.581).
     coarse = dataclasses.replace(get_dialect("gsk25i"), least_increment_mm=0.001)
@@ -102,7 +107,7 @@ def test_roundoff_example_x68_with_a_0_001_increment():
 
 
 def test_round_in_a_condition_rounds_to_an_integer():
-    # L5553: IF[#1 LE ROUND[#2]] with #2 = 3.567 compares with 4.0.
+    # §3.7.4: IF[#1 LE ROUND[#2]] with #2 = 3.567 compares with 4.0.
     assert ends("#1=3.9\n#2=3.567\nIF[#1LEROUND[#2]]THEN#3=1\nG00 X#3\n") == [(1.0, 0.0, 0.0)]
 
 
@@ -116,7 +121,7 @@ def test_comparisons_allow_eight_digit_roundoff():
 
 # --------------------------------------------------------------------------- WHILE / DO / END
 def test_while_loop_x70():
-    # L5724: #120 runs 1..10; each pass moves X to #120: ten moves X1 … X10.
+    # §3.7.5: #120 runs 1..10; each pass moves X to #120: ten moves X1 … X10.
     text = "#120=1\nN1 WHILE[#120LE10]DO1\nG01 X#120 F100\n#120=#120+1\nN4 END1\nM30\n"
     assert x_values(text) == [float(i) for i in range(1, 11)]
 
@@ -153,7 +158,7 @@ END1
 
 
 def test_do_without_while_loops_until_a_goto_leaves():
-    # L5720: DOm without WHILE repeats forever; GOTO out of the range is allowed (rule ⑥).
+    # §3.7.5: DOm without WHILE repeats forever; GOTO out of the range is allowed (rule ⑥).
     text = "#1=0\nDO1\n#1=#1+1\nG01 X#1 F100\nIF[#1GE3]GOTO9\nEND1\nN9 G00 Y1\n"
     assert ends(text) == [(1.0, 0.0, 0.0), (2.0, 0.0, 0.0), (3.0, 0.0, 0.0), (3.0, 1.0, 0.0)]
 
@@ -221,7 +226,7 @@ M99
 
 # --------------------------------------------------------------------------- GOTO and IF
 def test_goto_skips_forward_and_searches_backward():
-    # GOTO searches forward from the next block, then wraps to the start (notes §1.3 [INFERRED]).
+    # GOTO searches forward from the next block, then wraps to the start (inferred from §1.2.3).
     text = "#1=0\nN10 #1=#1+1\nIF[#1GE3]GOTO30\nGOTO10\nG00 X99\nN30 G00 X#1\n"
     assert ends(text) == [(3.0, 0.0, 0.0)]
 
@@ -234,7 +239,7 @@ def test_goto_picks_the_first_match_forward_then_wraps_for_duplicates():
 
 
 def test_computed_goto():
-    # GOTO#i and GOTO[expression] (L5672).
+    # GOTO#i and GOTO[expression] (§3.7.5).
     text = "#1=20\nGOTO#1\nN10 G00 X10\nN20 G00 Y20\nGOTO[#1+10]\nN25 G00 Z99\nN30 G00 Z30\n"
     assert ends(text) == [(0.0, 20.0, 0.0), (0.0, 20.0, 30.0)]
 
@@ -263,7 +268,7 @@ def test_statement_errors(text, code, alarm):
 
 
 def test_user_alarm_x69_names_the_alarm_and_message():
-    # L5685-L5694: with #1 >= 10 the jump reaches N150 #3000=150: alarm 3150 with the comment as message.
+    # §3.7.5: with #1 >= 10 the jump reaches N150 #3000=150: alarm 3150 with the comment as message.
     text = "#1=12\nIF[#1GE10]GOTO150\nG00 X1\nM99\nN150 #3000=150 (RANGE ERROR)\nM99\n"
     err = program_error(text)
     assert err.code == "user-alarm" and err.alarm == 3150 and err.line == 5 and "RANGE ERROR" in err.message
@@ -305,3 +310,35 @@ def test_max_blocks_must_be_a_positive_integer(bad):
 
     with pytest.raises(ConfigError):
         interpret("G00 X1\n", max_blocks=bad)
+
+
+# A loop that never ends but stays within the block budget for long: 2 000 000 blocks take seconds.
+_ENDLESS = "#1=0\nWHILE[#1LT1]DO1\nG91 G01 X1 F100\nX-1\nEND1\n"
+
+
+def test_interpretation_time_is_bounded():
+    start = time.process_time()
+    err = program_error(_ENDLESS, max_seconds=0.3)
+    assert (err.code, err.alarm) == ("time-budget", None) and "max_seconds" in err.message
+    assert err.line in (2, 5)  # the WHILE or the END (where control leaves the straight path)
+    assert time.process_time() - start < 3.0
+
+
+def test_tool_path_size_is_bounded():
+    err = program_error(_ENDLESS, max_segments=5000)
+    assert err.code == "segment-budget" and "5000" in err.message
+    # A single cycle block makes its moves under the same bounds (checked per hole).
+    err = program_error("G91 G81 X1 Z-1 R1 F100 K50000\n", max_segments=5000)
+    assert (err.code, err.line) == ("segment-budget", 1)
+    assert program_error("G91 G81 X1 Z-1 R1 F100 K99999\n", max_seconds=0.05).code == "time-budget"
+    # A subprogram that ends without M99 returns at the end of its text: checked there too, with its line.
+    err = program_error("M98 P1 L9999\nM30\nO1\nG91 G01 X1 F100\nX-1\n", max_segments=1000, file="p.nc")
+    assert (err.code, err.file, err.line) == ("segment-budget", "p.nc", 5)
+
+
+@pytest.mark.parametrize(("name", "bad"), [("max_seconds", 0), ("max_seconds", float("nan")),
+                                           ("max_seconds", "5"), ("max_segments", 0), ("max_segments", 1.5),
+                                           ("max_segments", True)])
+def test_bad_bounds_are_config_errors(name, bad):
+    with pytest.raises(ConfigError, match=name):
+        interpret("G00 X1\n", **{name: bad})

@@ -4,6 +4,7 @@ never a hang (the ``max_blocks`` bound), never a NaN."""
 from __future__ import annotations
 
 import numpy as np
+from gcode_helpers import success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -58,11 +59,14 @@ def _check(text: str) -> None:
         tp = interpret(text, max_blocks=MAX_BLOCKS)
     except ProgramError as err:
         assert err.code and "\n" not in str(err)
+        tally(False)
         return
+    tally(True)
     for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
         assert np.all(np.isfinite(getattr(tp, name))), name
 
 
+@success_share(0.05)
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(LINE, max_size=14), st.lists(LINE, max_size=6), st.lists(LINE, max_size=6))
 def test_random_macro_programs(main, sub, macro):
@@ -82,6 +86,7 @@ FRAGMENT = st.sampled_from(["", "#", "[", "]", "1", "0", "D", "O", "N", "GOTO", 
                             "L", "=", "M99", "G65"])  # fmt: skip
 
 
+@success_share(0.01)
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(SEEDS), st.lists(st.tuples(st.integers(0, 10_000), FRAGMENT), min_size=1, max_size=6))
 def test_mutated_macro_programs(seed, edits):

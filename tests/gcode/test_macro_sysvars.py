@@ -1,5 +1,8 @@
-"""System variables (seed notes §6.3; manual L5241-L5508). Expected values follow from the programs' own
-moves and settings, worked out in each test."""
+"""System variables (§3.7.3). Expected values follow from the programs' own
+moves and settings, worked out in each test.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -81,7 +84,7 @@ def test_servo_deviation_reads_zero():
 
 # --------------------------------------------------------------------------- offsets
 def test_work_offsets_2500_to_2906_read_and_write():
-    # #2500 + 100·(axis-1) + k: k = 0 external, 1..6 G54..G59 (L5493-L5502). #2702 = G55 Z.
+    # #2500 + 100·(axis-1) + k: k = 0 external, 1..6 G54..G59 (§3.7.3). #2702 = G55 Z.
     # External X 1 + G55 X 10 → G55 X0 goes to machine X11; G55 Z 5 → Z0 is machine Z5.
     text = "#2500=1\n#2502=10\n#2702=5\nG55 G00 X0 Y0 Z0\n#101=#2502+#2500\nG53 X#101 Y#2702\n"
     assert ends(text) == [(11.0, 0.0, 5.0), (11.0, 5.0, 5.0)]
@@ -121,7 +124,7 @@ def test_user_alarm_3000():
     err = program_error("G00 X1\n#3000=12 (TOOL NOT FOUND)\n")
     assert (err.code, err.alarm, err.message, err.line) == ("user-alarm", 3012, "TOOL NOT FOUND", 2)
     assert program_error("#3000=7\n").message == "user alarm 7"
-    assert program_error("#3000=201\n").code == "bad-variable"  # 0..200 (L5286)
+    assert program_error("#3000=201\n").code == "bad-variable"  # 0..200 (§3.7.3)
 
 
 def test_message_stop_3006():
@@ -171,7 +174,7 @@ def test_last_h_and_d_numbers():
 
 
 def test_skip_position_after_g31_and_extra_work_system_number():
-    # G31 with no skip signal runs to its end point; #5061-#5063 hold it (work coordinates, L5486).
+    # G31 with no skip signal runs to its end point; #5061-#5063 hold it (work coordinates, §3.7.3).
     # #4130 is the G54.1 P number in force.
     assert last("G31 X10 Y5 F100\nG00 Z#5061\n") == (10.0, 5.0, 10.0)
     assert last("G54.1 P3\nG00 X#4130\n") == (3.0, 0.0, 0.0)

@@ -1,7 +1,9 @@
-"""G05 P10000 / G06.2 NURBS interpolation (seed notes §3.21; manual L1201-L1303).
+"""G05 P10000 / G06.2 NURBS interpolation (§3.2.5).
 
 Expected geometry is computed independently of cnc_gym: a plain de Boor–Cox evaluation written here
 (``de_boor_cox``) for the manual's example, and closed forms (circle, ellipse) for the quarter circle.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from gcode_helpers import program_error, records
+from gcode_helpers import program_error, records, success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -21,9 +23,9 @@ from cnc_gym.gcode import interpret
 from cnc_gym.toolpath import SegmentKind
 
 # ----------------------------------------------------------------------------- the manual's example (X12)
-# L1297-L1301, verbatim except: (1) "K0.651784X25.768Y15.447Z0.000R5.000:" has a ':' for ';' in print;
-# (2) the G05 P10000 / G05 P0 wrapper the format requires (L1213) and (3) the `rank` = 4 knot-only blocks
-# after the last control point (L1244) are missing from the printed text (notes §3.21, X12). We add them:
+# §3.2.5, verbatim except: (1) "K0.651784X25.768Y15.447Z0.000R5.000:" has a ':' for ';' in print;
+# (2) the G05 P10000 / G05 P0 wrapper the format requires (§3.2.5) and (3) the `rank` = 4 knot-only blocks
+# after the last control point (§3.2.5) are missing from the printed text (§3.2.5, X12). We add them:
 # four K1.0 blocks (the last knot printed is 0.985023 < 1, and the last four knots must be equal).
 _MANUAL_POINTS = """\
 K0.000000X55.507Y52.139Z0.000R1.000; K0.000000X56.082Y49.615Z0.000R1.000;
@@ -80,7 +82,7 @@ def _parse_manual():
 
 
 def de_boor_cox(points, weights, knots, order, t):
-    """P(t) straight from the manual's definition (L1264-L1272): the basis by the de Boor–Cox recursion,
+    """P(t) straight from the manual's definition (§3.2.5): the basis by the de Boor–Cox recursion,
     N_{i,1} = 1 on [x_i, x_{i+1}) (the last non-empty span closed at x_m), 0/0 = 0."""
     n = len(points)
     last = max(i for i in range(len(knots) - 1) if knots[i] < knots[i + 1])
@@ -110,11 +112,11 @@ def test_manual_example_x12_is_one_exact_nurbs_segment():
     assert kinds[row + 1] == "RAPID"
     curve = tp.nurbs[row]
     points, weights, knots = _parse_manual()
-    assert len(points) == 50 and len(knots) == 54  # knot count = control points + rank (L1246)
+    assert len(points) == 50 and len(knots) == 54  # knot count = control points + rank (§3.2.5)
     assert curve.order == 4  # P4
     assert np.allclose(curve.control_points, points, atol=1e-12)
     assert np.allclose(curve.weights, weights, atol=1e-12)
-    # K keeps all six decimals (a length address would truncate K0.008286 to 0.0082, L685).
+    # K keeps all six decimals (a length address would truncate K0.008286 to 0.0082, §2.5).
     assert np.allclose(curve.knots, knots, atol=1e-12) and curve.knots[4] == 0.008286
     assert tp.feed[row] == 5000.0  # F5000 from the Z-21. block (modal; no F in NURBS mode)
     assert tp.line[row] == 9  # the segment belongs to the G6.2 block
@@ -177,7 +179,7 @@ def test_quarter_circle_matches_the_closed_form():
 
 
 def test_incremental_form_gives_the_same_curve():
-    # L1256: in G91 the first control point is written X0 Y0 Z0; later points are relative to the previous.
+    # §3.2.5: in G91 the first control point is written X0 Y0 Z0; later points are relative to the previous.
     text = (QUARTER.replace("G06.2 P3 K0 X10 Y0 F600\nK0 X10 Y10", "G91 G06.2 P3 K0 X0 Y0 Z0 F600\nK0 X0 Y10")
             .replace("K0 X0 Y10\nK1", "K0 X-10 Y0\nK1").replace("G01 X-5", "G90 G01 X-5"))  # fmt: skip
     a, b = interpret(QUARTER), interpret(text)
@@ -189,7 +191,7 @@ def test_transforms_map_the_control_points_exactly():
     # G51 with X×2, Y×1 about the origin, and a G54 offset of (100, 50, 5): the quarter circle becomes the
     # quarter ellipse x = 100 + 20 cos θ, y = 50 + 10 sin θ exactly (an affine map of the control points
     # is exact for NURBS, unlike arcs under unequal scaling).
-    # (G51 keeps the tool where it is, L1932: the G00 after it moves it to the image of (10, 0).)
+    # (G51 keeps the tool where it is, §3.2.17: the G00 after it moves it to the image of (10, 0).)
     text = "G10 L2 P1 X100 Y50 Z5\nG54\n" + (
         QUARTER.replace("G00 X10 Y0 Z0", "G51 X0 Y0 I2 J1\nG00 X10 Y0 Z0")
         .replace("G01 X-5\nG05 P0", "G01 X-5\nG50\nG05 P0"))  # fmt: skip
@@ -239,7 +241,7 @@ def test_omitted_axis_keeps_the_previous_control_point():
 
 
 def test_two_curves_and_axes_in_the_second_block():
-    # "When there is no command in the first block, the axes should be specified in the second" (L1276).
+    # "When there is no command in the first block, the axes should be specified in the second" (§3.2.5).
     text = ("G05 P10000\nG00 X0 Y0\nG06.2 P2 F100\nK0 X0 Y0\nK0 X4 Y0\nK1\nK1\n"
             "G06.2 P2 K0 X4 Y0\nK0 X4 Y3\nK1\nK1\nG05 P0\nG00 X0\n")  # fmt: skip
     recs = records(text)
@@ -268,13 +270,13 @@ _CURVE = "G06.2 P3 K0 X10 Y0 F600\nK0 X10 Y10 R0.7\nK0 X0 Y10\nK1\nK1\nK1\n"
 @pytest.mark.parametrize(
     ("text", "code", "line"),
     [
-        ("G00 X10 Y0\n" + _CURVE, "nurbs-outside-hpcc", 2),  # no G05 P10000 (L1209)
-        ("G05 P10000\nD1 G41 G01 X10 Y0 F100\n" + _CURVE, "nurbs-in-compensation", 3),  # L1289
-        (_HEAD + _CURVE.replace("K0 X10 Y0 F600", "K0 X11 Y0 F600"), "nurbs-start-point", 3),  # L1293
-        (_HEAD + _CURVE.replace("P3", "P5"), "nurbs-bad-rank", 3),  # P 2..4 (L1233)
+        ("G00 X10 Y0\n" + _CURVE, "nurbs-outside-hpcc", 2),  # no G05 P10000 (§3.2.5)
+        ("G05 P10000\nD1 G41 G01 X10 Y0 F100\n" + _CURVE, "nurbs-in-compensation", 3),  # §3.2.5
+        (_HEAD + _CURVE.replace("K0 X10 Y0 F600", "K0 X11 Y0 F600"), "nurbs-start-point", 3),  # §3.2.5
+        (_HEAD + _CURVE.replace("P3", "P5"), "nurbs-bad-rank", 3),  # P 2..4 (§3.2.5)
         (_HEAD + _CURVE.replace("K0 X0 Y10", "P3 K0 X0 Y10"), "nurbs-forbidden", 5),  # P: first block only
         (_HEAD + _CURVE.replace("K0 X0 Y10", "K0 X0 Y10 F300"), "nurbs-forbidden", 5),  # no feed change
-        (_HEAD + _CURVE.replace("K0 X0 Y10", "K0 X0 Y10 M08"), "nurbs-forbidden", 5),  # no M/S/T/B (L1281)
+        (_HEAD + _CURVE.replace("K0 X0 Y10", "K0 X0 Y10 M08"), "nurbs-forbidden", 5),  # no M/S/T/B (§3.2.5)
         (_HEAD + _CURVE.replace("K0 X0 Y10", "K0 X0 Y10 S100"), "nurbs-forbidden", 5),
         (_HEAD + _CURVE.replace("K0 X0 Y10", "G90 K0 X0 Y10"), "nurbs-forbidden", 5),  # no G codes
         (_HEAD + _CURVE.replace("K1\nK1\nK1\n", "K1\nG01 X5\n"), "nurbs-incomplete", 7),  # curve not finished
@@ -316,23 +318,52 @@ def test_at_most_p1407_blocks_per_curve():
 
 
 def test_canned_cycle_ends_at_g06_2():
-    # G06.2 is a group-01 code: it ends a canned cycle like G01 (L2655).
+    # G06.2 is a group-01 code: it ends a canned cycle like G01 (§3.4.4).
     text = "G81 X0 Y0 Z-5 R2 F100\nG05 P10000\nG06.2 P2 K0 X0 Y0 Z0\nK0 X5 Y0\nK1\nK1\nG01 X0\n"
     tp = interpret(text)
     assert (tp.kind == SegmentKind.NURBS).sum() == 1
 
 
+_coordinate = st.floats(-5, 5, allow_nan=False).map(lambda v: round(v, 3))
+_weight = st.one_of(st.none(), st.sampled_from([0.5, 1, 2, 0.01, 30]))
+_control_point = st.tuples(_coordinate, _coordinate, _weight)
+
+
+@success_share(0.2)
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.lists(st.tuples(st.sampled_from(["K", "X", "Y", "Z", "R", "P", "F", "G01", "M08", ""]),
-                          st.floats(-5, 5, allow_nan=False).map(lambda v: round(v, 3))),
-                min_size=0, max_size=12))  # fmt: skip
-def test_random_nurbs_programs_give_an_error_or_a_finite_path(words):
+@given(st.lists(_control_point, min_size=2, max_size=10),
+       st.lists(st.floats(0.05, 0.95).map(lambda v: round(v, 2)), max_size=10),
+       st.lists(st.tuples(st.integers(0, 20), st.sampled_from(["K0.5", "X1", "R2", "P1", "F100", "G01", "M08",
+                                                               "", "K-1", "R0", "K2 X1"])),
+                max_size=2))  # fmt: skip
+def test_random_nurbs_programs_give_an_error_or_a_finite_path(points, inner, noise):
+    # Mostly well-formed curves (rank 3: knots 0 0 0, sorted inner knots, 1 1 1; random points and
+    # weights) with now and then a stray or broken block: an error, or a finite path.
+    knots = [0.0, 0.0, *sorted(inner)][: len(points)]
+    missing = len(points) - len(knots)
+    knots += [round(knots[-1] + (1 - knots[-1]) * (k + 1) / (missing + 1), 6) for k in range(missing)]
     lines = [_HEAD, "G06.2 P3 K0 X10 Y0 F600\n"]
-    for letter, value in words:
-        lines.append(f"{letter}{value}\n" if letter not in ("G01", "M08", "") else f"{letter}\n")
+    for (x, y, weight), knot in zip(points, knots, strict=True):
+        lines.append(f"K{knot} X{x} Y{y}" + (f" R{weight}" if weight is not None else "") + "\n")
     lines.append("K1\nK1\nK1\nG01 X0\n")
+    for position, word in noise:
+        lines.insert(2 + position % (len(lines) - 1), word + "\n")
     try:
         tp = interpret("".join(lines))
     except ProgramError:
+        tally(False)
         return
+    tally(True)
     assert np.all(np.isfinite(tp.end)) and np.isfinite(tp.total_length)
+
+
+def test_extreme_weights_are_rejected_and_small_ones_are_cheap():
+    # R0.01 beside R1 (the issue's 8-line program) is a fine curve: its length table stays small.
+    text = _HEAD + "G06.2 P3 K0 X10 Y0 F600\nK0 X20 Y0 R0.01\nK0 X20 Y10 R1\nK0.5 X10 Y10 R0.01\nK1\nK1\nK1\n"
+    tp = interpret(text)
+    assert len(tp.nurbs[1]._leaf_t) < 200
+    # Weights more than a factor 1e6 apart cannot be evaluated to the path's accuracy: an error at the
+    # block that widens the range beyond it.
+    text = _HEAD + "G06.2 P4 K0 X10 Y0 R0.0001 F600\nK0 X20 Y0 R1000\nK0 X20 Y10\nK0 X10 Y10\n" + "K1\n" * 4
+    err = program_error(text)
+    assert (err.code, err.line) == ("nurbs-bad-weight", text.split("\n").index("K0 X20 Y0 R1000") + 1)

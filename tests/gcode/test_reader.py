@@ -1,4 +1,7 @@
-"""Lexical rules of the GSK 25i dialect (seed notes §1): %, O, N, comments, block skip, numbers, case."""
+"""Lexical rules of the GSK 25i dialect (§1.2.3): %, O, N, comments, block skip, numbers, case.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -32,15 +35,15 @@ def test_comments_case_spaces_and_semicolon_end_of_block():
 
 
 def test_number_without_decimal_point_is_mm_and_literals_are_truncated():
-    # GSK 1800#0 DPI = 1 (standard): X10 is 10 mm (L684). X9.87654 is truncated (not rounded) to the
-    # least input increment 0.0001 mm: 9.8765 (L685-L690, worked example X6).
+    # GSK 1800#0 DPI = 1 (standard): X10 is 10 mm (§2.5). X9.87654 is truncated (not rounded) to the
+    # least input increment 0.0001 mm: 9.8765 (§2.5, worked example X6).
     out = moves("G00 X10 Y9.87654 Z-0.00009\n")
     assert out[0]["end"] == [10.0, 9.8765, 0.0]  # -0.00009 truncates to -0.0000
 
 
 def test_truncation_at_a_0_001_mm_increment_and_dpi_0():
-    # The same literal at a 0.001 mm increment becomes 9.876 (L686, X6). With DPI = 0 a number without a
-    # point counts least increments: X10000 = 10 mm at 0.001 mm (the Fanuc-style examples, L4523).
+    # The same literal at a 0.001 mm increment becomes 9.876 (§2.5, X6). With DPI = 0 a number without a
+    # point counts least increments: X10000 = 10 mm at 0.001 mm (the Fanuc-style examples, §3.5.3).
     coarse = dataclasses.replace(GSK, least_increment_mm=0.001, least_increment_inch=0.001)
     assert moves("G00 X9.87654\n", dialect=coarse)[0]["end"][0] == 9.876
     dpi0 = dataclasses.replace(coarse, integer_is_unit=False)
@@ -62,34 +65,39 @@ def test_optional_block_skip(switches, expected_x):
 
 
 def test_block_skip_applies_to_program_end():
-    # "/M30" does not end the program when the switch is on (L516).
+    # "/M30" does not end the program when the switch is on (§1.3.3).
     assert len(moves("G00 X1\n/M30\nX2\n", block_skip=frozenset({1}))) == 2
     assert len(moves("G00 X1\n/M30\nX2\n")) == 1
 
 
 def test_slash_inside_a_block_discards_the_rest():
-    # L533-L535: "information between the slash and EOB code is ignored".
+    # §1.3.4: "information between the slash and EOB code is ignored".
     assert moves("G00 X10 /Y20\n")[0]["end"] == [10.0, 0.0, 0.0]
 
 
 def test_block_skip_syntax_errors():
-    assert program_error("//3 G00 X10.0\n").code == "bad-block-skip"  # written /1/3 (L522-L524)
+    assert program_error("//3 G00 X10.0\n").code == "bad-block-skip"  # written /1/3 (§1.3.4)
     assert program_error("/0 G00 X1\n").code == "bad-block-skip"
     err = program_error("/#2 G00 X100.0\n")
-    assert err.code == "variable-not-allowed"  # L5159
+    assert err.code == "variable-not-allowed"  # §3.7.2
 
 
 def test_o_and_n_must_lead_the_block():
     assert program_error("G00 N10 X1\n").code == "misplaced-word"
     assert program_error("G00 X1 O12\n").code == "misplaced-word"
-    assert program_error("N#3 Y200.0\n").code == "variable-not-allowed"  # L5160
-    assert program_error("O#1\n").code == "variable-not-allowed"  # L5158
+    assert program_error("N#3 Y200.0\n").code == "variable-not-allowed"  # §3.7.2
+    assert program_error("O#1\n").code == "variable-not-allowed"  # §3.7.2
 
 
 @pytest.mark.parametrize(
     ("text", "code", "alarm"),
     [
         ("G01 X1.2.3 F100\n", "bad-number", 7),  # 7 ILLEGAL USE OF DECIMAL POINT
+        ("G01 X1.23456.7 F100\n", "bad-number", 7),  # was truncated to X1.2345 silently
+        ("G01 X-1.23456.7 Y#1 F100\n", "bad-number", 7),  # the scanner's path
+        ("G05 P10000\nG06.2 P2 K1.2345. X0 Y0 F100\n", "bad-number", 7),  # G06.2's own K format
+        ("G05 P10000\nG06.2 P2 K0 X0 Y0 F100\nK1.2345. X1\n", "bad-number", 7),  # a ValueError
+        ("G110 X1 L2.55555.5\n", "bad-number", 7),  # a cycle's own L format
         ("G01 X. F100\n", "bad-number", 7),
         ("G01 X F100\n", "missing-value", 5),
         ("G01 X- F100\n", "bad-sign", 6),  # 6 ILLEGAL USE OF NEGATIVE SIGN
@@ -99,6 +107,7 @@ def test_o_and_n_must_lead_the_block():
         ("G01 X10 F100 (unclosed\n", "unclosed-comment", None),
         ("G01 X10 F100 )\n", "bad-character", 9),
         ("G00 X1 % \n", "bad-character", 9),
+        ("%G01 X1\n", "bad-character", 9),  # the tape mark's own check named no file
         ("M3.5\n", "decimal-point-not-allowed", 7),
         ("T1.0\n", "decimal-point-not-allowed", 7),
         ("N1234567 G00 X1\n", "value-out-of-range", 16),
@@ -109,7 +118,7 @@ def test_o_and_n_must_lead_the_block():
 )
 def test_lexical_errors(text, code, alarm):
     err = program_error(text, file="part.nc")
-    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", 1)
+    assert (err.code, err.alarm, err.file, err.line) == (code, alarm, "part.nc", text.count("\n"))
 
 
 def test_error_line_counts_blank_and_comment_lines():
@@ -124,7 +133,7 @@ def test_lowercase_and_uppercase_give_the_same_toolpath():
 
 
 def test_two_words_of_one_address_are_an_error():
-    # The manual's default is "the later one is valid" (L503); this interpreter raises instead
+    # The manual's default is "the later one is valid" (§1.3.2); this interpreter raises instead
     # (1802#6 AD2 = 1 behaviour), consistently with group conflicts. docs/gcode.md.
     assert program_error("G01 X1 X2 F100\n").code == "duplicate-word"
 
@@ -132,3 +141,53 @@ def test_two_words_of_one_address_are_an_error():
 def test_interpret_keeps_the_file_name_in_the_toolpath():
     tp = interpret("G00 X1\n", file="dir/part.nc")
     assert tp.files[0] == "dir/part.nc"
+
+
+@pytest.mark.parametrize(
+    ("text", "char"),
+    [
+        ("#1=²\n", "²"),  # a superscript passes str.isdigit
+        ("#²=1\n", "²"),
+        ("G01 X١٢ F100\n", "١"),  # Arabic-Indic digits were silently read as 12
+        ("#1=١٢\nG01 X#1 F100\n", "١"),
+        ("G01 X1.5 F１00\n", "１"),  # a fullwidth digit
+        ("G01 Xı F100\n", "ı"),  # 'ı'.upper() is the ASCII 'I'
+        ("G0ﬁ\n", "ﬁ"),  # 'ﬁ'.upper() is 'FI'
+        ("G01 X1 F100\u00a0Y2\n", "\u00a0"),  # a no-break space is not a space
+        ("G01 X1 F100\u2028Y2\n", "\u2028"),  # nor a line break
+    ],
+)
+def test_only_ascii_is_program_text(text, char):
+    # Only ASCII letters and digits are program text: anything else is alarm 9 ILLEGAL CHARACTERS.
+    err = program_error(text, file="part.nc")
+    assert (err.code, err.alarm, err.line) == ("bad-character", 9, 1)
+    assert repr(char) in err.message
+
+
+def test_comments_may_hold_any_text_and_lines_break_at_cr_or_lf_only():
+    assert len(records("G00 X1 (Maß ½ – ok)\r\nG00 X2\rG00 X3\n")) == 3
+    # FS, NEL and U+2029 are no line breaks (str.splitlines would split there): an editor's line numbers.
+    err = program_error("G00 X1\nG00 X2\x1cG00 X3\nG00 X4\u2029\n")
+    assert (err.code, err.line) == ("bad-character", 2)
+
+
+@pytest.mark.parametrize(
+    ("text", "code"),
+    [
+        ("G01 " + "X1" * 3_000_000 + "\n", "too-many-words"),  # 6 MB: the plain-block regex kept 600 MB
+        ("G01 " + "X1\t" * 2_000_000 + "\n", "too-many-words"),  # re.sub of the blanks kept 160 MB
+        ("G65 P1 " + "A1 " * 1_000_000 + "\n", "too-many-words"),  # a call block's arguments
+        ("#1=" + "1+" * 1_000_000 + "1\n", "bad-expression"),  # more than 200 operators
+    ],
+)
+def test_one_long_line_is_an_error_in_bounded_memory(text, code):
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        err = program_error(text)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert err.code == code and err.line == 1
+    assert peak < 8 * len(text) + 2**20  # a few copies of the line, not an object per word

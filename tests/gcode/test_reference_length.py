@@ -1,4 +1,4 @@
-"""G28/G30 in tool length offset mode (manual L3897, notes §5.1 and §3.7).
+"""G28/G30 in tool length offset mode (§3.5.1 and §3.3).
 
 "G28 and G30 are canceled after moving into the intermediate point … the mode code doesn't switch into
 G49 … the tool length offset vector canceled by G53, G28 or G30 restores in the next block." We restore the
@@ -7,6 +7,8 @@ axis it is the manual's "next block"), and that block's move carries it, in G90 
 
 Every case below: H1 = 20 mm, type B in G17 (vector on Z), work offsets zero, reference positions at the
 machine origin.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ def test_g49_or_a_new_h_after_g28_wins_over_the_restore():
 
 
 def test_g28_without_the_offset_axis_keeps_the_vector():
-    # Only the vector of an axis G28 moves is cancelled (the other axes' are not, L3897).
+    # Only the vector of an axis G28 moves is cancelled (the other axes' are not, §3.5.1).
     assert _ends("G43 Z50 H1\nG28 X0\nG91 Z-10\n")[-1] == (0, 0, 60)
 
 

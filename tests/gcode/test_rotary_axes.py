@@ -1,7 +1,10 @@
-"""Rotary axes A/B/C in the interpreter (manual L981-L995, §10 X8): words, positions and the feed rule.
+"""Rotary axes A/B/C in the interpreter (manual §3.2.2, example X8): words, positions and the feed
+rule.
 
 The GSK 25i counts a rotary axis's degrees like millimetres in the feed: in a block that moves linear and
 rotary axes together F is the rate along the composite vector, and a rotary-only G01 runs at F deg/min.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ def run(text: str, machine=GSK):
 
 
 def test_x8_rotary_only_feed_is_degrees_per_minute():
-    # X8, first block (L985): `G91 G01 B90.0 F300;` turns B by 90° at 300 deg/min: 0.3 min = 18 s.
+    # X8, first block (§3.2.2): `G91 G01 B90.0 F300;` turns B by 90° at 300 deg/min: 0.3 min = 18 s.
     tp = run("G91 G01 B90.0 F300;\n")
     assert len(tp) == 1 and tp.kind[0] == SegmentKind.LINE
     assert tp.length[0] == 0.0 and np.all(tp.start[0] == tp.end[0])  # no XYZ motion
@@ -35,7 +38,7 @@ def test_x8_rotary_only_feed_is_degrees_per_minute():
 
 
 def test_x8_combined_feed_along_the_composite_vector():
-    # X8, second block (L987-L995): `G91 G01 X20.0 B40.0 F300.0;`. The manual: time = √(20² + 40²)/300 =
+    # X8, second block (§3.2.2): `G91 G01 X20.0 B40.0 F300.0;`. The manual: time = √(20² + 40²)/300 =
     # 0.14907 min (printed "0.014907", a slipped digit: its own next line divides by 0.14907), and the B
     # rate 40/0.14907 = 268.3 deg/min. So X moves at 20/0.14907 = 134.16 mm/min.
     tp = run("G91 G01 X20.0 B40.0 F300.0;\n")

@@ -1,5 +1,8 @@
-"""Subprograms: M98 / M99, programs in the file and in the program folder, nesting (seed notes §1.9,
-manual L461-L495, L6739-L6751). Expected paths are worked out by hand in each test."""
+"""Subprograms: M98 / M99, programs in the file and in the program folder, nesting (§1.3,
+manual §1.3.1, §4.1.2). Expected paths are worked out by hand in each test.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -18,19 +21,19 @@ SUB_STEP = "O1002\nG91 G01 X1 F100\nG90\nM99\n"  # one call = +1 in X
 
 
 def test_p_count_prefix_calls_five_times():
-    # L489: M98 P51002 calls O1002 five times: X1 … X5.
+    # §1.3.1: M98 P51002 calls O1002 five times: X1 … X5.
     assert [e[0] for e in ends("M98 P51002\nM30\n" + SUB_STEP)] == [1.0, 2.0, 3.0, 4.0, 5.0]
 
 
 def test_p_and_l_form_and_l0():
-    # M98 P1002 L3 (L2067 "P2200L7"): three times; L0 is no call; P without a count is once.
+    # M98 P1002 L3 (§3.2.18 "P2200L7"): three times; L0 is no call; P without a count is once.
     assert len(ends("M98 P1002 L3\nM30\n" + SUB_STEP)) == 3
     assert ends("M98 P1002 L0\nG00 Y1\nM30\n" + SUB_STEP) == [(0.0, 1.0, 0.0)]
     assert len(ends("M98 P1002\nM30\n" + SUB_STEP)) == 1
 
 
 def test_move_in_the_m98_block_runs_before_the_call():
-    # L5878: G01 X100.0 M98 Pp moves first, then calls. The subprogram's G91 X1 then starts at X10.
+    # §3.7.6: G01 X100.0 M98 Pp moves first, then calls. The subprogram's G91 X1 then starts at X10.
     assert ends("G01 X10 F100 M98 P1002\nM30\n" + SUB_STEP) == [(10.0, 0.0, 0.0), (11.0, 0.0, 0.0)]
 
 
@@ -40,7 +43,7 @@ def test_m99_returns_to_the_block_after_the_call():
 
 
 def test_m99_p_returns_to_sequence_number_in_the_caller():
-    # M99 P30 skips the caller's N20 block (notes §1.9 [INFERRED], Fanuc).
+    # M99 P30 skips the caller's N20 block (inferred from §1.3 and the Fanuc convention).
     text = "M98 P7\nN20 G00 Y20\nN30 G00 Z30\nM30\nO7\nG00 X7\nM99 P30\n"
     assert ends(text) == [(7.0, 0.0, 0.0), (7.0, 0.0, 30.0)]
 
@@ -51,7 +54,7 @@ def test_m99_p_to_a_missing_sequence_number_is_alarm_60():
 
 
 def test_subprograms_share_the_callers_locals():
-    # M98 does not open a local level (L6368): the subprogram reads and changes the caller's #1.
+    # M98 does not open a local level (§3.7.7): the subprogram reads and changes the caller's #1.
     text = "#1=3\nM98 P8\nG00 Y#1\nM30\nO8\nG00 X#1\n#1=4\nM99\n"
     assert ends(text) == [(3.0, 0.0, 0.0), (3.0, 4.0, 0.0)]
 
@@ -68,7 +71,7 @@ def test_main_program_stops_at_the_next_o_block():
 
 
 def test_nesting_four_levels_runs_and_five_is_alarm_77():
-    # Main → O1 → O2 → O3 → O4 is four levels (L465): fine. One more is alarm 77.
+    # Main → O1 → O2 → O3 → O4 is four levels (§1.3): fine. One more is alarm 77.
     links = "".join(f"O{i}\nG91 G00 X1\nM98 P{i + 1}\nM99\n" for i in range(1, 4))
     chain = "M98 P1\nM30\n" + links + "O4\nG00 X1\nM99\n"
     assert [e[0] for e in ends(chain)] == [1.0, 2.0, 3.0, 4.0]
@@ -88,7 +91,7 @@ def test_recursion_is_bounded_by_the_nesting_limit():
         ("M98 P4321\n", "program-not-found", 59),
         ("M98\n", "missing-program-number", 76),
         ("M98 P51002 L2\nO1002\nM99\n", "bad-call", 17),  # count twice
-        ("M98 P10001002\nO1002\nM99\n", "bad-call", 17),  # 1000 repeats > 999 (L469)
+        ("M98 P10001002\nO1002\nM99\n", "bad-call", 17),  # 1000 repeats > 999 (§1.3)
         ("M98 P0\n", "bad-call", 17),
         ("M98 P1002 L10000\nO1002\nM99\n", "value-out-of-range", 8),  # L beyond 9999
         ("O1\nM99\nO1\nM99\n", "duplicate-program", 73),
@@ -100,7 +103,7 @@ def test_call_errors(text, code, alarm):
 
 
 def test_m99_in_the_main_program_ends_by_default_and_restarts_on_request():
-    # L481: M99 at the end of a main program restarts it. By default one pass (one part) ends the run;
+    # §1.3.1: M99 at the end of a main program restarts it. By default one pass (one part) ends the run;
     # main_m99="restart" loops, and a macro counter (#500 kept across passes) exits to M30 after 3 passes.
     text = "#500=#500+1\nG91 G01 X1 F100\nIF[#500GE3]GOTO9\nM99\nN9 M30\n"
     assert [e[0] for e in ends(text)] == [1.0]
@@ -114,7 +117,7 @@ def test_m99_in_the_main_program_ends_by_default_and_restarts_on_request():
 
 
 def test_block_skip_applies_to_m99():
-    # L516: /M99 is skipped like any other block when the switch is on: the subprogram runs on to its end.
+    # §1.3.3: /M99 is skipped like any other block when the switch is on: the subprogram runs on to its end.
     text = "M98 P7\nM30\nO7\n/M99\nG00 X5\nM99\n"
     assert ends(text) == []
     assert ends(text, block_skip={1}) == [(5.0, 0.0, 0.0)]

@@ -1,8 +1,9 @@
-"""Tool length offset G43/G44/G49 and tool position offset G45-G48 (seed notes §5.1, §5.6; manual L3845-L3919,
-L4785-L4872).
+"""Tool length offset G43/G44/G49 and tool position offset G45-G48 (§3.5.1, §3.5.7).
 
 The machine starts at the machine origin with every work offset zero, so expected machine coordinates
 are the programmed ones plus (G43) or minus (G44) the H value, worked out by hand per test.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -24,20 +25,20 @@ H = "G10 L10 P1 R20\nG10 L10 P2 R30\nG10 L10 P3 R11\n"  # H01 = 20, H02 = 30, H0
 
 # ----------------------------------------------------------------------------------------------- G43/G44/G49
 def test_worked_example_x55_h_replaces_not_adds():
-    # L3913-L3919: H01 = 20, H02 = 30. G90 G43 Z100 H01 reaches Z120; G90 G43 Z100 H02 reaches Z130
+    # §3.5.2: H01 = 20, H02 = 30. G90 G43 Z100 H01 reaches Z120; G90 G43 Z100 H02 reaches Z130
     # (the new value replaces the old one: 100 + 30, not 100 + 20 + 30).
     assert ends(H + "G90 G43 Z100.0 H01\nG90 G43 Z100.0 H02\n") == [[0, 0, 120.0], [0, 0, 130.0]]
 
 
 def test_worked_example_x56_validity_sequence():
-    # L3887-L3895: H01; (selects only) G43 Z10 (H01 valid: 10 + 20 = 30); G44 Z20 H02 (20 - 30 = -10);
+    # §3.5.1: H01; (selects only) G43 Z10 (H01 valid: 10 + 20 = 30); G44 Z20 H02 (20 - 30 = -10);
     # H03; (H03 valid, sign of G44: the next Z20 goes to 20 - 11 = 9); G49; (cancelled: Z20 is 20).
     text = H + "H01\nG43 Z10\nG44 Z20 H02\nH03\nZ20\nG49\nZ20\nM30\n"
     assert ends(text) == [[0, 0, 30.0], [0, 0, -10.0], [0, 0, 9.0], [0, 0, 20.0]]
 
 
 def test_g43_g91_z0_applies_the_offset_as_a_move():
-    # L3869: "G43 G91 Z0 H_" applies the offset as a move: Z goes to 0 + 20. A later incremental Z-10
+    # §3.5.1: "G43 G91 Z0 H_" applies the offset as a move: Z goes to 0 + 20. A later incremental Z-10
     # moves 10 down from there (the vector is not added twice).
     assert ends(H + "G91 G43 Z0 H1\nG01 Z-10 F100\n") == [[0, 0, 20.0], [0, 0, 10.0]]
     # An H change in a G91 block with the axis: the move carries the difference (30 - 20 = +10).
@@ -45,7 +46,7 @@ def test_g43_g91_z0_applies_the_offset_as_a_move():
 
 
 def test_h00_and_g49_cancel():
-    # L3891: G49 or H00 cancels at once; the next move of the axis goes to the programmed position.
+    # §3.5.1: G49 or H00 cancels at once; the next move of the axis goes to the programmed position.
     assert ends(H + "G43 Z0 H1\nG91 H0 Z0\n") == [[0, 0, 20.0], [0, 0, 0.0]]
     assert ends(H + "G43 Z0 H1\nG49 Z0\n") == [[0, 0, 20.0], [0, 0, 0.0]]
 
@@ -73,12 +74,12 @@ def test_work_offsets_and_length_offset_add():
 
 
 def test_g53_cancels_the_vector_for_its_move_and_it_is_restored_next():
-    # L3897: G53 reaches its machine position without the vector; the next block restores it.
+    # §3.5.1: G53 reaches its machine position without the vector; the next block restores it.
     assert ends(H + "G43 Z10 H1\nG53 Z0\nZ10\n") == [[0, 0, 30.0], [0, 0, 0.0], [0, 0, 30.0]]
 
 
 def test_canned_cycle_example_x46_first_tool():
-    # §4.3 (L3293-L3330): G92 X0 Y0 Z0 at the reference; G00 Z250 T11 M6; G43 Z0 H11 with H11 = 200: the
+    # X46 (§3.4.15): G92 X0 Y0 Z0 at the reference; G00 Z250 T11 M6; G43 Z0 H11 with H11 = 200: the
     # tool tip goes to Z0 in program coordinates = machine Z 200 (Z250 first, then down 50).
     text = "G10 L10 P11 R200\nN001 G92 X0 Y0 Z0\nN002 G90 G00 Z250 T11 M6\nN003 G43 Z0 H11\nN012 G49 Z250\n"
     assert ends(text) == [[0, 0, 250.0], [0, 0, 200.0], [0, 0, 250.0]]
@@ -96,7 +97,7 @@ def test_tool_offsets_argument_and_macro_variables_share_the_table():
     [
         ("G43 H1\n", "length-no-axis", 27),  # T8: NO AXES COMMANDED IN G43/G44
         ("G44 H1\n", "length-no-axis", 27),
-        ("G43 G03 X0 Y0 Z5 I5 H1 F100\n", "length-helical", None),  # T11: not in a helical block (L1103)
+        ("G43 G03 X0 Y0 Z5 I5 H1 F100\n", "length-helical", None),  # T11: not in a helical block (§3.2.3)
         ("G01 Z1 H257 F100\n", "value-out-of-range", 30),
         ("G10 L10 P1 R1000\n", "bad-offset-value", 32),
         ("G10 L11 P1 R-100\n", "bad-offset-value", 32),
@@ -113,7 +114,7 @@ def test_tool_length_alarms(text, code, alarm):
 
 # ----------------------------------------------------------------------------------------------- G45-G48
 def test_worked_example_x62_tool_position_offset():
-    # L4856-L4872 with D01 = 10, all G91. Each commanded axis's travel grows (G45 +1x, G47 +2x) or shrinks
+    # §3.5.7 with D01 = 10, all G91. Each commanded axis's travel grows (G45 +1x, G47 +2x) or shrinks
     # (G46 -1x, G48 -2x) by the offset along its own direction; N3/N5 have no code (uncompensated).
     #   N1 G46 G00 X80 Y50     → X 70, Y 40          → (70, 40)
     #   N2 G47 G01 X50          → X 50 + 20           → (140, 40)
@@ -148,7 +149,7 @@ def test_worked_example_x62_tool_position_offset():
 
 
 def test_position_offset_in_g90_and_direction_reversal():
-    # L4806: in G90 the travel from the previous end point grows; a zero travel does not move. L4829: a
+    # §3.5.7: in G90 the travel from the previous end point grows; a zero travel does not move. §3.5.7: a
     # decrease larger than the travel reverses it: G91 G46 X5 with D = 10 moves -5.
     # G00 X10; G45 X30: travel 20 grows to 30 → X40; G45 X40: zero travel, no move; G45 X30: travel -10
     # grows to -20 → X20.
@@ -165,7 +166,7 @@ def test_position_offset_in_g90_and_direction_reversal():
 
 
 def test_position_offset_on_other_arcs_is_an_error():
-    # L4831: only quarter and three-quarter circles with I/J/K.
+    # §3.5.7: only quarter and three-quarter circles with I/J/K.
     err = program_error("G10 L12 P1 R10\nG91 G45 G03 X10 Y0 I5 D1 F100\n")
     assert err.code == "position-offset-arc"
 

@@ -1,4 +1,7 @@
-"""G37 automatic tool length measurement (manual L4692-L4783, §10 X61) with the simulated instrument."""
+"""G37 automatic tool length measurement (manual §3.5.6, example X61) with the simulated instrument.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 
@@ -6,10 +9,10 @@ import pytest
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import interpret
-from cnc_gym.gcode.measurement import ToolMeasurement
+from cnc_gym.gcode.settings import ToolMeasurement
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
-# X61 (L4771-L4781), then two probes that print the H01 wear (#10001) and geometry (#11001) as X and Y.
+# X61 (§3.5.6), then two probes that print the H01 wear (#10001) and geometry (#11001) as X and Y.
 X61 = "G92 Z760.0 X1100.0;\nG00 G90 X850.0;\nH01;\nG37 Z200.0;\nG00 Z204.0;\n"
 PROBE = "G01 X#10001 Y#11001 F100\n"
 INSTRUMENT = {"signal_at": {1: 198.0}, "decel_mm": 10.0, "band_mm": 5.0}
@@ -19,7 +22,7 @@ def test_x61_signal_at_z198_lowers_the_offset_by_2():
     # G92 at machine (0, 0, 0) makes it work (1100, ?, 760): work → machine is −1100 on X, −760 on Z.
     # G00 X850 → machine X −250. G37 Z200: rapid down to r = 10 mm before Z200 (work Z210, machine −550),
     # then the measurement feed P2651 = 1000 mm/min until the signal at work Z198 (machine −562), where
-    # the tool stops. Offset H01 += 198 − 200 = −2 (L4781), in the wear value (memory C). G00 Z204 →
+    # the tool stops. Offset H01 += 198 − 200 = −2 (§3.5.6), in the wear value (memory C). G00 Z204 →
     # machine −556.
     tp = interpret(X61 + PROBE, tool_measurement=INSTRUMENT)
     assert tp.kind.tolist()[:4] == [SegmentKind.RAPID, SegmentKind.RAPID, SegmentKind.LINE, SegmentKind.RAPID]
@@ -76,7 +79,7 @@ def test_signals_outside_the_band_are_alarm_80(signal, message):
 @pytest.mark.parametrize(
     ("text", "code"),
     [
-        ("H01;\nG37 Z200 H01;\n", "g37-h-in-block"),  # note 1 (L4741): alarm
+        ("H01;\nG37 Z200 H01;\n", "g37-h-in-block"),  # note 1 (§3.5.6): alarm
         ("G37 Z200;\n", "g37-no-h"),
         ("H01;\nG37 X10 Z200;\n", "g37-axis"),
         ("H01;\nG37;\n", "g37-axis"),

@@ -302,7 +302,7 @@ NO_LOOKAHEAD = machine_from_dict({
 
 
 def test_g63_tapping_mode_runs_on_through_block_ends_at_f_whatever_the_knob():
-    # GSK manual L6423: in G63 "tool is not decelerated at the end point of a block, but the next block is
+    # GSK manual §3.8: in G63 "tool is not decelerated at the end point of a block, but the next block is
     # executed. When G63 is specified, feedrate override and feed hold are invalid." Without look-ahead
     # (P1409 = 0) a G64 block ends at rest; a tapping-mode block runs on into the next one where the limits
     # allow. Two collinear 10 mm Z blocks at F 1200 (20 mm/s), A 3000, J 30000 (20 < A²/J = 300).
@@ -623,3 +623,19 @@ def test_in_position_check_off_and_run_to_end_never_wait():
     # run_to_end has no servo to wait for: same time as with the check off
     expected = Controller(tp, VMC, in_position_check=False).run_to_end().time_s[-1]
     assert on.run_to_end().time_s[-1] == pytest.approx(expected, abs=1e-12)
+
+
+def test_a_near_cusp_refines_only_its_own_nurbs_pieces():
+    # 13 lines of G-code: a cubic whose control polygon doubles back (X100 → X0 → X100, 1 µm apart) has a
+    # near-cusp. The Hermite table used to be refined for the whole curve (456 pieces to 1025 samples
+    # each: 79 s and 1.9 GB to build); now only the pieces at the cusp are, and the others keep 9 samples.
+    from cnc_gym.gcode import interpret
+    from cnc_gym.motion import kernel as K
+    from cnc_gym.motion.limits import NURBS_MAX_EVALUATIONS, NURBS_SAMPLES, build_limits
+
+    text = ("G05 P10000\nG00 X0 Y0\nG06.2 P4 K0 X0 Y0 F600\nK0 X100 Y0\nK0 X0 Y0.001\nK0 X100 Y0.002\n"
+            "K0.5 X0 Y0\nK0.7 X100 Y100\nK1\nK1\nK1\nK1\nG05 P0\n")  # fmt: skip
+    limits = build_limits(interpret(text), VMC)
+    samples = limits.seg_i[limits.seg_i[:, K.I_TABLE] >= 0, K.I_NSAMP]
+    assert len(samples) == 456 and np.count_nonzero(samples > NURBS_SAMPLES) <= 12
+    assert len(limits.curve_f) == samples.sum() < NURBS_MAX_EVALUATIONS

@@ -1,4 +1,7 @@
-"""The controller's timing of rotary-axis moves (manual L981-L995) against closed forms."""
+"""The controller's timing of rotary-axis moves (manual §3.2.2) against closed forms.
+
+Sections (§n) are those of the GSK 25i programming manual.
+"""
 
 from __future__ import annotations
 

@@ -2,6 +2,8 @@
 
 Notation: v path speed (mm/s), Kv position gain (1/s), f velocity feed-forward fraction, T = 2 ms sample
 period. Expected values are derived in each test from the transfer functions, not from the plant code.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -216,7 +218,7 @@ def test_reset_rest_and_settled():
 
 
 def test_gsk25i_following_error():
-    # P4209 = 245 1/s, P4210 = 0 %: at P1225 = 4000 mm/min the lag is 66.67/245 = 0.2721 mm (notes §3.2.7).
+    # P4209 = 245 1/s, P4210 = 0 %: at P1225 = 4000 mm/min the lag is 66.67/245 = 0.2721 mm (§3.1).
     plant = ServoPlant(load_machine("gsk25i"))
     ref = ramp_reference((4000 / 60, 0, 0), 0.3)
     plant.step(ref)

@@ -65,6 +65,7 @@ def test_random_rows_of_every_kind_mode_and_awkward_number():
     assert toolpath_jsonl(tp) == reference_text(tp)
 
 
+@pytest.mark.filterwarnings("ignore::cnc_gym.gcode.dialects.syntec.modes.SmoothingNotHonoured")
 def test_rotary_axes_and_interpreted_programs():
     rotary = interpret("G01 X1 F100\nG91 G01 X1 B45\nG90 G00 B0\n", machine=load_machine("gsk25i"))
     assert toolpath_jsonl(rotary) == reference_text(rotary)
@@ -72,5 +73,8 @@ def test_rotary_axes_and_interpreted_programs():
             "G03 X-10 Y0 Z-2 R10\nG04 X0.25\nG18 G02 X0 Z-2 I5 K0\nM30\n")  # fmt: skip
     tp = interpret(text)
     assert toolpath_jsonl(tp) == reference_text(tp)
+    smoothed = interpret("G5.1 Q1 E0.01\nG01 X1. F100\nG02 X3. R1.\nG5.1 Q0\nG01 X4.\n", dialect="syntec")
+    assert smoothed.smoothing_tolerance_mm.any()
+    assert toolpath_jsonl(smoothed) == reference_text(smoothed)
     empty = interpret("G90\nM30\n")
     assert toolpath_jsonl(empty) == reference_text(empty)

@@ -3,6 +3,7 @@
 import itertools
 import math
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -258,6 +259,7 @@ def test_nearest_at_a_kink_knot():
         ([[0, 0, 0]] * 6, [1] * 6, [0, 0, 0, 0.5, 0.5, 0.5, 1, 1, 1], 3, "repeats 3 times"),
         ([[0, 0, float("nan")]] * 4, [1] * 4, [0] * 4 + [1] * 4, 4, "finite"),
         ([[1, 2, 3]] * 4, [1] * 4, [0] * 4 + [1] * 4, 4, "all coincide"),
+        ([[0, 0, 0]] * 4, [1e-4, 1e3, 1e-4, 1e3], [0] * 4 + [1] * 4, 4, "differ by more than a factor of 1e"),
     ],
 )
 def test_validation_errors(points, weights, knots, order, message):
@@ -327,3 +329,65 @@ def test_builder_row_and_records():
     _, points = tp.sample(1.0)
     np.testing.assert_allclose(np.linalg.norm(points, axis=1), 10.0, rtol=1e-13)
     np.testing.assert_allclose(points[-1], [0, 10, 0], atol=1e-12)
+
+
+# ------------------------------------------------------------------------ arc length: accuracy and work
+def _reference_length(curve: NurbsCurve) -> float:
+    """∫|P'| by scipy's adaptive quadrature on scipy's de Boor evaluation (not the curve's Taylor table),
+    with each knot span cut geometrically towards both ends, where a small weight beside a large one
+    packs millimetres of curve into 1e-7 of the parameter."""
+    from scipy.integrate import quad
+    from scipy.interpolate import BSpline
+
+    homogeneous = np.column_stack((curve.control_points * curve.weights[:, None], curve.weights))
+    spline = BSpline(curve.knots, homogeneous, curve.order - 1)
+    derivative = spline.derivative()
+
+    def speed(t: float) -> float:
+        h, d = spline(t), derivative(t)
+        return float(np.linalg.norm((d[:3] - d[3] * h[:3] / h[3]) / h[3]))
+
+    total = 0.0
+    breaks = np.unique(curve.knots)
+    for lo, hi in itertools.pairwise(breaks):
+        steps = (hi - lo) * np.logspace(-15, -1, 15)
+        cuts = np.unique(np.concatenate(([lo, hi, 0.5 * (lo + hi)], lo + steps, hi - steps)))
+        for a, b in itertools.pairwise(cuts):
+            with warnings.catch_warnings():  # quad's round-off warnings at this tolerance
+                warnings.simplefilter("ignore")
+                total += quad(speed, a, b, epsabs=0.0, epsrel=1e-13, limit=500)[0]
+    return total
+
+
+SQUARE = [[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]]
+
+
+@pytest.mark.parametrize(
+    "weights",
+    [
+        [1, 0.01, 1, 0.01],  # the issue's R0.01 beside R1: 1 647 leaves and 2.8 s in one program
+        [0.01, 1, 1, 0.01],
+        [1e-3, 1e3, 1e-3, 1e3],  # the largest ratio allowed: 1e6
+        [1e-3, 1e3, 1, 1],  # the curve leaves P0 for P1 within 3e-7 of the parameter: no node sees it
+        [1, 1, 1e3, 1e-3],
+    ],
+)
+def test_extreme_weights_keep_the_length_accurate_and_the_work_small(weights):
+    curve = NurbsCurve(SQUARE, weights, [0] * 4 + [1] * 4, 4)
+    assert curve.length == pytest.approx(_reference_length(curve), rel=1e-10)
+    assert len(curve._leaf_t) < 1000  # leaves of the length table (the work)
+    # Arc length and parameter stay each other's inverse, and the length is at least the chord sum.
+    t = np.linspace(0, 1, 201)
+    s = curve.length_at(t)
+    assert np.all(np.diff(s) >= 0) and s[-1] == pytest.approx(curve.length, rel=1e-10)
+    chords = np.sum(np.linalg.norm(np.diff(curve.evaluate(t), axis=0), axis=1))
+    assert chords <= curve.length * (1 + 1e-9)
+
+
+def test_a_rational_quadratic_with_a_tiny_middle_weight_is_cheap():
+    # 8 program lines of the issue: R0.01 beside R1 took 4 s and 900 MB (200 000 leaves at an unreachable
+    # 1e-13 tolerance); the speed's round-off now ends the splitting.
+    curve = NurbsCurve([[0, 0, 0], [10, 0, 0], [10, 10, 0], [0, 10, 0]], [1, 0.01, 1, 0.01],
+                       [0, 0, 0, 0.5, 1, 1, 1], 3)  # fmt: skip
+    assert len(curve._leaf_t) < 200
+    assert curve.length == pytest.approx(_reference_length(curve), rel=1e-11)

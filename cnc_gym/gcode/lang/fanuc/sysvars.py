@@ -1,6 +1,9 @@
-"""GSK 25i system variables (#1000 and up), read and written through the running interpreter.
+"""System variables of the Fanuc family's Macro B (#1000 and up), read and written through the seam.
 
-Seed notes §6.3; manual L5241-L5508. Lengths are in the program's input unit (mm, or inch in G20),
+The numbering is Fanuc's, as the GSK 25i manual documents it (its table is the same as a Fanuc 0i-M's,
+memory C offsets included); the dialect's ``system_variables`` ranges say which exist.
+
+§3.7.3-§3.7.4. Lengths are in the program's input unit (mm, or inch in G20),
 like every value a program sees; the interpreter stores mm.
 
 ======================  =====  ================================================================
@@ -33,21 +36,25 @@ emitted so far — feed moves at their programmed F, rapids at :data:`NOMINAL_RA
 plus whatever the program wrote to them. The 4th and 5th axis positions (#5004, #5024, #5044 …) are the
 machine's rotary axes in A, B, C order (degrees; null where the machine has none); their work offsets
 (#2800-#2906 4th/5th columns) do not exist here (rotary axes have only the G92 origin).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
 if TYPE_CHECKING:
-    from cnc_gym.gcode.interpreter import Interpreter
+    from cnc_gym.gcode.dialect import Seam
+    from cnc_gym.gcode.offsets import ToolOffsets
 
-#: Rapid rate for the nominal clock (#3001/#3002), mm/min: the manual's example rate (L8946).
+#: Rapid rate for the nominal clock (#3001/#3002), mm/min: the manual's example rate (GSK 25i operation manual
+#: §4.1.3).
 NOMINAL_RAPID_MM_MIN = 6000.0
 _RAPID = int(SegmentKind.RAPID)
 _LINE = int(SegmentKind.LINE)
@@ -80,9 +87,9 @@ _LAST_VALUE = {
 class SystemVariables:
     """The system-variable table of one run (module docstring)."""
 
-    def __init__(self, interp: Interpreter) -> None:
-        self.interp = interp
-        self.dialect = interp.dialect
+    def __init__(self, core: Seam) -> None:
+        self.core = core
+        self.dialect = core.dialect
         self.outputs: dict[int, float] = {}
         self.single_block = 0.0  # #3003
         self.run_control = 0  # #3004
@@ -101,11 +108,11 @@ class SystemVariables:
 
     @property
     def _scale(self) -> float:
-        return self.interp.scale
+        return self.core.state.scale
 
     # ------------------------------------------------------------------ read
     def read(self, index: int) -> float | None:
-        interp = self.interp
+        core = self.core
         if 1000 <= index <= 1035:
             return 0.0
         if 1100 <= index <= 1135:
@@ -118,7 +125,7 @@ class SystemVariables:
             axis, k = self._work_offset(index)
             if axis >= 3:
                 return None
-            offsets = interp.offsets
+            offsets = core.state.offsets
             table = offsets.external if k == 0 else offsets.wcs[k - 1]
             return table[axis] / self._scale
         if index == 3000 or index == 3006:
@@ -141,7 +148,7 @@ class SystemVariables:
         if index == 3902:
             return self.parts_required
         if 4001 <= index <= 4022:
-            key = interp.modal.get(index - 4000)
+            key = core.state.modal.get(index - 4000)
             return None if key is None else key / 10.0
         if index in _LAST_VALUE:
             return self._last_value(_LAST_VALUE[index])
@@ -155,14 +162,8 @@ class SystemVariables:
             raise self._error(f"tool offset {number} does not exist (offsets 1..{count})", "bad-variable")
         return number
 
-    def _tool_offsets(self):
-        offsets = getattr(self.interp, "tool_offsets", None)
-        if offsets is None:
-            from cnc_gym.gcode.offsets import ToolOffsets
-
-            offsets = ToolOffsets()
-            self.interp.tool_offsets = offsets
-        return offsets
+    def _tool_offsets(self) -> ToolOffsets:
+        return self.core.state.comp.offsets
 
     def _work_offset(self, index: int) -> tuple[int, int]:
         axis, k = divmod(index - 2500, 100)
@@ -173,7 +174,7 @@ class SystemVariables:
         return axis, k
 
     def _nominal_seconds(self) -> float:
-        rows = self.interp.builder._rows
+        rows = self.core.state.builder._rows
         kinds = rows["kind"]
         total = self._clock_s
         for i in range(self._clock_rows, len(kinds)):
@@ -196,28 +197,29 @@ class SystemVariables:
         return total
 
     def _last_value(self, letter: str) -> float | None:
-        interp = self.interp
+        core = self.core
         if letter == "F":
-            return None if interp.feed is None else interp.feed / self._scale
+            st = core.state
+            feed = st.feed_programmed if st.feed_per_rev else st.feed
+            return None if feed is None else feed / self._scale
         if letter == "S":
-            return interp.spindle_speed
+            return core.state.spindle_speed
         if letter == "T":
-            return float(interp.tool)
+            return float(core.state.tool)
         if letter == "O":
-            unit = interp.macro.frames[-1].unit
+            unit = core.state.flow.frames[-1].unit
             return None if unit.number is None else float(unit.number)
         if letter in "HD":
             # The offset numbers in use live with the tool compensation (compensation.py).
-            value = getattr(getattr(interp, "comp", None), f"{letter.lower()}_number", None)
-            return None if value is None else float(value)
+            comp = core.state.comp
+            return float(comp.d_number if letter == "D" else comp.h_number)
         if letter == "P":
-            value = getattr(interp.offsets, "extra_wcs_number", None)
-            return None if value is None else float(value)
+            return float(core.state.offsets.extra_wcs_number)
         # N and M: the last one in program order up to this block (a scan back through the running unit
         # from the block of the current line; the fast path does not track the program counter).
-        runner = interp.macro
+        runner = core.state.flow
         unit = runner.frames[-1].unit
-        line = interp.out.line
+        line = core.state.out.line
         here = next((i for i in range(unit.start, unit.end) if unit.blocks[i].line == line), runner.pc - 1)
         for i in range(here, unit.start - 1, -1):
             block = unit.blocks[i]
@@ -231,44 +233,44 @@ class SystemVariables:
 
     def _position(self, index: int) -> float | None:
         group, axis = divmod(index - 5001, 20)
-        interp = self.interp
+        core = self.core
         if index >= 5101:
             return 0.0 if index <= 5105 else self._missing(index)
         if axis >= 5:
             return self._missing(index)
         if group == 4:  # #5081-#5085: tool length offset vector
-            return interp.offsets.tool_length[axis] / self._scale if axis < 3 else None
+            return core.state.offsets.tool_length[axis] / self._scale if axis < 3 else None
         if axis >= 3:
             # The 4th/5th axis: the machine's rotary axes in A, B, C order (degrees, never scaled).
             rotary = axis - 3
-            if rotary >= len(interp.rotary_axes) or group == 3:
+            if rotary >= len(core.state.rotary_axes) or group == 3:
                 return None
-            machine_deg = interp.out.rotary[rotary]
-            return machine_deg if group == 1 else machine_deg - interp.rotary_origin[rotary]
+            machine_deg = core.state.out.rotary[rotary]
+            return machine_deg if group == 1 else machine_deg - core.state.rotary_origin[rotary]
         scale = self._scale
         if group == 0:
-            return interp.program_position[axis] / scale
-        machine = interp.out.position
+            return core.program_position[axis] / scale
+        machine = core.state.out.position
         if group == 1:
             return machine[axis] / scale
         if group == 2:
             return (machine[axis] - self._work_origin()[axis]) / scale
         if group == 3:
-            skip = getattr(interp, "skip_position", None)
+            skip = core.state.skip_position
             return None if skip is None else skip[axis] / scale
         return self._missing(index)
 
     def _work_origin(self) -> list[float]:
-        offsets = self.interp.offsets
+        offsets = self.core.state.offsets
         work = offsets.work_origin()
         return [work[a] + offsets.local[a] for a in range(3)]
 
-    def _missing(self, index: int) -> None:
+    def _missing(self, index: int) -> NoReturn:
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
 
     # ------------------------------------------------------------------ write
     def write(self, index: int, value: float | None) -> None:
-        interp = self.interp
+        core = self.core
         if index == 3000:
             self._user_alarm(value)
         if 1100 <= index <= 1135:
@@ -294,13 +296,11 @@ class SystemVariables:
             axis, k = self._work_offset(index)
             if axis >= 3:
                 raise self._error(f"#{index}: the machine has no axis {axis + 1} (XYZ)", "unsupported-axis")
-            offsets = interp.offsets
+            offsets = core.state.offsets
             table = offsets.external if k == 0 else offsets.wcs[k - 1]
             table[axis] = (value or 0.0) * self._scale
             offsets.update()
-            resync = getattr(interp, "resync_program_position", None)
-            if resync is not None:
-                resync()
+            core.resync_program_position()
             return
         if index in (3001, 3002):
             seconds = self._nominal_seconds()
@@ -316,14 +316,14 @@ class SystemVariables:
             self.run_control = int(self._small_int(index, value, 7))
             add = SegmentMode.OVERRIDE_LOCKED if self.run_control & 2 else SegmentMode.NONE
             drop = SegmentMode.EXACT_STOP if self.run_control & 4 else SegmentMode.NONE
-            interp._sys_modes = (add, drop)
-            interp._update_modes()
+            core.state.sys_modes = (add, drop)
+            core.update_modes()
             return
         if index == 3006:
             if value is None or value == 0:
                 return
-            interp.out.dwell(0.0, SegmentMode.EXACT_STOP)
-            interp.stops.append((interp.out.line, "message_stop"))
+            core.state.out.dwell(0.0, SegmentMode.EXACT_STOP)
+            core.state.stops.append((core.state.out.line, "message_stop"))
             return
         if index in (3901, 3902):
             value = value or 0.0
@@ -335,7 +335,7 @@ class SystemVariables:
                 self.parts_required = value
             return
         if index in (3011, 3012) or 1000 <= index <= 1035 or 4001 <= index <= 5105:
-            raise self._error(f"system variable #{index} is read-only (L5441, L5450)", "read-only-variable")
+            raise self._error(f"system variable #{index} is read-only (GSK 25i §3.7.3)", "read-only-variable")
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
 
     def _small_int(self, index: int, value: float | None, high: int) -> float:
@@ -347,11 +347,13 @@ class SystemVariables:
     def _user_alarm(self, value: float | None) -> None:
         number = value or 0.0
         if number != int(number) or not 0 <= number <= 200:
-            raise self._error(f"#3000={number:g}: the user alarm number is 0..200 (L5286)", "bad-variable")
-        runner = getattr(self.interp, "macro", None)
+            raise self._error(f"#3000={number:g}: the user alarm number is 0..200 (GSK 25i §3.7.3)",
+                              "bad-variable")
+        runner = self.core.state.flow
         message = getattr(runner, "message", None) or f"user alarm {int(number)}"
         raise self._error(message[:26], "user-alarm", alarm=3000 + int(number))
 
     def count_part(self) -> None:
-        """M02/M30: one more part done (L6757)."""
+        """M02/M30: one more part done (§4.1.3)."""
         self.parts_done += 1.0
+

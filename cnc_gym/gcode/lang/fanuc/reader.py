@@ -1,15 +1,16 @@
-"""Read phase: program text → :class:`Program` (a list of :class:`Block` with a program counter).
+"""The Fanuc family's lexer and block reader: program text → :class:`~cnc_gym.gcode.program.Program` (the
+default :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`).
 
-Lexical rules (GSK 25i, seed notes §1; the dialect supplies the number formats):
+Lexical rules (GSK 25i, §1.2.3; the dialect supplies the number formats):
 
-* a line is a block; ``;`` also ends a block (EOB, L392); a line holding only ``%`` is a tape mark and a
+* a line is a block; ``;`` also ends a block (EOB, §1.2); a line holding only ``%`` is a tape mark and a
   second one ends the tape (text after it is not read);
 * ``( … )`` is a comment; upper and lower case are the same; spaces and tabs are ignored;
 * ``/`` or ``/n`` (n = 1..9, several as ``/1/3``) at the head of a block marks it for optional block
-  skip; a ``/`` later in the block discards the rest of the block (L533-L535);
+  skip; a ``/`` later in the block discards the rest of the block (§1.3.4);
 * ``O`` program number and ``N`` sequence number at the head; then words: an address letter and a number,
   ``#i``, ``#[e]``, ``[e]`` or a signed form of these; or one macro assignment ``#i = e``;
-* literal numbers are truncated to the least input increment (L685-L690); without a decimal point they are
+* literal numbers are truncated to the least input increment (§2.5); without a decimal point they are
   in mm/inch/s (DPI = 1) or in least increments (DPI = 0), per the dialect.
 
 Plain blocks (no ``#``, ``[``, ``/`` or keywords) go through one regex match and one ``findall``; the rest
@@ -20,24 +21,28 @@ blocks of kind ``"stmt"``; blocks that may call a macro (G65, G66, and the G/M/T
 :class:`~cnc_gym.gcode.dialect.MacroCalls` maps) are of kind ``"call"`` and keep their words in order
 (argument specification II repeats I/J/K). A file may hold several programs, each starting at an ``O``
 block; the first is the main program (:attr:`Program.units`).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.expressions import ExpressionParser
+from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
+from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
+from cnc_gym.gcode.program import Block, Program, SpecialBlock
 
 if TYPE_CHECKING:
-    from cnc_gym.gcode.dialect import Dialect, MacroCalls
+    from cnc_gym.gcode.dialect import Dialect
+    from cnc_gym.gcode.settings import MacroCalls
 
-_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 # Hot-path patterns: deliberately loose ([0-9.]+); float() then rejects "1.2.3" and ".". The plain-block
 # pattern is built per reader (_plain_block_pattern) so that it admits only words within the dialect's
-# length limit (GSK alarm 13, notes §9 E1): a longer literal falls to the scanner, which names it
+# length limit (GSK alarm 13, docs/gsk25i_alarms.md E1): a longer literal falls to the scanner, which names it
 # (``word-too-long``), and the hot path pays nothing for the check.
 _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 
@@ -45,104 +50,16 @@ _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 def _plain_block_pattern(max_word_length: int) -> re.Pattern:
     n = max_word_length - 1  # characters after the address letter
     return re.compile(rf"(?:[A-Z](?:[-+][0-9.]{{1,{n - 1}}}|[0-9.]{{1,{n}}}))+")
-_SPACES = re.compile(r"[ \t\r\f\v]+")
+_BLANKS = " \t\r\f\v"
+_NO_BLANKS = str.maketrans("", "", _BLANKS)
+# Line breaks other than CR/LF that str.splitlines() would also split at (FS, GS, RS, NEL, U+2028/9): a
+# block ends at a CR, LF or CRLF only, so line numbers are those of an editor.
+_OTHER_BREAKS = re.compile("[\x1c-\x1e\x85\u2028\u2029]")
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _NUMBER_AT = re.compile(_NUMBER)
 _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 #: Addresses of a call block that keep their own rules (the rest are arguments: any sign, decimal point).
 _CALL_CONTROL = "GNOPL"
-
-
-class Block:
-    """One block after reading.
-
-    ``words``: ``(letter, value, text)`` tuples; ``value`` is a float for a literal (``text`` its
-    digits, for decimal-point checks) or an expression node (``text`` None) evaluated at execution. A
-    plain block (read on the hot path) keeps just ``(letter, digits)`` pairs; ``word[-1]`` is the text
-    either way.
-    ``assign``: ``(target_node, value_node)`` for a macro assignment block (then ``words`` is empty).
-    ``skip``: bit mask of the block-skip switches (bit n for ``/n``) that suppress the block.
-    ``gs``, ``ms``, ``values``: for a block without expressions, the words split once at read time (G
-    numbers, M numbers, other addresses → value); None when the block has expressions.
-    ``kind``: None (an ordinary block), ``"assign"`` (a macro assignment, in ``assign``), ``"stmt"`` (a macro
-    statement, in ``stmt``) or ``"call"`` (may call a macro; words kept in order, arguments read without the
-    addresses' own rules, evaluated at run time; ``stmt`` is then ``("strict", block or ProgramError)``,
-    the block as an ordinary one, for where the code does not call).
-    ``stmt``: ``("goto", target)``, ``("if_goto", cond, target)``, ``("if_then", cond, (target, value))``,
-    ``("while", cond or None, m)`` (``DOm`` alone has no condition), ``("end", m)``.
-    ``message``: the comment of an assignment block (``#3000=1 (TOOL NOT FOUND)``), else None.
-    """
-
-    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
-    # Ordinary blocks share these class-level defaults (no per-block stores on the read hot path);
-    # :class:`SpecialBlock` gives statements, assignments and calls their own.
-    kind: str | None = None
-    stmt: tuple | None = None
-    message: str | None = None
-
-    def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
-                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
-        self.line = line
-        self.words = words
-        self.skip = skip
-        self.has_expr = has_expr
-        self.assign = assign
-        self.number = number
-        if has_expr:
-            self.gs = self.ms = self.values = None
-        else:
-            self.gs, self.ms, self.values = split_words(words)
-
-    def __repr__(self) -> str:
-        return (f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r}, "
-                f"kind={self.kind!r}, stmt={self.stmt!r})")
-
-
-class SpecialBlock(Block):
-    """A block of kind ``"assign"``, ``"stmt"`` or ``"call"`` (see :class:`Block`)."""
-
-    __slots__ = ("kind", "message", "stmt")
-
-    def __init__(self, line: int, words: tuple, *, kind: str, stmt: tuple | None = None, skip: int = 0,
-                 assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
-        super().__init__(line, words, skip=skip, has_expr=True, assign=assign, number=number)
-        self.kind = kind
-        self.stmt = stmt
-        self.message = None
-
-
-def split_words(words) -> tuple[tuple | None, tuple | None, dict[str, float]]:
-    """(G numbers or None, M numbers or None, {address: value}); a repeated address is an error."""
-    values: dict[str, float] = {}
-    gs = ms = None
-    for letter, value, _ in words:
-        if letter == "G":
-            gs = [value] if gs is None else [*gs, value]
-        elif letter == "M":
-            ms = [value] if ms is None else [*ms, value]
-        elif letter in values:
-            # The manual's default is "the later one is valid" (L503, 1802#6 AD2 = 0); we take the
-            # AD2 = 1 behaviour, an alarm, as with two G codes of one group (docs/gcode.md).
-            raise ProgramError(f"address {letter} appears twice in the block", code="duplicate-word")
-        else:
-            values[letter] = value
-    return gs, ms, values
-
-
-@dataclass
-class Program:
-    """A read program: blocks in order, with sequence numbers indexed for a later GOTO.
-
-    ``units``: program number → ``(start, end)`` block indices of each ``O`` program in the text (start is
-    the ``O`` block; end is the next ``O`` block or the end). ``main``: the extent of the first program
-    (from block 0, whether or not it has an ``O`` number).
-    """
-
-    blocks: list[Block]
-    file: str = "<program>"
-    program_number: int | None = None
-    sequence_index: dict[int, list[int]] = field(default_factory=dict)
-    units: dict[int, tuple[int, int]] = field(default_factory=dict)
-    main: tuple[int, int] = (0, 0)
 
 
 class Reader:
@@ -152,7 +69,9 @@ class Reader:
         self.dialect = dialect
         calls = macro_calls if macro_calls is not None else dialect.macro_calls
         # Codes that make a block a possible macro call (kind "call"): G65/G66 and the configured ones.
-        self._call_g = frozenset({65.0, 66.0, *(float(g) for g in calls.g_macro)})
+        roles = dialect.roles
+        call_codes = {key / 10 for key in (roles.macro_call, roles.modal_call) if key is not None}  # G65, G66
+        self._call_g = frozenset({*call_codes, *(float(g) for g in calls.g_macro)})
         self._call_m = frozenset(float(m) for m in (*calls.m_macro, *calls.m_sub))
         self._call_t = calls.t_sub is not None
         self._last_comment: str | None = None
@@ -165,10 +84,13 @@ class Reader:
         self._max_words = dialect.max_words_per_block
         self._max_word_length = dialect.max_word_length
         self._plain_pattern = _plain_block_pattern(dialect.max_word_length)
+        # A longer block breaks the word-count or word-length limit: it goes to the scanner, which stops at
+        # the first word too many (the regex would keep a stack entry per word of a 10 MB line).
+        self._max_plain = dialect.max_words_per_block * dialect.max_word_length
         # Per letter: (low, high, point_allowed, is_length) for the hot loop.
         self._fast_rules = {a: (r.low, r.high, r.point_allowed, a in self._length_letters)
                             for a, r in rules.items()}  # fmt: skip
-        # Macro arguments (G65 A1.0 D5.0 …, L5892): every sign and a decimal point; lengths still follow
+        # Macro arguments (G65 A1.0 D5.0 …, §3.7.6): every sign and a decimal point; lengths still follow
         # the increment and decimal-point mode.
         self._arg_rules = {a: (rule if a in _CALL_CONTROL else (-1e9, 1e9, True, rule[3]))
                            for a, rule in self._fast_rules.items()}  # fmt: skip
@@ -203,6 +125,35 @@ class Reader:
             self._deferred_letters |= {"R"}
         self._lenient_rules = lenient
 
+    def _hinted(self, exc: ProgramError, raw: str) -> ProgramError:
+        """The error with a hint when the line looks like another language's syntax (hints.py)."""
+        hint = self.dialect.language.hint
+        text = hint(raw) if hint is not None else None
+        if text is None and ";" in raw and self._comment_after_semicolon(raw):
+            text = SEMICOLON_COMMENT
+        if text is not None and text not in exc.message:
+            exc.message = f"{exc.message} ({text})"
+            exc.args = (exc.message,)
+        return exc
+
+    def _comment_after_semicolon(self, raw: str) -> bool:
+        """Whether the line reads up to a ';' and fails after it on words (``G01 X10 ; move``)."""
+        o_blocks, comment = list(self._o_blocks), self._last_comment
+        try:
+            text = self._strip_comments(raw, 0).translate(_NO_BLANKS).upper()
+        except ProgramError:
+            return False
+        try:
+            for index, part in enumerate(text.split(";")):
+                try:
+                    if part:
+                        self.read_block(part, 0)
+                except ProgramError:
+                    return index > 0 and re.search("[A-Z]{2}", part) is not None
+            return False
+        finally:
+            self._o_blocks, self._last_comment = o_blocks, comment
+
     def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):
         err = self.dialect.error(message, code, column=column, alarm=alarm)
         err.line = line
@@ -214,30 +165,35 @@ class Reader:
         self._o_blocks = []
         program_number = None
         seen_percent = False
-        for line_no, raw in enumerate(text.splitlines(), start=1):
-            stripped = raw.strip()
+        colon = ":" in self.dialect.program_number_marks
+        lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        for line_no, raw in enumerate(lines, start=1):
+            stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
+            if colon and stripped[0] == ":":
+                stripped = "O" + stripped[1:]  # ``:1234`` is the program number O1234 (ISO code)
             if stripped.startswith("%"):
                 if stripped.strip("%").strip() and not stripped[1:].lstrip().startswith("("):
-                    raise self.error("'%' must stand alone on its line (tape start/end mark)",
-                                     "bad-character", line_no)  # fmt: skip
+                    error = self.error("'%' must stand alone on its line (tape start/end mark)",
+                                       "bad-character", line_no)  # fmt: skip
+                    raise self._hinted(error, raw).located(file, line_no)
                 if seen_percent:
                     break  # second '%': end of tape
                 seen_percent = True
                 continue
             try:
                 # Hot path inline: a plain line (no comment, ';', expression) is one regex match.
-                if "(" not in stripped and ")" not in stripped and ";" not in stripped:
+                if stripped.isascii() and "(" not in stripped and ")" not in stripped and ";" not in stripped:
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
-                        text_block = _SPACES.sub("", text_block)
-                    if self._plain_pattern.fullmatch(text_block):
+                        text_block = text_block.translate(_NO_BLANKS)
+                    if len(text_block) <= self._max_plain and self._plain_pattern.fullmatch(text_block):
                         blocks.append(self._plain_block(text_block, line_no))
                         continue
                 blocks.extend(self.read_line(stripped, line_no))
             except ProgramError as exc:
-                raise exc.located(file, line_no) from None
+                raise self._hinted(exc, raw).located(file, line_no) from None
         program = Program(blocks, file=file)
         for index, block in enumerate(blocks):
             if block.number is not None:
@@ -275,7 +231,14 @@ class Reader:
         self._last_comment = None
         if "(" in text or ")" in text:
             text = self._strip_comments(text, line)
-        text = _SPACES.sub("", text).upper()
+        if not text.isascii():
+            # Only ASCII letters and digits are program text (a comment may hold anything): '²' or '١'
+            # would pass str.isdigit, and 'ı'.upper() is 'I'. Alarm 9 ILLEGAL CHARACTERS IN THE ADDRESS.
+            column, char = next((i, c) for i, c in enumerate(text) if not c.isascii())
+            raise self.error(f"illegal character {char!r} (U+{ord(char):04X})", "bad-character", line,
+                             column + 1)  # fmt: skip
+        # (str.translate, not re.sub, which keeps a list entry per match: 160 MB for a 6 MB line of words)
+        text = text.translate(_NO_BLANKS).upper()
         if "%" in text:
             raise self.error("'%' must stand alone on its line (tape start/end mark)", "bad-character", line)
         if ";" in text:
@@ -287,7 +250,7 @@ class Reader:
             block = self.read_block(text, line)
             blocks = [block] if block is not None else []
         if self._last_comment is not None:
-            # The message of #3000=n (…) / #3006=1 (…) (L5286, L5380): the comment of an assignment line.
+            # The message of #3000=n (…) / #3006=1 (…) (§3.7.3): the comment of an assignment line.
             for block in blocks:
                 if block.assign is not None:
                     block.message = self._last_comment
@@ -316,7 +279,7 @@ class Reader:
 
     # ------------------------------------------------------------------ block
     def read_block(self, text: str, line: int) -> Block | None:
-        if self._plain_pattern.fullmatch(text):
+        if len(text) <= self._max_plain and self._plain_pattern.fullmatch(text):
             return self._plain_block(text, line)
         return self._scan_block(text, line)
 
@@ -352,7 +315,7 @@ class Reader:
                         or letter in self._deferred_letters):  # fmt: skip
                     # macro arguments have their own rules; so do the words of some codes (L2.5 in G110,
                     # also in a later block of the modal cycle: checked when it runs)
-                    return self._scan_block(text, line)
+                    return self._rescan(text, line)
                 raise
             if letter == "G":
                 if gs is None:
@@ -366,15 +329,15 @@ class Reader:
                     ms.append(value)
             elif letter in values:
                 if letter in "IJK":
-                    return self._scan_block(text, line)  # argument specification II, if a call block
+                    return self._rescan(text, line)  # argument specification II, if a call block
                 raise self.error(f"address {letter} appears twice in the block", "duplicate-word", line)
             else:
                 values[letter] = value
         if ((gs is not None and not self._call_g.isdisjoint(gs))
                 or (ms is not None and not self._call_m.isdisjoint(ms)) or (self._call_t and "T" in values)):
-            return self._scan_block(text, line)  # a possible macro call: words kept in order
+            return self._rescan(text, line)  # a possible macro call: words kept in order
         if gs is not None and not self._override_codes.isdisjoint(gs):
-            return self._scan_block(text, line)  # a code with its own number formats (CodeSpec.address_rules)
+            return self._rescan(text, line)  # a code with its own number formats (CodeSpec.address_rules)
         number = None
         has_o = False
         if "N" in values or "O" in values:
@@ -400,9 +363,20 @@ class Reader:
             self._o_blocks.append(block)
         return block
 
+    def _rescan(self, text: str, line: int) -> Block:
+        """A plain line that needs the scanner after all (it is not empty, so it gives a block)."""
+        block = self._scan_block(text, line)
+        assert block is not None
+        return block
+
     def _literal(self, letter: str, digits: str, rule: tuple, line: int) -> float:
         low, high, point_allowed, is_length = rule
         has_point = "." in digits
+        if has_point and digits.count(".") > 1:
+            # Before the truncation below, which would cut X1.23456.7 to X1.2345 (alarm 7 ILLEGAL USE OF
+            # DECIMAL POINT).
+            raise self.error(f"bad number {letter}{digits}: a second decimal point", "bad-number", line,
+                             alarm=7)  # fmt: skip
         if has_point:
             if not point_allowed:
                 raise self.error(f"{letter}{digits}: no decimal point allowed in {letter}",
@@ -410,7 +384,7 @@ class Reader:
             if is_length:
                 dot = digits.index(".")
                 if len(digits) - dot - 1 > self._decimals:
-                    # Finer than the least input increment: truncated (L685-L690), on the text, so
+                    # Finer than the least input increment: truncated (§2.5), on the text, so
                     # 9.87654 becomes exactly 9.8765 (no binary rounding on the way).
                     digits = digits[: dot + 1 + self._decimals]
         value = float(digits)
@@ -430,13 +404,13 @@ class Reader:
         rest = list(words)
         if rest and rest[0][0] == "O":
             if not isinstance(rest[0][1], float):
-                raise self.error("O cannot be a variable (L5158)", "variable-not-allowed", line)
+                raise self.error("O cannot be a variable (GSK 25i §3.7.2)", "variable-not-allowed", line)
             rest = rest[1:]
             if rest and rest[0][0] == "O":
                 raise self.error("two program numbers O in one block", "duplicate-word", line)
         if rest and rest[0][0] == "N":
             if not isinstance(rest[0][1], float):
-                raise self.error("N cannot be a variable (L5160)", "variable-not-allowed", line)
+                raise self.error("N cannot be a variable (GSK 25i §3.7.2)", "variable-not-allowed", line)
             number = int(rest[0][1])
             rest = rest[1:]
         for letter, _, _ in rest:
@@ -504,7 +478,7 @@ class Reader:
               defer: bool = False) -> Block | None:  # fmt: skip
         pos = 0
         skip = 0
-        # Optional block skip: /, /n, /1/3 at the head (L520-L524).
+        # Optional block skip: /, /n, /1/3 at the head (§1.3.4).
         while pos < len(text) and text[pos] == "/":
             pos += 1
             if pos < len(text) and text[pos].isdigit():
@@ -513,10 +487,12 @@ class Reader:
                     raise self.error("block skip switch must be 1 to 9", "bad-block-skip", line, pos + 1)
                 pos += 1
             elif pos < len(text) and text[pos] == "#":
-                raise self.error("a variable cannot follow '/' (L5159)", "variable-not-allowed", line,
+                raise self.error("a variable cannot follow '/' (GSK 25i §3.7.2)", "variable-not-allowed",
+                                 line,
                                  pos + 1)  # fmt: skip
             elif pos < len(text) and text[pos] == "/":
-                raise self.error("'//n' is not a block skip; write /1/n (L522-L524)", "bad-block-skip", line,
+                raise self.error("'//n' is not a block skip; write /1/n (GSK 25i §1.3.4)", "bad-block-skip",
+                                 line,
                                  pos + 1)  # fmt: skip
             else:
                 n = 1
@@ -531,7 +507,7 @@ class Reader:
         while pos < len(text):
             c = text[pos]
             if c == "/":
-                break  # a slash inside the block: the rest of the block is ignored (L533-L535)
+                break  # a slash inside the block: the rest of the block is ignored (§1.3.4)
             if c == "#":
                 if any(w[0] not in "ON" for w in words):
                     raise self.error("a macro assignment must be alone in its block", "bad-expression", line,
@@ -567,9 +543,8 @@ class Reader:
             if text_digits is None:
                 has_expr = True
             words.append((letter, value, text_digits))
-        if len(words) > self._max_words:
-            raise self.error(f"{len(words)} words in one block (at most {self._max_words})", "too-many-words",
-                             line)  # fmt: skip
+            if len(words) > self._max_words:  # stop here: no need to read a million more words
+                raise self.error(f"more than {self._max_words} words in one block", "too-many-words", line)
         if defer:  # words that fail their address's own rule wait for the code they belong to
             for n, (letter, value, digits) in enumerate(words):
                 if digits is not None and letter in self._deferred_letters:
@@ -615,7 +590,8 @@ class Reader:
 
     # ------------------------------------------------------------------ macro statements
     def _statement(self, keyword: str, text: str, pos: int, line: int) -> tuple[tuple, int]:
-        """``IF[c]GOTOn``, ``IF[c]THEN #i=e``, ``GOTOn``, ``WHILE[c]DOm``, ``DOm``, ``ENDm`` (L5663-L5850)."""
+        """``IF[c]GOTOn``, ``IF[c]THEN #i=e``, ``GOTOn``, ``WHILE[c]DOm``, ``DOm``, ``ENDm``
+        (§3.7.4-§3.7.5)."""
         parser = ExpressionParser(text, pos + len(keyword), self.dialect)
         if keyword == "IF":
             if parser._peek() != "[":
@@ -667,7 +643,7 @@ class Reader:
                 parser.pos += 1
             if parser._peek() == ".":
                 raise self.error("a GOTO sequence number is an integer", "bad-number", line, parser.pos + 1)
-            return ("num", float(parser.text[start : parser.pos]))
+            return ("num", parser.constant(parser.text[start : parser.pos]))
         if c == "#":
             return parser.variable()
         if c == "[":
@@ -682,9 +658,9 @@ class Reader:
         digits = parser.text[start : parser.pos]
         if not digits:
             raise self.error(f"{word} needs its identifier 1, 2 or 3 ({word}1)", "do-end", line, start + 1)
-        m = int(digits)
+        m = int(parser.constant(digits))
         if not 1 <= m <= 3:
-            raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (L5712)", "do-end", line,
+            raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (GSK 25i §3.7.5)", "do-end", line,
                              start + 1, alarm=97)  # fmt: skip  # alarm 97 ILLEGAL CYCLE NUMBER
         return m
 

@@ -1,8 +1,10 @@
 """The macro variable store: #0 (always null), locals #1-#33, commons #100-#199 and #500-#999, and the
-system variables (#1000 and up) through :class:`~cnc_gym.gcode.sysvars.SystemVariables`.
+system variables (#1000 and up) through :class:`~cnc_gym.gcode.lang.fanuc.sysvars.SystemVariables`.
 
-Locals are one set per macro call level (L6364-L6379): G65, G66 and G/M-code macro calls push a fresh set
+Locals are one set per macro call level (§3.7.7): G65, G66 and G/M-code macro calls push a fresh set
 (:meth:`VariableStore.push_locals`), M99 pops it; M98 and M/T-code subprogram calls share the caller's set.
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -14,17 +16,19 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
 
 
-#: Largest magnitude a variable holds (§3.7.7 "Max ±10^47", L6386; L5219's ±999999 would refuse ordinary
+#: Largest magnitude a variable holds (§3.7.7 "Max ±10^47"; §3.7.2's ±999999 would refuse ordinary
 #: values such as a feed of 1 000 000 mm/min, so the limitations table is followed).
 MAX_VALUE = 1e47
 
 
 class SystemVariableSource(Protocol):
-    """What the store needs from the system-variable table (cnc_gym.gcode.sysvars)."""
+    """What the store needs from the system-variable table (lang/fanuc/sysvars.py)."""
 
     def read(self, index: int) -> float | None: ...
 
     def write(self, index: int, value: float | None) -> None: ...
+
+    def count_part(self) -> None: ...
 
 
 class VariableStore:
@@ -47,7 +51,7 @@ class VariableStore:
 
     @property
     def level(self) -> int:
-        """The local-variable level: 0 in the main program, +1 per macro call (L6364)."""
+        """The local-variable level: 0 in the main program, +1 per macro call (§3.7.6)."""
         return len(self._local_stack)
 
     def _index(self, value: float | None) -> int:
@@ -96,7 +100,7 @@ class VariableStore:
         if kind == "null":
             raise self.dialect.error("#0 is always null and cannot be assigned", "bad-variable")
         if value is not None and not abs(value) <= MAX_VALUE:  # also NaN
-            raise self.dialect.error(f"#{index}: {value:g} is beyond ±1e47 (L6386)", "overflow")
+            raise self.dialect.error(f"#{index}: {value:g} is beyond ±1e47 (GSK 25i §3.7.7)", "overflow")
         if kind == "system":
             if self.system is None:
                 raise self.dialect.error(f"system variable #{index} is not available here", "not-implemented")

@@ -4,36 +4,41 @@ Two layers:
 
 * **Plane geometry** (pure functions): a programmed move projected on the compensation plane is a
   :class:`PlaneElement` (line or arc). :func:`offset_curve` gives its offset line/circle,
-  :func:`corner` the tool-centre points at the junction of two elements (GSK/Fanuc type C, seed notes
-  §5.2, manual L4107-L4237): intersection points at inner corners and outer corners of 90° or more,
-  extension points (two or three extra points) at outer corners under 90°, start-up and cancel of type A
-  or B. :func:`correct_interference` is the interference check (alarm 41) with the manual's correction
-  before it alarms (interfering corner-vector pairs ignored from the inside out, an arc turned into a
-  line, L4554-L4611). :func:`compensate` runs a whole sequence (start-up line, offset-mode moves, cancel
-  line).
+  :func:`corner` the tool-centre points at the junction of two elements (GSK/Fanuc type C, §3.5.2-§3.5.3):
+  intersection points at inner corners and outer corners of 90° or more, extension points (two or three extra
+  points) at outer corners under 90°, start-up and cancel of type A or B. :func:`correct_interference` is the
+  interference check (alarm 41) with the manual's correction before it alarms (interfering corner-vector pairs
+  ignored from the inside out, an arc turned into a line, §3.5.3). :func:`compensate` runs a whole sequence
+  (start-up line, offset-mode moves, cancel line).
 * **The stage** (:class:`OffsetStage`): sits between the interpreter and the
   :class:`~cnc_gym.gcode.canonical.CanonicalMachine` with the same interface (``straight_traverse``,
   ``straight_feed``, ``arc_feed``, ``dwell``, ``position``, context attributes). It receives programmed
   moves in machine coordinates (after the work offsets), keeps the look-ahead the corners need (the
   manual's three-block buffer: a corner is resolved with the next move in the plane if it comes within
-  the next two blocks, else the vector is perpendicular to the block, L4119, L4515-L4555), and emits
+  the next two blocks, else the vector is perpendicular to the block, §3.5.3), and emits
   compensated moves (the tool length vector is already in every target: ``OffsetStack.tool_length``).
   ``position`` reports the *programmed* position, so the interpreter's incremental and arc arithmetic
   stays in programmed coordinates.
 
 Conventions: ``d`` is the signed offset, positive to the left of the direction of travel (G41 with a
-positive D), negative to the right (G42, or G41 with a negative D: the manual's swap, L4005). Arcs are
+positive D), negative to the right (G42, or G41 with a negative D: the manual's swap, §3.5.2). Arcs are
 signed sweeps in radians, positive counter-clockwise in the plane (u, v).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.gcode.offsets import ToolOffsets
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
+
+if TYPE_CHECKING:
+    from cnc_gym.gcode.codes import CodeSpec
+    from cnc_gym.gcode.dialect import Seam
 
 Point = tuple[float, float]
 Vec = tuple[float, float, float]
@@ -75,8 +80,14 @@ class PlaneElement:
         return self.center is not None
 
     @property
+    def arc_center(self) -> Point:
+        """The centre of an arc (lines have none)."""
+        assert self.center is not None
+        return self.center
+
+    @property
     def radius(self) -> float:
-        c = self.center
+        c = self.arc_center
         return math.hypot(self.start[0] - c[0], self.start[1] - c[1])
 
     def tangent(self, at_end: bool) -> Point:
@@ -204,13 +215,13 @@ def corner(
     role: str = "offset",
     startup_type: str = "B",
 ) -> Corner:
-    """Tool-centre points at the end of ``a`` / start of ``b`` (type C, seed notes §5.2).
+    """Tool-centre points at the end of ``a`` / start of ``b`` (type C, §3.5.2).
 
     ``role``: ``offset`` (both blocks compensated), ``startup`` (``a`` is the start-up line: its start
     has no vector), ``cancel`` (``b`` is the cancel line: it ends without a vector). ``b`` None: no next
     move in the plane within the look-ahead (end of program, G40 without a move): the vector is
     perpendicular to ``a`` at its end. ``d_b``: b's offset; only a G41/G42 switch (the opposite sign) uses
-    it here: a D change applies from the end vector of the block that carries it (L4480), so b's start
+    it here: a D change applies from the end vector of the block that carries it (§3.5.3), so b's start
     vector is computed with the old offset ``d_a`` (an arc then steps radially onto its new offset circle).
     ``startup_type``: ``A`` or ``B`` for outer corners of start-up and cancel (parameter 2602#2 TPH).
 
@@ -224,7 +235,7 @@ def corner(
     if d_b is None:
         d_b = d_a
     switch = d_a * d_b < 0.0
-    # A D change applies from the end vector of the block that carries it (L4480): b's start vector uses
+    # A D change applies from the end vector of the block that carries it (§3.5.3): b's start vector uses
     # the previous offset (a line tapers to the new one; an arc steps radially onto its new circle).
     if not switch:
         d_b = d_a
@@ -241,7 +252,7 @@ def corner(
         return Corner(va, lead, vb, kind)
 
     if switch:
-        # G41 <-> G42 (L4335-L4349): no inside/outside; the intersection if the offset paths meet, else a
+        # G41 <-> G42 (§3.5.3): no inside/outside; the intersection if the offset paths meet, else a
         # vector perpendicular to b at its start.
         point = _nearest(intersections(curve_a, curve_b), p)
         if point is None:
@@ -269,7 +280,7 @@ def corner(
         return Corner(point, [], point, "inner")
     if role in ("startup", "cancel") and startup_type == "A":
         if role == "startup":
-            return Corner(vb, [], vb, "type-a")  # straight to the vector perpendicular to b (L3980)
+            return Corner(vb, [], vb, "type-a")  # straight to the vector perpendicular to b (§3.5.2)
         return Corner(va, [], va, "type-a")  # cancel: perpendicular to a, then straight to the end
     obtuse = dot >= -1e-12  # alpha >= 90 deg on the workpiece side
     if obtuse:
@@ -282,10 +293,10 @@ def corner(
         ):
             return Corner(point, [], point, "outer-intersection")
         # The offset curves do not meet near the corner (arcs): straight from one vector to the other
-        # ("moving the corner", L4440).
+        # ("moving the corner", §3.5.3).
         return perpendicular("outer-vectors")
     # Acute outer corner: extension points r beyond the end of a and r before the start of b along their
-    # tangents (two or three extra points, L4452).
+    # tangents (two or three extra points, §3.5.3).
     q1 = (va[0] + r * ta[0], va[1] + r * ta[1])
     q2 = (vb[0] - r * tb[0], vb[1] - r * tb[1])
     if a.is_arc:
@@ -320,7 +331,7 @@ def block_interference(
     element: PlaneElement, d: float, start: Point, end: Point, as_line: bool = False, line: int = 0
 ) -> str | None:
     """Interference check of one block's compensated movement from ``start`` to ``end`` (Remark 9,
-    L4554-L4580); returns why it interferes, or None.
+    §3.5.3); returns why it interferes, or None.
 
     (a) the tool-centre path runs 90°-270° against the programmed path: for a line (or an arc turned into
     a line by the correction, compared with its chord), the dot product of the two directions is negative;
@@ -372,7 +383,7 @@ def correct_interference(
     end_vectors: list[Point],
     line: int = 0,
 ) -> tuple[list[Point], list[Point], bool]:
-    """The controller's correction of interference before it alarms (L4582-L4611, seed notes §5.2).
+    """The controller's correction of interference before it alarms (§3.5.3, §3.5.2).
 
     ``start_vectors``: the tool-centre points at the block's start corner in path order (the first is
     where the previous block ended, the last where this block's own movement starts); ``end_vectors``:
@@ -383,9 +394,9 @@ def correct_interference(
     out is checked, until a pair does not interfere. The last vector at a corner is never dropped: when
     only one side can give one up, only that one is dropped (a step smaller than the tool radius
     machined with an arc: "one vector is ignored and the tool traverses toward the 2nd vector",
-    L4511-L4513); when neither can (a single pair from the start, or interference left after
+    §3.5.3); when neither can (a single pair from the start, or interference left after
     correcting) it is ``comp-interference`` (alarm 41). Once a vector has been dropped an arc block runs
-    as a straight line (L4600).
+    as a straight line (§3.5.3).
 
     Returns the kept start vectors, the kept end vectors and whether an arc now runs as a line.
     """
@@ -417,7 +428,7 @@ def correct_interference(
 
 def _circle_point(element: PlaneElement, d: float, toward: Point) -> Point:
     """The point of the arc's offset circle (radius for ``d``) in the direction of ``toward``."""
-    cu, cv = element.center
+    cu, cv = element.arc_center
     radius = offset_radius(element, d)
     du, dv = toward[0] - cu, toward[1] - cv
     n = math.hypot(du, dv)
@@ -476,13 +487,13 @@ def compensate(
         for q in starts[1:]:
             out.append(OutputMove(q, block=i))
         if element.is_arc and not as_line:
-            sweep = arc_sweep_between(element.center, starts[-1], ends_at[0], element.sweep)
-            out.append(OutputMove(ends_at[0], element.center, sweep, block=i))
+            sweep = arc_sweep_between(element.arc_center, starts[-1], ends_at[0], element.sweep)
+            out.append(OutputMove(ends_at[0], element.arc_center, sweep, block=i))
         else:
             out.append(OutputMove(ends_at[0], block=i))
         tool = ends_at[0]
         lead = ends_at[1:]
-        start_b = c.start_b
+        start_b = c.start_b if c.start_b is not None else tool  # set by Corner.__post_init__
     if cancel_last:
         for q in lead:
             out.append(OutputMove(q, block=len(elements) - 1))
@@ -491,7 +502,7 @@ def compensate(
 
 
 def _cancel_with_direction(a: PlaneElement, virtual: PlaneElement, d: float) -> Corner:
-    """``G40 X_ Y_ I_ J_`` (L4420-L4436): a ends where its offset path meets the offset of the (I, J)
+    """``G40 X_ Y_ I_ J_`` (§3.5.3): a ends where its offset path meets the offset of the (I, J)
     direction from its end; if they do not meet, perpendicular to a at its end."""
     point = _nearest(intersections(offset_curve(a, d), offset_curve(virtual, d)), a.end)
     if point is None:
@@ -517,6 +528,12 @@ class _Item:
     lead: list[Point] = field(default_factory=list)
     start_b: Point | None = None
     role: str = "offset"
+
+    @property
+    def move(self) -> PlaneElement:
+        """The element of a move in the plane (every item the corner logic sees has one)."""
+        assert self.element is not None
+        return self.element
 
 
 class OffsetStage:
@@ -551,7 +568,7 @@ class OffsetStage:
         self.corner_arc_feed: float | None = None
         # The tool length vector lives in OffsetStack.tool_length (it is in every target already).
         # ``length_pending``: the change of that vector an incremental move of
-        # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, L3869).
+        # the offset axis in the block that changes it must carry (``G43 G91 Z0 H_`` moves by H, §3.5.1).
         self.length_pending: Vec | None = None
         self.suspended = False  # this block's moves pass through uncompensated (G53, G27-G30, G60)
         self._position_offset: tuple[int, float, frozenset[int], bool] | None = None
@@ -585,14 +602,14 @@ class OffsetStage:
         self._position_offset = None
         if self.cancel_requested and self.pending is not None:
             # G40 in a block without a move in the plane: the vector stays perpendicular to the last
-            # block and is cancelled on the next move (L4418).
+            # block and is cancelled on the next move (§3.5.3).
             self._resolve(None)
             self.active = False
         elif self.pending is not None:
             self.blocks_since += 1
             if self.blocks_since > LOOKAHEAD_BLOCKS:
                 # The two blocks after the pending one have no move in the plane: the next block cannot
-                # be seen, so its end vector is perpendicular to it (the overcut of L4535-L4545).
+                # be seen, so its end vector is perpendicular to it (the overcut of §3.5.3).
                 self._resolve(None)
         if self.cancel_requested and self.pending is None:
             self.cancel_requested = False
@@ -622,7 +639,7 @@ class OffsetStage:
         self._position_offset = (factor, amount, axes, incremental)
 
     def corner_arc(self, direction: Point | None, feed: float | None) -> None:
-        """G39 [I J]: a corner arc of radius |d| at the end of the pending block (L4646-L4666)."""
+        """G39 [I J]: a corner arc of radius |d| at the end of the pending block (§3.5.4)."""
         self.corner_arc_pending = True
         self.corner_arc_direction = direction
         self.corner_arc_feed = feed
@@ -704,7 +721,7 @@ class OffsetStage:
     def suspend(self) -> None:
         """G53, G27-G30, G60 come next: everything buffered is emitted first (the last block ending with its
         vector perpendicular to it) and this block's moves go through uncompensated; the next move in the
-        plane is a new start-up. A simplification of the manual's temporary cancel (L1664, L4371-L4394):
+        plane is a new start-up. A simplification of the manual's temporary cancel (§3.2.12, §3.5.3):
         the vector is gone at the intermediate point and comes back with the next block's start-up."""
         self.flush()
         self.suspended = True
@@ -712,7 +729,7 @@ class OffsetStage:
 
     # ------------------------------------------------------------------ internals
     def _adjust(self, target: Vec) -> Vec:
-        """G45-G48 on a straight move: each commanded axis's travel grows/shrinks by factor x D (L4785)."""
+        """G45-G48 on a straight move: each commanded axis's travel grows/shrinks by factor x D (§3.5.7)."""
         request = self._position_offset
         if request is None:
             return target
@@ -725,12 +742,13 @@ class OffsetStage:
             if delta != 0.0:
                 delta += math.copysign(1.0, delta) * factor * amount
             elif incremental:
-                delta = factor * amount  # a zero move in G91 moves by the offset (L4806, N9/N11)
+                delta = factor * amount  # a zero move in G91 moves by the offset (§3.5.7, N9/N11)
             out[a] = pos[a] + delta
         return (out[0], out[1], out[2])
 
     def _adjust_arc(self, end: Vec, center: Vec, plane: Plane, sweep: float) -> tuple[Vec, Vec]:
-        """G45-G48 on a quarter or three-quarter I/J/K circle: the radius changes by factor x D (L4831)."""
+        """G45-G48 on a quarter or three-quarter I/J/K circle: the radius changes by factor x D (§3.5.7)."""
+        assert self._position_offset is not None  # the caller checked it
         factor, amount, _axes, _incremental = self._position_offset
         self._position_offset = None
         u, v, _w = PLANE_AXES[plane]
@@ -744,7 +762,7 @@ class OffsetStage:
         if not quarter or abs(abs(sweep) - math.pi) < 1e-6:
             raise CompensationError(
                 "G45-G48 on an arc: only quarter and three-quarter circles with the "
-                "centre on an axis direction can be offset (L4831)",
+                "centre on an axis direction can be offset (GSK 25i §3.5.7)",
                 "position-offset-arc",
             )
         change = factor * amount
@@ -797,7 +815,7 @@ class OffsetStage:
             self.machine.straight_feed(target, feed)
 
     def _plane_move(self, item: _Item) -> None:
-        element = item.element
+        element = item.move
         line = self.line
         if not self.active:
             if item.kind == "arc":
@@ -833,7 +851,7 @@ class OffsetStage:
             self._position = item.target
             return
         if self.pending is None:
-            # The previous block was resolved without seeing this one (look-ahead starved, L4535): the tool
+            # The previous block was resolved without seeing this one (look-ahead starved, §3.5.3): the tool
             # sits on the old vector and runs straight to this block's end vector (an arc: to its start).
             item.start_b = element.offset_point(False, item.d)
         else:
@@ -853,17 +871,17 @@ class OffsetStage:
                 self._corner_arc_resolve(a, nxt)
                 return
             self.corner_arc_pending = False  # G39 before a cancel or the end: no corner to round
-        b_el = nxt.element if nxt is not None else None
+        b_el = nxt.move if nxt is not None else None
         try:
             if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:
                 virtual = PlaneElement(
-                    a.element.end,
+                    a.move.end,
                     (
-                        a.element.end[0] + self.cancel_direction[0],
-                        a.element.end[1] + self.cancel_direction[1],
+                        a.move.end[0] + self.cancel_direction[0],
+                        a.move.end[1] + self.cancel_direction[1],
                     ),
                 )
-                c = _cancel_with_direction(a.element, virtual, a.d)
+                c = _cancel_with_direction(a.move, virtual, a.d)
             else:
                 role = (
                     "startup"
@@ -871,7 +889,7 @@ class OffsetStage:
                     else ("cancel" if nxt is not None and nxt.role == "cancel" else "offset")
                 )
                 d_b = None if nxt is None or nxt.role == "cancel" else nxt.d
-                c = corner(a.element, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
+                c = corner(a.move, b_el, a.d, d_b, role=role, startup_type=self.startup_type)
         except CompensationError as err:
             err.line = err.line or line
             raise
@@ -890,15 +908,15 @@ class OffsetStage:
         """G39: a ends with the vector perpendicular to its end; an arc of radius |d| about the corner
         takes the tool to the vector perpendicular to the next block's start (or to the I/J direction)."""
         self.corner_arc_pending = False
-        p = a.element.end
-        end_a = a.element.offset_point(True, a.d)
+        p = a.move.end
+        end_a = a.move.offset_point(True, a.d)
         if self.corner_arc_direction is not None:
             virtual = PlaneElement(
                 p, (p[0] + self.corner_arc_direction[0], p[1] + self.corner_arc_direction[1])
             )
             target = virtual.offset_point(False, a.d)
         else:
-            target = nxt.element.offset_point(False, nxt.d)
+            target = nxt.move.offset_point(False, nxt.d)
         self._emit_block(a, [end_a])
         sweep = arc_sweep_between(p, end_a, target, 0.0)
         if abs(sweep) > SMOOTH:
@@ -942,9 +960,9 @@ class OffsetStage:
         The interference check and its correction (:func:`correct_interference`) run first and may drop
         vectors at both corners (an arc then runs as a straight line); returns the end corner's vectors
         that are left for the next block's lead. An arc whose start vector is not on its offset circle
-        (D changed in this block: the start vector keeps the old offset, L4480) steps radially onto it."""
+        (D changed in this block: the start vector keeps the old offset, §3.5.3) steps radially onto it."""
         self._set_machine_context(item.context)
-        element = item.element
+        element = item.move
         line = item.context[0]
         u, v, _w = PLANE_AXES[self.plane]
         pos = self.machine.position
@@ -962,9 +980,9 @@ class OffsetStage:
             start = _circle_point(element, item.d, starts[-1])
             if _dist(starts[-1], start) > 1e-7:
                 self._emit_plane_point(start, item)
-            sweep = arc_sweep_between(element.center, start, end, element.sweep)
+            sweep = arc_sweep_between(element.arc_center, start, end, element.sweep)
             center = list(target)
-            center[u], center[v] = element.center
+            center[u], center[v] = element.arc_center
             self.machine.arc_feed(target, (center[0], center[1], center[2]), self.plane, sweep, item.feed)
         else:
             self._emit_straight("line" if item.kind == "arc" else item.kind, target, item.feed)
@@ -988,230 +1006,281 @@ class OffsetStage:
 
 
 # ====================================================================== interpreter glue
+# The actions and hooks of tool compensation. The state is ``core.state.comp`` (CompensationState): the
+# offset memory, the D and H numbers, the G40-G42 and G43/G44/G49 modes, and the OffsetStage, installed in
+# place of the output stage the first time a program needs it (plain programs keep the direct path).
 
 
-def _incremental(interp) -> bool:
+def _incremental(core: Seam) -> bool:
     """G91 in force for this block's move: G90/G91 of the block have not run yet at the compensation
     steps (order of execution), but the raw modal table already holds them."""
-    key = interp.modal.get(3)
-    return interp.incremental if key is None else key == 910
+    roles = core.dialect.roles
+    key = core.state.modal.get(roles.distance_group)  # type: ignore[arg-type]
+    return core.state.incremental if key is None else key == roles.incremental
 
 
 _LETTERS = "XYZ"
 _IJK = "IJK"
 
 
-class ToolCompensation:
-    """The interpreter's tool compensation state and actions (called from a few hooks in interpreter.py).
+def install(core: Seam) -> OffsetStage:
+    """The compensation stage, put in front of the output the first time it is needed."""
+    st = core.state
+    comp = st.comp
+    if comp.stage is None:
+        comp.stage = OffsetStage(st.out, startup_type=comp.settings.startup_type, alarms=core.dialect.alarms)
+        st.out = comp.stage
+        st.block_listeners.append(before_block)
+    return comp.stage
 
-    Holds the offset memory (:class:`~cnc_gym.gcode.offsets.ToolOffsets`), the selected D and H
-    numbers, the G40/G41/G42 and G43/G44/G49 modes, and installs the :class:`OffsetStage` in place of the
-    interpreter's canonical machine the first time a program needs it (plain programs keep the direct
-    path). Holds no reference to the interpreter (it is passed in), so no reference cycle.
-    """
 
-    def __init__(self, dialect, tool_offsets=None) -> None:
-        self.settings = dialect.compensation
-        self.offsets: ToolOffsets = self.settings.new_offsets(tool_offsets)
-        self.d_number = 0
-        self.h_number = 0
-        self.side = 0  # +1 G41, -1 G42, 0 G40
-        self.plane = Plane.XY  # plane of the G41/G42 in force
-        self.length_sign = 0  # +1 G43, -1 G44, 0 G49
-        self.length_axis = 2
-        self.stage: OffsetStage | None = None
-        # G28/G30 cancel the tool length vector at the intermediate point (L3897): the cancelled part per
-        # axis, restored by the next block that commands that axis (``restore_length``), or None.
-        self.length_restore: list[float] | None = None
+def before_block(core: Seam, values: dict) -> None:
+    """Each block once the stage is installed: the look-ahead counts blocks; after G28/G30 the tool
+    length vector comes back with the next block that commands its axis."""
+    comp = core.state.comp
+    comp.stage.begin_block()
+    if comp.length_restore is not None:  # the tool length vector after G28/G30 (§3.5.1)
+        restore_length(core, values)
 
-    # ------------------------------------------------------------------ helpers
-    def install(self, interp) -> OffsetStage:
-        if self.stage is None:
-            self.stage = OffsetStage(
-                interp.out, startup_type=self.settings.startup_type, alarms=interp.dialect.alarms
-            )
-            interp.out = self.stage
-        return self.stage
 
-    def signed_offset(self, interp) -> float:
-        """The signed compensation offset (left +) for the D and G41/G42 in force.
+def signed_offset(core: Seam) -> float:
+    """The signed compensation offset (left +) for the D and G41/G42 in force.
 
-        A mirror image in the plane (G51.1, or G51 with one negative factor) interchanges G41 and G42, so
-        the machine path is the mirror image of the compensated programmed path (Fanuc's rule; GSK's
-        manual is silent). The stage sees the mirrored moves, hence the sign. Scaling never scales the
-        offset."""
-        if not self.side:
-            return 0.0
-        sign = 1.0
-        chain = interp.chain
-        if chain.active:
-            u, v, _w = PLANE_AXES[self.plane if self.side else interp.plane]
-            a = chain.linear
-            if a[u][u] * a[v][v] - a[u][v] * a[v][u] < 0.0:
-                sign = -1.0
-        return sign * self.side * self.offsets.radius(self.d_number)
+    A mirror image in the plane (G51.1, or G51 with one negative factor) interchanges G41 and G42, so
+    the machine path is the mirror image of the compensated programmed path (Fanuc's rule; GSK's
+    manual is silent). The stage sees the mirrored moves, hence the sign. Scaling never scales the
+    offset."""
+    st = core.state
+    comp = st.comp
+    if not comp.side:
+        return 0.0
+    sign = 1.0
+    chain = st.chain
+    if chain.active:
+        u, v, _w = PLANE_AXES[comp.plane if comp.side else st.plane]
+        a = chain.linear
+        if a[u][u] * a[v][v] - a[u][v] * a[v][u] < 0.0:
+            sign = -1.0
+    return sign * comp.side * comp.offsets.radius(comp.d_number)
 
-    def _direction(self, interp, values: dict) -> Point | None:
-        u, v, _w = PLANE_AXES[interp.plane]
-        iu, iv = values.get(_IJK[u]), values.get(_IJK[v])
-        if iu is None and iv is None:
-            return None
-        du, dv = (iu or 0.0) * interp.scale, (iv or 0.0) * interp.scale
-        if du == 0.0 and dv == 0.0:
-            raise interp.error("the I/J/K direction is zero", "comp-bad-direction")
-        return (du, dv)
 
-    # ------------------------------------------------------------------ words
-    def words(self, interp, values: dict) -> None:
-        """D and H words: select the offset numbers (D and H are modal, L4468, L3887)."""
-        if "D" in values:
-            self.d_number = int(values["D"])
-            if self.side and self.stage is not None:
-                # A D change in offset mode applies from this block's end vector (L4471); D00 cancels.
-                self.stage.set_cutter(self.signed_offset(interp), self.plane)
-        if "H" in values:
-            self.length_restore = None  # an H in G43/G44 mode sets the vector afresh
-            self.h_number = int(values["H"])
-            if self.length_sign:
-                self._apply_length(interp, values)
+def _direction(core: Seam, values: dict) -> Point | None:
+    st = core.state
+    u, v, _w = PLANE_AXES[st.plane]
+    iu, iv = values.get(_IJK[u]), values.get(_IJK[v])
+    if iu is None and iv is None:
+        return None
+    du, dv = (iu or 0.0) * st.scale, (iv or 0.0) * st.scale
+    if du == 0.0 and dv == 0.0:
+        raise core.error("the I/J/K direction is zero", "comp-bad-direction")
+    return (du, dv)
 
-    # ------------------------------------------------------------------ G40 / G41 / G42
-    def cutter(self, interp, spec, values: dict) -> None:
-        side = int(spec.value)
-        if side:
-            if self.side and interp.plane != self.plane:
-                raise interp.error(
-                    "G41/G42: the plane changed in cutter compensation mode", "comp-plane-change"
-                )
-            self.side = side
-            self.plane = interp.plane
-            stage = self.install(interp)
-            stage.set_cutter(self.signed_offset(interp), self.plane)
-            return
-        self.side = 0
-        direction = self._direction(interp, values)
-        if self.stage is not None:
-            self.stage.set_cutter(0.0, self.plane, cancel_direction=direction)
 
-    def check_plane(self, interp, plane) -> None:
-        """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (L4175)."""
-        if self.side and plane != self.plane:
-            raise interp.error(
-                f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with G40 first)",
-                "comp-plane-change",
-            )
+# ---------------------------------------------------------------------- D and H words
+def offset_words(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """D and H words: select the offset numbers (D and H are modal, §3.5.3, §3.5.1); D and H in one block
+    are one item."""
+    if spec.name == "D" or "D" not in values:
+        words(core, values)
 
-    def corner_arc(self, interp, spec, values: dict) -> None:
-        """G39 [I_J_]: corner arc of the compensation radius (L4646-L4666); only in offset mode."""
-        if not self.side or self.stage is None or not self.stage.active:
-            raise interp.error(
-                "G39 is only allowed in cutter compensation mode (G41/G42 after start-up)", "g39-without-comp"
-            )
-        self.stage.corner_arc(self._direction(interp, values), interp.feed)
 
-    # ------------------------------------------------------------------ G43 / G44 / G49
-    def length(self, interp, spec, values: dict) -> None:
-        self.length_restore = None  # G43/G44/G49 set the vector afresh (after a G28/G30 cancel too)
-        sign = int(spec.value)
-        if sign and not any(letter in values for letter in _LETTERS):
-            raise interp.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
-        if interp.modal.get(1) in (20, 30):  # G02/G03 in force: an arc block with the normal axis is a helix
-            u, v, w = PLANE_AXES[interp.plane]
-            arc_words = ("IJK"[u], "IJK"[v], "R", _LETTERS[u], _LETTERS[v])
-            if _LETTERS[w] in values and any(letter in values for letter in arc_words):
-                raise interp.error(
-                    f"{spec.name} cannot be given in a helical block (L1103)", "length-helical"
-                )
-        self.length_sign = sign
-        if sign:
-            self.length_axis = 2 if self.settings.tool_length_type == "A" else PLANE_AXES[interp.plane][2]
-        self._apply_length(interp, values)
+def words(core: Seam, values: dict) -> None:
+    comp = core.state.comp
+    if "D" in values:
+        comp.d_number = int(values["D"])
+        if comp.side and comp.stage is not None:
+            # A D change in offset mode applies from this block's end vector (§3.5.3); D00 cancels.
+            comp.stage.set_cutter(signed_offset(core), comp.plane)
+    if "H" in values:
+        comp.length_restore = None  # an H in G43/G44 mode sets the vector afresh
+        comp.h_number = int(values["H"])
+        if comp.length_sign:
+            _apply_length(core, values)
 
-    def cancel_length_at_intermediate(self, interp, axes) -> None:
-        """G28/G30 reached the intermediate point: the tool length vector of the commanded axes is cancelled
-        (L3897: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
-        G43/G44). The next block commanding the axis restores it (:meth:`restore_length`)."""
-        vector = interp.offsets.tool_length
-        cancelled = [vector[a] if a in axes else 0.0 for a in range(3)]
-        if not any(cancelled):
-            return
-        interp.offsets.tool_length = [vector[a] - cancelled[a] for a in range(3)]
-        interp.offsets.update()
-        restore = self.length_restore or [0.0, 0.0, 0.0]
-        self.length_restore = [restore[a] + cancelled[a] for a in range(3)]
-        self.install(interp)  # its per-block hook (interpreter.execute) lets the restore see the next blocks
 
-    def restore_length(self, interp, values: dict) -> None:
-        """At the start of a block after G28/G30: the cancelled vector of each axis the block commands comes
-        back, and the block's move of that axis carries it (in G90 and G91 alike: ``length_pending``)."""
-        restore = self.length_restore
-        axes = [a for a in range(3) if restore[a] and _LETTERS[a] in values]
-        if not axes:
-            return
-        vector = list(interp.offsets.tool_length)
-        delta = [0.0, 0.0, 0.0]
-        for a in axes:
-            vector[a] += restore[a]
-            delta[a] = restore[a]
-            restore[a] = 0.0
-        if not any(restore):
-            self.length_restore = None
-        interp.offsets.tool_length = vector
-        interp.offsets.update()
-        if not interp._transformed and self.stage is not None:
-            # The programmed position moves with the vector, so an incremental move adds to the restored
-            # position and an absolute one goes to program + offsets + vector (the transformed path keeps
-            # its program position and gets this from the origin by itself).
-            self.stage.length_pending = (delta[0], delta[1], delta[2])
+# ---------------------------------------------------------------------- G40 / G41 / G42
+def cutter(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G41/G42 (cutter compensation left/right) and G40 (cancel, optional I/J direction)."""
+    st = core.state
+    comp = st.comp
+    side = int(spec.value)  # type: ignore[call-overload]
+    if side:
+        if comp.side and st.plane != comp.plane:
+            raise core.error("G41/G42: the plane changed in cutter compensation mode", "comp-plane-change")
+        comp.side = side
+        comp.plane = st.plane
+        stage = install(core)
+        stage.set_cutter(signed_offset(core), comp.plane)
+        return
+    comp.side = 0
+    direction = _direction(core, values)
+    if comp.stage is not None:
+        comp.stage.set_cutter(0.0, comp.plane, cancel_direction=direction)
 
-    def _apply_length(self, interp, values: dict) -> None:
-        """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the
-        next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (L3913)."""
-        new = [0.0, 0.0, 0.0]
-        if self.length_sign:
-            new[self.length_axis] = self.length_sign * self.offsets.length(self.h_number)
-        old = interp.offsets.tool_length
-        if new == list(old):
-            return
-        delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
-        interp.offsets.tool_length = new
-        interp.offsets.update()
-        if (
-            _incremental(interp)
-            and not interp._transformed
-            and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
-        ):
-            # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, L3869). The
-            # transformed path does this by itself (its program position ignores the machine's).
-            stage = self.install(interp)
-            stage.length_pending = tuple(delta[a] if _LETTERS[a] in values else 0.0 for a in range(3))
 
-    # ------------------------------------------------------------------ G45-G48
-    def position_offset(self, interp, spec, values: dict) -> None:
-        """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
-        value (L4785-L4862). Not in G41/G42 mode (L4825); ignored in canned-cycle mode (L4839)."""
-        if self.side:
-            raise interp.error(
-                f"{spec.name} cannot be used in cutter compensation mode G41/G42 (L4825)",
-                "position-offset-in-comp",
-            )
-        cycle = getattr(interp, "cycle", None)
-        if cycle is not None and getattr(cycle, "code", None):
-            return
-        axes = frozenset(a for a in range(3) if _LETTERS[a] in values)
-        amount = self.offsets.position_offset(self.d_number)
-        self.install(interp).set_position_offset(int(spec.value), amount, axes, _incremental(interp))
+def check_plane(core: Seam, plane) -> None:
+    """G17/G18/G19 while G41/G42 is in force: a different plane is alarm 37 (§3.5.3)."""
+    comp = core.state.comp
+    if comp.side and plane != comp.plane:
+        raise core.error(f"plane change to {Plane(plane).name} in cutter compensation mode (cancel with G40 "
+                         "first)", "comp-plane-change")  # fmt: skip
 
-    # ------------------------------------------------------------------ G53, G27-G30, end
-    def before_machine_move(self) -> None:
-        """G53 (and G27-G30, G60) are about to move: compensation is suspended for this block."""
-        if self.stage is not None:
-            self.stage.suspend()
 
-    def finish(self, file: str = "<program>") -> None:
-        """End of the program: emit what the look-ahead still holds (the vector stays, L4112)."""
-        if self.stage is not None:
-            try:
-                self.stage.flush()
-            except ProgramError as err:
-                raise err.located(file, self.stage.line) from None
+def corner_arc(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G39 [I_J_]: corner arc of the compensation radius (§3.5.4); only in offset mode."""
+    comp = core.state.comp
+    if not comp.side or comp.stage is None or not comp.stage.active:
+        raise core.error("G39 is only allowed in cutter compensation mode (G41/G42 after start-up)",
+                         "g39-without-comp")  # fmt: skip
+    comp.stage.corner_arc(_direction(core, values), core.state.feed)
+
+
+# ---------------------------------------------------------------------- G43 / G44 / G49
+def length(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G43/G44 (tool length offset + / -) and G49 (cancel)."""
+    st = core.state
+    comp = st.comp
+    comp.length_restore = None  # G43/G44/G49 set the vector afresh (after a G28/G30 cancel too)
+    sign = int(spec.value)  # type: ignore[call-overload]
+    deferred = False
+    if sign and not any(letter in values for letter in _LETTERS):
+        if comp.settings.length_needs_axis:
+            raise core.error(f"{spec.name} needs an axis word in its block", "length-no-axis")
+        deferred = True  # the next move of the tool axis carries the vector
+    if st.modal.get(1) in core.dialect.roles.arcs:  # G02/G03 in force: an arc block with the normal axis …
+        # … is a helix
+        u, v, w = PLANE_AXES[st.plane]
+        arc_words = ("IJK"[u], "IJK"[v], "R", _LETTERS[u], _LETTERS[v])
+        if _LETTERS[w] in values and any(letter in values for letter in arc_words):
+            raise core.error(f"{spec.name} cannot be given in a helical block (GSK 25i §3.2.3)",
+                             "length-helical")  # fmt: skip
+    comp.length_sign = sign
+    if sign:
+        comp.length_axis = 2 if comp.settings.tool_length_type == "A" else PLANE_AXES[st.plane][2]
+    if deferred:
+        _defer_length(core)
+    else:
+        _apply_length(core, values)
+
+
+def _defer_length(core: Seam) -> None:
+    """``G43 H_`` without an axis word (where the dialect allows it): the new vector waits, as after a
+    G28 cancel, for the next block that commands its axis, whose move carries it in G90 and G91 alike
+    (:func:`restore_length`)."""
+    st = core.state
+    comp = st.comp
+    new = [0.0, 0.0, 0.0]
+    new[comp.length_axis] = comp.length_sign * comp.offsets.length(comp.h_number)
+    old = st.offsets.tool_length
+    delta = [new[a] - old[a] for a in range(3)]
+    if any(delta):
+        comp.length_restore = delta
+        install(core)
+
+
+def cancel_length_at_intermediate(core: Seam, axes) -> None:
+    """G28/G30 reached the intermediate point: the tool length vector of the commanded axes is cancelled
+    (§3.5.1: "G28 and G30 are canceled after moving into the intermediate point"; the mode stays
+    G43/G44). The next block commanding the axis restores it (:func:`restore_length`)."""
+    st = core.state
+    comp = st.comp
+    vector = st.offsets.tool_length
+    cancelled = [vector[a] if a in axes else 0.0 for a in range(3)]
+    if not any(cancelled):
+        return
+    st.offsets.tool_length = [vector[a] - cancelled[a] for a in range(3)]
+    st.offsets.update()
+    restore = comp.length_restore or [0.0, 0.0, 0.0]
+    comp.length_restore = [restore[a] + cancelled[a] for a in range(3)]
+    install(core)  # its per-block hook lets the restore see the next blocks
+
+
+def restore_length(core: Seam, values: dict) -> None:
+    """At the start of a block after G28/G30: the cancelled vector of each axis the block commands comes
+    back, and the block's move of that axis carries it (in G90 and G91 alike: ``length_pending``)."""
+    st = core.state
+    comp = st.comp
+    restore = comp.length_restore
+    axes = [a for a in range(3) if restore[a] and _LETTERS[a] in values]  # type: ignore[index]
+    if not axes:
+        return
+    vector = list(st.offsets.tool_length)
+    delta = [0.0, 0.0, 0.0]
+    for a in axes:
+        vector[a] += restore[a]  # type: ignore[index]
+        delta[a] = restore[a]  # type: ignore[index]
+        restore[a] = 0.0  # type: ignore[index]
+    if not any(restore):  # type: ignore[arg-type]
+        comp.length_restore = None
+    st.offsets.tool_length = vector
+    st.offsets.update()
+    if not st.transformed and comp.stage is not None:
+        # The programmed position moves with the vector, so an incremental move adds to the restored
+        # position and an absolute one goes to program + offsets + vector (the transformed path keeps
+        # its program position and gets this from the origin by itself).
+        comp.stage.length_pending = (delta[0], delta[1], delta[2])
+
+
+def _apply_length(core: Seam, values: dict) -> None:
+    """Put the tool length vector into the offset chain (OffsetStack.tool_length, canonical.py): the
+    next absolute move of the axis goes to program + offsets + vector; H replaces, never adds (§3.5.1)."""
+    st = core.state
+    comp = st.comp
+    new = [0.0, 0.0, 0.0]
+    if comp.length_sign:
+        new[comp.length_axis] = comp.length_sign * comp.offsets.length(comp.h_number)
+    old = st.offsets.tool_length
+    if new == list(old):
+        return
+    delta = (new[0] - old[0], new[1] - old[1], new[2] - old[2])
+    st.offsets.tool_length = new
+    st.offsets.update()
+    if (
+        _incremental(core)
+        and not st.transformed
+        and any(_LETTERS[a] in values and delta[a] != 0.0 for a in range(3))
+    ):
+        # G91 with the axis in this block: the move carries the change (G43 G91 Z0 H_, §3.5.1). The
+        # transformed path does this by itself (its program position ignores the machine's).
+        stage = install(core)
+        moved = [delta[a] if _LETTERS[a] in values else 0.0 for a in range(3)]
+        stage.length_pending = (moved[0], moved[1], moved[2])
+
+
+# ---------------------------------------------------------------------- G45-G48
+def position_offset(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """G45/G46/G47/G48: the block's travel on each commanded axis grows or shrinks by 1x or 2x the D
+    value (§3.5.7). Not in G41/G42 mode (§3.5.7); ignored in canned-cycle mode (§3.5.7)."""
+    comp = core.state.comp
+    if comp.side:
+        raise core.error(f"{spec.name} cannot be used in cutter compensation mode G41/G42 (GSK 25i §3.5.7)",
+                         "position-offset-in-comp")  # fmt: skip
+    if core.state.cycle.spec is not None:
+        return
+    axes = frozenset(a for a in range(3) if _LETTERS[a] in values)
+    amount = comp.offsets.position_offset(comp.d_number)
+    install(core).set_position_offset(int(spec.value), amount, axes, _incremental(core))  # type: ignore[call-overload]
+
+
+# ---------------------------------------------------------------------- G53, G27-G30, end
+def before_machine_move(core: Seam) -> None:
+    """G53 (and G27-G30, G60) are about to move: compensation is suspended for this block."""
+    stage = core.state.comp.stage
+    if stage is not None:
+        stage.suspend()
+
+
+def finish(core: Seam) -> None:
+    """End of the program (a block hook): emit what the look-ahead still holds (the vector stays, §3.5.3)."""
+    stage = core.state.comp.stage
+    if stage is not None:
+        try:
+            stage.flush()
+        except ProgramError as err:
+            raise err.located(core.state.file, stage.line) from None
+
+
+ACTIONS = {
+    "offset_words": offset_words, "cutter_comp": cutter, "length_comp": length,
+    "position_offset": position_offset, "corner_arc": corner_arc,
+}  # fmt: skip

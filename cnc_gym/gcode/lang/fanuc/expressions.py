@@ -9,14 +9,17 @@ Nodes are plain tuples (cheap to build, easy to test):
 ``("op", name, a, b)``       ``+ - * / MOD AND OR XOR``
 ``("fn", name, args)``       ``SIN[x]``, ``ATAN[y]/[x]`` (→ ``ATAN2``), ``POW[x,y]``
 ``("cmp", name, a, b)``      a condition of IF/WHILE: ``EQ NE GT GE LT LE``
+``("and"|"or", a, b)``       conditions combined (dialects with ``condition_operators``)
 ===========================  =======================================================
 
-Null ("vacant") semantics follow GSK L5162-L5211: reading a null variable gives ``None``; ``#2=#1`` keeps
+Null ("vacant") semantics follow GSK §3.7.2: reading a null variable gives ``None``; ``#2=#1`` keeps
 null; arithmetic treats null as 0 (``#1*5`` and ``#1+#1`` give 0). A unary sign on a bare null keeps it
 null (so ``X-#1`` with #1 vacant drops the word, as ``X#1`` does). In conditions, EQ and NE tell null from 0
-while GT GE LT LE read null as 0 (L5195-L5211). Comparisons allow a relative difference of 1e-9 (the
-controller computes with 8 significant digits, L5604-L5660, so a loop counter summed from 0.1 steps must
+while GT GE LT LE read null as 0 (§3.7.2). Comparisons allow a relative difference of 1e-9 (the
+controller computes with 8 significant digits, §3.7.4, so a loop counter summed from 0.1 steps must
 still reach its bound).
+
+Sections (§n) are those of the GSK 25i programming manual.
 """
 
 from __future__ import annotations
@@ -25,13 +28,17 @@ import math
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.codes import round_to as _round_to
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
-    from cnc_gym.gcode.variables import VariableStore
+    from cnc_gym.gcode.state import Variables as VariableStore
 
 Node = tuple
 MAX_OPERATORS = 200
+#: Largest constant an expression may hold: "max ±99999999" (GSK 25i, 8 digits; §3.7.4). A
+#: variable number and a GOTO target are constants too.
+MAX_CONSTANT = 99_999_999.0
 
 _MUL_WORDS = ("MOD", "AND")
 _ADD_WORDS = ("XOR", "OR")
@@ -49,6 +56,8 @@ class ExpressionParser:
         self.dialect = dialect
         self.depth = 0
         self.operators = 0
+        #: Bracket depth at which AND/OR end an operand (a combined condition's comparison), or None.
+        self._stop_depth: int | None = None
 
     # ------------------------------------------------------------------ helpers
     def _peek(self) -> str:
@@ -104,7 +113,7 @@ class ExpressionParser:
                 continue
             word = self._word()
             op = next((w for w in _ADD_WORDS if word.startswith(w)), None)
-            if op is None:
+            if op is None or (op == "OR" and self._stop_depth == self.depth):
                 return node
             self.pos += len(op)
             self._count()
@@ -121,7 +130,7 @@ class ExpressionParser:
                 continue
             word = self._word()
             op = next((w for w in _MUL_WORDS if word.startswith(w)), None)
-            if op is None:
+            if op is None or (op == "AND" and self._stop_depth == self.depth):
                 return node
             self.pos += len(op)
             self._count()
@@ -137,8 +146,18 @@ class ExpressionParser:
         return ("neg", node) if signs % 2 else node
 
     def condition(self) -> Node:
-        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (L5663-L5720)."""
+        """``[ expr CMP expr ]`` starting at '[' (IF / WHILE); CMP is EQ NE GT GE LT LE (§3.7.5).
+
+        With the dialect's condition operators (``Dialect.condition_operators``: Fanuc's AND, OR)
+        comparisons combine, AND before OR: ``[#1 GT 0 AND #2 LT 5]``, ``[[#1 GT 0] OR [#2 EQ 1]]``. At
+        the level of the comparison AND/OR are logical; inside an operand's own brackets they stay the
+        bitwise operators (``[#1 AND 3] EQ 1``)."""
         self._open()
+        node = self._logical_or() if self.dialect.condition_operators else self._comparison()
+        self._close()
+        return node
+
+    def _comparison(self) -> Node:
         left = self.expression()
         word = self._word()[:2]
         if word not in COMPARISONS:
@@ -147,8 +166,44 @@ class ExpressionParser:
         self.pos += 2
         self._count()
         right = self.expression()
-        self._close()
         return ("cmp", word, left, right)
+
+    def _logic_word(self) -> str | None:
+        word = self._word()
+        for op in ("AND", "OR"):
+            if word.startswith(op) and op in self.dialect.condition_operators:
+                return op
+        return None
+
+    def _logical_or(self) -> Node:
+        node = self._logical_and()
+        while self._logic_word() == "OR":
+            self.pos += 2
+            self._count()
+            node = ("or", node, self._logical_and())
+        return node
+
+    def _logical_and(self) -> Node:
+        node = self._logical_factor()
+        while self._logic_word() == "AND":
+            self.pos += 3
+            self._count()
+            node = ("and", node, self._logical_factor())
+        return node
+
+    def _logical_factor(self) -> Node:
+        """A bracketed condition, or a comparison whose operands stop at a logical AND/OR."""
+        if self._peek() == "[":
+            saved = (self.pos, self.depth, self.operators)
+            try:
+                return self.condition()
+            except ProgramError:
+                self.pos, self.depth, self.operators = saved  # an arithmetic bracket: ``[#1+1] GT 2``
+        outer, self._stop_depth = self._stop_depth, self.depth
+        try:
+            return self._comparison()
+        finally:
+            self._stop_depth = outer
 
     def number(self) -> float:
         text = self.text
@@ -159,7 +214,19 @@ class ExpressionParser:
         literal = text[start:end]
         if literal.count(".") > 1 or literal == ".":
             raise self._fail(f"bad number {literal!r}", "bad-number")
+        value = self.constant(literal)
         self.pos = end
+        return value
+
+    def constant(self, literal: str) -> float:
+        """The value of an unsigned literal (ASCII digits, at most one point) of at most 8 integer digits
+        (alarm 3 TOO MANY DIGITS): 1 followed by 400 zeros would be inf, and inf a crash wherever an
+        integer is taken of it."""
+        integer = literal.split(".", 1)[0].lstrip("0")
+        if len(integer) > 8:
+            shown = integer if len(integer) <= 20 else integer[:20] + "…"
+            raise self._fail(f"constant {shown} has more than 8 digits (at most ±{MAX_CONSTANT:.0f})",
+                             "too-many-digits")  # fmt: skip
         return float(literal)
 
     def variable(self) -> Node:
@@ -172,7 +239,7 @@ class ExpressionParser:
                 self.pos += 1
             if self._peek() == ".":
                 raise self._fail("a variable number must be an integer", "bad-variable")
-            return ("var", ("num", float(self.text[start : self.pos])))
+            return ("var", ("num", self.constant(self.text[start : self.pos])))
         if c == "[":
             return ("var", self.bracketed())
         raise self._fail("'#' must be followed by a variable number or [expression]", "missing-operand")
@@ -250,13 +317,18 @@ def evaluate(node: Node, variables: VariableStore, dialect: Dialect, round_step:
 
 
 def evaluate_condition(node: Node, variables: VariableStore, dialect: Dialect) -> bool:
-    """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring)."""
+    """Truth of a ``("cmp", …)`` node with GSK null semantics (module docstring), or of an ``("and"|"or",
+    a, b)`` combination (both sides are evaluated, as a controller computing the truth values does)."""
+    if node[0] in ("and", "or"):
+        first = evaluate_condition(node[1], variables, dialect)
+        second = evaluate_condition(node[2], variables, dialect)
+        return (first and second) if node[0] == "and" else (first or second)
     _, op, left, right = node
     a = evaluate(left, variables, dialect)
     b = evaluate(right, variables, dialect)
     if op in ("EQ", "NE"):
         if a is None or b is None:
-            same = a is None and b is None  # null equals only null (L5195-L5203)
+            same = a is None and b is None  # null equals only null (§3.7.2)
         else:
             same = abs(a - b) <= COMPARE_TOLERANCE * max(1.0, abs(a), abs(b))
         return same if op == "EQ" else not same
@@ -287,7 +359,7 @@ def _binary(op: str, a: float, b: float, dialect: Dialect) -> float:
         if b == 0:
             raise dialect.error(f"division by zero ({_fmt([a])} MOD 0)", "division-by-zero")
         result = math.fmod(a, b)
-    else:  # AND OR XOR: on 32-bit integers (L5515-L5522)
+    else:  # AND OR XOR: on 32-bit integers (§3.7.4)
         ia, ib = _int32(a, op, dialect), _int32(b, op, dialect)
         result = float(ia & ib if op == "AND" else ia | ib if op == "OR" else ia ^ ib)
     return _finite(result, dialect, op)
@@ -303,12 +375,6 @@ def _finite(x: float, dialect: Dialect, what: str) -> float:
     if not math.isfinite(x):
         raise dialect.error(f"{what}: result out of range", "overflow")
     return float(x)
-
-
-def _round_to(x: float, step: float) -> float:
-    """Round half away from zero to a multiple of ``step`` (the address's least input increment)."""
-    n = math.floor(abs(x) / step + 0.5 + 1e-9)
-    return math.copysign(n * step, x) if n else 0.0
 
 
 def _fmt(values: list[float]) -> str:

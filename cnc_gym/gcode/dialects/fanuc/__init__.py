@@ -1,0 +1,62 @@
+"""``fanuc``: a generic Fanuc 0i-M / Haas-class 3-axis mill, the Fanuc family with the differences a shop
+program written for such a machine needs (docs/fanuc.md lists each difference from the GSK 25i with its
+reason).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from cnc_gym.gcode.dialect import Dialect
+from cnc_gym.gcode.dialects.fanuc import blocks
+from cnc_gym.gcode.dialects.fanuc.codes import ADDRESSES, ALARMS, G_CODES, M_CODES, MACHINE_MCODES, POWER_ON
+from cnc_gym.gcode.lang import fanuc
+from cnc_gym.gcode.lang.fanuc import checks, codes, cycles
+from cnc_gym.gcode.settings import CompensationSettings, CycleParameters
+
+#: The family's block checks with the G00/G01-beside-G28 rule (blocks.py).
+HOOKS = replace(fanuc.HOOKS, checks=(cycles.check_codes, blocks.motion_with_reference_return,
+                                     checks.axis_owners, cycles.check_mode))  # fmt: skip
+
+DIALECT = Dialect(
+    name="fanuc",
+    title="Fanuc 0i-M / Haas-class mill",
+    gcodes=G_CODES,
+    mcodes=M_CODES,
+    power_on=POWER_ON,
+    execution_order=codes.EXECUTION_ORDER,
+    addresses=ADDRESSES,
+    words=codes.WORDS,
+    actions=dict(fanuc.ACTIONS),
+    cycles=dict(fanuc.CYCLES),
+    language=fanuc.LANGUAGE,
+    hooks=HOOKS,
+    axes="XYZ",
+    other_axes="ABCUVW",
+    functions=codes.FUNCTIONS,
+    alarms=ALARMS,
+    # Parameter 3401#0 DPI = 0, the Fanuc standard: a number without a decimal point is in least input
+    # increments (X1000 = 1 mm); IS-B: 0.001 mm, 0.0001 inch.
+    integer_is_unit=False,
+    least_increment_mm=0.001,
+    least_increment_inch=0.0001,
+    arc_radius_tolerance_mm=0.02,  # parameter 3410 (a typical setting)
+    cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5),  # parameters 5114, 5115
+    max_words_per_block=32,
+    max_m_per_block=3,
+    m_groups=codes.M_GROUPS,
+    machine_mcodes=MACHINE_MCODES,
+    corner_words=frozenset({",C", ",R"}),
+    max_bracket_depth=5,
+    keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),
+    condition_operators=frozenset({"AND", "OR"}),  # IF[[#1 GT 0] AND [#2 LT 5]]GOTO10
+    program_number_marks="O:",  # ":1234" is O1234 (ISO code)
+    variables=((1, 33), (100, 199), (500, 999)),
+    system_variables=(
+        (1000, 1135), (2001, 2906), (3000, 3012), (3901, 3902), (4001, 4130), (5001, 5105), (10001, 13400),
+    ),
+    # Tool length offset on Z whatever the plane (type A, parameter 5001#0 TLC = 0); G43 H_ alone puts it in
+    # force for the next Z move.
+    compensation=CompensationSettings(tool_length_type="A", startup_type="A", offset_count=400,
+                                      length_needs_axis=False),
+)

@@ -1,0 +1,273 @@
+"""The ``fanuc`` dialect (generic Fanuc 0i-M / Haas-class mill): each difference from the GSK 25i
+(docs/fanuc.md), and shop programs written in the style of common CAM post-processors and of hand-written
+Haas programs.
+
+Expected points are worked out by hand in the comments: machine = program + G54 (zero here) + the tool
+length vector (H, type A: on Z).
+"""
+
+from __future__ import annotations
+
+import pytest
+from gcode_helpers import close, moves, program_error, records
+
+from cnc_gym.gcode import get_dialect, interpret
+
+FANUC = "fanuc"
+
+
+def ends(text: str, **kw) -> list[list[float]]:
+    return [m["end"] for m in moves(text, dialect=FANUC, **kw)]
+
+
+# --------------------------------------------------------------------------- numbers and programs
+def test_numbers_without_a_decimal_point_are_least_increments():
+    # Parameter 3401#0 DPI = 0 (the Fanuc standard), IS-B: X1000 = 1 mm; X1. = 1 mm; the GSK 25i reads X1000
+    # as 1000 mm (its DPI = 1).
+    assert ends("G00 X1000 Y2.5\n") == [[1.0, 2.5, 0.0]]
+    assert [m["end"] for m in moves("G00 X1000\n")] == [[1000.0, 0.0, 0.0]]
+    # G04 X1500 = 1.5 s (X in 0.001 s), P in ms.
+    dwells = [r["seconds"] for r in records("G04 X1500\nG04 P250\nG04 X2.\n", dialect=FANUC)]
+    assert dwells == [1.5, 0.25, 2.0]
+
+
+def test_colon_is_the_program_number_address_and_o_numbers_have_8_digits():
+    text = ":1234 (MAIN)\nG00 X1.\nM98 P12345678\nM30\nO12345678 (SUB)\nG00 Y2.\nM99\n"
+    assert ends(text) == [[1.0, 0.0, 0.0], [1.0, 2.0, 0.0]]
+    # With 8-digit program numbers P is the number itself; the repeat count is L (P21002 is O21002).
+    sub = "O1\nM98 P21002\nM30\nO21002\nG91 G00 X1.\nM99\n"
+    assert ends(sub) == [[1.0, 0.0, 0.0]]
+    assert ends("O1\nM98 P21002 L3\nM30\nO21002\nG91 G00 X1.\nM99\n")[-1] == [3.0, 0.0, 0.0]
+    # The GSK 25i: 4-digit O numbers, P21002 = O1002 twice; a 5-digit O is out of range (alarm 74).
+    assert program_error(":1234\n").code == "bad-character"
+    assert program_error("O12345678\n").code == "value-out-of-range"
+
+
+# --------------------------------------------------------------------------- G43 H without an axis word
+def test_g43_h_alone_puts_the_offset_in_force_for_the_next_z_move():
+    offsets = {"H": {1: 100.0}}
+    # G90: Z10. after G43 H1 → machine Z 110; the XY move between does not move Z.
+    out = ends("G00 X5.\nG43 H1\nG00 X6.\nZ10.\nZ20.\n", tool_offsets=offsets)
+    assert out == [[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [6.0, 0.0, 110.0], [6.0, 0.0, 120.0]]
+    # G91: the next Z move carries the vector too: 0 + 100 - 5 = 95.
+    assert ends("G91 G43 H1\nG00 Z-5.\n", tool_offsets=offsets) == [[0.0, 0.0, 95.0]]
+    # G49 alone cancels it for the next absolute move.
+    assert ends("G43 H1\nG00 Z10.\nG49\nG00 Z10.\n", tool_offsets=offsets)[-1] == [0.0, 0.0, 10.0]
+    # The GSK 25i needs an axis word in the block (alarm 27).
+    err = program_error("G43 H1\nG00 Z10.\n", tool_offsets=offsets)
+    assert err.code == "length-no-axis" and err.alarm == 27
+
+
+# --------------------------------------------------------------------------- safe-start lines
+def test_g00_beside_g28_only_sets_the_modal_motion():
+    # "G00 G28 G91 Z0": G28 via the incremental intermediate point Z+0 to reference Z0; G00 is then the
+    # modal motion (the next axis-only block is a rapid).
+    out = moves("G01 Z50. F100.\nG00 G28 G91 Z0.\nG90 X10.\n", dialect=FANUC)
+    assert [(m["kind"], m["end"]) for m in out] == [("line", [0.0, 0.0, 50.0]), ("rapid", [0.0, 0.0, 0.0]),
+                                                   ("rapid", [10.0, 0.0, 0.0])]  # fmt: skip
+    assert program_error("G00 G28 G91 Z0.\n").code == "axis-word-conflict"  # the GSK 25i
+    # Two codes that take the axis words stay an error.
+    assert program_error("G28 G51.1 Z0.\n", dialect=FANUC).code == "axis-word-conflict"
+
+
+# --------------------------------------------------------------------------- AND / OR
+@pytest.mark.parametrize(("condition", "taken"), [
+    ("#1 GT 0 AND #2 LT 5", True), ("#1 GT 0 AND #2 GT 5", False), ("#1 LT 0 OR #2 EQ 2", True),
+    ("[#1 GT 0] AND [#2 LT 5]", True), ("[#1 LT 0] OR [#2 GT 5]", False),
+    ("#1 LT 0 AND #2 EQ 2 OR #1 EQ 1", True),  # AND before OR: (F and T) or T
+    ("[#1 AND 3] EQ 1", True),  # inside an operand's brackets AND is the bitwise operator (1 AND 3 = 1)
+])  # fmt: skip
+def test_conditions_combine_with_and_or(condition, taken):
+    text = f"#1=1\n#2=2\nIF[{condition}]GOTO10\nG00 X1.\nN10 G00 Y1.\n"
+    assert (ends(text)[0] == [0.0, 1.0, 0.0]) is taken
+
+
+def test_while_with_and_counts_to_the_first_failing_comparison():
+    text = "#1=0\nWHILE[#1 LT 10 AND #1 LT 3]DO1\n#1=#1+1\nG00 X#1\nEND1\n"
+    assert [e[0] for e in ends(text)] == [1.0, 2.0, 3.0]  # a variable's value is in mm whatever DPI
+    assert program_error("#1=0\nIF[#1 LT 10 AND #1 LT 3]GOTO5\n").code == "bad-expression"  # the GSK 25i
+
+
+# --------------------------------------------------------------------------- G95, M19
+def test_g95_feed_per_revolution_follows_the_spindle_speed():
+    out = moves("S1000 M03\nG95 G01 X10. F0.2\nS500\nX20.\nG94 F300.\nX30.\n", dialect=FANUC)
+    assert [m["feed"] for m in out] == [200.0, 100.0, 300.0]  # 0.2 mm/rev × 1000 r/min, then × 500
+    assert [m["end"][0] for m in out] == [10.0, 20.0, 30.0]
+    err = program_error("S1000 M03\nG01 X1. F100.\nG95\nX2.\n", dialect=FANUC)  # the unit changed: F again
+    assert err.code == "missing-feed" and "G95" in err.message
+    err = program_error("G95 G01 X1. F0.2\n", dialect=FANUC)  # no spindle speed
+    assert "spindle speed" in err.message
+    assert program_error("G95\n").code == "not-implemented"  # the GSK 25i
+
+
+def test_m19_oriented_spindle_stop_is_recorded():
+    tp = interpret("S800 M03\nG00 X1.\nM19\nG00 X2.\n", dialect=FANUC)
+    rows = tp.to_records()
+    assert rows[1] == {"kind": "dwell", "line": 3, "seconds": 0.0, "modes": ["exact_stop"]}
+    assert float(tp.spindle_rpm[0]) == 800.0 and float(tp.spindle_rpm[2]) == 0.0
+    assert program_error("M19\n").code == "not-implemented"  # the GSK 25i
+
+
+def test_machine_specific_m_codes_are_refused_by_name():
+    err = program_error("M88\n", dialect=FANUC)
+    assert err.code == "unknown-code" and "M88" in err.message and "through-spindle coolant" in err.message
+    assert "M97" in program_error("M97 P100\n", dialect=FANUC).message
+    assert program_error("M123\n", dialect=FANUC).message == "unknown M code M123"
+
+
+# --------------------------------------------------------------------------- power-on units
+HAAS_INCH = """%
+O40002 (HAAS STYLE, INCH MACHINE, NO G20)
+(T1 0.5 FLAT ENDMILL)
+G00 G17 G40 G49 G80 G90
+T1 M06
+G00 G90 G54 X1. Y1. S3000 M03
+G43 H01 Z1. M08
+G01 Z-0.1 F10.
+X2. F20.
+G03 X2.5 Y1.5 R0.5
+G00 Z1. M09
+G00 G28 G91 Z0.
+G28 X0. Y0.
+M30
+%
+"""
+
+
+def test_a_haas_inch_program_without_g20_on_an_inch_machine():
+    # units="inch": the input unit at power-on (a controller parameter); H1 = 4 in = 101.6 mm.
+    tp = interpret(HAAS_INCH, dialect=FANUC, units="inch", tool_offsets={"H": {1: 101.6}})
+    rows = [r for r in tp.to_records() if r["kind"] != "dwell"]
+    assert close(rows[0]["end"], [25.4, 25.4, 0.0])  # X1. Y1.
+    assert close(rows[1]["end"], [25.4, 25.4, 25.4 + 101.6])  # Z1. + H1
+    assert close(rows[2]["end"], [25.4, 25.4, -2.54 + 101.6]) and close(rows[2]["feed"], 254.0)
+    arc = rows[4]
+    assert arc["kind"] == "arc" and close(arc["end"], [63.5, 38.1, 99.06]) and close(arc["radius"], 12.7)
+    assert close(arc["feed"], 508.0)  # F20. in/min
+    assert close(rows[-1]["end"], [0.0, 0.0, 0.0])  # G28 X0. Y0. in G91: to the reference position
+    # The same text read in mm is another part (X1. = 1 mm); a program's own G20 rules over units="mm".
+    assert close(moves(HAAS_INCH, dialect=FANUC)[0]["end"], [1.0, 1.0, 0.0])
+    g20 = HAAS_INCH.replace("G00 G17 G40", "G20 G00 G17 G40")
+    assert close(moves(g20, dialect=FANUC, units="mm")[0]["end"], [25.4, 25.4, 0.0])
+
+
+def test_units_is_checked():
+    with pytest.raises(Exception, match="units must be 'mm' or 'inch'"):
+        interpret("G00 X1\n", units="cm")
+
+
+# --------------------------------------------------------------------------- CAM-style programs
+FUSION = """%
+O1001 (BRACKET)
+(T1  D=10. CR=0. - ZMIN=-5. - FLAT END MILL)
+(T2  D=6.8 CR=0. TAPER=118DEG - ZMIN=-12. - DRILL)
+N10 G90 G94 G17
+N15 G21
+N20 G53 G0 Z0.
+
+(2D CONTOUR1)
+N25 T1 M6
+N30 S8000 M3
+N35 G54
+N40 G0 X-15. Y-5.
+N45 G43 Z15. H1
+N50 G0 Z5.
+N55 G1 Z-5. F800.
+N60 G1 Y40. F1200.
+N65 G2 X-5. Y50. R10.
+N70 G1 X45.
+N75 G2 X55. Y40. I0. J-10.
+N80 G1 Y0.
+N85 G0 Z15.
+N90 M9
+N95 G53 G0 Z0.
+
+(DRILL1)
+N100 T2 M6
+N105 S2500 M3
+N110 G54
+N115 G0 X10. Y20.
+N120 G43 Z15. H2
+N125 M8
+N130 G0 Z5.
+N135 G98 G83 X10. Y20. Z-12. R5. Q3. F250.
+N140 X30.
+N145 G80
+N150 M9
+N155 G53 G0 Z0.
+N160 M5
+N165 G53 G0 X0. Y0.
+N170 M30
+%
+"""
+
+
+def test_a_fusion_style_program():
+    tp = interpret(FUSION, dialect=FANUC, tool_offsets={"H": {1: 100.0, 2: 120.0}})
+    rows = [r for r in tp.to_records() if r["kind"] != "dwell"]
+    lines = enumerate(FUSION.splitlines(), 1)
+    line = {int(text.split()[0][1:]): n for n, text in lines if text.startswith("N")}
+    at = {}
+    for r in rows:
+        at.setdefault(r["line"], []).append(r)
+    assert at[line[45]][0]["end"] == [-15.0, -5.0, 115.0]  # N45 G43 Z15. H1: Z 15 + 100
+    arc = at[line[65]][0]  # N65 G2 X-5. Y50. R10.: from (-15, 40), centre (-5, 40), a CW quarter
+    assert arc["center"] == [-5.0, 40.0, 95.0] and arc["sweep_deg"] == -90.0
+    arc = at[line[75]][0]  # N75 G2 X55. Y40. I0. J-10.: from (45, 50), centre (45, 40)
+    assert arc["center"] == [45.0, 40.0, 95.0] and arc["sweep_deg"] == -90.0
+    assert at[line[95]][0]["end"] == [55.0, 0.0, 0.0]  # N95 G53 G0 Z0.: machine Z0
+    # N135 G83 Q3 from R5 (Z 125 with H2): pecks to 2, -1, -4, -7, -10, -12 (+120), then back to the
+    # initial level Z5 (G98); N140 the same at X30.
+    feeds = [r["end"] for r in rows if r["kind"] == "line" and r["line"] in (line[135], line[140])]
+    depths = [2.0, -1.0, -4.0, -7.0, -10.0, -12.0]
+    assert feeds == [[x, 20.0, d + 120.0] for x in (10.0, 30.0) for d in depths]
+    assert at[line[135]][-1]["end"] == [10.0, 20.0, 125.0]
+    assert rows[-1]["end"] == [0.0, 0.0, 0.0]  # N165 G53 G0 X0. Y0.
+    assert tp.tool[-1] == 2 and int(tp.spindle_rpm[-1]) == 0  # T2, M5
+
+
+MASTERCAM = """%
+O0100(PLATE)
+(DATE=DD-MM-YY - 12-05-23 TIME=HH:MM - 10:20)
+(MATERIAL - ALUMINUM MM - 2024)
+( T3 |  8. FLAT ENDMILL | H3 | D3 )
+N100 G21
+N102 G0 G17 G40 G49 G80 G90
+N104 T3 M6
+N106 G0 G90 G54 X0. Y-10. S6000 M3
+N108 G43 H3 Z25.
+N110 Z5.
+N112 G1 Z-2. F300.
+N114 G41 D3 Y0. F600.
+N116 X40.
+N118 Y30.
+N120 X0.
+N122 Y0.
+N124 G40 X-10.
+N126 G0 Z25.
+N128 M5
+N130 G91 G28 Z0.
+N132 G28 X0. Y0.
+N134 M30
+%
+"""
+
+
+def test_a_mastercam_style_program_with_cutter_compensation():
+    # The 40 x 30 rectangle from (0, 0) run counter-clockwise with G41 (left = inside) and D3 = 4: the tool
+    # centre runs 4 inside. Start-up type A: perpendicular to the next block at its start, (0, 0) + 4·(+Y);
+    # the inner corners are the offset lines' intersections (36, 4), (36, 26), (4, 26); the turn into the
+    # cancel block (-Y then -X) is an outer corner: perpendicular to the last block at its end, (4, 0); then
+    # straight to X-10. Z: -2 + H3 (90) = 88.
+    tp = interpret(MASTERCAM, dialect=FANUC, tool_offsets={"H": {3: 90.0}, "D": {3: 4.0}})
+    rows = [r for r in tp.to_records() if r["kind"] != "dwell"]
+    cut = [r["end"][:2] for r in rows if r["kind"] == "line" and r["end"][2] == 88.0]
+    assert cut == [[0.0, -10.0], [0.0, 4.0], [36.0, 4.0], [36.0, 26.0], [4.0, 26.0], [4.0, 0.0], [-10.0, 0.0]]
+    assert rows[-1]["end"] == [0.0, 0.0, 0.0]  # G28 X0. Y0. (G91): via +0 to the reference position
+
+
+def test_dialect_table_differences_are_data():
+    fanuc, gsk = get_dialect(FANUC), get_dialect("gsk25i")
+    assert fanuc.language is gsk.language  # one family: the same lexer, expressions, flow and calls
+    assert fanuc.corner_words == {",C", ",R"} and gsk.corner_words == {",L", ",R"}
+    assert not fanuc.compensation.length_needs_axis and gsk.compensation.length_needs_axis
