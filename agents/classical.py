@@ -245,7 +245,7 @@ def _ramp_error_response(model: ServoErrorModel, t: np.ndarray) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=256)  # (a randomised training run plans on a few dozen machines)
 def servo_tables(machine: MachineConfig) -> ServoTables:
     """:class:`ServoTables` of ``machine`` (cached: machines are frozen and hashable)."""
     model = ServoErrorModel(machine)

@@ -1,9 +1,10 @@
 """cnc-gym: Gymnasium environments for CNC feed-rate control on real G-code.
 
-Importing the package registers ``cnc_gym/Feedrate-v0`` with Gymnasium: at once when Gymnasium is
-already imported, otherwise the moment it is (a post-import hook on ``gymnasium.envs.registration``).
-So ``import cnc_gym`` stays cheap for interpreter-only users: ``cnc-gym trace`` never loads Gymnasium,
-numba or scipy. The env module itself is imported by ``gymnasium.make``.
+Importing the package registers ``cnc_gym/Feedrate-v0`` and ``cnc_gym/Feedrate-v1`` with Gymnasium: at once
+when Gymnasium is already imported, otherwise the moment it is (a post-import hook on
+``gymnasium.envs.registration``). So ``import cnc_gym`` stays cheap for interpreter-only users:
+``cnc-gym trace`` never loads Gymnasium, numba or scipy. The env module itself is imported by
+``gymnasium.make``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ def _register() -> None:
 
     if "cnc_gym/Feedrate-v0" not in registry:
         register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv")
+    if "cnc_gym/Feedrate-v1" not in registry:
+        register(id="cnc_gym/Feedrate-v1", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1")
 
 
 class _RegisterOnImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):

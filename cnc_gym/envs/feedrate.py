@@ -244,11 +244,23 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
                              lookahead_mm=lookahead_mm, lookahead_points=lookahead_points)  # fmt: skip
+        self._configure(args)
+        self.reward_weights = resolve_reward(args.reward)
+        # Observation and reward: declared once (observation_spec_v0, reward_spec_v0), assembled by the
+        # compiled step.
+        self._obs_spec = observation_spec_v0(self.lookahead_points, self._v_ref, self._a_ref,
+                                             self.max_override, self.tolerance_mm,
+                                             self.lookahead_mm)  # fmt: skip
+        self._reward_spec = reward_spec_v0(self.reward_weights)
+        self.observation_space = spaces.Box(self._obs_spec.low, self._obs_spec.high, dtype=np.float32)
+        self._start()
+
+    def _configure(self, args: Any) -> None:
+        """The machine, periods, references and programs of checked arguments (v0's and later versions')."""
         self.machine: MachineConfig = load_machine(args.machine)
         self.action_mode = args.action_mode
         self.render_mode = args.render_mode
         self.dialect = args.dialect
-        self.reward_weights = resolve_reward(args.reward)
         ctrl = self.machine.controller
         self.interpolation_period_s = ctrl.interpolation_period_s
         self.ticks_per_step = control_ticks(args.control_period_s, self.machine)
@@ -269,19 +281,13 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         # Programs: interpreted once (cached by cnc_gym.programs), controllers built lazily per program.
         programs = load_task("default").programs if args.programs is None else args.programs
         self._programs: list[tuple[str, Toolpath]] = [
-            load_program(p, dialect, self.machine) for p in programs
+            load_program(p, args.dialect, self.machine) for p in programs
         ]
         self.program_names = [name for name, _ in self._programs]
-
-        # Spaces, observation and reward: declared once (observation_spec_v0, reward_spec_v0), assembled by
-        # the compiled step.
         self.action_space = spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
-        self._obs_spec = observation_spec_v0(self.lookahead_points, self._v_ref, self._a_ref,
-                                             self.max_override, self.tolerance_mm,
-                                             self.lookahead_mm)  # fmt: skip
-        self._reward_spec = reward_spec_v0(self.reward_weights)
-        self.observation_space = spaces.Box(self._obs_spec.low, self._obs_spec.high, dtype=np.float32)
 
+    def _start(self) -> None:
+        """The renderer and the engine, once the spaces and specs are set."""
         self._renderer = None
         if self.render_mode == "rgb_array":
             from cnc_gym.envs.render import EpisodeRenderer
@@ -324,13 +330,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         """The bank index of a program in ``batch`` (packed on first use with its nominal time, budget)."""
         name, toolpath = self.resolve_program(choice)
         slot = batch.find_program(name, toolpath)
-        if slot is None:
-            t_nominal = nominal_time_s(toolpath, self.machine)
-            budget = self._max_episode_steps_arg or (
-                math.ceil(5.0 * t_nominal / self.control_period_s) + math.ceil(1.0 / self.control_period_s)
-            )
-            slot = batch.add_program(name, toolpath, self.control_period_s / t_nominal, int(budget))
-        return slot
+        return self.pack_program(batch, name, toolpath) if slot is None else slot
+
+    def pack_program(self, batch: FeedrateBatch, name: str, toolpath: Toolpath) -> int:
+        """Pack a program into ``batch`` with its nominal time and step budget; its bank index."""
+        t_nominal = nominal_time_s(toolpath, self.machine)
+        budget = self._max_episode_steps_arg or (
+            math.ceil(5.0 * t_nominal / self.control_period_s) + math.ceil(1.0 / self.control_period_s)
+        )
+        return batch.add_program(name, toolpath, self.control_period_s / t_nominal, int(budget))
 
     def draw_program(self, rng: np.random.Generator) -> int:
         """The episode's program index in the set: drawn with ``rng`` when there are several."""

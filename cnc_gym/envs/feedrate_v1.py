@@ -1,0 +1,352 @@
+"""``cnc_gym/Feedrate-v1``: the feed-rate task with a return that ranks like the benchmark's score."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from cnc_gym.config import Choice, declared, number, parse_value, schema, section, spec_of
+from cnc_gym.envs.feedrate import FeedrateEnv
+from cnc_gym.envs.fused import (
+    F_SIGNAL,
+    SIG_PROGRESS_DELTA,
+    SIG_TIME_FRACTION,
+    SIG_VIOLATION_LENGTH,
+    RewardSpec,
+)
+from cnc_gym.envs.observation import OBSERVATION_V1, ObservationLayout, markdown_table
+from cnc_gym.envs.options import (
+    CONTROL_PERIOD,
+    DIALECT,
+    MAX_EPISODE_STEPS,
+    RENDER_MODES,
+    EnvArguments,
+    MachineRef,
+    reset_choice,
+)
+from cnc_gym.envs.planner_prior import PlannerPrior
+from cnc_gym.envs.randomization import DomainRandomization, MachineDraw, draw_machine
+from cnc_gym.errors import ConfigError
+from cnc_gym.machine import MachineConfig
+from cnc_gym.plant import ServoPlant
+from cnc_gym.programs import ProgramLike
+from cnc_gym.toolpath import Toolpath
+
+#: Action modes of v1: v0's two, and ``residual`` (the agent scales the deployable planner's knob).
+ACTION_MODES_V1 = ("override", "feed", "residual")
+#: Where v1's argument errors come from, in their messages.
+SOURCE_V1 = "FeedrateEnv-v1"
+_WHY = "keeps every step's reward finite, and a return within float32 precision."
+
+
+@dataclass(frozen=True)
+class RankingReward:
+    """Weights of Feedrate-v1's reward (the class docstring of :class:`FeedrateEnvV1`). Any values in range
+    keep the ranking rules: time and finish weights are positive, the others non-negative."""
+
+    time: float = number(1.0, 0, 1e6, low_open=True, why=_WHY,
+                         doc="w_time: the episode's time cost per nominal time (> 0: faster ranks higher)")
+    progress: float = number(1.0, 0, 1e6, why=_WHY,
+                             doc="w_progress: paid over the whole path, in proportion to progress")
+    violation: float = number(10.0, 0, 1e6, why=_WHY,
+                              doc="w_violation: per mm of path cut with contour error over tolerance")
+    finish: float = number(1.0, 0, 1e6, low_open=True, why=_WHY,
+                           doc="w_finish: paid, with the step budget's time, on a violation-free finish")
+
+
+#: The per-mm violation cost's budget of the constrained formulation (``info["cost"]``, summed over an
+#: episode, is the episode's violation length in mm); the benchmark's feasibility is a budget of 0.
+COST_BUDGET_MM = 0.0
+
+
+MACHINE_V1 = MachineRef(doc="the machine (of every episode, or the centre of the randomisation)")
+ACTION_MODE_V1 = Choice(choices=ACTION_MODES_V1, doc="what the action sets: the override knob, the feed, or "
+                        "a factor on the deployable planner's override")
+
+
+@dataclass(frozen=True)
+class EnvArgumentsV1:
+    """The keyword arguments of ``cnc_gym/Feedrate-v1``, checked."""
+
+    programs: tuple[ProgramLike, ...] | None = declared(spec_of(EnvArguments, "programs"))
+    dialect: str = declared(DIALECT, "gsk25i")
+    machine: str | Path | MachineConfig = declared(MACHINE_V1, "vmc-small")  # noqa: RUF009
+    action_mode: str = declared(ACTION_MODE_V1, "override")
+    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    reward: RankingReward | None = section(  # noqa: RUF009
+        RankingReward, optional=True, doc="reward weights (null: the defaults)")
+    randomize: DomainRandomization | None = section(  # noqa: RUF009
+        DomainRandomization, optional=True, doc="domain randomisation (null: off)")
+    residual_range: float = number(
+        2.0, 1, 10, low_open=True, doc="residual mode: the knob is the planner's × residual_range^a",
+        why="a factor above 1; 10 spans 0.1 to 10 times the planner's override.")  # fmt: skip
+    max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
+    render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
+    lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
+    lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
+
+
+def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
+    """v1's keyword arguments checked against :class:`EnvArgumentsV1` (one ConfigError line)."""
+    specs = schema(EnvArgumentsV1)
+    unknown = sorted(set(kwargs) - set(specs))
+    if unknown:
+        raise ConfigError(f"{SOURCE_V1}: unknown argument {unknown[0]} (allowed: {', '.join(specs)})")
+    values = {key: parse_value(specs[key], raw, SOURCE_V1, key) for key, raw in kwargs.items()}
+    return EnvArgumentsV1(**values)
+
+
+def reward_spec_v1(weights: RankingReward) -> RewardSpec:
+    """The per-step part of Feedrate-v1's reward, term by term (the finish bonus is added by the env)."""
+    return RewardSpec((
+        ("time_fraction", "linear", 0.0, -weights.time),
+        ("progress_delta", "linear", 0.0, weights.progress),
+        ("violation_length", "linear", 0.0, -weights.violation),
+    ))  # fmt: skip
+
+
+def scaled_feed(toolpath: Toolpath, factor: float) -> Toolpath:
+    """``toolpath`` with every programmed feed × ``factor`` (the controller's clamps still apply)."""
+    if factor == 1.0:
+        return toolpath
+    return dataclasses.replace(toolpath, feed=toolpath.feed * factor)
+
+
+class FeedrateEnvV1(FeedrateEnv):
+    r"""Feed-rate control on real G-code, with a return that ranks policies like the benchmark's score.
+
+    The same machine, controller, servo plant and contour meter as ``cnc_gym/Feedrate-v0`` (one compiled
+    step, :mod:`cnc_gym.envs.fused`); what changes is what the agent is paid for, what it sees, and what
+    it may be trained on.
+
+    ## Action Space
+
+    ``Box(-1, 1, (1,), float32)``; values outside [-1, 1] are clipped, NaN/inf or a wrong shape raise
+    :class:`ActionError`.
+
+    | action_mode | meaning of a ∈ [-1, 1] |
+    |---|---|
+    | ``override`` (default) | override ``(a + 1) / 2 · max_override`` (v0's knob) |
+    | ``feed`` | feed ``(a + 1) / 2 · max_feed_mm_min`` (replaces F) |
+    | ``residual`` | override ``clip(ov_plan · ρ^a, 0, max_override)``, ``ρ = residual_range`` (default 2) |
+
+    ``ov_plan`` is the deployable planner's override (the benchmark's ``classical`` baseline, which knows
+    the program and the machine, never the env's dynamics): a = 0 is exactly the planner, a = ±1 twice
+    or half its override.
+
+    ## Observation Space
+
+    ``Box(low, high, (13 + 4·N,), float32)`` with ``N = lookahead_points`` (default 8: 45 entries),
+    declared once in :data:`cnc_gym.envs.observation.OBSERVATION_V1` (this table, the bounds, the scaling
+    and :attr:`observation_structure` come from it). ``v_ref = max_feed_mm_min / 60``, ``a_ref`` the
+    preset's largest axis acceleration, ``tol`` the contour tolerance, ``H = lookahead_mm``,
+    ``ov_max = max_override``. Nothing identifies a position in a particular program.
+
+    {observation_table}
+
+    ## Rewards
+
+    Per control step of ``dt``, with ``τ = dt / T_nominal`` (:func:`~cnc_gym.envs.feedrate.nominal_time_s`),
+    ``Δp`` the path progress in the step (a fraction of the program's length) and ``ℓ`` the path length
+    (mm) the reference advanced over the step's servo samples with contour error above ``tol``:
+
+    .. math::
+
+        r = - w_\text{{time}} τ + w_\text{{progress}} Δp - w_\text{{violation}} ℓ
+            + [\text{{finished with no violation}}] (w_\text{{time}} N_\text{{max}} τ + w_\text{{finish}})
+
+    The last term is paid once, on the step that finishes the program, when the episode's violation
+    length is 0 (``N_max`` = the step budget). The undiscounted return of an episode of ``n`` steps is
+    ``w_progress·p − w_time·n·τ − w_violation·L_viol`` plus the bonus, so on one program:
+
+    - a finished, violation-free episode always has a higher return than one with violations or one that
+      is truncated (the bonus exceeds any time difference, since ``n ≤ N_max``);
+    - among violation-free episodes, the faster one wins (``−w_time·n·τ``);
+    - error inside the tolerance costs nothing (the score does not penalise it either);
+    - ``ℓ`` and the time are measured per path length and per second: the control period changes neither.
+
+    This is the benchmark's primary score's order (docs/benchmark.md); ``tests/envs/test_feedrate_v1.py``
+    checks it on episodes of known outcome. Weights (:class:`RankingReward`): ``w_time = 1``,
+    ``w_progress = 1``, ``w_violation = 10`` per mm, ``w_finish = 1``. The terms are in ``info``
+    (``reward_time``, ``reward_progress``, ``reward_violation``, ``reward_finish``).
+
+    **Cost** (constrained RL, Safety-Gymnasium's convention): ``info["cost"] = ℓ``, the step's violation
+    length in mm, so an episode's cost is its ``violation_length_mm``; the budget is
+    ``COST_BUDGET_MM = 0`` (the benchmark's feasibility). A Lagrangian learner needs a small positive
+    budget to settle on; ``agents/training.py``'s PPO-Lagrangian takes it as ``cost_limit``.
+
+    ## Starting State
+
+    As v0: the machine at rest at the program's start, override 100 %. With ``randomize`` enabled, each
+    reset also draws the episode's machine (Kv level and axis mismatch, feed-forward, acceleration
+    limits) and a feed scale (:mod:`cnc_gym.envs.randomization`) with the env's generator.
+
+    ## Episode End
+
+    As v0: termination when the program has finished and the axes are in position; truncation after the
+    step budget (5 × ``T_nominal`` / ``dt`` plus one second, or ``max_episode_steps``).
+
+    ## Arguments
+
+    v0's (``programs``, ``dialect``, ``machine``, ``control_period_s``, ``max_episode_steps``,
+    ``render_mode``, ``lookahead_mm``, ``lookahead_points``), and ``action_mode`` (with ``residual``),
+    ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
+    (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
+    ``residual_range``. ``reset(seed=..., options={{"program": ...}})`` as v0.
+
+    ## Info
+
+    v0's keys (``cost`` is now the violation length of the step, mm), the reward terms, and
+    ``planner_override`` (the planner's override for the next step).
+
+    ## Version History
+
+    - v1: reward that ranks like the benchmark's score (violations per path length, finish bonus, no
+      penalty inside the tolerance); observation without program position, with the machine's parameters
+      and the deployable planner's override; ``residual`` action mode; domain randomisation.
+    - v0: first version (kept as it was; docs/env.md).
+    """
+
+    def __init__(
+        self,
+        programs: Sequence[ProgramLike] | ProgramLike | None = None,
+        dialect: str = "gsk25i",
+        machine: str | Path | MachineConfig = "vmc-small",
+        action_mode: str = "override",
+        control_period_s: float = 0.01,
+        reward: dict | RankingReward | None = None,
+        randomize: dict | DomainRandomization | None = None,
+        residual_range: float = 2.0,
+        max_episode_steps: int | None = None,
+        render_mode: str | None = None,
+        lookahead_mm: float = 24.0,
+        lookahead_points: int = 8,
+    ) -> None:
+        args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
+                                control_period_s=control_period_s, reward=reward, randomize=randomize,
+                                residual_range=residual_range, max_episode_steps=max_episode_steps,
+                                render_mode=render_mode, lookahead_mm=lookahead_mm,
+                                lookahead_points=lookahead_points)  # fmt: skip
+        self._configure(args)
+        self.base_machine = self.machine
+        self.reward_weights = args.reward or RankingReward()
+        self.randomize = args.randomize or DomainRandomization()
+        self.residual_range = float(args.residual_range)
+        if self.randomize.enabled:
+            problem = self.randomize.stability_problem(self.machine)
+            if problem:
+                raise ConfigError(f"{SOURCE_V1}: randomize: {problem}")
+            # The contour window reaches back over the largest lag any draw can have.
+            lowest = min(self.machine.axis_array("kv_1_s")) * self.randomize.kv_scale[0] * (
+                1.0 - self.randomize.kv_mismatch[1])  # fmt: skip
+            self._max_lag_mm = self._v_ref / lowest
+        self.layout = ObservationLayout(OBSERVATION_V1, self.lookahead_points, {
+            "v_ref": self._v_ref, "a_ref": self._a_ref, "tol": self.tolerance_mm, "H": self.lookahead_mm,
+            "ov_max": self.max_override})  # fmt: skip
+        self._obs_spec = self.layout.kernel_spec
+        self._reward_spec = reward_spec_v1(self.reward_weights)
+        self.observation_space = spaces.Box(self.layout.low, self.layout.high, dtype=np.float32)
+        #: Entry name → indices in the observation (as Gymnasium's MuJoCo envs' observation_structure).
+        self.observation_structure = {name: idx.tolist() for name, idx in self.layout.structure.items()}
+        self.prior = PlannerPrior(self.control_period_s, self.max_override)
+        #: The current episode's machine draw and feed scale (None and 1 without randomisation).
+        self.episode_draw: MachineDraw | None = None
+        self.feed_scale = 1.0
+        self._pool: list[tuple[MachineDraw, ServoPlant] | None] = [None] * self.randomize.machines
+        self._observation = np.zeros(self.layout.size, dtype=np.float32)
+        self._machine_values = self.layout.machine_values(self.machine)
+        self._planner_override = 1.0
+        self._start()
+        self._begin_episode()
+
+    # ------------------------------------------------------------------------------------------ episode
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        choice = reset_choice(options)
+        super(FeedrateEnv, self).reset(seed=seed)
+        if choice is None:
+            choice = self.draw_program(self.np_random)
+        if self.randomize.enabled:
+            name, toolpath = self.resolve_program(choice)
+            k = int(self.np_random.integers(len(self._pool)))
+            if self._pool[k] is None:
+                draw = draw_machine(self.base_machine, self.randomize, self.np_random)
+                self._pool[k] = (draw, ServoPlant(draw.machine, n_envs=1))
+            self.episode_draw, plant = self._pool[k]  # type: ignore[misc]
+            self.feed_scale = float(self.np_random.uniform(*self.randomize.feed_scale))
+            self.machine = self.episode_draw.machine
+            # The episode's engine: the machine's plant, the program packed with its controller tables.
+            self._batch = self.make_batch(1, plant=plant)
+            self.plant = plant
+            slot = self.pack_program(self._batch, name, scaled_feed(toolpath, self.feed_scale))
+            self._machine_values = self.layout.machine_values(self.machine)
+        else:
+            slot = self.program_slot(self._batch, choice)
+        self._batch.reset([0], [slot])
+        self._needs_reset = False
+        self._sync()
+        if self._renderer is not None:
+            self._renderer.start(self)
+        info = self._begin_episode()
+        return self._observation.copy(), info
+
+    def _begin_episode(self) -> dict[str, Any]:
+        program = self._batch.program(0)
+        self.prior.start(program.toolpath, self.machine, program.limits)
+        self._bonus = self.reward_weights.time * program.max_episode_steps * self.control_period_s / max(
+            self.nominal_time_s, 1e-12) + self.reward_weights.finish  # fmt: skip
+        info = self._batch.info(0)
+        return self._finish_info(info, 0.0, 0.0, 0.0, 0.0)
+
+    # --------------------------------------------------------------------------------------------- step
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        a = self._parse_action(action)
+        batch = self._batch
+        if self.action_mode == "residual":
+            override = min(max(self._planner_override * self.residual_range**a, 0.0), self.max_override)
+            a = self.prior.knob(override)
+        batch.actions[0] = a
+        batch.step()
+        reward, terminated, truncated, info = batch.outcome(0)
+        signals = batch.state_f[0, F_SIGNAL:]
+        w = self.reward_weights
+        time_term = -w.time * signals[SIG_TIME_FRACTION]
+        progress_term = w.progress * signals[SIG_PROGRESS_DELTA]
+        violation_term = -w.violation * signals[SIG_VIOLATION_LENGTH]
+        finish = self._bonus if terminated and info["violation_length_mm"] <= 0.0 else 0.0
+        reward += finish
+        info = self._finish_info(info, float(time_term), float(progress_term), float(violation_term), finish)
+        info["cost"] = float(signals[SIG_VIOLATION_LENGTH])
+        if self._renderer is not None:
+            self._renderer.record(*batch.last_samples(0)[:2])
+        return self._observation.copy(), float(reward), terminated, truncated, info
+
+    def _finish_info(self, info: dict[str, Any], time_term: float, progress_term: float,
+                     violation_term: float, finish: float) -> dict[str, Any]:  # fmt: skip
+        """The observation's extra entries and the info's v1 keys, from the step's outputs."""
+        self._planner_override = self.prior.override(info["path_s"], info["feed_mm_min"])
+        observation = self._observation
+        observation[: self.layout.kernel_size] = self._batch.observations[0]
+        self.layout.fill_extras(observation, self._machine_values, self._planner_override)
+        info["cost"] = 0.0
+        info["reward_time"] = time_term
+        info["reward_progress"] = progress_term
+        info["reward_violation"] = violation_term
+        info["reward_finish"] = finish
+        info["planner_override"] = self._planner_override
+        return info
+
+
+FeedrateEnvV1.__doc__ = (FeedrateEnvV1.__doc__ or "").replace(
+    "{observation_table}", markdown_table().replace("\n", "\n    ")).replace("{{", "{").replace("}}", "}")
+
+
+__all__ = ["ACTION_MODES_V1", "COST_BUDGET_MM", "EnvArgumentsV1", "FeedrateEnvV1", "RankingReward",
+           "env_arguments_v1", "reward_spec_v1", "scaled_feed"]

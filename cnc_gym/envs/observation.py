@@ -1,0 +1,188 @@
+"""``cnc_gym/Feedrate-v1``'s observation, declared once: each entry's name, source, formula, scale, bounds.
+
+:data:`OBSERVATION_V1` is the one declaration. From it come
+
+- the Box bounds (:meth:`ObservationLayout.low`, :meth:`ObservationLayout.high`);
+- the scaling: the compiled step's :class:`~cnc_gym.envs.fused.ObservationSpec` for the entries the kernel
+  computes (per-step signals and the look-ahead blocks) and :meth:`ObservationLayout.fill_extras` for the
+  entries of the episode (the machine drawn for it) and of the deployable planner;
+- the table of the env's docstring and of docs/env.md (:func:`markdown_table`; a test keeps docs/env.md
+  equal to it);
+- ``observation_structure``: entry name → the indices it occupies, as Gymnasium's MuJoCo envs expose it.
+
+No entry identifies a position in a particular program (v0's ``progress = s / L`` is gone): every entry
+is the machine's state, the path ahead within a fixed horizon, the controller's limits there, the
+machine's own parameters, or what the deployable planner would command now. A policy therefore sees the
+same kind of input on any program, which is what lets it run programs it was not trained on.
+
+Scales are written as the reference quantity an entry is divided by (``v_ref`` = the controller's max
+feed in mm/s, ``a_ref`` = the largest axis acceleration of the preset, ``tol`` = the contour tolerance,
+``H`` = the look-ahead horizon, ``Kv_ref`` = 40 1/s, ``ov_max`` = the override knob's top): the scale
+stays the same when the episode's machine is randomised, so the entries carry the change.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cnc_gym.envs.fused import LOOKAHEAD_ROWS, SIGNALS, ObservationSpec
+from cnc_gym.machine import MachineConfig
+
+#: Where an entry's value comes from.
+SOURCES = ("signal", "lookahead", "machine", "planner")
+#: Fixed references (the others are the env's: v_ref, a_ref, tol, H, ov_max).
+KV_REF_1_S = 40.0
+CURVATURE_LENGTH_MM = 10.0  # curvature κ is observed as κL/(1 + κL): R 50 mm → 0.17, R 1 mm → 0.91
+FOLLOWING_ERROR_REF_MM = 1.0
+MISMATCH_REF = 0.1
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One observation entry (a look-ahead entry is a block of ``N = lookahead_points`` values).
+
+    ``quantity`` is a kernel signal (:data:`~cnc_gym.envs.fused.SIGNALS`), a look-ahead row
+    (:data:`~cnc_gym.envs.fused.LOOKAHEAD_ROWS`), a machine quantity (:data:`MACHINE_QUANTITIES`) or
+    ``override`` of the planner; ``divide_by`` names the reference it is divided by (``1`` for none);
+    ``saturate`` applies ``x·L / (1 + x·L)`` with L = ``saturate`` mm before scaling.
+    """
+
+    name: str
+    source: str
+    quantity: str
+    formula: str
+    meaning: str
+    low: float
+    high: float
+    divide_by: str = "1"
+    saturate: float = 0.0
+
+
+#: Machine quantities an observation may hold (computed by :func:`machine_quantities`).
+MACHINE_QUANTITIES = ("kv_min", "kv_mismatch", "feedforward", "accel_min")
+
+OBSERVATION_V1: tuple[Entry, ...] = (
+    Entry("speed", "signal", "speed", "v / v_ref", "path speed of the reference", 0, 2, "v_ref"),
+    Entry("accel", "signal", "accel", "a / a_ref", "path acceleration of the reference", -2, 2, "a_ref"),
+    Entry("override", "signal", "override", "override / ov_max", "override in force", 0, 1, "ov_max"),
+    Entry("knob", "signal", "knob", "k", "the knob value the last step applied", -1, 1),
+    Entry("following_error", "signal", "following_error", "‖r − x‖ / 1 mm",
+          "following error at the last servo sample", 0, 5, "following_ref"),
+    Entry("contour_error_step", "signal", "contour_error_step", "e_max / tol",
+          "largest contour error over the last step's servo samples", 0, 5, "tol"),
+    Entry("contour_error_now", "signal", "contour_error_now", "e / tol",
+          "contour error at the last servo sample", 0, 5, "tol"),
+    Entry("distance_to_stop", "signal", "distance_to_stop", "min(d_stop / H, 1)",
+          "distance to the next mandatory stop", 0, 1, "H"),
+    Entry("speed_limit", "lookahead", "speed_limit", "v_lim / v_ref",
+          "the controller's speed limit (100 % override) in each bin of the next H mm", 0, 2, "v_ref"),
+    Entry("curvature", "lookahead", "curvature", "κL / (1 + κL), L = 10 mm",
+          "largest curvature in each bin", 0, 1, saturate=CURVATURE_LENGTH_MM),
+    Entry("turn_angle", "lookahead", "turn_angle", "θ / π", "largest junction turn in each bin", 0, 1, "pi"),
+    Entry("programmed_feed", "lookahead", "programmed_feed", "F / 60 / v_ref",
+          "programmed feed at each bin's far end", 0, 2, "v_ref"),
+    Entry("kv", "machine", "kv_min", "min Kv / 40 1/s", "the lowest position gain of the axes", 0, 5,
+          "kv_ref"),
+    Entry("kv_mismatch", "machine", "kv_mismatch", "(max Kv − min Kv) / mean Kv / 0.1",
+          "gain mismatch between the axes", 0, 5, "mismatch_ref"),
+    Entry("feedforward", "machine", "feedforward", "f", "mean velocity feed-forward of the axes", 0, 1),
+    Entry("accel_limit", "machine", "accel_min", "min A / a_ref", "the lowest axis acceleration", 0, 5,
+          "a_ref"),
+    Entry("planner_override", "planner", "override", "ov_plan / ov_max",
+          "what the deployable planner (`classical`) would command now", 0, 1, "ov_max"),
+)  # fmt: skip
+
+
+def machine_quantities(machine: MachineConfig) -> dict[str, float]:
+    """The machine quantities of :data:`MACHINE_QUANTITIES` (Kv in 1/s, accelerations in mm/s²)."""
+    kv = np.array(machine.axis_array("kv_1_s"))
+    return {"kv_min": float(kv.min()), "kv_mismatch": float((kv.max() - kv.min()) / kv.mean()),
+            "feedforward": float(np.mean(machine.axis_array("feedforward"))),
+            "accel_min": float(min(machine.axis_array("max_accel_mm_s2")))}  # fmt: skip
+
+
+class ObservationLayout:
+    """:data:`OBSERVATION_V1` (or another entry list) resolved for one env: ``points`` look-ahead points and
+    the env's reference values (``v_ref``, ``a_ref``, ``tol``, ``H``, ``ov_max``)."""
+
+    def __init__(self, entries: tuple[Entry, ...], points: int, references: dict[str, float]) -> None:
+        self.entries = entries
+        self.points = int(points)
+        self.references = {"1": 1.0, "pi": math.pi, "kv_ref": KV_REF_1_S, "mismatch_ref": MISMATCH_REF,
+                           "following_ref": FOLLOWING_ERROR_REF_MM, **references}  # fmt: skip
+        order = [SOURCES.index(e.source) for e in entries]
+        if order != sorted(order):
+            raise ValueError("observation entries must be ordered signal, lookahead, machine, planner")
+        for e in entries:
+            known = {"signal": SIGNALS, "lookahead": LOOKAHEAD_ROWS, "machine": MACHINE_QUANTITIES,
+                     "planner": ("override",)}[e.source]  # fmt: skip
+            if e.quantity not in known:
+                raise ValueError(f"observation entry {e.name}: unknown {e.source} quantity {e.quantity!r}")
+        self.kernel_spec = ObservationSpec(
+            tuple((e.quantity, self.scale(e), e.low, e.high) for e in entries if e.source == "signal"),
+            tuple((e.quantity, "saturate" if e.saturate else "none", e.saturate, self.scale(e), e.low, e.high)
+                  for e in entries if e.source == "lookahead"),
+            self.points,
+        )  # fmt: skip
+        self.structure: dict[str, np.ndarray] = {}
+        at = 0
+        for e in entries:
+            width = self.points if e.source == "lookahead" else 1
+            self.structure[e.name] = np.arange(at, at + width)
+            at += width
+        self.size = at
+        self.kernel_size = self.kernel_spec.size
+        self._extras = [e for e in entries if e.source in ("machine", "planner")]
+
+    def scale(self, entry: Entry) -> float:
+        return 1.0 / self.references[entry.divide_by]
+
+    def _bounds(self, column: str) -> np.ndarray:
+        return np.concatenate([np.full(len(self.structure[e.name]), getattr(e, column), dtype=np.float32)
+                               for e in self.entries])  # fmt: skip
+
+    @property
+    def low(self) -> np.ndarray:
+        return self._bounds("low")
+
+    @property
+    def high(self) -> np.ndarray:
+        return self._bounds("high")
+
+    def machine_values(self, machine: MachineConfig) -> np.ndarray:
+        """The machine entries of ``machine``, scaled and clipped (in entry order)."""
+        quantities = machine_quantities(machine)
+        return np.array([min(max(quantities[e.quantity] * self.scale(e), e.low), e.high)
+                         for e in self._extras if e.source == "machine"], dtype=np.float32)  # fmt: skip
+
+    def fill_extras(self, observation: np.ndarray, machine_values: np.ndarray,
+                    planner_override: float) -> None:  # fmt: skip
+        """Write the machine and planner entries into ``observation`` (kernel entries already there)."""
+        at = self.kernel_size
+        n_machine = len(machine_values)
+        observation[at : at + n_machine] = machine_values
+        at += n_machine
+        for e in self._extras[n_machine:]:
+            observation[at] = min(max(planner_override * self.scale(e), e.low), e.high)
+            at += 1
+
+
+def markdown_table(entries: tuple[Entry, ...] = OBSERVATION_V1) -> str:
+    """The observation table (index, name, formula, meaning, bounds), ``N`` look-ahead points symbolic."""
+    def index(base: int, blocks: int) -> str:
+        return f"{base}" if not blocks else f"{base}+{'' if blocks == 1 else blocks}N"
+
+    rows = ["| index | name | formula | meaning | range |", "|---|---|---|---|---|"]
+    at, blocks = 0, 0
+    for e in entries:
+        if e.source == "lookahead":
+            where = f"{index(at, blocks)} … {index(at - 1, blocks + 1)}"
+            blocks += 1
+        else:
+            where = index(at, blocks)
+            at += 1
+        rows.append(f"| {where} | `{e.name}` | `{e.formula}` | {e.meaning} | [{e.low:g}, {e.high:g}] |")
+    return "\n".join(rows)
