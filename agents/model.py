@@ -15,7 +15,13 @@ moment it is loaded. cnc-gym therefore never calls it and never unpickles anythi
    tensors, and loaded strictly (every tensor, right shapes, all finite) into that policy.
 
 Nothing else in the zip is read (no optimizer state, no schedules, no replay buffers): a policy that
-acts needs none of them. A model outside this list (a custom policy class, image or dict observations)
+acts needs none of them, except one plain JSON entry of ``data`` that ``scripts/train.py`` writes,
+``cnc_gym_env``: the env id and the few keyword arguments that fix what the model's observation and action
+mean (``action_mode``, ``control_period_s``, ``residual_range``, ``lookahead_mm``, ``lookahead_points``),
+checked against a fixed list of ids and keys, so ``cnc-gym bench`` and ``cnc-gym run`` run the model in the
+env it was trained for (models without it run in ``cnc_gym/Feedrate-v0``).
+
+A model outside this list (a custom policy class, image or dict observations)
 is refused with one line; there is no unsafe fallback. Such a model can still be loaded in your own code
 with SB3's loader, at your own risk, and run as any object with ``reset(env)`` and ``act(obs, info)``
 (:class:`agents.base.Policy`). docs/security.md says what a model file can and cannot do.
@@ -23,6 +29,7 @@ with SB3's loader, at your own risk, and run as any object with ``reset(env)`` a
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import itertools
 import json
@@ -71,6 +78,8 @@ class LoadedModel:
     observation_space: Any  # gymnasium.spaces.Box
     action_space: Any  # gymnasium.spaces.Box
     sb3_version: str
+    env_id: str = "cnc_gym/Feedrate-v0"
+    env_kwargs: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def predict(self, observation: np.ndarray, deterministic: bool = True) -> np.ndarray:
         action, _ = self.policy.predict(observation, deterministic=deterministic)
@@ -111,11 +120,13 @@ def load_sb3_model(path: str | Path) -> LoadedModel:
         kwargs = _policy_kwargs(data, family)
         weights = _weights(weights_bytes, torch)
         policy = _build(family, observation_space, action_space, kwargs, weights, torch)
+        env_id, env_kwargs = _env(data)
     except _Refused as exc:
         raise ModelError(f"{name}: {exc}") from None
     sb3_version = escaped(version.decode("ascii", "replace"), 40)
     return LoadedModel(policy=policy, algorithm=algorithm, observation_space=observation_space,
-                       action_space=action_space, sb3_version=sb3_version)  # fmt: skip
+                       action_space=action_space, sb3_version=sb3_version, env_id=env_id,
+                       env_kwargs=env_kwargs)  # fmt: skip
 
 
 class _Refused(Exception):
@@ -140,6 +151,31 @@ def _json(data_bytes: bytes) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise _Refused("its 'data' entry is not a JSON object")
     return data
+
+
+#: Env ids a model may name, and the keyword arguments it may record with their types.
+_ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1")
+_ENV_KEYS: dict[str, tuple[type, ...]] = {"action_mode": (str,), "control_period_s": (int, float),
+                                          "residual_range": (int, float), "lookahead_mm": (int, float),
+                                          "lookahead_points": (int,)}  # fmt: skip
+
+
+def _env(data: dict[str, Any]) -> tuple[str, dict[str, Any]]:
+    """The env a model acts in: ``data["cnc_gym_env"]`` (plain JSON, checked), or Feedrate-v0."""
+    recorded = data.get("cnc_gym_env")
+    if recorded is None:
+        return "cnc_gym/Feedrate-v0", {}
+    if not isinstance(recorded, dict) or set(recorded) != {"id", "kwargs"} or recorded["id"] not in _ENV_IDS:
+        raise _Refused(f"its cnc_gym_env record names no known env (one of {', '.join(_ENV_IDS)})")
+    kwargs = recorded["kwargs"]
+    if not isinstance(kwargs, dict):
+        raise _Refused("its cnc_gym_env.kwargs are not a mapping")
+    for key, value in kwargs.items():
+        if key not in _ENV_KEYS or isinstance(value, bool) or not isinstance(value, _ENV_KEYS[key]):
+            raise _Refused(f"its cnc_gym_env.kwargs.{escaped(str(key), 40)} is not an env setting a model "
+                           "records")  # fmt: skip
+        _check_plain(value, f"cnc_gym_env.kwargs.{key}")
+    return str(recorded["id"]), dict(kwargs)
 
 
 def _family(data: dict[str, Any]) -> tuple[type, str]:
@@ -343,6 +379,9 @@ class ModelPolicy:
         self.name = self.path.name
         self.deterministic = deterministic
         self.model = load_sb3_model(self.path)
+        #: The env the model acts in (what ``cnc-gym bench`` and ``cnc-gym run`` build for it).
+        self.env_id = self.model.env_id
+        self.env_kwargs = dict(self.model.env_kwargs)
 
     def reset(self, env: Any) -> None:
         want = self.model.observation_space.shape

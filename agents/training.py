@@ -1,11 +1,16 @@
-"""SB3 training helpers: the validated training config and the PPO training loop.
+"""SB3 training helpers: the validated training config and the PPO / PPO-Lagrangian training loop.
 
 ``scripts/train.py`` and ``scripts/evaluate.py`` are thin entry points over these. A config is YAML read
 with the bounded safe loader of :mod:`cnc_gym.config`; every key is declared below with its type and
-range (docs/training.md's key table is written from these declarations), and the ``env:`` keys share
-their specs with the env's own arguments (:mod:`cnc_gym.envs.options`). Unknown keys, wrong types and
-out-of-range values are one :class:`~cnc_gym.errors.ConfigError` line naming the file and the key. See
-``configs/train/ppo.yaml``.
+range (docs/configs.md's key tables are written from these declarations), and the ``env:`` keys share
+their specs with the envs' own arguments (:mod:`cnc_gym.envs.options`, :mod:`cnc_gym.envs.feedrate_v1`,
+:mod:`cnc_gym.envs.randomization`). Unknown keys, wrong types, out-of-range values and keys that do not
+belong to the chosen env version are one :class:`~cnc_gym.errors.ConfigError` line naming the file and
+the key. See ``configs/train/``.
+
+Programs may be named one by one (built-in names, ``.nc`` paths) or as a split of a benchmark suite,
+``suite:<name>/<split>`` (e.g. ``suite:cnc-bench-v1/train``); a suite's ``test`` split is refused, so a
+training config cannot train on the programs the result is reported on.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ from typing import Any
 import yaml
 
 from cnc_gym.config import (
+    Choice,
     Number,
     check_object,
     declared,
@@ -34,8 +40,8 @@ from cnc_gym.config import (
     spec_of,
     text,
 )
+from cnc_gym.envs.feedrate_v1 import ACTION_MODE_V1, RankingReward
 from cnc_gym.envs.options import (
-    ACTION_MODE,
     CONTROL_PERIOD,
     DIALECT,
     MACHINE_NAME,
@@ -43,7 +49,16 @@ from cnc_gym.envs.options import (
     PROGRAM_NAMES,
     RewardWeights,
 )
+from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
+
+#: The env versions a training config may name.
+ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1")
+#: A program entry naming a whole split of a benchmark suite.
+SUITE_PREFIX = "suite:"
+#: Keyword arguments a trained model records (plain JSON in its zip), so that ``cnc-gym bench`` and
+#: ``cnc-gym run`` rebuild the env it acts in: what fixes the meaning of its observation and action.
+POLICY_ENV_KEYS = ("action_mode", "control_period_s", "residual_range", "lookahead_mm", "lookahead_points")
 
 #: Most samples in one PPO rollout (n_steps × n_envs): about 200 MB of buffers with this env's observation.
 MAX_ROLLOUT = 2**20
@@ -51,29 +66,109 @@ MAX_ROLLOUT = 2**20
 
 @dataclass
 class EnvSettings:
-    """Keyword arguments of ``cnc_gym/Feedrate-v0`` used for training (and, by default, evaluation)."""
+    """The env trained on: its id and keyword arguments (and, by default, evaluation's)."""
 
+    id: str = declared(Choice(choices=ENV_IDS, doc="the env version"), "cnc_gym/Feedrate-v0")
     programs: list[str] = declared(  # noqa: RUF009
-        dataclasses.replace(PROGRAM_NAMES, as_tuple=False),
+        dataclasses.replace(PROGRAM_NAMES, doc="built-in program names, `.nc` paths, or a suite split "
+                            "`suite:<name>/<split>` (train or val)", as_tuple=False),
         default_factory=lambda: ["star", "pocket", "freeform"],
     )
     dialect: str = declared(DIALECT, "gsk25i")
     machine: str = declared(MACHINE_NAME, "vmc-small")
-    action_mode: str = declared(ACTION_MODE, "override")
+    action_mode: str = declared(dataclasses.replace(ACTION_MODE_V1, doc="what the action sets (`residual`: "
+                                                    "Feedrate-v1 only)"), "override")  # fmt: skip
     control_period_s: float = declared(CONTROL_PERIOD, 0.01)
     reward: RewardWeights | None = section(  # noqa: RUF009
-        RewardWeights, optional=True, doc="reward weights (null: configs/tasks/default.yaml)")  # fmt: skip
+        RewardWeights, optional=True, doc="Feedrate-v0's reward weights (null: configs/tasks/default.yaml)")
+    reward_v1: RankingReward | None = section(  # noqa: RUF009
+        RankingReward, optional=True, doc="Feedrate-v1's reward weights (null: its defaults)")
+    randomize: DomainRandomization | None = section(  # noqa: RUF009
+        DomainRandomization, optional=True, doc="Feedrate-v1's domain randomisation (null: off)")
+    residual_range: float = number(
+        2.0, 1, 10, low_open=True, doc="Feedrate-v1, residual mode: the knob is the planner's × this^a",
+        why="a factor above 1; 10 spans 0.1 to 10 times the planner's override.")  # fmt: skip
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
 
+    def config_problems(self) -> Iterator[tuple[str, str]]:
+        """Rules across keys: ``(key, problem)``."""
+        if self.id == "cnc_gym/Feedrate-v0":
+            if self.action_mode == "residual":
+                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v1"
+            for key in ("reward_v1", "randomize"):
+                if getattr(self, key) is not None:
+                    yield key, "belongs to cnc_gym/Feedrate-v1 (set id: cnc_gym/Feedrate-v1)"
+        elif self.reward is not None:
+            yield "reward", "holds Feedrate-v0's weights; Feedrate-v1's are reward_v1"
+        for program in self.programs:
+            if program.startswith(SUITE_PREFIX):
+                problem = _suite_problem(program)
+                if problem:
+                    yield "programs", problem
+
+    def program_list(self) -> list[str]:
+        """The programs, a suite split expanded into its files."""
+        out: list[str] = []
+        for program in self.programs:
+            if program.startswith(SUITE_PREFIX):
+                from cnc_gym.benchmark.suites import load_suite
+
+                name, split = program.removeprefix(SUITE_PREFIX).split("/")
+                out += [str(p) for p in load_suite(name).paths(split)]
+            else:
+                out.append(program)
+        return out
+
     def make_kwargs(self) -> dict[str, Any]:
-        kwargs: dict[str, Any] = {"programs": list(self.programs), "dialect": self.dialect,
+        kwargs: dict[str, Any] = {"programs": self.program_list(), "dialect": self.dialect,
                                   "machine": self.machine, "action_mode": self.action_mode,
                                   "control_period_s": self.control_period_s}  # fmt: skip
         if self.reward is not None:
             kwargs["reward"] = dataclasses.asdict(self.reward)
+        if self.id != "cnc_gym/Feedrate-v0":
+            kwargs["residual_range"] = self.residual_range
+            if self.reward_v1 is not None:
+                kwargs["reward"] = dataclasses.asdict(self.reward_v1)
+            if self.randomize is not None:
+                kwargs["randomize"] = dataclasses.asdict(self.randomize)
         if self.max_episode_steps is not None:
             kwargs["max_episode_steps"] = self.max_episode_steps
         return kwargs
+
+    def policy_env(self) -> dict[str, Any]:
+        """What a trained model records of its env (:data:`POLICY_ENV_KEYS`): plain JSON."""
+        kwargs = self.make_kwargs()
+        return {"id": self.id, "kwargs": {k: kwargs[k] for k in POLICY_ENV_KEYS if k in kwargs}}
+
+
+def _suite_problem(program: str) -> str | None:
+    """Why ``suite:<name>/<split>`` cannot be trained on, or None."""
+    from cnc_gym.benchmark.suites import suite_names
+
+    spec = program.removeprefix(SUITE_PREFIX)
+    if spec.count("/") != 1:
+        return f"{program!r}: a suite split is written suite:<name>/<split>, e.g. suite:cnc-bench-v1/train"
+    name, split = spec.split("/")
+    if name not in suite_names():
+        return f"{program!r}: unknown suite {name!r} (suites: {', '.join(suite_names())})"
+    if split not in ("train", "val"):
+        return (f"{program!r}: train on the train split (or val); the test split is for the reported "
+                "result only")
+    return None
+
+
+@dataclass
+class LagrangianSettings:
+    """PPO-Lagrangian's dual ascent on the violation budget (agents/lagrangian.py)."""
+
+    cost_limit: float = number(0.01, 0, 1e6, unit="mm", doc="budget d of the mean episode cost "
+                               "(Feedrate-v1: violation length per episode)", why="a length.")  # fmt: skip
+    lambda_init: float = number(1.0, 0, 1e6, doc="λ at the start (reward units per mm of violation)",
+                                why="λ ≥ 0; the upper end keeps rewards finite.")  # fmt: skip
+    lambda_lr: float = number(5.0, 0, 1e6, doc="η: λ += η·(mean episode cost − cost_limit) per rollout",
+                              why="non-negative; 0 holds λ fixed.")  # fmt: skip
+    lambda_max: float = number(1000.0, 0, 1e6, doc="λ is clipped to [0, lambda_max]",
+                               why="keeps rewards finite.")  # fmt: skip
 
 
 @dataclass
@@ -105,8 +200,12 @@ class PPOSettings:
 class TrainConfig:
     """A training run: env, vectorisation, algorithm settings and where to write."""
 
-    env: EnvSettings = section(EnvSettings, doc="the env's arguments")  # noqa: RUF009
+    env: EnvSettings = section(EnvSettings, doc="the env and its arguments")  # noqa: RUF009
+    algorithm: str = declared(Choice(choices=("ppo", "ppo_lagrangian"), doc="SB3 PPO, or PPO with a "
+                                     "Lagrange multiplier on the cost budget (Feedrate-v1)"), "ppo")
     ppo: PPOSettings = section(PPOSettings, doc="PPO's arguments (SB3 names)")  # noqa: RUF009
+    lagrangian: LagrangianSettings = section(  # noqa: RUF009
+        LagrangianSettings, doc="PPO-Lagrangian's dual ascent (algorithm: ppo_lagrangian)")
     total_timesteps: int = number(100_000, 1, 10**10, integer=True, doc="env steps to train for",
                                   why="10¹⁰ steps are months at this env's ~10⁴ steps/s.")  # fmt: skip
     n_envs: int = number(4, 1, 256, integer=True, doc="env copies in the process (DummyVecEnv)",
@@ -133,6 +232,8 @@ class TrainConfig:
         elif self.ppo.batch_size > rollout:
             yield "ppo.batch_size", (f"must not exceed the rollout n_steps × n_envs = {rollout}, "
                                      f"got {self.ppo.batch_size}")  # fmt: skip
+        if self.algorithm == "ppo_lagrangian" and self.env.id == "cnc_gym/Feedrate-v0":
+            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v1 (its cost is per mm)"
 
 
 def load_config(path: str | Path) -> TrainConfig:
@@ -183,15 +284,18 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
     from cnc_gym.programs import load_program
 
     torch.set_num_threads(config.torch_threads)  # small MLPs: more threads only add overhead
-    for program in config.env.programs:  # interpret up front: program errors are one clear line
+    env_kwargs = config.env.make_kwargs()
+    for program in env_kwargs["programs"]:  # interpret up front: program errors are one clear line
         load_program(program, config.env.dialect)
-    vec_env = make_vec_env(
-        "cnc_gym/Feedrate-v0",
-        n_envs=config.n_envs,
-        seed=config.seed,
-        env_kwargs=config.env.make_kwargs(),
-        vec_env_cls=DummyVecEnv,
-    )
+    vec_env = make_vec_env(config.env.id, n_envs=config.n_envs, seed=config.seed, env_kwargs=env_kwargs,
+                           vec_env_cls=DummyVecEnv)  # fmt: skip
+    callback = None
+    if config.algorithm == "ppo_lagrangian":
+        from agents.lagrangian import CostPenalty, DualAscent
+
+        lag = config.lagrangian
+        vec_env = penalty = CostPenalty(vec_env, lag.lambda_init)
+        callback = DualAscent(penalty, lag.cost_limit, lag.lambda_lr, lag.lambda_max)
     if config.normalize_reward:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -204,11 +308,14 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
         policy_kwargs={"net_arch": list(p.net_arch), "log_std_init": p.log_std_init},
         tensorboard_log=str(tensorboard_dir), device="cpu", verbose=0,
     )  # fmt: skip
+    # Plain JSON in the model's zip: the env it acts in (agents/model.py reads it back without unpickling).
+    model.cnc_gym_env = config.env.policy_env()  # type: ignore[attr-defined]
     show_bar = config.progress_bar if progress_bar is None else progress_bar
     started = time.perf_counter()
     model_path = run_dir / "model.zip"
     try:
-        model.learn(total_timesteps=total, progress_bar=show_bar, tb_log_name=config.run_name)
+        model.learn(total_timesteps=total, progress_bar=show_bar, tb_log_name=config.run_name,
+                    callback=callback)  # fmt: skip
         elapsed = time.perf_counter() - started
         model.save(model_path)
         saved = config_to_dict(config)

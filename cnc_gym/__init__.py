@@ -26,6 +26,11 @@ def _register() -> None:
         register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv")
     if "cnc_gym/Feedrate-v1" not in registry:
         register(id="cnc_gym/Feedrate-v1", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1")
+    import warnings
+
+    # v0 stays supported beside v1 (the benchmark runs its baselines in it): no "out of date" warning.
+    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v0 is out of date",
+                            category=DeprecationWarning)  # fmt: skip
 
 
 class _RegisterOnImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):

@@ -145,16 +145,19 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                  "contour_error_rms_mm": None, "tolerance_mm": None, "violations": None, "steps": None,
                  "finished": True, "feasible": True, "score": 1.0, "total_return": None, "reference": True}
                 for seed in seeds]  # fmt: skip
-    import gymnasium
-
-    import cnc_gym  # noqa: F401  (registers the env ids)
-    from agents import make_policy
-
-    policy = make_policy(policy_spec, progress=None if progress else False)
-    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text], dialect=dialect, machine=machine)
     records = []
+    # A spec with "{seed}" names one policy per seed (e.g. a model per training seed): each seed's episode
+    # runs its own; every other policy is built once. A policy runs in the env it names (env_id,
+    # env_kwargs: a trained model's), else in Feedrate-v0; with randomisation off, every version has the
+    # same dynamics and the same metrics.
+    policy = env = None
     try:
         for seed in seeds:
+            if policy is None or "{seed}" in policy_spec:
+                if env is not None:
+                    env.close()
+                policy, env = _policy_env(policy_spec.replace("{seed}", str(seed)), program, dialect, machine,
+                                          progress)  # fmt: skip
             info, total_return, steps, finished = run_one_episode(env, policy, int(seed))
             cycle = float(info["cycle_time_s"])
             ratio = cycle / bound["total_s"] if bound["total_s"] > 0 else float("inf")
@@ -170,8 +173,24 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                             "score": episode_score(finished, length, ratio), "total_return": total_return,
                             "reference": False})  # fmt: skip
     finally:
-        env.close()
+        if env is not None:
+            env.close()
     return records
+
+
+def _policy_env(spec: str, program: BenchProgram, dialect: str, machine: str,
+                progress: bool) -> tuple[Any, Any]:  # fmt: skip
+    """A policy and the env it runs the program in."""
+    import gymnasium
+
+    import cnc_gym  # noqa: F401  (registers the env ids)
+    from agents import make_policy
+
+    policy = make_policy(spec, progress=None if progress else False)
+    env_id = getattr(policy, "env_id", "cnc_gym/Feedrate-v0")
+    kwargs = dict(getattr(policy, "env_kwargs", {}))
+    env = gymnasium.make(env_id, **kwargs, programs=[program.text], dialect=dialect, machine=machine)
+    return policy, env
 
 
 def run_one_episode(env: Any, policy: Any, seed: int) -> tuple[dict[str, Any], float, int, bool]:
@@ -258,7 +277,8 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
         if spec != "bound":
             from agents import make_policy
 
-            make_policy(spec, progress=False)
+            for seed in config.seeds if "{seed}" in spec else [None]:
+                make_policy(spec.replace("{seed}", str(seed)), progress=False)
     mach = load_machine(config.machine)
     common = {"suite": config.suite or "user", "suite_version": config.suite_version,
               "suite_sha256": config.suite_sha256, "machine": mach.name,
