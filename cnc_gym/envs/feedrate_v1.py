@@ -142,7 +142,7 @@ class FeedrateEnvV1(FeedrateEnv):
 
     ## Observation Space
 
-    ``Box(low, high, (13 + 4·N,), float32)`` with ``N = lookahead_points`` (default 8: 45 entries),
+    ``Box(low, high, (14 + 4·N,), float32)`` with ``N = lookahead_points`` (default 8: 46 entries),
     declared once in :data:`cnc_gym.envs.observation.OBSERVATION_V1` (this table, the bounds, the scaling
     and :attr:`observation_structure` come from it). ``v_ref = max_feed_mm_min / 60``, ``a_ref`` the
     preset's largest axis acceleration, ``tol`` the contour tolerance, ``H = lookahead_mm``,
@@ -334,7 +334,8 @@ class FeedrateEnvV1(FeedrateEnv):
         self._planner_override = self.prior.override(info["path_s"], info["feed_mm_min"])
         observation = self._observation
         observation[: self.layout.kernel_size] = self._batch.observations[0]
-        self.layout.fill_extras(observation, self._machine_values, self._planner_override)
+        self.layout.fill_extras(observation, self._machine_values, info["violation_length_mm"] <= 0.0,
+                                self._planner_override)
         info["cost"] = 0.0
         info["reward_time"] = time_term
         info["reward_progress"] = progress_term

@@ -12,8 +12,10 @@
 
 No entry identifies a position in a particular program (v0's ``progress = s / L`` is gone): every entry
 is the machine's state, the path ahead within a fixed horizon, the controller's limits there, the
-machine's own parameters, or what the deployable planner would command now. A policy therefore sees the
-same kind of input on any program, which is what lets it run programs it was not trained on.
+machine's own parameters, whether the episode is still violation-free (so a value function can tell
+whether the finish bonus is still to be had), or what the deployable planner would command now. A policy
+therefore sees the same kind of input on any program, which is what lets it run programs it was not
+trained on.
 
 Scales are written as the reference quantity an entry is divided by (``v_ref`` = the controller's max
 feed in mm/s, ``a_ref`` = the largest axis acceleration of the preset, ``tol`` = the contour tolerance,
@@ -32,7 +34,7 @@ from cnc_gym.envs.fused import LOOKAHEAD_ROWS, SIGNALS, ObservationSpec
 from cnc_gym.machine import MachineConfig
 
 #: Where an entry's value comes from.
-SOURCES = ("signal", "lookahead", "machine", "planner")
+SOURCES = ("signal", "lookahead", "machine", "episode", "planner")
 #: Fixed references (the others are the env's: v_ref, a_ref, tol, H, ov_max).
 KV_REF_1_S = 40.0
 CURVATURE_LENGTH_MM = 10.0  # curvature κ is observed as κL/(1 + κL): R 50 mm → 0.17, R 1 mm → 0.91
@@ -91,6 +93,8 @@ OBSERVATION_V1: tuple[Entry, ...] = (
     Entry("feedforward", "machine", "feedforward", "f", "mean velocity feed-forward of the axes", 0, 1),
     Entry("accel_limit", "machine", "accel_min", "min A / a_ref", "the lowest axis acceleration", 0, 5,
           "a_ref"),
+    Entry("violation_free", "episode", "violation_free", "[L_viol = 0]",
+          "1 while the episode has cut no path over tolerance (the finish bonus is still to be had)", 0, 1),
     Entry("planner_override", "planner", "override", "ov_plan / ov_max",
           "what the deployable planner (`classical`) would command now", 0, 1, "ov_max"),
 )  # fmt: skip
@@ -115,10 +119,10 @@ class ObservationLayout:
                            "following_ref": FOLLOWING_ERROR_REF_MM, **references}  # fmt: skip
         order = [SOURCES.index(e.source) for e in entries]
         if order != sorted(order):
-            raise ValueError("observation entries must be ordered signal, lookahead, machine, planner")
+            raise ValueError(f"observation entries must be ordered by source: {', '.join(SOURCES)}")
         for e in entries:
             known = {"signal": SIGNALS, "lookahead": LOOKAHEAD_ROWS, "machine": MACHINE_QUANTITIES,
-                     "planner": ("override",)}[e.source]  # fmt: skip
+                     "episode": ("violation_free",), "planner": ("override",)}[e.source]  # fmt: skip
             if e.quantity not in known:
                 raise ValueError(f"observation entry {e.name}: unknown {e.source} quantity {e.quantity!r}")
         self.kernel_spec = ObservationSpec(
@@ -135,7 +139,7 @@ class ObservationLayout:
             at += width
         self.size = at
         self.kernel_size = self.kernel_spec.size
-        self._extras = [e for e in entries if e.source in ("machine", "planner")]
+        self._extras = [e for e in entries if e.source in ("machine", "episode", "planner")]
 
     def scale(self, entry: Entry) -> float:
         return 1.0 / self.references[entry.divide_by]
@@ -158,15 +162,16 @@ class ObservationLayout:
         return np.array([min(max(quantities[e.quantity] * self.scale(e), e.low), e.high)
                          for e in self._extras if e.source == "machine"], dtype=np.float32)  # fmt: skip
 
-    def fill_extras(self, observation: np.ndarray, machine_values: np.ndarray,
+    def fill_extras(self, observation: np.ndarray, machine_values: np.ndarray, violation_free: bool,
                     planner_override: float) -> None:  # fmt: skip
-        """Write the machine and planner entries into ``observation`` (kernel entries already there)."""
+        """Write the machine, episode and planner entries into ``observation`` (after the kernel's)."""
         at = self.kernel_size
         n_machine = len(machine_values)
         observation[at : at + n_machine] = machine_values
         at += n_machine
         for e in self._extras[n_machine:]:
-            observation[at] = min(max(planner_override * self.scale(e), e.low), e.high)
+            value = float(violation_free) if e.source == "episode" else planner_override
+            observation[at] = min(max(value * self.scale(e), e.low), e.high)
             at += 1
 
 

@@ -54,11 +54,11 @@ def test_gymnasium_and_sb3_checkers_pass_without_warnings():
 def test_observation_spec_gives_bounds_structure_and_table():
     env = FeedrateEnvV1(programs=["circle"], lookahead_points=5)
     n = 5
-    assert env.observation_space.shape == (13 + 4 * n,)
+    assert env.observation_space.shape == (14 + 4 * n,)
     structure = env.observation_structure
     assert list(structure) == [e.name for e in OBSERVATION_V1]
     indices = [i for idx in structure.values() for i in idx]
-    assert indices == list(range(13 + 4 * n))  # every entry once, in order
+    assert indices == list(range(14 + 4 * n))  # every entry once, in order
     for entry in OBSERVATION_V1:
         idx = structure[entry.name]
         assert len(idx) == (n if entry.source == "lookahead" else 1)
@@ -85,6 +85,7 @@ def test_observation_entries_hold_their_formulas():
     assert obs[s["kv_mismatch"][0]] == pytest.approx((45 - 38) / np.mean([40, 38, 45]) / 0.1, rel=1e-6)
     assert obs[s["feedforward"][0]] == pytest.approx(0.7)
     assert obs[s["accel_limit"][0]] == pytest.approx(1.0)
+    assert obs[s["violation_free"][0]] == float(info["violation_length_mm"] == 0.0) == 1.0
 
 
 # ------------------------------------------------------------------------------------------ the ranking
@@ -127,8 +128,8 @@ def test_returns_rank_like_the_benchmark_score(circle_outcomes):
     # 1. a finished, violation-free episode beats every violating or truncated one;
     assert min(returns[k] for k in feasible) > max(returns[k] for k in infeasible)
     # 2. among violation-free episodes the faster one wins: the same order as the score.
-    assert sorted(feasible, key=lambda k: returns[k]) == sorted(feasible, key=lambda k: scores[k]) == [0.2, 0.5,
-                                                                                                       1.0]
+    by_return = sorted(feasible, key=lambda k: returns[k])
+    assert by_return == sorted(feasible, key=lambda k: scores[k]) == [0.2, 0.5, 1.0]
 
 
 def test_error_inside_tolerance_costs_nothing(circle_outcomes):
@@ -147,7 +148,7 @@ def test_error_inside_tolerance_costs_nothing(circle_outcomes):
 def test_reward_terms_in_info_add_up_and_cost_is_the_violation_length(circle_outcomes):
     _, out = circle_outcomes
     for key in (1.0, 2.0, "truncated"):
-        total, _, terminated, info, infos = out[key]
+        total, _, _, info, infos = out[key]
         terms = sum(i["reward_time"] + i["reward_progress"] + i["reward_violation"] + i["reward_finish"]
                     for i in infos[1:])  # fmt: skip
         assert terms == pytest.approx(total, rel=1e-9, abs=1e-9)
@@ -160,7 +161,7 @@ def test_violations_and_time_do_not_depend_on_the_control_period():
     totals = []
     for period in (0.01, 0.02):
         env = FeedrateEnvV1(programs=["circle"], control_period_s=period)
-        _, steps, _, _, info, infos = run_episode(env, 0.5)  # override 1.5: violating
+        _, _, _, _, info, infos = run_episode(env, 0.5)  # override 1.5: violating
         time_cost = sum(i["reward_time"] for i in infos[1:])
         # The time term is the cycle time over the nominal time, whatever the period.
         assert time_cost == pytest.approx(-info["cycle_time_s"] / env.nominal_time_s, rel=1e-9)
