@@ -242,6 +242,13 @@ def load_config(path: str | Path) -> TrainConfig:
     return from_mapping(TrainConfig, data, str(path), "", {"source": str(path)})
 
 
+def with_overrides(config: TrainConfig, **values: Any) -> TrainConfig:
+    """``config`` with top-level keys replaced (None: kept), each checked by its key's spec."""
+    changes = {key: parse_value(spec_of(TrainConfig, key), value, "", f"--{key.replace('_', '-')}")
+               for key, value in values.items() if value is not None}  # fmt: skip
+    return dataclasses.replace(config, **changes)
+
+
 def config_to_dict(config: TrainConfig) -> dict[str, Any]:
     data = dataclasses.asdict(config)
     data.pop("source", None)

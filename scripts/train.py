@@ -1,14 +1,16 @@
-"""Train a feed-override agent with Stable-Baselines3 PPO.
+"""Train a feed-override agent with Stable-Baselines3 PPO (or PPO-Lagrangian).
 
     .venv/bin/python scripts/train.py --config configs/train/ppo.yaml [--timesteps N] [--out DIR]
+        [--seed N] [--run-name NAME]
 
 The config (YAML, read with the bounded safe loader; every key has a type and range, see docs/configs.md)
 names the env (programs, machine, dialect, action mode, control period, reward weights), the number of
 in-process envs (DummyVecEnv) and the PPO settings. The run writes, under ``<output_dir>/<run_name>/``:
 ``model.zip`` (``cnc-gym run --policy`` and ``scripts/evaluate.py`` load it without unpickling, see
 docs/security.md), ``config.yaml`` (the config as used), and TensorBoard logs under
-``<output_dir>/tensorboard``. ``--timesteps`` and ``--out`` follow the rules of ``total_timesteps`` and
-``output_dir``; a bad config or option is one line on stderr and exit status 2.
+``<output_dir>/tensorboard``. ``--timesteps``, ``--out``, ``--seed`` and ``--run-name`` override
+``total_timesteps``, ``output_dir``, ``seed`` and ``run_name`` under the same rules; a bad config or option is
+one line on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from agents.training import load_config, train
+from agents.training import load_config, train, with_overrides
 from cnc_gym.errors import CncGymError
 
 
@@ -28,10 +30,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--config", default="configs/train/ppo.yaml", help="training config (YAML)")
     parser.add_argument("--timesteps", type=int, default=None, help="override total_timesteps")
     parser.add_argument("--out", default=None, help="override output_dir")
+    parser.add_argument("--seed", type=int, default=None, help="override seed")
+    parser.add_argument("--run-name", default=None, help="override run_name")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     try:
         config = load_config(args.config)
+        config = with_overrides(config, seed=args.seed, run_name=args.run_name)
         train(
             config, timesteps=args.timesteps, out=args.out, progress_bar=False if args.no_progress else None
         )
