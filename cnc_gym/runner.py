@@ -110,8 +110,9 @@ class RunResult:
 
 
 def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
-             max_blocks: int | None = None, **kwargs: Any):  # fmt: skip
-    """The Feedrate env on one program (interpreted up front, so program errors surface here)."""
+             max_blocks: int | None = None, env_id: str = "cnc_gym/Feedrate-v0", **kwargs: Any):  # fmt: skip
+    """The Feedrate env (``env_id``) on one program (interpreted up front, so program errors surface
+    here)."""
     import gymnasium
 
     import cnc_gym  # noqa: F401  (registers the env ids)
@@ -121,8 +122,7 @@ def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     options = {} if max_blocks is None else {"max_blocks": max_blocks}
     # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
     loaded = load_program(program, dialect, load_machine(machine), **options)
-    return gymnasium.make("cnc_gym/Feedrate-v0", programs=[loaded], dialect=dialect, machine=machine,
-                          **kwargs)  # fmt: skip
+    return gymnasium.make(env_id, programs=[loaded], dialect=dialect, machine=machine, **kwargs)
 
 
 def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
@@ -266,7 +266,9 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
 
     _check_max_time(max_time_s)
     pol = make_policy(policy) if isinstance(policy, str) else policy
-    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks)
+    # A trained model runs in the env version and settings it was trained with (agents/model.py).
+    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks,
+                   env_id=getattr(pol, "env_id", "cnc_gym/Feedrate-v0"), **getattr(pol, "env_kwargs", {}))
     try:
         if log is not None:
             _announce_long_program(env.unwrapped, max_time_s, log)

@@ -17,9 +17,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from agents.training import EnvSettings, PPOSettings, TrainConfig
+from agents.training import EnvSettings, LagrangianSettings, PPOSettings, TrainConfig
 from cnc_gym.config import markdown_table
+from cnc_gym.envs import observation
+from cnc_gym.envs.feedrate_v1 import EnvArgumentsV1, RankingReward
 from cnc_gym.envs.options import EnvArguments, RewardWeights
+from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.envs.task import TaskConfig
 from cnc_gym.machine import AxisConfig, ControllerConfig, MachineConfig, RotaryAxisConfig
 
@@ -35,8 +38,14 @@ TABLES: dict[str, tuple[type, str]] = {
     "train": (TrainConfig, ""),
     "train.env": (EnvSettings, "env."),
     "train.ppo": (PPOSettings, "ppo."),
+    "train.lagrangian": (LagrangianSettings, "lagrangian."),
     "env.arguments": (EnvArguments, ""),
+    "env.v1.arguments": (EnvArgumentsV1, ""),
+    "reward.v1": (RankingReward, ""),
+    "randomize": (DomainRandomization, ""),
 }
+#: Tables written by a function instead of from a schema: Feedrate-v1's observation, from its spec.
+GENERATED = {"env.v1.observation": observation.markdown_table}
 #: Files that hold tables.
 DOCS = ("docs/configs.md", "docs/env.md")
 _BLOCK = re.compile(r"(<!-- config-table ([\w.]+) -->\n)(.*?)(<!-- end config-table -->)", re.S)
@@ -48,6 +57,9 @@ def render(text: str) -> tuple[str, list[str]]:
 
     def fill(match: re.Match[str]) -> str:
         name = match.group(2)
+        if name in GENERATED:
+            names.append(name)
+            return f"{match.group(1)}{GENERATED[name]()}\n{match.group(4)}"
         if name not in TABLES:
             raise SystemExit(f"config_docs: unknown table {name!r} (known: {', '.join(TABLES)})")
         names.append(name)
@@ -71,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
             stale.append(doc)
             if not args.check:
                 path.write_text(new)
-    missing = sorted(set(TABLES) - set(found))
+    missing = sorted((set(TABLES) | set(GENERATED)) - set(found))
     if missing:
         where = ", ".join(DOCS)
         print(f"config_docs: no block for table(s) {', '.join(missing)} in {where}", file=sys.stderr)

@@ -4,11 +4,12 @@
         [--overrides 0.5,1.0,1.5,2.0] [--no-classical] [--oracle] [--json]
 
 Every policy runs one deterministic episode per program through the env configured as in training (read
-from the ``config.yaml`` saved beside the model, or ``--config``). The table shows return, cycle time,
-max/RMS contour error and violations; the summary ranks policies by the benchmark's primary score
-(docs/benchmark.md: the time-optimal bound ÷ cycle time for an episode that finished with no path cut over
-tolerance, 0 otherwise), so a truncated or violating run can never be the "best constant". For a whole
-suite split use ``cnc-gym bench``.
+from the ``config.yaml`` saved beside the model, or ``--config``; randomisation off), a trained model in
+the env version and action mode it was trained with, the baselines turning the override knob. The table
+shows return, cycle time, max/RMS contour error and violations; the summary ranks policies by the
+benchmark's primary score (docs/benchmark.md: the time-optimal bound ÷ cycle time for an episode that
+finished with no path cut over tolerance, 0 otherwise), so a truncated or violating run can never be the
+"best constant". For a whole suite split use ``cnc-gym bench``.
 """
 
 from __future__ import annotations
@@ -26,9 +27,14 @@ from cnc_gym.errors import CncGymError
 DEFAULT_OVERRIDES = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0)
 
 
-def evaluate(policies: list[Any], env_kwargs: dict[str, Any], programs: list[str]) -> list[dict[str, Any]]:
+def evaluate(policies: list[Any], env_kwargs: dict[str, Any], programs: list[str],
+             env_id: str = "cnc_gym/Feedrate-v0") -> list[dict[str, Any]]:  # fmt: skip
     """One episode per (policy, program); rows carry the ``cnc-gym run --json`` keys plus the benchmark's
-    metrics (``bound_s``, ``time_ratio``, ``violation_length_mm``, ``feasible``, ``score``)."""
+    metrics (``bound_s``, ``time_ratio``, ``violation_length_mm``, ``feasible``, ``score``).
+
+    Every policy runs in the env it names (a trained model: the id and settings it was trained with),
+    else in ``env_id`` with ``env_kwargs``; the baselines turn the override knob, so a ``residual``
+    action mode is theirs in ``override`` mode. Randomisation is off: one deterministic episode each."""
     import gymnasium
 
     import cnc_gym  # noqa: F401
@@ -36,26 +42,38 @@ def evaluate(policies: list[Any], env_kwargs: dict[str, Any], programs: list[str
     from cnc_gym.benchmark.runner import run_one_episode
     from cnc_gym.motion.bound import time_optimal_bound
 
+    common = {k: v for k, v in env_kwargs.items() if k not in ("randomize", "programs")}
     rows = []
     for program in programs:
-        kwargs = {**env_kwargs, "programs": [program]}
-        env = gymnasium.make("cnc_gym/Feedrate-v0", **kwargs)
-        try:
-            base = env.unwrapped
-            bound = time_optimal_bound(base.toolpath, base.machine, action_mode=base.action_mode).total_s
-            for policy in policies:
+        bound = None
+        for policy in policies:
+            policy_id = getattr(policy, "env_id", None)
+            kwargs = {**common, "programs": [program]}
+            if policy_id is None:  # a baseline: the knob, in the configured env
+                policy_id = env_id
+                if kwargs.get("action_mode") == "residual":
+                    kwargs["action_mode"] = "override"
+            else:
+                kwargs.update(getattr(policy, "env_kwargs", {}))
+            if policy_id == "cnc_gym/Feedrate-v0":
+                kwargs = {k: v for k, v in kwargs.items() if k not in ("residual_range",)}
+            env = gymnasium.make(policy_id, **kwargs)
+            try:
+                base = env.unwrapped
+                if bound is None:
+                    mode = "feed" if base.action_mode == "feed" else "override"
+                    bound = time_optimal_bound(base.toolpath, base.machine, action_mode=mode).total_s
                 info, total_return, steps, finished = run_one_episode(env, policy, 0)
-                row = {key: info[key] for key in ("program", "cycle_time_s", "contour_error_max_mm",
-                                                  "contour_error_rms_mm", "tolerance_mm", "violations")}
-                length, ratio = float(info["violation_length_mm"]), info["cycle_time_s"] / bound
-                row.update(machine=base.machine.name, policy=str(getattr(policy, "name", policy)),
-                           steps=steps, total_return=total_return, finished=finished, bound_s=bound,
-                           time_ratio=ratio, violation_length_mm=length,
-                           feasible=is_feasible(finished, length),
-                           score=episode_score(finished, length, ratio))  # fmt: skip
-                rows.append(row)
-        finally:
-            env.close()
+            finally:
+                env.close()
+            row = {key: info[key] for key in ("program", "cycle_time_s", "contour_error_max_mm",
+                                              "contour_error_rms_mm", "tolerance_mm", "violations")}
+            length, ratio = float(info["violation_length_mm"]), info["cycle_time_s"] / bound
+            row.update(machine=base.machine.name, policy=str(getattr(policy, "name", policy)),
+                       steps=steps, total_return=total_return, finished=finished, bound_s=bound,
+                       time_ratio=ratio, violation_length_mm=length, feasible=is_feasible(finished, length),
+                       score=episode_score(finished, length, ratio))  # fmt: skip
+            rows.append(row)
     return rows
 
 
@@ -108,6 +126,7 @@ def main(argv: list[str] | None = None) -> int:
             config_path = str(beside) if beside.exists() else None
         config = load_config(config_path) if config_path else None
         env_kwargs = config.env.make_kwargs() if config else {"programs": ["star", "pocket", "freeform"]}
+        env_id = config.env.id if config else "cnc_gym/Feedrate-v0"
         if args.machine:
             env_kwargs["machine"] = args.machine
         programs = args.programs or list(env_kwargs["programs"])
@@ -124,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
             policies.append(OraclePlanner(progress=False))
         if args.model:
             policies.append(ModelPolicy(args.model))
-        rows = evaluate(policies, env_kwargs, programs)
+        rows = evaluate(policies, env_kwargs, programs, env_id)
     except CncGymError as exc:
         print(f"evaluate: {exc}", file=sys.stderr)
         return 2
