@@ -189,6 +189,13 @@ def readable(key: str, attribute: str, value):
         (lambda d: d.update(policy_kwargs={"net_arch": [32, 32]}), "weights do not fit"),
         (lambda d: d.update(policy_kwargs={"features_extractor_class": "<class 'evil.Extractor'>"}),
          "features_extractor_class"),
+        (lambda d: d.update(cnc_gym_env={"id": "evil/Env-v0", "kwargs": {}}), "names no known env"),
+        (lambda d: d.update(cnc_gym_env={"id": "cnc_gym/Feedrate-v1", "kwargs": {"programs": ["x"]}}),
+         "cnc_gym_env.kwargs.programs is not"),
+        (lambda d: d.update(cnc_gym_env={"id": "cnc_gym/Feedrate-v1", "kwargs": {"residual_range": "2"}}),
+         "cnc_gym_env.kwargs.residual_range is not"),
+        (lambda d: d.update(cnc_gym_env={":type:": "<class 'dict'>", ":serialized:": "gAR9lC4="}),
+         "names no known env"),
     ],
 )
 def test_models_outside_the_known_list_are_refused_in_one_line(model_zip, tmp_path, change, fragment):
@@ -197,6 +204,14 @@ def test_models_outside_the_known_list_are_refused_in_one_line(model_zip, tmp_pa
         load_sb3_model(crafted)
     assert_one_clean_line(str(err.value), crafted)
     assert fragment in str(err.value)
+
+
+def test_the_env_record_is_read_as_plain_json(model_zip, tmp_path):
+    record = {"id": "cnc_gym/Feedrate-v1", "kwargs": {"action_mode": "residual", "residual_range": 2.0}}
+    crafted = rewrite(model_zip, tmp_path / "v1.zip", data=lambda d: d.update(cnc_gym_env=record))
+    policy = ModelPolicy(crafted)
+    assert (policy.env_id, policy.env_kwargs) == (record["id"], record["kwargs"])
+    assert (ModelPolicy(model_zip).env_id, ModelPolicy(model_zip).env_kwargs) == ("cnc_gym/Feedrate-v0", {})
 
 
 def test_damaged_and_oversized_members_are_one_line(model_zip, tmp_path):

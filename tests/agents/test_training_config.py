@@ -20,10 +20,41 @@ def test_shipped_ppo_config_loads():
     assert kwargs["action_mode"] == "override" and kwargs["programs"] == config.env.programs
 
 
+def test_shipped_v1_configs_load_and_name_the_train_split():
+    from cnc_gym.benchmark import load_suite
+
+    train = {str(p) for p in load_suite().paths("train")}
+    for name in ("ppo-residual", "ppo-lagrangian-residual"):
+        config = load_config(REPO / f"configs/train/{name}.yaml")
+        kwargs = config.env.make_kwargs()
+        assert config.env.id == "cnc_gym/Feedrate-v1" and kwargs["action_mode"] == "residual"
+        assert set(kwargs["programs"]) == train and kwargs["randomize"]["enabled"]
+        assert config.env.policy_env() == {"id": "cnc_gym/Feedrate-v1", "kwargs": {
+            "action_mode": "residual", "control_period_s": 0.01, "residual_range": 2.0}}
+    assert load_config(REPO / "configs/train/ppo-lagrangian-residual.yaml").algorithm == "ppo_lagrangian"
+
+
+V1 = "env: {id: cnc_gym/Feedrate-v1, programs: [circle]"
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
         ("total_timestep: 10\n", "unknown key total_timestep"),
+        ("env: {action_mode: residual}\n", "env.action_mode residual needs id: cnc_gym/Feedrate-v1"),
+        ("env: {randomize: {enabled: true}}\n", "env.randomize belongs to cnc_gym/Feedrate-v1"),
+        ("env: {reward_v1: {time: 2}}\n", "env.reward_v1 belongs to cnc_gym/Feedrate-v1"),
+        (V1 + ", reward: {time: 2}}\n", "env.reward holds Feedrate-v0's weights"),
+        (V1 + ", reward_v1: {finish: 0}}\n", r"env.reward_v1.finish must be in \(0, 1e6\]"),
+        (V1 + ", randomize: {kv_scale: [2, 1]}}\n", "env.randomize.kv_scale must be"),
+        (V1 + ", randomize: {feed_scale: [0.5, 20]}}\n", r"env.randomize.feed_scale ends must be in"),
+        ("env: {id: cnc_gym/Feedrate-v2}\n", "env.id must be one of"),
+        ("env: {programs: ['suite:cnc-bench-v1/test']}\n", "the test split is for the reported result"),
+        ("env: {programs: ['suite:nope/train']}\n", "unknown suite 'nope'"),
+        ("env: {programs: ['suite:cnc-bench-v1']}\n", "suite:<name>/<split>"),
+        ("algorithm: ppo_lagrangian\n", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v1"),
+        ("algorithm: sac\n", "algorithm must be one of ppo, ppo_lagrangian"),
+        ("lagrangian: {lambda_lr: -1}\n", r"lagrangian.lambda_lr must be in \[0, 1e6\]"),
         ("ppo: {learning_rat: 0.1}\n", "unknown key ppo.learning_rat"),
         ("env: {programs: []}\n", "env.programs must name at least one program"),
         ("ppo: {learning_rate: '3e-4'}\n", "ppo.learning_rate must be a number"),
