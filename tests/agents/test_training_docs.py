@@ -1,0 +1,40 @@
+"""docs/training.md: its result table is what scripts/leaderboard.py makes of the committed bench records."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+DOC = ROOT / "docs" / "training.md"
+#: The test-split records the table is made of: the baselines' and the trained agents'.
+RECORDS = ["docs/results/cnc-bench-v1-test-learned.jsonl", "docs/results/cnc-bench-v1-test.jsonl"]
+
+
+def test_the_result_table_is_generated_from_the_committed_records():
+    command = [sys.executable, "scripts/leaderboard.py", *RECORDS, "--doc", str(DOC), "--check"]
+    result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+
+
+def test_the_agents_were_benched_with_three_training_seeds_on_a_committed_tree():
+    from cnc_gym.benchmark.runner import read_jsonl
+
+    records = read_jsonl([ROOT / RECORDS[0]])
+    assert {r["split"] for r in records} == {"test"}
+    for policy in {r["policy"] for r in records}:
+        mine = [r for r in records if r["policy"] == policy]
+        assert "{seed}" in policy and sorted({r["seed"] for r in mine}) == [0, 1, 2]
+        assert len(mine) == 3 * 70
+        assert all(not r["commit"].endswith("+dirty") for r in mine)
+        assert (ROOT / policy.replace("{seed}", "0")).is_file()
+
+
+def test_the_val_table_is_the_scripts_output():
+    order = ["ppo-residual", "ppo-lagrangian-residual", "ppo-lagrangian-residual-narrow"]
+    val = [f"docs/results/val/{name}.jsonl" for name in order]
+    command = [sys.executable, "scripts/leaderboard.py", *val, "--print"]
+    result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout in DOC.read_text()
