@@ -34,8 +34,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_interpreter import generate_program  # noqa: E402  (the interpreter benchmark's program)
+from bench_interpreter import generate_program  # the interpreter benchmark's program
 
+STARTUP = "cnc-gym trace (start-up: a one-line program)"
 _TRACE = "import sys; from cnc_gym.cli import main; sys.argv[0] = 'cnc-gym'; sys.exit(main())"
 
 
@@ -84,14 +85,14 @@ def main(argv: list[str] | None = None) -> int:
         program.write_text(generate_program(args.lines))
         tiny = work / "tiny.nc"
         tiny.write_text("G01 X1 F100\nM30\n")
+        trace = [sys.executable, "-c", _TRACE, "trace"]
         commands: dict[str, tuple[list[str], dict[str, str] | None]] = {
-            "cnc-gym trace": ([sys.executable, "-c", _TRACE, "trace", str(program)], None),
-            "cnc-gym trace (start-up: a one-line program)": ([sys.executable, "-c", _TRACE, "trace", str(tiny)],
-                                                            None),  # fmt: skip
+            "cnc-gym trace": ([*trace, str(program)], None),
+            STARTUP: ([*trace, str(tiny)], None),
         }
         if args.before:
-            env = {**os.environ, "PYTHONPATH": str(Path(args.before).resolve())}
-            commands["cnc-gym trace, --before"] = ([sys.executable, "-c", _TRACE, "trace", str(program)], env)
+            before_env = {**os.environ, "PYTHONPATH": str(Path(args.before).resolve())}
+            commands["cnc-gym trace, --before"] = ([*trace, str(program)], before_env)
         rs274 = shutil.which("rs274")
         if rs274:
             ngc = work / "program.ngc"
@@ -99,14 +100,15 @@ def main(argv: list[str] | None = None) -> int:
             commands["rs274 -g"] = ([rs274, "-g", str(ngc)], None)
         times: dict[str, dict[str, list[float]]] = {name: {"wall": [], "cpu": []} for name in commands}
         for _ in range(args.repeats):
-            for name, (command, env) in commands.items():
-                wall, cpu = timed_run(command, work / "out.txt", env)
+            for name, (command, environment) in commands.items():
+                wall, cpu = timed_run(command, work / "out.txt", environment)
                 times[name]["wall"].append(wall)
                 times[name]["cpu"].append(cpu)
         result: dict = {"lines": args.lines, "repeats": args.repeats}
         reference = "rs274 -g" if rs274 else None
         print(f"{args.lines:,}-line G01/G02 program, fresh processes, median of {args.repeats}")
-        print(f"{'command':46s} {'wall s':>7s} {'CPU s':>7s}" + ("   ratio to rs274 (wall | CPU)" if reference else ""))
+        print(f"{'command':46s} {'wall s':>7s} {'CPU s':>7s}" + ("   ratio to rs274 (wall | CPU)" if reference
+                                                                   else ""))  # fmt: skip
         medians = {name: {k: statistics.median(v) for k, v in t.items()} for name, t in times.items()}
         for name, m in medians.items():
             line = f"{name:46s} {m['wall']:7.3f} {m['cpu']:7.3f}"
@@ -119,8 +121,7 @@ def main(argv: list[str] | None = None) -> int:
             print("(rs274 not on PATH: install Debian's linuxcnc-uspace for the reference)")
         result["commands"] = medians
         parts = split(program.read_text())
-        result["split"] = {"startup_cpu_s": medians["cnc-gym trace (start-up: a one-line program)"]["cpu"],
-                           **parts}  # fmt: skip
+        result["split"] = {"startup_cpu_s": medians[STARTUP]["cpu"], **parts}
         print(f"split of cnc-gym trace (CPU s): start-up {result['split']['startup_cpu_s']:.3f}, "
               f"interpret {parts['interpret_cpu_s']:.3f}, write {parts['write_cpu_s']:.3f} "
               f"({parts['rows']:,} tool-path rows)")
