@@ -11,7 +11,9 @@ from cnc_gym.gcode import interpret
 
 
 def run(text: str, **kw):
-    return interpret(text, dialect="h4cm", **kw)
+    """``interpret`` with ``dialect="h4cm"`` unless another (a variant with other options) is given."""
+    kw.setdefault("dialect", "h4cm")
+    return interpret(text, **kw)
 
 
 def path(text: str, **kw) -> list[tuple]:

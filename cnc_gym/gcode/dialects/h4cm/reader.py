@@ -98,8 +98,9 @@ class HustReader(Reader):
         if _G65.search(text):
             return self._g65(text, line)
         block = super()._plain_block(text, line)
-        if block.number is not None and block.kind is None:
-            block.number = next(label_key(d) for letter, d in block.words if letter == "N")
+        # A plain block keeps its (letter, digits) pairs, N included; a rescanned one got its key in _head.
+        if block.number is not None and len(block.words[0]) == 2:
+            block.number = next(label_key(w[1]) for w in block.words if w[0] == "N")
         return block
 
     def _head(self, words: list, line: int) -> tuple[list, int | None]:
