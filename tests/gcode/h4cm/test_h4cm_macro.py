@@ -62,8 +62,8 @@ def test_fill_and_copy():
 
 def test_plc_registers_counters_and_bits():
     assert value("G65 L01 P#3 A7\nG65 L01 P#2 A31\nG65 L60 P#2 A#3\nG65 L50 P#10 A31") == 7
-    assert value("G65 L56 P#10 A10", dialect=replace(get_dialect("h4cm"),
-                                                      options=H4cmOptions(plc_counters={10: 100}))) == 100  # fmt: skip
+    counters = replace(get_dialect("h4cm"), options=H4cmOptions(plc_counters={10: 100}))
+    assert value("G65 L56 P#10 A10", dialect=counters) == 100
     bits = replace(get_dialect("h4cm"), options=H4cmOptions(plc_bits={"I": 229 << 16}))
     assert value("G65 L51 P#10 A1", dialect=bits) == 229
 
