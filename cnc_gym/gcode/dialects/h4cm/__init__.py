@@ -82,8 +82,9 @@ DIALECT = Dialect(
     # §3.39: five levels (ERROR 24).
     max_subprogram_nesting=5,
     # §3.40: 40 tool groups; the length offset on Z; G43 H_ may come without Z; start-up straight to the
-    # vector of the next block (the start-up block builds the offset up, "full comp. starting at B").
+    # vector of the next block (the start-up block builds the offset up, "full comp. starting at B"); an
+    # arc round every outer corner ("the tool will make a circular movement").
     compensation=CompensationSettings(tool_length_type="A", startup_type="A", offset_count=40,
-                                      length_needs_axis=False),
+                                      length_needs_axis=False, outer_corner_arcs=True),
     options=H4cmOptions(),
 )
