@@ -8,8 +8,8 @@ errors against the tests.
 The folder: ``codes.py`` (tables, addresses, error numbers), ``options.py`` (its MCM parameters and its
 features' state), ``reader.py`` (64-character blocks, string labels, G65 statements, variables in words),
 ``variables.py`` (#1-#9999 integers), ``macro.py`` (G65 operations, M98/M99, the part counter),
-``blocks.py`` (the last G wins, U/V/W, the arc-mode and compensation rules), ``motion.py`` (G04, the R
-rule, G28/G29/G30), ``coordinates.py`` (G10, G68/G69 mirror, G51 scaling), ``cycles.py`` (G81-G89,
+``blocks.py`` (the last G wins, U/V/W, the arc-mode and compensation rules), ``modes.py`` (CNC and
+master/slave interpolation, #93), ``motion.py`` (G04, the R rule, G28/G29/G30), ``coordinates.py`` (G10, G68/G69 mirror, G51 scaling), ``cycles.py`` (G81-G89,
 G34-G37), ``grooves.py`` (G22-G25).
 """
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from cnc_gym.gcode.dialect import Dialect
-from cnc_gym.gcode.dialects.h4cm import blocks, coordinates, cycles, grooves, macro, motion
+from cnc_gym.gcode.dialects.h4cm import blocks, coordinates, cycles, grooves, macro, modes, motion
 from cnc_gym.gcode.dialects.h4cm.codes import (
     ADDRESSES,
     ALARMS,
@@ -59,8 +59,8 @@ DIALECT = Dialect(
     execution_order=codes.EXECUTION_ORDER,
     addresses=ADDRESSES,
     words=codes.WORDS,
-    actions={**fanuc.ACTIONS, **motion.ACTIONS, **coordinates.ACTIONS, **cycles.ACTIONS, **macro.ACTIONS,
-             "hust_groove": grooves.groove},
+    actions={**fanuc.ACTIONS, **modes.ACTIONS, **motion.ACTIONS, **coordinates.ACTIONS, **cycles.ACTIONS,
+             **macro.ACTIONS, "hust_groove": grooves.groove},
     cycles=cycles.CYCLES,
     language=LANGUAGE,
     hooks=HOOKS,

@@ -44,6 +44,8 @@ _NEED_COMP_OFF = ("hust_reference", "skip")
 
 def normalise(core: Seam, gs, ms, values: dict) -> tuple:
     """The block normaliser (module docstring)."""
+    if core.state.dialect_data is None:
+        data(core)  # the first block: the run's H4C-M state, and the interpolation mode's stop rule
     if gs is not None and len(gs) > 1:
         gs = [gs[-1]]
     g = gs[0] if gs is not None else None

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from cnc_gym.frozen import FrozenDict
+from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Seam
@@ -93,4 +94,8 @@ def data(core: Seam) -> H4cmData:
         opts = options(core)
         st.dialect_data = H4cmData(counter_limit=opts.counter_limit, registers=dict(opts.plc_registers),
                                    counters=dict(opts.plc_counters))  # fmt: skip
+        if opts.interpolation_mode == CNC_MODE:
+            # CNC mode (#93 = 0): "decelerate to a complete stop at the end of" every block (modes.py).
+            st.path_mode = st.path_mode | SegmentMode.EXACT_STOP
+            core.update_modes()
     return st.dialect_data
