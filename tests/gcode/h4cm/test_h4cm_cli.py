@@ -38,7 +38,8 @@ def test_trace_reports_an_h4cm_error_in_one_line(tmp_path, capsys):
 def test_run_and_bench_with_the_h4cm_dialect_and_preset(tmp_path, capsys):
     program = tmp_path / "part.nc"
     program.write_text(PROGRAM)
-    assert main(["run", str(program), "--dialect", "h4cm", "--machine", "h4cm", "--json", "--no-progress"]) == 0
+    argv = ["run", str(program), "--dialect", "h4cm", "--machine", "h4cm", "--json", "--no-progress"]
+    assert main(argv) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["finished"] and result["machine"] == "h4cm"
     out = tmp_path / "bench.jsonl"

@@ -9,8 +9,8 @@ The folder: ``codes.py`` (tables, addresses, error numbers), ``options.py`` (its
 features' state), ``reader.py`` (64-character blocks, string labels, G65 statements, variables in words),
 ``variables.py`` (#1-#9999 integers), ``macro.py`` (G65 operations, M98/M99, the part counter),
 ``blocks.py`` (the last G wins, U/V/W, the arc-mode and compensation rules), ``modes.py`` (CNC and
-master/slave interpolation, #93), ``motion.py`` (G04, the R rule, G28/G29/G30), ``coordinates.py`` (G10, G68/G69 mirror, G51 scaling), ``cycles.py`` (G81-G89,
-G34-G37), ``grooves.py`` (G22-G25).
+master/slave interpolation, #93), ``motion.py`` (G04, the R rule, G28/G29/G30), ``coordinates.py``
+(G10, G68/G69 mirror, G51 scaling), ``cycles.py`` (G81-G89, G34-G37), ``grooves.py`` (G22-G25).
 """
 
 from __future__ import annotations

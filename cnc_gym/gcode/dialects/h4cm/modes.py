@@ -2,8 +2,8 @@
 
 * **CNC mode** (#93 = 0, the default): "the servo motor will decelerate to a complete stop at the end of
   the first block, then … accelerate to the feed-rate on the next block": every segment carries the
-  exact-stop mode (set with the run's H4C-M state, ``options.data``); F is the vector feed (Examples 2 and 3 of §3.4; Example 1's per-axis comments are
-  shifted a line and contradict them).
+  exact-stop mode (set with the run's H4C-M state, ``options.data``); F is the vector feed (Examples 2
+  and 3 of §3.4; Example 1's per-axis comments are shifted a line and contradict them).
 * **Master/slave mode** (#93 = 1, 2, 3: X, Y or Z master): no stop between blocks, and **F is the master
   axis's speed**; the slaves follow in proportion, so the vector feed of a G01 block is F·|Δ|/|Δmaster|.
   A block in which the master does not move runs at F ("the feed-rate of the slave axis will be used").
