@@ -39,7 +39,7 @@ def test_n_labels_are_strings():
 
 
 def test_execution_is_in_file_order_whatever_the_n_values():
-    # §2.2.3 (E7): N35 or N350 between N30 and N40 changes nothing.
+    # §2.3.6 (E7): N35 or N350 between N30 and N40 changes nothing.
     for n in ("N35", "N350"):
         text = f"N10 G01 X1. F100\nN30 X2.\n{n} X3.\nN40 X4.\nM02\n"
         assert [e[0] for e in ends(text)] == [1.0, 2.0, 3.0, 4.0]

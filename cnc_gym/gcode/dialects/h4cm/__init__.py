@@ -70,7 +70,7 @@ DIALECT = Dialect(
     least_increment_mm=0.001,
     least_increment_inch=0.0001,
     arc_radius_tolerance_mm=0.01,
-    # §2.3: at most 7 digits: a sign, 7 digits and a point after the letter.
+    # §2.3.5: at most 7 digits: a sign, 7 digits and a point after the letter.
     max_word_length=10,
     m_groups=M_GROUPS,
     machine_mcodes=MACHINE_MCODES,

@@ -1,12 +1,12 @@
-"""The H4C-M's block rules (HUST H4C-M manual §2.3 program format, §3.1, §3.5 arcs, §3.40 radius
+"""The H4C-M's block rules (HUST H4C-M manual §2.3.6 notes for edition, §3.1, §3.5 arcs, §3.40 radius
 compensation): the word normaliser and the block checks.
 
 **Normaliser** (runs before a block's codes are looked up):
 
 * **one G code per block, the last one wins**: "If several G-codes are accidentally specified in a block,
   only the last G-code specified is effective" (§3.1: ``G00 G1 X10.000`` runs G01);
-* **U, V, W are incremental X, Y, Z** in G90 (§2.2.4, §3.20); under G91 they are ignored ("rendered
-  ineffective": no motion on that axis); with both X and U in one block U wins (§2.3). G10 keeps its U/V/W
+* **U, V, W are incremental X, Y, Z** in G90 (§2.2.4, §3.18); under G91 they are ignored ("rendered
+  ineffective": no motion on that axis); with both X and U in one block U wins (§2.3.6). G10 keeps its U/V/W
   (tool wear, ``coordinates.py``);
 * a groove block's T and D are its type and tool radius, not a tool or an offset group (taken off the
   words for ``grooves.py``);
@@ -112,8 +112,8 @@ def check_block(core: Seam, plan: BlockPlan) -> CodeSpec | None:
                              "compensation in canned cycles)", "comp-not-cancelled")  # fmt: skip
         for spec in plan.items:
             if spec.action in _NEED_COMP_OFF:
-                raise core.error(f"{spec.name} with radius compensation on: cancel with G40 first (§3.13, "
-                                 "§3.16)", "comp-not-cancelled")  # fmt: skip
+                raise core.error(f"{spec.name} with radius compensation on: cancel with G40 first (§3.11, "
+                                 "§3.14, §3.40)", "comp-not-cancelled")  # fmt: skip
     return plan.axis_owner
 
 

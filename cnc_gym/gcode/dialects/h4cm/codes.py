@@ -21,7 +21,7 @@ from cnc_gym.gcode.lang.fanuc.codes import g, m, table, unbuilt
 _FAMILY = frozenset(gkey(n) for n in (0, 1, 2, 3, 17, 18, 19, 20, 21, 31, 40, 41, 42, 43, 44, 49, 54, 55, 56,
                                       57, 58, 59, 80, 90, 91))  # fmt: skip
 
-#: Words of the groove cycles G22-G25 (§3.21-§3.24) and hole patterns G34-G37 (§3.29-§3.32). T and D of a
+#: Words of the groove cycles G22-G25 (§3.29-§3.32) and hole patterns G34-G37 (§3.33-§3.37). T and D of a
 #: groove block are its type and tool radius (blocks.py takes them off the block's words).
 GROOVE_WORDS = {22: "RIJ", 23: "RIJK", 24: "RIJ", 25: "RK"}
 PATTERN_WORDS = {34: "IJK", 35: "IJK", 36: "IJPK", 37: "IJPK"}
@@ -39,14 +39,14 @@ CYCLE_CODES = {81: "drill", 82: "drill_dwell", 83: "peck_deep", 85: "bore", 86: 
 
 G_CODES = table([
     *(spec for spec in family.G_CODES if gkey(float(spec.name[1:])) in _FAMILY),
-    # §3.6 G04: dwell X in seconds (X without a point counts 0.001 s); no P form.
+    # §3.7 G04: dwell X in seconds (X without a point counts 0.001 s); no P form.
     g(4, 0, "hust_dwell", step="dwell", uses_axes=True),
-    # §3.7 G08: clears the machine coordinates of the named axes (a homing operation).
+    # §3.8 G08: clears the machine coordinates of the named axes (a homing operation).
     unbuilt(8, 0, "G08 clears the machine coordinates (a homing step of the operator's panel); the simulated "
                   "machine keeps its coordinate system", uses_axes=True),
     # §3.9 G10: HUST's data setting (work origin, tool offsets and wear) and system functions (P100-P2002).
     g(10, 0, "hust_g10", step="setting", uses_axes=True, words="PLIJKUVWR"),
-    # §3.21-§3.24 grooves; §3.29-§3.32 hole patterns (one-shot; the value is the G number).
+    # §3.29-§3.32 grooves; §3.33-§3.37 hole patterns (one-shot; the value is the G number).
     *[g(n, 0, "hust_groove", n, step="motion", uses_axes=True, words=words)
       for n, words in GROOVE_WORDS.items()],
     *[g(n, 0, "hust_pattern", n, step="motion", uses_axes=True, words=words, address_rules=PATTERN_RULES[n])
@@ -54,19 +54,19 @@ G_CODES = table([
     # §3.19-§3.28 canned cycles (cycles.py): G86 retracts at feed; no G73, G74, G76, G87, G88.
     *[g(n, 9, "cycle", kind, step="motion", uses_axes=True, words="RQPK", address_rules=CYCLE_RULES)
       for n, kind in CYCLE_CODES.items()],
-    # §3.13-§3.15 G28/G29/G30: the axis words only select axes; no intermediate point.
+    # §3.11-§3.13 G28/G29/G30: the axis words only select axes; no intermediate point.
     g(28, 0, "hust_reference", 1, step="motion", uses_axes=True),
     g(29, 0, "hust_reference_back", step="motion", uses_axes=True),
     g(30, 0, "hust_reference", 2, step="motion", uses_axes=True),
-    # §3.17 G50/G51 scaling: I J K are the X Y Z factors, about the position where G51 is given.
+    # §3.15 G50/G51 scaling: I J K are the X Y Z factors, about the position where G51 is given.
     g(50, 11, "hust_scaling_cancel", step="modes"),
     g(51, 11, "hust_scaling", step="setting", words="IJK", address_rules=SCALE_RULES),
     # §3.41 G65: one macro instruction (reader.py makes it a statement; macro.py runs it).
     g(65, 0, "hust_g65", step="stop", words="LPAB"),
-    # §3.18 G68/G69: X and Y mirror toggles.
+    # §3.17 G68/G69: X and Y mirror toggles.
     g(68, 0, "hust_mirror", 0, step="setting"),
     g(69, 0, "hust_mirror", 1, step="setting"),
-    # §3.26 (contents only): no definition in the manual.
+    # G84: in the manual's contents only ("3.26 G84 Thread Tapping Cycle"); no section defines it.
     unbuilt(84, 9, "G84 tapping is listed in the manual's contents but has no section, format or cycle-table "
                    "row on the H4C-M"),
     # G98/G99: a modal group (Table 3-1) the manual never defines. G98 stands before the cycles in their
@@ -77,7 +77,7 @@ G_CODES = table([
                     "the mill"),
 ])  # fmt: skip
 
-#: Power-on codes (§3.1 Table 3-1 '#' marks, §3.5 G17, §3.12 G21, §3.20 G90): G01, not G00.
+#: Power-on codes (§3.1 Table 3-1 '#' marks, §3.6 G17, §3.10 G21, §3.18 G90): G01, not G00.
 POWER_ON = tuple(gkey(n) for n in (1, 17, 90, 21, 40, 49, 80, 98, 50, 54))
 
 M_CODES = table([
@@ -91,7 +91,7 @@ M_GROUPS = {**family.M_GROUPS, "coolant": frozenset(gkey(n) for n in (7, 8, 9))}
 #: PLC-defined M codes of the manual's appendix, refused by name (the PLC program decides what they do).
 MACHINE_MCODES = {gkey(10): "chuck clamp (PLC)", gkey(11): "chuck unclamp (PLC)"}
 
-#: Seven digits at most (§2.3 "numeric input: at most 7 digits"); lengths in the 4/3 format. U/V/W are
+#: Seven digits at most (§2.3.5 "numeric input: at most 7 digits"); lengths in the 4/3 format. U/V/W are
 #: incremental X/Y/Z (blocks.py); A/B are G65 operands (reader.py), never axes.
 BIG = 9999.999
 ADDRESSES = {

@@ -1,4 +1,4 @@
-"""The H4C-M's coordinate and data-setting codes (HUST H4C-M manual §3.9 G10, §3.17 G50/G51, §3.18
+"""The H4C-M's coordinate and data-setting codes (HUST H4C-M manual §3.9 G10, §3.15 G50/G51, §3.17
 G68/G69):
 
 * **G10 X Y Z** (no P) makes the tool's current position the given coordinates of the work system in

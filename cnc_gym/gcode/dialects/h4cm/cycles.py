@@ -1,4 +1,4 @@
-"""The H4C-M's canned cycles and hole patterns (HUST H4C-M manual §3.19-§3.28 G80-G89, §3.29-§3.32
+"""The H4C-M's canned cycles and hole patterns (HUST H4C-M manual §3.19-§3.28 G80-G89, §3.33-§3.37
 G34-G37).
 
 **G81-G89** run the Fanuc family's modal cycle (``lang/fanuc/cycles.py``) with the H4C-M's differences:

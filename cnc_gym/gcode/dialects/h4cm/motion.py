@@ -1,5 +1,5 @@
-"""The H4C-M's motion codes where they differ from the Fanuc family (HUST H4C-M manual §3.5 G02/G03, §3.6
-G04, §3.13-§3.15 G28/G29/G30):
+"""The H4C-M's motion codes where they differ from the Fanuc family (HUST H4C-M manual §3.5 G02/G03, §3.7
+G04, §3.11-§3.13 G28/G29/G30):
 
 * **G04 X** dwells X seconds, 0-8000 s; X without a decimal point counts 0.001 s (``G4 X1`` is 1 ms, the
   least-increment rule). There is no P form.

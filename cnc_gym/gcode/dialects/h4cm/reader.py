@@ -1,5 +1,5 @@
-"""The H4C-M's lexical rules on the Fanuc family's reader (HUST H4C-M manual §2.3 program format, §3.41
-G65 macro instructions):
+"""The H4C-M's lexical rules on the Fanuc family's reader (HUST H4C-M manual §2.3.5 decimal points,
+§2.3.6 notes for edition, §3.41 G65 macro instructions):
 
 * **a block holds at most 64 characters** (ERROR 8; §2.3.6 prints 80 bytes and "Err-18", a copy from
   another model, which chapter 6 contradicts);
@@ -76,7 +76,7 @@ class HustReader(Reader):
                 if length > MAX_BLOCK_CHARS:
                     err = self.error(f"{length} characters in one block (at most {MAX_BLOCK_CHARS}, "
                                      "HUST H4C-M "
-                                     "manual §2.3)", "block-too-long", number)  # fmt: skip
+                                     "manual §2.3.6)", "block-too-long", number)  # fmt: skip
                     raise err.located(file, number)
         return super().read(text, file)
 
