@@ -39,7 +39,7 @@ _INCREMENTAL = (("U", 0, "X"), ("V", 1, "Y"), ("W", 2, "Z"))
 MAX_D = 16
 #: Flag in ``State.general_path`` while an arc block waits for its G00/G01.
 ARC_OPEN = "h4cm-arc"
-_NEED_COMP_OFF = ("hust_reference", "skip")
+_NEED_COMP_OFF = ("hust_reference", "skip", "hust_groove", "hust_pattern")
 
 
 def normalise(core: Seam, gs, ms, values: dict) -> tuple:
@@ -68,7 +68,12 @@ def normalise(core: Seam, gs, ms, values: dict) -> tuple:
         if d != int(d) or not 0 <= d <= MAX_D:
             raise core.error(f"D{d:g}: the compensation group is 1-{MAX_D} (D0 is D1)", "bad-offset-number")
         if d == 0:
-            values = {**values, "D": 1.0}
+            d = 1.0
+            values = {**values, "D": d}
+        comp = core.state.comp
+        if comp.side and d != comp.d_number:
+            raise core.error(f"D{d:g} while compensation with D{comp.d_number} is on: cancel with G40 before "
+                             "changing D (§3.40)", "comp-d-change")  # fmt: skip
     return gs, ms, values
 
 
@@ -76,17 +81,6 @@ def check_block(core: Seam, plan: BlockPlan) -> CodeSpec | None:
     """The arc-mode and radius-compensation rules (module docstring). (Block check.)"""
     st = core.state
     motion = plan.motion
-    d = st.dialect_data
-    if d is not None and d.arc_open:
-        moves = motion is not None or (plan.axis_owner is None and st.modal_item is None
-                                       and any(a in plan.values for a in core.dialect.axes))  # fmt: skip
-        if moves:
-            if motion is None or motion.value not in (0, 1):
-                name = motion.name if motion is not None else "an axis-only block"
-                raise core.error(f"{name} after an arc: an arc block must be followed by a G00 or G01 block "
-                                 "(HUST H4C-M manual §3.5)", "arc-mode")  # fmt: skip
-            d.arc_open = False
-            st.general_path.discard(ARC_OPEN)
     roles = core.dialect.roles
     cutter = plan.by_group.get(roles.cutter_group)  # type: ignore[arg-type]
     comp = st.comp
@@ -101,10 +95,6 @@ def check_block(core: Seam, plan: BlockPlan) -> CodeSpec | None:
             raise core.error(f"{cutter.name} while {'G41' if comp.side > 0 else 'G42'} is on: "
                              "cancel with "
                              "G40 before changing sides (§3.40)", "comp-switch")  # fmt: skip
-    if comp.side and "D" in plan.values and plan.values["D"] != comp.d_number:
-        raise core.error(f"D{plan.values['D']:g} while compensation with D{comp.d_number} is on: "
-                         "cancel "
-                         "with G40 before changing D (§3.40)", "comp-d-change")  # fmt: skip
     if comp.side:
         cycle = plan.by_group.get(roles.cycle_group)  # type: ignore[arg-type]
         if cycle is not None and cycle.action == "cycle":
@@ -114,6 +104,17 @@ def check_block(core: Seam, plan: BlockPlan) -> CodeSpec | None:
             if spec.action in _NEED_COMP_OFF:
                 raise core.error(f"{spec.name} with radius compensation on: cancel with G40 first (§3.11, "
                                  "§3.14, §3.40)", "comp-not-cancelled")  # fmt: skip
+    d = st.dialect_data
+    if d is not None and d.arc_open:
+        moves = motion is not None or (plan.axis_owner is None and st.modal_item is None
+                                       and any(a in plan.values for a in core.dialect.axes))  # fmt: skip
+        if moves:
+            if motion is None or motion.value not in (0, 1):
+                name = motion.name if motion is not None else "an axis-only block"
+                raise core.error(f"{name} after an arc: an arc block must be followed by a G00 or G01 block "
+                                 "(HUST H4C-M manual §3.5)", "arc-mode")  # fmt: skip
+            d.arc_open = False
+            st.general_path.discard(ARC_OPEN)
     return plan.axis_owner
 
 
