@@ -46,8 +46,9 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
     core.state.out.dwell(seconds)
 
 
-def r_sweep_deg(core: Seam, x, y, z, r: float) -> float:
-    """The sweep (degrees, 0-360) of an R arc from the program position to the block's end point."""
+def r_sweep_deg(core: Seam, x, y, z, r: float) -> float | None:
+    """The sweep (degrees, 0-360) of an R arc from the program position to the block's end point; None when
+    R is too small for the chord (the family's arc rule names that)."""
     here = core.program_position
     target = core.resolve_target(x, y, z)
     end = [here[a] if t is None else t for a, t in enumerate(target)]
@@ -56,6 +57,8 @@ def r_sweep_deg(core: Seam, x, y, z, r: float) -> float:
     radius = abs(r) * core.state.scale
     if radius == 0.0:
         return 0.0
+    if chord > 2.0 * radius + core.dialect.arc_radius_tolerance_mm:
+        return None
     minor = math.degrees(2.0 * math.asin(min(1.0, chord / (2.0 * radius))))
     return minor if r > 0 else 360.0 - minor
 
@@ -66,7 +69,7 @@ def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
     if "R" in values:
         sweep = r_sweep_deg(core, x, y, z, values["R"])
         for low, high in R_FORBIDDEN:
-            if low <= sweep <= high:
+            if sweep is not None and low <= sweep <= high:
                 raise core.error(f"{name} R{values['R']:g} sweeps {sweep:.1f}°: an R arc may not sweep "
                                  "-10°…+10° "
                                  "or 179°…181° (HUST H4C-M manual §3.5); give the centre with I/J/K",
