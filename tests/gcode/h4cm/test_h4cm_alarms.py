@@ -1,4 +1,4 @@
-"""A minimal program per error condition of the HUST H4C-M manual (docs/h4cm_alarms.md lists them, A1-A34):
+"""A minimal program per error condition of the HUST H4C-M manual (docs/h4cm_alarms.md lists them, A1-A33):
 each ends in the error code and H4C-M error number (None where the manual numbers none) at the line of the
 offending block. ``CASES`` is read by tests/gcode/h4cm/test_h4cm_indexes.py to check the index's "Our code"
 and "Our alarm" columns.
@@ -45,8 +45,7 @@ CASES: dict[str, list[tuple]] = {
     "A30": [("D17\n", "bad-offset-number", None, 1)],
     "A31": [("G91\nG22 X0 Y0 Z-1. R1. I5. J0 F100\n", "groove-absolute-only", None, 2)],
     "A32": [("G65 L08 P#1 A1\n", "unknown-code", 13, 1)],
-    "A33": [("G65 L05 P#1 A1 B0\n", "division-by-zero", None, 1)],
-    "A34": [("M98 P1000\n", "bad-call", None, 1)],
+    "A33": [("M98 P1000\n", "bad-call", None, 1)],
 }  # fmt: skip
 
 
