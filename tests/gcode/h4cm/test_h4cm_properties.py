@@ -21,22 +21,25 @@ RESULT = st.sampled_from(["#1", "#2", "#3", "#10", "#1", "#2", "#3", "#10", "#10
 OPERAND = st.one_of(VAR, st.sampled_from(["0", "1", "-1", "2500", "100", "45", "-7", "3.5"]))
 LABEL = st.sampled_from(["1", "01", "10", "010", "99"])
 G65 = st.one_of(
-    st.tuples(st.sampled_from([1, 2, 3, 4, 5, 6, 7, 11, 12, 13, 14, 15, 16, 17, 21, 22, 23, 26, 31, 32, 34, 50,
-                               51, 56, 60, 66, 8]), RESULT, OPERAND, OPERAND)
+    st.tuples(st.sampled_from([1, 2, 3, 4, 5, 6, 7, 11, 12, 13, 14, 15, 16, 17, 21, 22, 23, 26, 31, 32, 34,
+                               50, 51, 56, 60, 66, 8]), RESULT, OPERAND, OPERAND)
     .map(lambda t: f"G65 L{t[0]:02d} P{t[1]} A{t[2]} B{t[3]}"),
-    st.tuples(st.sampled_from([1, 1, 22, 50, 56]), RESULT, OPERAND).map(lambda t: f"G65 L{t[0]} P{t[1]} A{t[2]}"),
+    st.tuples(st.sampled_from([1, 1, 22, 50, 56]), RESULT, OPERAND)
+    .map(lambda t: f"G65 L{t[0]} P{t[1]} A{t[2]}"),
     st.tuples(st.sampled_from(range(81, 87)), LABEL, OPERAND, OPERAND)
     .map(lambda t: f"G65 L{t[0]} P{t[1]} A{t[2]} B{t[3]}"),
     st.tuples(LABEL).map(lambda t: f"G65 L80 P{t[0]}"),
     st.sampled_from(["G65 L99 P3", "G65 L99 P77"]),
 )  # fmt: skip
 MOTION = st.tuples(st.sampled_from(["", "G00 ", "G01 ", "G02 ", "G03 ", "G00 G01 ", "G91 G01 "]),
-                   st.lists(AXIS, max_size=3), st.sampled_from(["", " F100", " F#3", " R10.", " I5.", " J-3."]))
+                   st.lists(AXIS, max_size=3),
+                   st.sampled_from(["", " F100", " F#3", " R10.", " I5.", " J-3."]))  # fmt: skip
 STATEMENT = st.one_of(
     MOTION.map(lambda t: t[0] + " ".join(t[1]) + t[2]),
     G65,
     st.sampled_from([
-        "G90", "G91", "G04 X1.", "G04 X1", "G28", "G28 X0", "G29", "G30 Z0", "G68", "G69", "G51 I2. J2.", "G50",
+        "G90", "G91", "G04 X1.", "G04 X1", "G28", "G28 X0", "G29", "G30 Z0", "G68", "G69", "G51 I2. J2.",
+        "G50",
         "G41 D1 X1.", "G42 D2 Y1.", "G40", "G40 X0 Y0", "G10 X0 Y0", "G10 Z1. P101", "G10 W0.1 P102",
         "G10 K0.1 P103", "G10 P200 L2", "G10 P201", "G10 P800 L30", "G10 P2002",
         "G81 X1. Y1. Z-5. R1. F100", "G81 Z-5. R1. K0 F100", "G83 X2. Z-9. R1. Q2. F100", "G86 X3. Z-2. R1.",
@@ -52,7 +55,8 @@ LINE = st.tuples(st.sampled_from(["", "", "N1 ", "N01 ", "N10 ", "N010 ", "N99 "
 
 def _check(text: str, **kw) -> None:
     try:
-        tp = interpret(text, dialect="h4cm", max_blocks=MAX_BLOCKS, tool_offsets={"D": {1: 2.0, 2: 1.0}}, **kw)
+        tp = interpret(text, dialect="h4cm", max_blocks=MAX_BLOCKS, tool_offsets={"D": {1: 2.0, 2: 1.0}},
+                       **kw)  # fmt: skip
     except ProgramError as err:
         assert err.code and "\n" not in str(err)
         tally(False)
