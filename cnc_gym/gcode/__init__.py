@@ -31,6 +31,7 @@ from cnc_gym.gcode.settings import (
     FlowOptions,
     MacroCalls,
 )
+from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
@@ -99,7 +100,8 @@ def interpret(
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
     ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (the controller parameter a
     machine sets; shop programs for inch machines often carry no G20); the program's own G20/G21 still
-    rules. Default: the dialect's power-on code (G21 on the GSK 25i and ``fanuc``).
+    rules. Default: ``machine``'s ``power_on_units`` when it sets one, else the dialect's power-on code
+    (G21 on every built-in dialect; Syntec's G71).
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
@@ -122,7 +124,7 @@ def interpret(
         options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
                               max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
                               main_m99=main_m99)  # fmt: skip
-        if units is not None and units not in ("mm", "inch"):
+        if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
         program = spec.language.reader(spec, calls).read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
