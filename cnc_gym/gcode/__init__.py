@@ -134,7 +134,7 @@ def interpret(
         if collecting:
             gc.enable()
     if machine is not None:
-        _check_travel(toolpath, machine)
+        _check_travel(toolpath, machine, spec)
     return toolpath
 
 
@@ -211,13 +211,14 @@ def _reserved_codes(dialect: Dialect) -> dict[str, set[int]]:
     return {"g_macro": g_codes, "m_macro": m_codes, "m_sub": m_codes}
 
 
-def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
+def _check_travel(toolpath: Toolpath, machine: MachineConfig, dialect: Dialect) -> None:
     """Stored stroke check: every point of the path within each axis's [min, max] travel.
 
     Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
-    270° in the plane). The first offending segment is reported, with the operation volume's stored
-    stroke limit 1 alarm: 500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side
-    (n = the axis number, GSK 25i operation manual §2.5.4).
+    270° in the plane). The first offending segment is reported as "OVER TRAVEL:+n" beyond the + side,
+    "OVER TRAVEL:-n" beyond the − side (n = the axis number), with the dialect's stored stroke limit 1
+    alarm, conditions ``travel-limit/+`` and ``travel-limit/-`` (GSK 25i operation manual §2.5.4: 500
+    and 501; Fanuc OT500/OT501; none where the dialect's list has no number).
     """
     n = len(toolpath)
     if not n:
@@ -255,4 +256,4 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
         raise ProgramError(f"OVER TRAVEL:{side}{axis + 1}: {name}{value:.4f} (machine) is beyond the travel "
                            f"limit {low[axis]:g} .. {high[axis]:g} of machine {machine.name}",
                            code="travel-limit", file=file, line=line,
-                           alarm=500 if side == "+" else 501)  # fmt: skip
+                           alarm=dialect.alarm("travel-limit", f"travel-limit/{side}"))  # fmt: skip

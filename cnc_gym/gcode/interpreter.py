@@ -159,7 +159,7 @@ class Interpreter:
             finish(self)
         return st.builder.build()
 
-    def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
+    def error(self, message: str, code: str, *, alarm: str | int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
 
     def check_budget(self) -> None:

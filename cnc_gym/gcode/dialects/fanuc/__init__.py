@@ -35,6 +35,7 @@ DIALECT = Dialect(
     other_axes="ABCUVW",
     functions=codes.FUNCTIONS,
     alarms=ALARMS,
+    user_alarm_base=3000,  # #3000 = n (0..200): alarm 3000 + n
     # Parameter 3401#0 DPI = 0, the Fanuc standard: a number without a decimal point is in least input
     # increments (X1000 = 1 mm); IS-B: 0.001 mm, 0.0001 inch.
     integer_is_unit=False,
