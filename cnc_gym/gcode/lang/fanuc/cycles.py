@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.codes import CodeSpec
 from cnc_gym.gcode.dialect import CycleKind, Hole
-from cnc_gym.gcode.lang.fanuc import compensation
+from cnc_gym.gcode.lang.fanuc import compensation, least_units
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 if TYPE_CHECKING:
@@ -339,10 +339,12 @@ def _dwell_from_p(core: Seam, values: dict) -> float:
 
 
 def _repeats(core: Seam, values: dict) -> int:
-    """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (§3.4)."""
+    """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (§3.4).
+    A count, not a length, where numbers without a decimal point are least units (``K3`` is 3)."""
     if "K" not in values:
         return 1
-    k = abs(values["K"])
+    k = values["K"] if core.dialect.integer_is_unit else least_units.whole_count(core, "K", values["K"])
+    k = abs(k)
     if k != int(k) or k > 99999:
         raise core.error(f"K{values['K']:g}: the repeat count must be a whole number 0..99999", "bad-cycle")
     return int(k)
