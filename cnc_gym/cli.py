@@ -69,7 +69,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("program", metavar="PROGRAM", help=PROGRAM_HELP)
     _common(run)
     run.add_argument("--policy", default="constant:1.0",
-                     help="constant:<override>, classical, or a trained model's path (default constant:1.0)")
+                     help="constant:<override>, classical (deployable), oracle (re-simulates the plant: "
+                          "an oracle, not deployable), a trained model's path (.zip), or module:callable "
+                          "(default constant:1.0)")
     run.add_argument("--json", action="store_true", help="print one JSON object with the results")
     run.add_argument("--plot", metavar="FILE.png|DIR/",
                      help="save a plot of path, contour error and feed (.png, .pdf or .svg; a folder gets "

@@ -269,7 +269,7 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     from agents import make_policy
 
     _check_max_time(max_time_s)
-    pol = make_policy(policy) if isinstance(policy, str) else policy
+    pol = make_policy(policy, progress=progress) if isinstance(policy, str) else policy
     env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units)
     try:
         if log is not None:

@@ -301,3 +301,19 @@ def test_drilled_holes_show_as_dots_seen_from_above():
         assert {ax.get_title() for ax in fig.axes} >= {"XZ view", "YZ view"}
     finally:
         plt.close(fig)
+
+
+def test_simulate_passes_its_progress_choice_to_the_policy(monkeypatch):
+    """``--no-progress`` (progress=False) must also silence a planner's own planning bar."""
+    import agents
+
+    seen = []
+    real = agents.make_policy
+
+    def spy(spec, *, progress=None):
+        seen.append(progress)
+        return real(spec, progress=progress)
+
+    monkeypatch.setattr(agents, "make_policy", spy)
+    simulate("G91 G01 X5 F600\nM30\n", policy="constant:1.0", progress=False)
+    assert seen == [False]
