@@ -137,6 +137,8 @@ def test_run_dispatches_to_the_runner(tmp_path, capsys, monkeypatch):
     assert main(["run", program, "--json", "--plot", "p.png", "--no-progress"]) == 0
     assert seen["program"] == program and seen["policy"] == "constant:1.0" and seen["json"] is True
     assert seen["plot"] == "p.png" and seen["no_progress"] is True and seen["dialect"] == "gsk25i"
+    assert seen["units"] is None
+    assert main(["run", program, "--units", "inch"]) == 0 and seen["units"] == "inch"
 
 
 def test_run_without_a_runner_is_a_one_line_error(tmp_path, capsys, monkeypatch):
@@ -271,16 +273,3 @@ def test_units_option_errors(tmp_path, capsys):
     bad.write_text("power_on_units: metric\n")
     status, out, err = run_main(["trace", program, "--machine", str(bad)], capsys)
     assert status == 2 and out == "" and "power_on_units" in err and len(err.splitlines()) == 1
-
-
-def test_run_passes_units_to_the_runner(tmp_path, capsys, monkeypatch):
-    seen = {}
-
-    def run_cli(args):
-        seen.update(vars(args))
-        return 0
-
-    monkeypatch.setitem(sys.modules, "cnc_gym.runner", types.SimpleNamespace(run_cli=run_cli))
-    program = write(tmp_path, "G00 X1\n")
-    assert main(["run", program, "--units", "inch"]) == 0 and seen["units"] == "inch"
-    assert main(["run", program]) == 0 and seen["units"] is None
