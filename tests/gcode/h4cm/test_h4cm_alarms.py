@@ -10,6 +10,7 @@ import pytest
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
+from cnc_gym.machine import load_machine
 
 COMP = "G41 D1 Y10. F100\n"
 
@@ -21,6 +22,8 @@ CASES: dict[str, list[tuple]] = {
     "A8": [("G73 X1. Y1. Z-1. R1. Q1. F100\n", "unknown-code", 13, 1),
            ("G84 X1. Y1. Z-1. R1. F100\n", "not-implemented", 13, 1),
            ("G08 X0\n", "not-implemented", 13, 1)],
+    "A12": [("G91\nG00 X9000.\nX9000.\n", "travel-limit", 20, 3, {"machine": "h4cm"}),
+            ("G91\nG00 Z-9000.\nZ-9000.\n", "travel-limit", 20, 3, {"machine": "h4cm"})],
     "A14": [("M98 P1\nM02\n" + "".join(f"O{n}\nM98 P{n + 1}\nM99\n" for n in range(1, 6)) + "O6\nM99\n",
              "nesting", 24, 16)],
     "A15": [("G02 X10. Y0 I3. F100\n", "arc-radius-mismatch", 25, 1),
@@ -53,6 +56,7 @@ CASES: dict[str, list[tuple]] = {
                          [(row, k) for row, cases in CASES.items() for k in range(len(cases))])  # fmt: skip
 def test_manual_alarm(row: str, index: int) -> None:
     text, code, alarm, line, *options = CASES[row][index]
+    options = [{k: load_machine(v) if k == "machine" else v for k, v in o.items()} for o in options]
     with pytest.raises(ProgramError) as info:
         interpret(text, dialect="h4cm", file="part.nc", tool_offsets={"D": {1: 5.0, 2: 3.0}},
                   **dict(*options))  # fmt: skip

@@ -15,6 +15,10 @@ def test_numbers_without_a_point_count_least_increments_and_integer_f_is_mm_per_
     # §2.3.5: X2 = 0.002 mm, Y250 = 0.250 mm, W125. = 125 mm; F200 is 200 mm/min, not 0.2.
     assert path("G01 X2 Y250 F200\nG01 Z125.\n") == [("F", (0.002, 0.25, 0.0), 200.0),
                                                      ("F", (0.002, 0.25, 125.0), 200.0)]  # fmt: skip
+    # In G20 the least increment is 0.0001 inch: X2 is 0.0002 inch = 0.00508 mm; a variable likewise.
+    assert ends("G20\nG01 X2 F10\nG65 L01 P#1 A2500\nG01 X#1\n") == [(0.005, 0.0, 0.0), (6.35, 0.0, 0.0)]
+    # G04 X without a point counts milliseconds in either unit.
+    assert path("G20\nG04 X1\nG04 X1.5\n") == [("D", 0.001), ("D", 1.5)]
 
 
 def test_a_block_holds_at_most_64_characters():

@@ -117,6 +117,8 @@ ALARMS = {
     "block-too-long": 8,  # ERROR 8 more than 64 characters in one block
     "unknown-code": 13,  # ERROR 13 G-code not accepted by H4C-M
     "not-implemented": 13,
+    "travel-limit/+": 20,  # ERROR 20 software over-travel (#171-#174)
+    "travel-limit/-": 20,  # (#177-#180)
     "nesting": 24,  # ERROR 24 M98 nesting
     "arc-impossible": 25,  # ERROR 25 wrong circle format or data error
     "arc-radius-mismatch": 25,

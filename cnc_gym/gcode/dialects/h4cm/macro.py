@@ -34,7 +34,6 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.dialects.h4cm.options import data
 from cnc_gym.gcode.dialects.h4cm.reader import BRANCHES, USER_ALARM, label_text
 from cnc_gym.gcode.lang.fanuc.flow import FlowRunner
@@ -88,16 +87,6 @@ def _trunc_div(a: int, b: int) -> int:
 class HustRunner(FlowRunner):
     """The family's program-counter loop with G65 instructions, string labels, M98 P L and the part counter
     (module docstring)."""
-
-    def run(self) -> None:
-        try:
-            super().run()
-        except ProgramError as err:
-            # The family's features pass their reference controller's alarm numbers: the H4C-M's own map
-            # wins (a user alarm keeps its 50 + i).
-            if err.code != "user-alarm":
-                err.alarm = self.dialect.alarms.get(err.code)
-            raise
 
     def _statement(self, block: Block, pc: int) -> int:
         stmt = block.stmt

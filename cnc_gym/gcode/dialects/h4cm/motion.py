@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 from cnc_gym.gcode.dialects.h4cm import blocks
 from cnc_gym.gcode.dialects.h4cm.options import data
 from cnc_gym.gcode.lang.fanuc import arcs, corners
+from cnc_gym.gcode.lang.fanuc.least_units import is_whole, whole_count
 from cnc_gym.gcode.lang.fanuc.reference import reference_point
 from cnc_gym.toolpath import PLANE_AXES
 
@@ -26,8 +27,9 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Seam
 
-#: §2.2.5: G04 0-8000 s.
+#: §2.2.5: G04 0-8000 s; X without a decimal point counts 0.001 s (§2.3.5's least increment).
 MAX_DWELL_S = 8000.0
+DWELL_UNIT_S = 0.001
 #: §3.5: "Do not use R for sweeps of -10°…+10° or 179°…181°".
 R_FORBIDDEN = ((0.0, 10.0), (179.0, 181.0), (350.0, 360.0))
 
@@ -40,7 +42,8 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
                              "unused-word")
     if "X" not in values:
         raise core.error("G04 needs X (the dwell in seconds)", "missing-value")
-    seconds = values["X"] / core.state.scale  # X in seconds, never converted by G20
+    # X in seconds, never converted by G20; without a point a count of 1 ms (the 4/3 format's 0.001).
+    seconds = whole_count(core, "X", values["X"]) * DWELL_UNIT_S if is_whole(core, "X") else values["X"]
     if not 0.0 <= seconds <= MAX_DWELL_S:
         raise core.error(f"G04 X{seconds:g}: the dwell is 0-{MAX_DWELL_S:g} s", "bad-dwell")
     core.state.out.dwell(seconds)

@@ -6,8 +6,9 @@
 * **N labels are strings**: "N10, N010, N0010 are three different block numbers", and a G65 branch
   ``P0010`` finds ``N0010`` only. ``Block.number`` holds the label's digits behind a leading 1 (N10 → 110,
   N010 → 1010), so the family's sequence index and its wrapping search tell them apart;
-* **numbers without a decimal point** in a length address count least increments (4/3 format: ``X2`` is
-  0.002 mm; ``Dialect.integer_is_unit`` False); F is mm/min with or without a point;
+* **numbers without a decimal point** in a length address count least increments of the unit in force
+  (4/3 format: ``X2`` is 0.002 mm; ``Dialect.integer_is_unit`` False, the family's least-unit reader); F is
+  mm/min with or without a point;
 * **variables** ``#1``-``#9999`` hold integers in least increments: ``G01 U#12`` moves #12 × 0.001 mm
   (:func:`evaluate`); F, S and the other plain addresses take a variable's integer as it is;
 * **G65 is one macro instruction** ``G65 Lm P#i A#j B#k``, not a macro call: the reader turns the block
@@ -23,9 +24,9 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING
 
-from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.lang.fanuc import least_units
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate as family_evaluate
-from cnc_gym.gcode.lang.fanuc.reader import Reader
+from cnc_gym.gcode.lang.fanuc.least_units import LeastUnitReader
 from cnc_gym.gcode.program import SpecialBlock
 
 if TYPE_CHECKING:
@@ -58,16 +59,19 @@ def label_text(key: int) -> str:
 
 
 def evaluate(node: tuple, variables, dialect: Dialect, round_step: float | None = None) -> float | None:
-    """The family's evaluator; a variable read in a length address counts least increments (``round_step``,
-    the core's increment in force): ``U#12`` with #12 = 2500 is 2.5 mm."""
+    """The family's least-unit evaluator (``lang/fanuc/least_units.py``: ``X2`` is 2 least increments of the
+    unit in force); a variable read in a length word counts least increments too (``round_step``, the
+    core's increment in force): ``U#12`` with #12 = 2500 is 2.5 mm."""
+    if node[0] != "var" and not (node[0] == "neg" and node[1][0] == "var"):
+        return least_units.evaluate(node, variables, dialect, round_step)
     value = family_evaluate(node, variables, dialect, None)
     if value is not None and round_step:
         return value * round_step
     return value
 
 
-class HustReader(Reader):
-    """The family's reader with the H4C-M's block length, string labels and G65 statements."""
+class HustReader(LeastUnitReader):
+    """The family's least-unit reader with the H4C-M's block length, string labels and G65 statements."""
 
     def read(self, text: str, file: str = "<program>") -> Program:
         for number, raw in enumerate(text.splitlines(), start=1):
@@ -184,8 +188,3 @@ class HustReader(Reader):
         if not low <= index <= high:
             raise self.error(f"variable #{index} does not exist (#{low}-#{high})", "bad-variable", line)
         return index
-
-    def error(self, message: str, code: str, line: int, column: int | None = None,
-              alarm: int | None = None) -> ProgramError:  # fmt: skip
-        # The family's reader passes its reference controller's alarm numbers: the H4C-M's own map wins.
-        return super().error(message, code, line, column, self.dialect.alarms.get(code))
