@@ -1,10 +1,9 @@
-"""Helpers of the H4C-M tests: run a program with ``dialect="h4cm"`` and read its tool path compactly."""
+"""Helpers of the H4C-M tests: the shared interpreter-test helpers (gcode_helpers) with ``dialect="h4cm"``."""
 
 from __future__ import annotations
 
-import math
-
-import pytest
+from gcode_helpers import close as close_to
+from gcode_helpers import compact, program_error
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
@@ -17,23 +16,9 @@ def run(text: str, **kw):
 
 
 def path(text: str, **kw) -> list[tuple]:
-    """Rows as tuples: ("R", end) rapid, ("F", end, feed) line, ("D", seconds) dwell, ("A", end, centre,
-    radius, sweep°) arc; coordinates rounded to 1 µm."""
-    out = []
-    for r in run(text, **kw).to_records():
-        end = tuple(round(c, 3) + 0.0 for c in r.get("end", ()))
-        if r["kind"] == "rapid":
-            out.append(("R", end))
-        elif r["kind"] == "line":
-            out.append(("F", end, r["feed"]))
-        elif r["kind"] == "dwell":
-            out.append(("D", r["seconds"]))
-        elif r["kind"] == "arc":
-            out.append(("A", end, tuple(round(c, 3) + 0.0 for c in r["center"]), round(r["radius"], 3),
-                        round(r["sweep_deg"], 3)))  # fmt: skip
-        else:
-            out.append((r["kind"], end))
-    return out
+    """The tool path as compact rows (gcode_helpers.compact): ("R", end), ("F", end, feed), ("D", seconds),
+    ("A", end, centre, radius, sweep°)."""
+    return compact(run(text, **kw).to_records())
 
 
 def ends(text: str, **kw) -> list[tuple]:
@@ -42,10 +27,11 @@ def ends(text: str, **kw) -> list[tuple]:
 
 
 def error(text: str, **kw) -> ProgramError:
-    with pytest.raises(ProgramError) as info:
-        run(text, **kw)
-    return info.value
+    """The ProgramError the program ends in (``dialect="h4cm"`` unless given)."""
+    kw.setdefault("dialect", "h4cm")
+    return program_error(text, **kw)
 
 
 def close(a, b, tol: float = 1e-3) -> bool:
-    return all(math.isclose(x, y, abs_tol=tol) for x, y in zip(a, b, strict=True))
+    """Closeness to 1 µm (the paths' rounding)."""
+    return close_to(a, b, tol)

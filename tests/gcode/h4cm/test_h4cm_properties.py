@@ -5,15 +5,12 @@ labels, G10 forms, grooves, hole patterns, mirror toggles, subprograms."""
 
 from __future__ import annotations
 
-import numpy as np
-from gcode_helpers import success_share, tally
+from gcode_helpers import check_outcome, success_share
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cnc_gym.errors import ProgramError
-from cnc_gym.gcode import interpret
-
 MAX_BLOCKS = 3000
+OFFSETS = {"D": {1: 2.0, 2: 1.0}}
 NUMBER = st.sampled_from(["0", "1", "-1", "2500", "10.", "-7.5", "0.001", "100", "9999.999", "45."])
 AXIS = st.tuples(st.sampled_from("XYZUVW"), NUMBER).map("".join)
 VAR = st.sampled_from(["#1", "#2", "#3", "#10", "#9999", "-#1", "#1", "#2", "#0"])
@@ -53,26 +50,13 @@ STATEMENT = st.one_of(
 LINE = st.tuples(st.sampled_from(["", "", "N1 ", "N01 ", "N10 ", "N010 ", "N99 "]), STATEMENT).map("".join)
 
 
-def _check(text: str, **kw) -> None:
-    try:
-        tp = interpret(text, dialect="h4cm", max_blocks=MAX_BLOCKS, tool_offsets={"D": {1: 2.0, 2: 1.0}},
-                       **kw)  # fmt: skip
-    except ProgramError as err:
-        assert err.code and "\n" not in str(err)
-        tally(False)
-        return
-    tally(True)
-    for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
-        assert np.all(np.isfinite(getattr(tp, name))), name
-
-
 @success_share(0.08)  # 26 % under CI's examples
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(LINE, max_size=14), st.lists(LINE, max_size=5), st.lists(LINE, max_size=5),
        st.sampled_from(["end", "restart"]))  # fmt: skip
 def test_random_h4cm_programs(main, five, six, m99):
     text = "\n".join(main) + "\nM02\nO5\n" + "\n".join(five) + "\nM99\nO6\n" + "\n".join(six) + "\nM99\n"
-    _check(text, main_m99=m99)
+    check_outcome(text, dialect="h4cm", max_blocks=MAX_BLOCKS, tool_offsets=OFFSETS, main_m99=m99)
 
 
 SEEDS = [
@@ -97,4 +81,4 @@ def test_mutated_h4cm_programs(seed, edits, m99):
     for position, insert in edits:
         i = position % (len(text) + 1)
         text = text[:i] + insert + text[i + 1 :]
-    _check(text, main_m99=m99)
+    check_outcome(text, dialect="h4cm", max_blocks=MAX_BLOCKS, tool_offsets=OFFSETS, main_m99=m99)
