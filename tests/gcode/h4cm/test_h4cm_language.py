@@ -67,6 +67,9 @@ def test_uvw_are_incremental_in_g90_and_ignored_in_g91():
     assert ends("G00 X10. Y10.\nG01 U5. V-2. W1. F100\n") == [(10.0, 10.0, 0.0), (15.0, 8.0, 1.0)]
     # G91: U/V/W "rendered ineffective": no motion on those axes.
     assert ends("G91\nG01 U5. Y2. F100\n") == [(0.0, 2.0, 0.0)]
+    # A block's own G91/G90 decides: "G91 U5." moves nothing, "G90 U5." (from G91) moves by 5.
+    assert ends("G00 X1.\nG91 U5. Y2.\n") == [(1.0, 0.0, 0.0), (1.0, 2.0, 0.0)]
+    assert ends("G91\nG00 X1.\nG90 U5. Y2.\n") == [(1.0, 0.0, 0.0), (6.0, 2.0, 0.0)]
 
 
 def test_with_x_and_u_in_one_block_u_wins():

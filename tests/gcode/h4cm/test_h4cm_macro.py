@@ -128,3 +128,12 @@ def test_m99_in_the_main_program_restarts_and_the_counter_stops_it():
     # G10 P201 clears the counter each pass: the loop runs until the block budget ends it.
     endless = "G10 P200 L3\nG10 P201\nG91\nG01 X1. F100\nG90\nM99\n"
     assert error(endless, main_m99="restart", max_blocks=50).code == "too-many-blocks"
+
+
+def test_bad_options_are_one_line_config_errors():
+    from cnc_gym.errors import ConfigError
+
+    for kw in ({"plc_bits": {"X": 1}}, {"plc_registers": {300: 1}}, {"plc_counters": {1: 1.5}},
+               {"interpolation_mode": 5}):  # fmt: skip
+        with pytest.raises(ConfigError, match=r"^H4cmOptions\."):
+            H4cmOptions(**kw)

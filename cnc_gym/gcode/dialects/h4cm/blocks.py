@@ -58,10 +58,12 @@ def normalise(core: Seam, gs, ms, values: dict) -> tuple:
         values = dict(values)
         st = core.state
         here = core.program_position
+        # The distance mode of this block: its own G90/G91 (the block's only G code) or the one in force.
+        incremental = st.incremental if g not in (90.0, 91.0) else g == 91.0
         for letter, axis, absolute in _INCREMENTAL:
             if letter in values:
                 step = values.pop(letter)
-                if not st.incremental:
+                if not incremental:
                     values[absolute] = here[axis] / st.scale + step
     if "D" in values and g not in _GROOVES:
         d = values["D"]

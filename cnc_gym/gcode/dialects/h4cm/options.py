@@ -51,8 +51,14 @@ class H4cmOptions:
         if self.interpolation_mode not in (0, 1, 2, 3, NON_STOP):
             raise ConfigError(f"H4cmOptions.interpolation_mode (#93) is 0, 1, 2, 3 or 256, got "
                               f"{self.interpolation_mode!r}")  # fmt: skip
-        for name in ("plc_bits", "plc_registers", "plc_counters"):
+        areas: dict[str, tuple] = {"plc_bits": tuple("IOCSA"), "plc_registers": tuple(range(256)),
+                                   "plc_counters": tuple(range(256))}  # fmt: skip
+        for name, keys in areas.items():
             value = getattr(self, name)
+            for key, item in dict(value).items():
+                if key not in keys or isinstance(item, bool) or not isinstance(item, int):
+                    allowed = "I, O, C, S, A" if name == "plc_bits" else "0-255"
+                    raise ConfigError(f"H4cmOptions.{name}: {key!r}: {item!r} (keys {allowed}, integer values)")
             if not isinstance(value, FrozenDict):
                 object.__setattr__(self, name, FrozenDict(value))
 
