@@ -58,7 +58,7 @@ class H4cmOptions:
             for key, item in dict(value).items():
                 if key not in keys or isinstance(item, bool) or not isinstance(item, int):
                     allowed = "I, O, C, S, A" if name == "plc_bits" else "0-255"
-                    raise ConfigError(f"H4cmOptions.{name}: {key!r}: {item!r} (keys {allowed}, integer values)")
+                    raise ConfigError(f"H4cmOptions.{name}: {key!r}: {item!r} (keys {allowed}, integers)")
             if not isinstance(value, FrozenDict):
                 object.__setattr__(self, name, FrozenDict(value))
 
