@@ -64,7 +64,7 @@ def test_e5_mixed_usage_and_uv_ignored_in_g91():
 
 
 def test_e6_m99_in_the_main_program():
-    """§2.2.5 "Ex: Program 1": rapid to (0, 0), dwell 1 s, rapid by (480, -480), dwell ``X1`` = 0.001 s (no
+    """§2.3.2 "Ex: Program 1": rapid to (0, 0), dwell 1 s, rapid by (480, -480), dwell ``X1`` = 0.001 s (no
     decimal point: least increments), M99. One pass by default; with ``main_m99="restart"`` it starts
     again: with a part-counter limit of 2 the second M99 stops it with ERROR 03 (so it did restart)."""
     text = "N10 G0 X0. Y0.\nN20 G4 X1.\nN30 G0 U480. V-480.\nN40 G4 X1\nN50 M99\n"
