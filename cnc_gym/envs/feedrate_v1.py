@@ -90,6 +90,7 @@ class EnvArgumentsV1:
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
     lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
     lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
+    units: str | None = declared(spec_of(EnvArguments, "units"))
 
 
 def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
@@ -195,7 +196,8 @@ class FeedrateEnvV1(FeedrateEnv):
     ## Arguments
 
     v0's (``programs``, ``dialect``, ``machine``, ``control_period_s``, ``max_episode_steps``,
-    ``render_mode``, ``lookahead_mm``, ``lookahead_points``), and ``action_mode`` (with ``residual``),
+    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``), and ``action_mode`` (with
+    ``residual``),
     ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
     (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
     ``residual_range``. ``reset(seed=..., options={{"program": ...}})`` as v0.
@@ -227,12 +229,13 @@ class FeedrateEnvV1(FeedrateEnv):
         render_mode: str | None = None,
         lookahead_mm: float = 24.0,
         lookahead_points: int = 8,
+        units: str | None = None,
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                                 control_period_s=control_period_s, reward=reward, randomize=randomize,
                                 residual_range=residual_range, max_episode_steps=max_episode_steps,
                                 render_mode=render_mode, lookahead_mm=lookahead_mm,
-                                lookahead_points=lookahead_points)  # fmt: skip
+                                lookahead_points=lookahead_points, units=units)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
         self.reward_weights = args.reward or RankingReward()

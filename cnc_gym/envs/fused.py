@@ -673,22 +673,45 @@ class FeedrateBatch:
         if parallel is None:
             threads = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
             parallel = self.n_envs >= PARALLEL_MIN_ENVS and threads >= PARALLEL_MIN_THREADS
-        self._run = _run_parallel if parallel else _run_serial
         self.parallel = bool(parallel)
         # State (see the layout constants) and scratch.
         self.state_f = np.zeros((self.n_envs, N_STATE_F))
         self.state_i = np.zeros((self.n_envs, N_STATE_I), dtype=np.int64)
         self._plant_version = -1  # the plant's gains are read into the state before the first call
-        self._args: tuple = ()  # the compiled call's arrays, rebuilt when the bank or the plant changes
-        self._args_bank: np.ndarray | None = None
         self.observations = np.zeros((self.n_envs, obs_spec.size), dtype=np.float32)
         self.actions = np.zeros(self.n_envs)
         self.work_f = np.zeros((self.n_envs, work_size(self.ticks, window, points)))
         self.work_i = np.zeros((self.n_envs, self.ticks), dtype=np.int64)
         self._window, self._points = window, points
-        self._controllers: list[dict[int, Controller]] = [{} for _ in range(self.n_envs)]
         self._names = np.empty(0, dtype=object)  # program names by bank index, for the infos
+        self._controllers: list[dict[int, Controller]] = [{} for _ in range(self.n_envs)]
+        self._derived()
+
+    _DERIVED = ("_run", "_args", "_args_bank", "_out_rows")
+
+    def _derived(self) -> None:
+        """What refers into the state arrays or is built from them: the compiled function and its
+        arguments, views of the state rows. Rebuilt after a copy, never copied: a copy of a view is no view
+        (``copy.deepcopy`` of an env, as the oracle planner makes, must step like the env)."""
+        self._run = _run_parallel if self.parallel else _run_serial
+        self._args: tuple = ()  # the compiled call's arrays, rebuilt when the bank or the plant changes
+        self._args_bank: np.ndarray | None = None
         self._out_rows = [self.state_f[e, F_OUT:] for e in range(self.n_envs)]  # views, read every step
+
+    def _controller_state(self, env: int) -> tuple[np.ndarray, np.ndarray]:
+        """Env ``env``'s controller state vectors: views of its rows of the state arrays."""
+        return (self.state_f[env, F_CTRL : F_CTRL + K.N_STATE_F],
+                self.state_i[env, I_CTRL : I_CTRL + K.N_STATE_I])  # fmt: skip
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {key: value for key, value in vars(self).items() if key not in self._DERIVED}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        vars(self).update(state)
+        self._derived()
+        for env, controllers in enumerate(self._controllers):  # their state vectors came as copies
+            for controller in controllers.values():
+                controller.use_state(self._controller_state(env))
 
     # ------------------------------------------------------------------------------ programs
     def add_program(self, name: str, toolpath: Toolpath, time_fraction: float, max_episode_steps: int) -> int:
@@ -715,9 +738,8 @@ class FeedrateBatch:
         controllers = self._controllers[env]
         if p not in controllers:
             program = self.bank.programs[p]
-            state = (self.state_f[env, F_CTRL : F_CTRL + K.N_STATE_F],
-                     self.state_i[env, I_CTRL : I_CTRL + K.N_STATE_I])  # fmt: skip
-            controllers[p] = Controller(program.toolpath, self.machine, limits=program.limits, state=state)
+            controllers[p] = Controller(program.toolpath, self.machine, limits=program.limits,
+                                        state=self._controller_state(env))  # fmt: skip
         return controllers[p]
 
     # ------------------------------------------------------------------------------ stepping

@@ -128,6 +128,11 @@ class Controller:
             self._last_position = self._rest_position_now()
 
     # ------------------------------------------------------------------ state
+    def use_state(self, state: tuple[np.ndarray, np.ndarray]) -> None:
+        """Run on the ``(float, int)`` state vectors ``state`` from now on, their values taken as the
+        controller's state (e.g. the rows of a batch's state arrays after the batch was copied)."""
+        self._st_f, self._st_i = state
+
     def reset(self) -> None:
         """Back to the program start: t = 0, at rest, override 100 %."""
         lim = self.limits

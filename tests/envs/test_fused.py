@@ -197,3 +197,32 @@ def test_a_program_without_motion_ends_at_once_on_both_paths():
     envs.reset_envs([0, 1], [None, None], [{"program": text}, {"program": "circle"}])
     _, rewards, terminated, _, infos = envs.step(np.zeros((2, 1), dtype=np.float32))
     assert terminated.tolist() == [True, False] and rewards[0] == 0.0 and infos["cycle_time_s"][1] == 0.01
+
+
+@pytest.mark.parametrize("env_class", [FeedrateEnv, ReferenceEnv])
+def test_a_copied_or_pickled_env_steps_like_the_env(env_class):
+    # The oracle planner simulates on copy.deepcopy of the env: the copy's compiled call, state views and
+    # controllers must be its own, and the original must run on untouched.
+    import copy
+    import pickle
+
+    env = env_class(programs=["star", "circle"])
+    env.reset(seed=3)
+    rng = np.random.default_rng(3)
+    for _ in range(40):
+        env.step(rng.uniform(-1, 1, 1).astype(np.float32))
+    copies = [copy.deepcopy(env), pickle.loads(pickle.dumps(env))]
+    ends = 0
+    for t in range(1500):
+        action = rng.uniform(-1, 1, 1).astype(np.float32)
+        out = env.step(action)
+        for other in copies:
+            out_c = other.step(action)
+            np.testing.assert_array_equal(out[0], out_c[0], err_msg=f"step {t}")
+            assert out[1:] == out_c[1:], f"step {t}"
+        if out[2] or out[3]:
+            ends += 1
+            first = env.reset()
+            for other in copies:
+                assert other.reset()[1] == first[1]
+    assert ends >= 1
