@@ -59,6 +59,10 @@ class SegmentMode(IntFlag):
     AUTO_CORNER = 4  # G62 automatic corner override
     INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
     TAPPING_MODE = 16  # G63 tapping mode: no deceleration at block end (with OVERRIDE_LOCKED)
+    #: A DIN controller's G36 "rounding of linear blocks": the block may end a little short or long so the
+    #: last interpolation cycle keeps the path speed. Recorded for the controller; the motion stage plans
+    #: continuous-time profiles, so the last-cycle speed dip G36 avoids does not arise there.
+    ROUND_BLOCK_END = 32
 
 
 _FIELDS = (
