@@ -293,11 +293,11 @@ class DinReader:
                 parser.pos = start + 1
                 call = ("global", self._call_number(parser, "L"))
                 continue
+            if char in "RP":
+                raise parser.error(f"{char} is a parameter, not an address: assign it ({char}1 = …) or use it "
+                                   "in a value (X R1)", start)  # fmt: skip
             if char not in self._letters:
                 raise parser.error(f"unknown address {char}", start)
-            if char in "RP":
-                raise parser.error(f"{char} is a parameter: assign it ({char}1 = …) or use it in a value "
-                                   "(X R1)", start)  # fmt: skip
             if char == "N":
                 raise parser.error("N (the block number) begins the block, once", start)
             parser.pos = start + 1
