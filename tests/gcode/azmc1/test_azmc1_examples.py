@@ -57,8 +57,8 @@ def test_e1_numbering_is_optional_and_changes_nothing():
 
 def test_e2_nested_comments_leave_an_empty_block():
     # §2.3.2: "(Comment (comment))" nests; N300 is then an empty block. F100 is ours.
-    text = ("% 100 (Workpiece designation, date)\nN200 G1 X10 F100 (Circular pocket)\nN300 (Comment (comment))\n"
-            "N800 M30\n")
+    text = ("% 100 (Workpiece designation, date)\nN200 G1 X10 F100 (Circular pocket)\n"
+            "N300 (Comment (comment))\nN800 M30\n")
     toolpath = run(text)
     assert ends(text) == [(10, 0, 0)] and toolpath.line.tolist() == [2]
 
