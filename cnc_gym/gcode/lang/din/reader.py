@@ -54,6 +54,10 @@ _HEADER = re.compile(r"%[ \t]*(L?)[ \t]*([0-9]*)[ \t]*")
 PROGRAM_DIGITS = 8
 #: Addresses that take a literal whole number only (codes and the block number).
 _LITERAL_ONLY = "GMN"
+_LENGTH = "length"
+_WHOLE = "whole"
+#: Decimal places a length literal keeps (0.1 µm in mm, §2.7); longer ones are rounded.
+_DECIMALS = 4
 
 
 def strip_comment(line: str) -> str:
@@ -106,61 +110,51 @@ class DinReader:
         self._letters = frozenset(self._rules) | frozenset(dialect.axes) | frozenset(dialect.other_axes)
         self._functions = dict(dialect.functions)
         self._increment = dialect.least_increment_mm
+        # Each address's (number kind, low, high), for the hot path (N is the block number, not a word).
+        self._kinds = {letter: (_LENGTH if rule.unit == "length" else _WHOLE if (
+                           rule.unit == "integer" or letter in _LITERAL_ONLY) else "plain", rule.low, rule.high)
+                       for letter, rule in self._rules.items() if letter != "N"}  # fmt: skip
 
     # ------------------------------------------------------------------ the file
     def read(self, text: str, file: str = "<program>") -> DinProgram:
         blocks: list[Block] = []
         local_units: dict[int, tuple[int, int]] = {}
-        unit_starts: list[tuple[str, int | None, int, int]] = []  # (kind, number, first block, line)
-        main_start: int | None = None
-        program_number = None
+        headers: list[tuple[str, int | None, int, int]] = []  # (kind, number, first block, line)
+        plain_block = _PLAIN_BLOCK.fullmatch
+        plain = self._plain
         for lineno, raw in enumerate(_LINE_BREAK.split(text), 1):
             try:
                 if not raw.isascii():
                     bad = next(c for c in raw if not c.isascii())
-                    column = raw.index(bad) + 1
                     raise ProgramError(f"character {bad!r} is not in the controller's ASCII character set",
-                                       code="bad-character", column=column)  # fmt: skip
-                line = strip_comment(raw).upper()
-                stripped = line.strip()
+                                       code="bad-character", column=raw.index(bad) + 1)  # fmt: skip
+                line = strip_comment(raw).upper() if "(" in raw or ")" in raw else raw.upper()
+                stripped = line.lstrip()
                 if not stripped:
                     continue
-                if stripped[0] == "%":
-                    kind, number = self._header(stripped)
-                    if kind == "L":
-                        if main_start is not None:
-                            raise ProgramError(f"%L{number}: local subroutines stand before the main "
-                                               "program of their file (AMK AZ-MC1 programming manual §7.1)",
-                                               code="program-structure")  # fmt: skip
-                        if number in local_units or any(u[1] == number for u in unit_starts):
-                            raise ProgramError(f"%L{number} is defined twice in this file",
-                                               code="program-structure")  # fmt: skip
-                    else:
-                        if main_start is not None:
-                            raise ProgramError("a second main program header: one file holds one main "
-                                               "program (local subroutines %L come before it)",
-                                               code="program-structure")  # fmt: skip
-                        main_start = len(blocks)
-                        program_number = number
-                    if blocks and not unit_starts and main_start != 0:
-                        raise ProgramError("blocks before the first % header: local subroutines must "
-                                           "begin the file", code="program-structure")  # fmt: skip
-                    unit_starts.append((kind, number, len(blocks), lineno))
+                head = stripped[0]
+                if head == "%":
+                    self._unit_header(stripped.rstrip(), headers, len(blocks), lineno)
                     continue
-                block = self.block(line, lineno)
+                if head != "/" and plain_block(stripped):
+                    block = plain(stripped, lineno, 0)
+                else:
+                    block = self.block(stripped, lineno)
                 if block is not None:
                     blocks.append(block)
             except ProgramError as err:
                 raise err.located(file, lineno) from None
+        main_start = next((start for kind, _, start, _ in headers if kind == "main"), None)
+        program_number = next((number for kind, number, _, _ in headers if kind == "main"), None)
         # Units: each %L runs to the next header; the main program from its header (or the file's start)
         # to the end.
-        bounds = [start for _, _, start, _ in unit_starts] + [len(blocks)]
-        for i, (kind, number, start, _line) in enumerate(unit_starts):
+        bounds = [start for _, _, start, _ in headers] + [len(blocks)]
+        for i, (kind, number, start, _line) in enumerate(headers):
             if kind == "L":
                 local_units[number] = (start, bounds[i + 1])  # type: ignore[index]
         if main_start is None:
-            if unit_starts:
-                last_line = unit_starts[-1][3]
+            if headers:
+                last_line = headers[-1][3]
                 raise ProgramError("the file holds local subroutines but no main program (%n after them)",
                                    code="program-structure", file=file, line=last_line)  # fmt: skip
             main = (0, len(blocks))
@@ -171,6 +165,22 @@ class DinReader:
         for start, end in (main, *local_units.values()):
             control.compile_unit(program, start, end)
         return program
+
+    def _unit_header(self, text: str, headers: list, first_block: int, lineno: int) -> None:
+        """A ``%n`` or ``%L<n>`` line: local subroutines first, then at most one main program (§7.1)."""
+        kind, number = self._header(text)
+        if first_block and not headers:
+            raise ProgramError("blocks before the first % header: a file is local subroutines (%L<n>) and "
+                               "then its main program (%<n>)", code="program-structure")  # fmt: skip
+        if any(k == "main" for k, _, _, _ in headers):
+            if kind == "L":
+                raise ProgramError(f"%L{number}: local subroutines stand before the main program of their "
+                                   "file (AMK AZ-MC1 programming manual §7.1)", code="program-structure")
+            raise ProgramError("a second main program header: one file holds one main program (local "
+                               "subroutines %L come before it)", code="program-structure")  # fmt: skip
+        if kind == "L" and any(n == number for _, n, _, _ in headers):
+            raise ProgramError(f"%L{number} is defined twice in this file", code="program-structure")
+        headers.append((kind, number, first_block, lineno))
 
     def _header(self, text: str) -> tuple[str, int | None]:
         match = _HEADER.fullmatch(text)
@@ -198,18 +208,34 @@ class DinReader:
         return self._scan(body, lineno, skip)
 
     def _plain(self, body: str, lineno: int, skip: int) -> Block | None:
+        """A block of literal words (the hot path): each checked by its address's precomputed rule."""
         words: list[tuple] = []
         number = None
+        kinds = self._kinds
         for letter, digits in _PLAIN_WORD.findall(body):
-            if letter == "N":
+            kind = kinds.get(letter)
+            if kind is None:  # N, or an unknown address
+                if letter != "N":
+                    raise self._unknown_address(letter)
                 if number is not None or words:
                     raise ProgramError("N (the block number) begins the block, once", code="syntax")
                 number = self._block_number(digits)
                 continue
-            words.append((letter, self._literal(letter, digits), digits))
+            unit, low, high = kind
+            value = float(digits)
+            if unit is _LENGTH:
+                point = digits.find(".")
+                if point >= 0 and len(digits) - point > _DECIMALS + 1:
+                    value = round_to(value, self._increment)  # more places than the resolution keeps
+            elif unit is _WHOLE and "." in digits:
+                value = self._literal(letter, digits)  # raises: a whole number is expected
+            if not low <= value <= high:
+                value = self._literal(letter, digits)  # raises the range error
+            words.append((letter, value, digits))
         if not words:
             return None
-        return self._make_block(lineno, words, skip, number, has_expr=False)
+        # Block() splits the words once; a repeated address is an error there (located by read()).
+        return Block(lineno, tuple(words), skip=skip, number=number)
 
     def _make_block(self, lineno: int, words: list, skip: int, number: int | None, *,
                     has_expr: bool) -> Block:  # fmt: skip
