@@ -111,8 +111,7 @@ class DinReader:
         self._functions = dict(dialect.functions)
         self._increment = dialect.least_increment_mm
         # Each address's (number kind, low, high), for the hot path (N is the block number, not a word).
-        self._kinds = {letter: (_LENGTH if rule.unit == "length" else _WHOLE if (
-                           rule.unit == "integer" or letter in _LITERAL_ONLY) else "plain", rule.low, rule.high)
+        self._kinds = {letter: (self._number_kind(letter, rule), rule.low, rule.high)
                        for letter, rule in self._rules.items() if letter != "N"}  # fmt: skip
 
     # ------------------------------------------------------------------ the file
@@ -243,6 +242,12 @@ class DinReader:
             split_words(words)  # a repeated address is an error at read time
         return Block(lineno, tuple(words), skip=skip, has_expr=has_expr, number=number)
 
+    @staticmethod
+    def _number_kind(letter: str, rule: AddressRule) -> str:
+        if rule.unit == "length":
+            return _LENGTH
+        return _WHOLE if rule.unit == "integer" or letter in _LITERAL_ONLY else "plain"
+
     def _block_number(self, digits: str) -> int:
         if not digits.isdigit() or len(digits) > 9:
             raise ProgramError(f"N{digits}: a block number is a whole number", code="syntax")
@@ -320,8 +325,8 @@ class DinReader:
                 call = ("global", self._call_number(parser, "L"))
                 continue
             if char in "RP":
-                raise parser.error(f"{char} is a parameter, not an address: assign it ({char}1 = …) or use it "
-                                   "in a value (X R1)", start)  # fmt: skip
+                raise parser.error(f"{char} is a parameter, not an address: assign it ({char}1 = …) or use "
+                                   "it in a value (X R1)", start)  # fmt: skip
             if char not in self._letters:
                 raise parser.error(f"unknown address {char}", start)
             if char == "N":
