@@ -548,6 +548,9 @@ class OffsetStage:
         self.machine = machine
         self.alarms = alarms or {}
         self.startup_type = startup_type
+        #: Interference is corrected before it alarms (GSK/Fanuc, :func:`correct_interference`); False: any
+        #: interference is an alarm at once (controllers that only detect a contour violation).
+        self.correct_interference = True
         self._position: Vec = machine.position  # programmed (uncompensated) position
         self.file_index = machine.file_index
         self.modes = machine.modes
@@ -971,7 +974,12 @@ class OffsetStage:
             starts.append(item.start_b)
         as_line = False
         if item.role != "startup":
-            starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors, line)
+            if self.correct_interference:
+                starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors, line)
+            else:
+                reason = block_interference(element, item.d, starts[-1], end_vectors[0], False, line)
+                if reason is not None:
+                    raise CompensationError(f"contour violation: {reason}", "comp-interference", line)
         for q in starts[1:]:
             self._emit_plane_point(q, item)
         end = end_vectors[0]
