@@ -12,7 +12,9 @@ corners; straight intermediate blocks at outer ones: the offset lines' intersect
 extension points beyond — the manual's 180°-270° and 270°-360° ranges, §11.3.2); G138 approaches directly
 (to the point perpendicular to the next block's start), G139 with transition blocks (§11.3.1). Selection on
 a circle, a G41↔G42 change without G40, a G40 without a travel in the plane, and G41/G42 without a D are
-errors (§11.3.1, §11.3.3, §11.3.4).
+errors (§11.3.1, §11.3.3, §11.3.4). A contour violation — a compensated block that would run against its
+programmed direction, found with the current and the next two relevant blocks — is an error at once
+(``comp-interference``, §11.3.5), where the Fanuc family first corrects it.
 
 **Arcs.** I/J/K only (R is a parameter): G162 (the basic state) relative to the start, G161 absolute in
 program coordinates; the centre words are not modal (§3.1.3, §3.11).
@@ -76,6 +78,7 @@ def cutter(core: Seam, spec: CodeSpec, values: dict) -> None:
     core.run_action("family_cutter_comp", spec, values)
     if comp.stage is not None:
         comp.stage.startup_type = data(core).approach
+        comp.stage.correct_interference = False  # §11.3.5: a contour violation is an error, not corrected
 
 
 # --------------------------------------------------------------------------- arcs

@@ -975,7 +975,8 @@ class OffsetStage:
         as_line = False
         if item.role != "startup":
             if self.correct_interference:
-                starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors, line)
+                starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors,
+                                                                    line)  # fmt: skip
             else:
                 reason = block_interference(element, item.d, starts[-1], end_vectors[0], False, line)
                 if reason is not None:
