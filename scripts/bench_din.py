@@ -19,13 +19,14 @@ Goals (issue 16): >= 100 000 lines/s on the G01 program, >= 200 000 blocks/s on 
 from __future__ import annotations
 
 import argparse
-import re
-import statistics
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_interpreter import baseline as tokenise
+from bench_interpreter import median_seconds
 
 from cnc_gym.gcode import interpret
 
@@ -56,19 +57,6 @@ def while_program(passes: int) -> str:
             "R2 = R2 + 0.01 + 0.001 * SIN[R1]\nR1 = R1 - 1 X R2\n$ENDWHILE\nM30\n")
 
 
-_WORD = re.compile(r"([A-Z])\s*([+-]?\d*\.?\d+)")
-
-
-def tokenise(text: str) -> int:
-    """Minimal tokenise-and-float loop: the floor for any Python reader."""
-    words = 0
-    for line in text.splitlines():
-        for _letter, number in _WORD.findall(line.upper()):
-            float(number)
-            words += 1
-    return words
-
-
 def python_loop(passes: int) -> int:
     """The $WHILE program's loop in plain Python (the same arithmetic, one tuple per move)."""
     import math
@@ -81,17 +69,6 @@ def python_loop(passes: int) -> int:
         r[1] = r[1] - 1
         moves.append((r[2], 0.0, 0.0))
     return len(moves)
-
-
-def median_seconds(fn, repeats: int) -> tuple[float, float]:
-    """Median wall-clock and CPU (process) time of ``repeats`` calls."""
-    wall, cpu = [], []
-    for _ in range(repeats):
-        w0, c0 = time.perf_counter(), time.process_time()
-        fn()
-        cpu.append(time.process_time() - c0)
-        wall.append(time.perf_counter() - w0)
-    return statistics.median(wall), statistics.median(cpu)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -3,12 +3,11 @@ code, or a finite tool path — never another exception, a hang or a NaN (issue 
 
 from __future__ import annotations
 
-import numpy as np
-from gcode_helpers import success_share, tally
+from gcode_helpers import success_share
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_robustness import _check as check_program
 
-from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 
 #: Characters DIN programs are made of, plus a few that are not.
@@ -48,16 +47,7 @@ M30
 
 
 def _check(text: str, **options) -> None:
-    try:
-        tp = interpret(text, dialect="azmc1", max_blocks=20_000, **options)
-    except ProgramError as err:
-        assert err.code and "\n" not in str(err)
-        tally(False)
-        return
-    tally(True)
-    for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
-        assert np.all(np.isfinite(getattr(tp, name))), name
-    assert np.all(np.isfinite(tp.feed) | (tp.kind == 0) | (tp.kind == 3))
+    check_program(text, dialect="azmc1", max_blocks=20_000, **options)
 
 
 def test_the_base_program_runs():

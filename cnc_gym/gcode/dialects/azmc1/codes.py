@@ -15,6 +15,11 @@ from cnc_gym.toolpath import Plane
 #: ±214 000 mm (§2.7): the range of every length entry, after expressions and offsets.
 TRAVEL_MM = 214_000.0
 
+def refused(number: int, note: str) -> CodeSpec:
+    """An M code the controller has and this interpreter does not carry out: rejected by name."""
+    return m(number, "not_implemented", step="spindle", implemented=False, note=note)
+
+
 G_CODES = table([
     # Motion (§3.1). G01 is the basic state; I/J/K are the arc centre (no R: R is a parameter).
     g(0, 1, "motion", 0, step="motion"),
@@ -87,23 +92,17 @@ M_CODES = table([
     m(25, "plc_read", False, step="setting"),  # §4.2: PLC transfer parameters → R1000+n, no sync
     m(112, "plc_read", True, step="setting"),  # §4.2: the same, the decoder waits for the PLC
     m(26, "axis_group_wait", step="modes"),  # §4.1.5
-    CodeSpec("M17", 0, "not_implemented", None, "spindle", implemented=False,
-             note="the Vconst speed limit of constant cutting speed (§4.1.7): no cutting-speed model"),
-    CodeSpec("M18", 0, "not_implemented", None, "spindle", implemented=False,
-             note="constant cutting speed (§4.1.7): no cutting-speed model"),
-    CodeSpec("M20", 0, "not_implemented", None, "spindle", implemented=False,
-             note="spindle 2's Vconst speed limit (§4.1.7): no cutting-speed model"),
-    CodeSpec("M21", 0, "not_implemented", None, "spindle", implemented=False,
-             note="spindle 2's constant cutting speed (§4.1.7): no cutting-speed model"),
-    CodeSpec("M22", 0, "not_implemented", None, "spindle", implemented=False,
-             note="spindle 2 positioning (§4.1.7): spindle 2 has no position axis here"),
-    CodeSpec("M27", 0, "not_implemented", None, "spindle", implemented=False,
-             note="synchronous control of a slave axis to spindle 1 (§4.1.8): no synchronous axes here"),
-    CodeSpec("M28", 0, "not_implemented", None, "spindle", implemented=False,
-             note="synchronous control of a slave axis to spindle 2 (§4.1.8): no synchronous axes here"),
-    CodeSpec("M96", 0, "not_implemented", None, "modes", implemented=False,
-             note="acceleration override (§4.1.6): the tool path carries no acceleration scale to the "
-                  "motion stage"),
+    *[refused(number, note) for number, note in (
+        (17, "the Vconst speed limit of constant cutting speed (§4.1.7): no cutting-speed model"),
+        (18, "constant cutting speed (§4.1.7): no cutting-speed model"),
+        (20, "spindle 2's Vconst speed limit (§4.1.7): no cutting-speed model"),
+        (21, "spindle 2's constant cutting speed (§4.1.7): no cutting-speed model"),
+        (22, "spindle 2 positioning (§4.1.7): spindle 2 has no position axis here"),
+        (27, "synchronous control of a slave axis to spindle 1 (§4.1.8): no synchronous axes here"),
+        (28, "synchronous control of a slave axis to spindle 2 (§4.1.8): no synchronous axes here"),
+        (96, "acceleration override (§4.1.6): the tool path carries no acceleration scale to the motion "
+             "stage"),
+    )],
 ])
 
 #: M codes of one kind may not share a block.
