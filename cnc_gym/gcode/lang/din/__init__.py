@@ -11,6 +11,7 @@ Language components (:data:`LANGUAGE`):
 ``parameters.py``      the variable model: global R parameters (a list, for speed)
 ``control.py``         ``$IF/$SWITCH/$FOR/$WHILE/$DO/$BREAK/$CONTINUE/$TIME`` compiled to jump tables
 ``runner.py``          the program-counter loop, ``LL``/``L`` calls, M29, nesting 10, the run's bounds
+``hints.py``           what a Fanuc-style line that fails to read probably is, and how DIN writes it
 =====================  ==================================================================================
 
 A dialect takes :data:`LANGUAGE` as it is, or subclasses the reader (its data functions and procedures,
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 from cnc_gym.gcode.dialect import Language
 from cnc_gym.gcode.lang.din.expressions import FUNCTIONS, evaluate
+from cnc_gym.gcode.lang.din.hints import hint
 from cnc_gym.gcode.lang.din.parameters import ParameterStore
 from cnc_gym.gcode.lang.din.reader import DinProgram, DinReader
 from cnc_gym.gcode.lang.din.runner import DinRunner
@@ -33,7 +35,7 @@ LANGUAGE = Language(
     variables=ParameterStore,
     system_variables=None,
     runner=DinRunner,
-    hint=None,
+    hint=hint,
 )
 
 __all__ = ["FUNCTIONS", "LANGUAGE", "DinProgram", "DinReader", "DinRunner", "ParameterStore"]

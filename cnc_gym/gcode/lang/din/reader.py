@@ -55,6 +55,8 @@ PROGRAM_DIGITS = 8
 #: Addresses that take a literal whole number only (codes and the block number).
 _LITERAL_ONLY = "GMN"
 _LENGTH = "length"
+#: Errors that get a hint when the line looks like another language.
+_HINTED = frozenset({"syntax", "unknown-address"})
 _WHOLE = "whole"
 #: Decimal places a length literal keeps (0.1 µm in mm, §2.7); longer ones are rounded.
 _DECIMALS = 4
@@ -142,7 +144,7 @@ class DinReader:
                 if block is not None:
                     blocks.append(block)
             except ProgramError as err:
-                raise err.located(file, lineno) from None
+                raise self._hinted(err, raw).located(file, lineno) from None
         main_start = next((start for kind, _, start, _ in headers if kind == "main"), None)
         program_number = next((number for kind, number, _, _ in headers if kind == "main"), None)
         # Units: each %L runs to the next header; the main program from its header (or the file's start)
@@ -164,6 +166,15 @@ class DinReader:
         for start, end in (main, *local_units.values()):
             control.compile_unit(program, start, end)
         return program
+
+    def _hinted(self, err: ProgramError, raw: str) -> ProgramError:
+        """A syntax error with a hint when the line looks like another language's (``hints.py``)."""
+        hint = self.dialect.language.hint
+        text = hint(raw) if hint is not None and err.code in _HINTED else None
+        if text is not None and text not in err.message:
+            err.message = f"{err.message} ({text})"
+            err.args = (err.message,)
+        return err
 
     def _unit_header(self, text: str, headers: list, first_block: int, lineno: int) -> None:
         """A ``%n`` or ``%L<n>`` line: local subroutines first, then at most one main program (§7.1)."""

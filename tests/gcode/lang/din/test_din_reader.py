@@ -90,6 +90,15 @@ def test_syntax_errors_give_file_line_and_message(text, line, code, message):
     assert str(err).startswith(f"p.din:{line}: ") and str(err).endswith(f"[{code}]")
 
 
+@pytest.mark.parametrize(("text", "hint"), [
+    ("#1 = 5\n", "DIN parameters are R<n>"), ("O1234\n", "starts with %<number>"),
+    ("IF [#1 GT 2] GOTO 10\n", "no GOTO"), ("G2 X10 Y0 R5 F100\n", "an arc radius R?"),
+    ("G1 X10 ; move\n", "DIN comments are ( … )"),
+])  # fmt: skip
+def test_fanuc_style_lines_get_a_hint(text, hint):
+    assert hint in error(text).message
+
+
 # ---------------------------------------------------------------------- control blocks
 STRUCTURE = [
     ("$ENDIF\n", 1, "$ENDIF without $IF"),
