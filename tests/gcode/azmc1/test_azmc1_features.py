@@ -82,6 +82,12 @@ def test_g70_converts_distances_but_not_feed_or_offsets():
     assert toolpath.feed[0] == 100
 
 
+def test_power_on_units_select_g70():
+    # units="inch" puts G70 in force at power-on; F stays in mm/min.
+    toolpath = run("G1 X1 F100\nM30\n", units="inch")
+    assert toolpath.end.tolist() == [[25.4, 0, 0]] and toolpath.feed[0] == 100
+
+
 def test_g95_feed_per_revolution():
     toolpath = run("S500 M3\nG95 G1 X10 F0.2\nM30\n")
     assert toolpath.feed[0] == pytest.approx(100)  # 0.2 mm/rev × 500 rev/min

@@ -220,6 +220,8 @@ class DinReader:
     def _plain(self, body: str, lineno: int, skip: int) -> Block | None:
         """A block of literal words (the hot path): each checked by its address's precomputed rule."""
         words: list[tuple] = []
+        values: dict[str, float] = {}
+        gs = ms = None
         number = None
         kinds = self._kinds
         for letter, digits in _PLAIN_WORD.findall(body):
@@ -242,10 +244,21 @@ class DinReader:
             if not low <= value <= high:
                 value = self._literal(letter, digits)  # raises the range error
             words.append((letter, value, digits))
+            # The split the core reads (Block's own split_words, done here in the same pass).
+            if letter == "G":
+                gs = [value] if gs is None else [*gs, value]
+            elif letter == "M":
+                ms = [value] if ms is None else [*ms, value]
+            elif letter in values:
+                raise ProgramError(f"address {letter} appears twice in the block", code="duplicate-word")
+            else:
+                values[letter] = value
         if not words:
             return None
-        # Block() splits the words once; a repeated address is an error there (located by read()).
-        return Block(lineno, tuple(words), skip=skip, number=number)
+        block = Block(lineno, tuple(words), skip=skip, has_expr=True, number=number)
+        block.has_expr = False
+        block.gs, block.ms, block.values = gs, ms, values
+        return block
 
     def _make_block(self, lineno: int, words: list, skip: int, number: int | None, *,
                     has_expr: bool) -> Block:  # fmt: skip
