@@ -44,11 +44,11 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
     from cnc_gym.gcode.settings import MacroCalls
 
-_LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 #: A block of literal words only, none of them a parameter or call address (R, P, L): the hot path.
 _PLAIN_BLOCK = re.compile(rf"(?:[ \t]*[A-KMNOQS-Z][ \t]*{_NUMBER})*[ \t]*")
 _PLAIN_WORD = re.compile(rf"([A-Z])[ \t]*({_NUMBER})")
+_BLOCK_NUMBER = re.compile(r"N[ \t]*([0-9]{1,9})(?![0-9.])")
 _HEADER = re.compile(r"%[ \t]*(L?)[ \t]*([0-9]*)[ \t]*")
 #: Most digits of a program number (``%nnnnnnnn``, §2.2).
 PROGRAM_DIGITS = 8
@@ -123,13 +123,21 @@ class DinReader:
         headers: list[tuple[str, int | None, int, int]] = []  # (kind, number, first block, line)
         plain_block = _PLAIN_BLOCK.fullmatch
         plain = self._plain
-        for lineno, raw in enumerate(_LINE_BREAK.split(text), 1):
+        # Whole-text passes where they are cheaper than per-line ones: the character set, the line breaks
+        # (CR, LF, CRLF), upper case, and whether any line has a comment at all.
+        ascii_text = text.isascii()
+        lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        upper = text.upper().replace("\r\n", "\n").replace("\r", "\n").split("\n") if ascii_text else lines
+        comments = "(" in text or ")" in text
+        for lineno, raw in enumerate(lines, 1):
             try:
-                if not raw.isascii():
+                if not ascii_text and not raw.isascii():
                     bad = next(c for c in raw if not c.isascii())
                     raise ProgramError(f"character {bad!r} is not in the controller's ASCII character set",
                                        code="bad-character", column=raw.index(bad) + 1)  # fmt: skip
-                line = strip_comment(raw).upper() if "(" in raw or ")" in raw else raw.upper()
+                line = upper[lineno - 1] if ascii_text else raw.upper()
+                if comments and ("(" in line or ")" in line):
+                    line = strip_comment(line)
                 stripped = line.lstrip()
                 if not stripped:
                     continue
@@ -223,10 +231,15 @@ class DinReader:
         values: dict[str, float] = {}
         gs = ms = None
         number = None
+        if body[:1] == "N":  # the block number, off the words
+            head = _BLOCK_NUMBER.match(body)
+            if head is not None:
+                number = int(head.group(1))
+                body = body[head.end():]
         kinds = self._kinds
         for letter, digits in _PLAIN_WORD.findall(body):
             kind = kinds.get(letter)
-            if kind is None:  # N, or an unknown address
+            if kind is None:  # N again, or an unknown address
                 if letter != "N":
                     raise self._unknown_address(letter)
                 if number is not None or words:
