@@ -16,7 +16,7 @@ from cnc_gym import cli
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import get_dialect, interpret
 from cnc_gym.gcode.dialects.azmc1.options import AzOptions
-from cnc_gym.machine import load_machine
+from cnc_gym.machine import load_machine, machine_from_dict
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
 AZ = get_dialect("azmc1")
@@ -126,6 +126,17 @@ def test_soft_limits_set_add_and_check_arc_extremes():
     err = error("G99 Y4\nG0 X-5\nG2 X5 Y0 I5 J0 F100\nM30\n")  # Y5 > 4
     assert err.code == "soft-limit" and err.line == 3 and "Y5.0000" in err.message
     assert error("G98 X10\nG99 X5\n").code == "soft-limit"  # − above +
+
+
+def test_soft_limits_start_at_the_machine_travel():
+    # §3.1.7: the limits are preset from the axis data at run-up; G91 G99 X-10 pulls the + limit of a
+    # machine with X up to 500 mm 10 mm in.
+    machine = machine_from_dict({"axis_defaults": {"min_position_mm": -500, "max_position_mm": 500}},
+                                source="travel.yaml")  # fmt: skip
+    text = "G91 G99 X-10\nG90 G0 X490\nM30\n"
+    assert ends(text, machine=machine) == [(490, 0, 0)]
+    err = error(text.replace("X490", "X491"), machine=machine)
+    assert err.code == "soft-limit" and err.line == 2
 
 
 def test_soft_limits_check_the_compensated_path():

@@ -82,10 +82,14 @@ class AzData:
 
 
 def data(core: Seam) -> AzData:
-    """The run's :class:`AzData`, created on first use."""
+    """The run's :class:`AzData`, created on first use. The software limits start at the machine preset's
+    travel ("preset from the axis machine data record at run-up", §3.1.7), unbounded without a preset."""
     st = core.state
     if st.dialect_data is None:
         st.dialect_data = AzData()
+        if st.machine is not None:
+            st.dialect_data.low = [float(v) for v in st.machine.axis_array("min_position_mm")]
+            st.dialect_data.high = [float(v) for v in st.machine.axis_array("max_position_mm")]
     return st.dialect_data
 
 
