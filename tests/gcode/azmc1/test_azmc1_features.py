@@ -128,6 +128,17 @@ def test_soft_limits_set_add_and_check_arc_extremes():
     assert error("G98 X10\nG99 X5\n").code == "soft-limit"  # − above +
 
 
+def test_soft_limits_set_in_a_loop_are_checked_per_pass():
+    # A limit set in every pass of a loop: each segment meets the limit in force when it was made; pass 700
+    # overshoots its own limit by 0.5 mm (one epoch of 1000, found without a loop over them).
+    text = ("R1 = 0\n$WHILE R1 < 1000\nR1 = R1 + 1\nG99 Y R1 + 0.5\nG1 F1000 Y R1 + [R1 == 700]\n"
+            "$ENDWHILE\nM30\n")
+    assert len(run(text.replace(" + [R1 == 700]", ""))) == 1000
+    err = error(text)
+    assert err.code == "soft-limit" and err.line == 5
+    assert "Y701.0000" in err.message and "Y700.5" in err.message
+
+
 def test_soft_limits_start_at_the_machine_travel():
     # §3.1.7: the limits are preset from the axis data at run-up; G91 G99 X-10 pulls the + limit of a
     # machine with X up to 500 mm 10 mm in.

@@ -16,7 +16,6 @@
 
 from __future__ import annotations
 
-import itertools
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -88,30 +87,31 @@ def soft_limit(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 def check_soft_limits(core: Seam) -> None:
     """End of program (a finish hook): every segment within the limits in force when it was made, arcs at
-    their extremes too. The first offending segment is reported at its own line."""
+    their extremes too. The first offending segment is reported at its own line. Vectorised: each point
+    looks its limits up by the segment it belongs to (a G98/G99 inside a loop adds an epoch per pass)."""
     st = core.state
     d = st.dialect_data
     if d is None or not getattr(d, "limit_epochs", None):
         return
     toolpath = st.builder.build()
-    n = len(toolpath)
-    epochs = [*d.limit_epochs, (n, None, None, 0)]
+    starts = np.array([epoch[0] for epoch in d.limit_epochs])
+    lows = np.array([epoch[1] for epoch in d.limit_epochs])
+    highs = np.array([epoch[2] for epoch in d.limit_epochs])
+    rows = np.arange(int(starts[0]), len(toolpath))
     first: tuple[int, int, float, str, float] | None = None
-    for (start, low, high, _line), (stop, *_rest) in itertools.pairwise(epochs):
-        if stop <= start:
+    for index, points in _points(toolpath, rows):
+        epoch = np.searchsorted(starts, index, side="right") - 1  # the last G98/G99 before the segment
+        low, high = lows[epoch], highs[epoch]
+        outside = (points < low) | (points > high)
+        if not outside.any():
             continue
-        low_a, high_a = np.array(low), np.array(high)
-        rows = np.arange(start, stop)
-        for index, points in _points(toolpath, rows):
-            outside = (points < low_a) | (points > high_a)
-            if outside.any():
-                k, axis = np.argwhere(outside)[0]
-                row = int(index[k])
-                value = float(points[k, axis])
-                side = "+" if value > high_a[axis] else "-"
-                limit = float(high_a[axis] if side == "+" else low_a[axis])
-                if first is None or row < first[0]:
-                    first = (row, int(axis), value, side, limit)
+        k, axis = _first(outside, index)
+        row = int(index[k])
+        value = float(points[k, axis])
+        side = "+" if value > high[k, axis] else "-"
+        limit = float(high[k, axis] if side == "+" else low[k, axis])
+        if first is None or row < first[0]:
+            first = (row, int(axis), value, side, limit)
     if first is not None:
         row, axis, value, side, limit = first
         file, line = toolpath.source(row)
@@ -119,6 +119,13 @@ def check_soft_limits(core: Seam) -> None:
         what = "G99 (positive)" if side == "+" else "G98 (negative)"
         raise core.error(f"software limit switch {letter}{side}: {letter}{value:.4f} (machine) is beyond the "
                          f"{what} limit {letter}{limit:g}", "soft-limit").located(file, line)  # fmt: skip
+
+
+def _first(outside: np.ndarray, index: np.ndarray) -> tuple[int, int]:
+    """(point, axis) of the offending point of the earliest segment."""
+    hits = np.argwhere(outside)
+    k, axis = hits[np.argmin(index[hits[:, 0]])]
+    return int(k), int(axis)
 
 
 def _points(toolpath, rows: np.ndarray):

@@ -160,8 +160,8 @@ def axis_group_wait(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def auxiliary(core: Seam, spec: CodeSpec | None, values: dict) -> None:
-    """H: an auxiliary function passed to the PLC (§4.3), recorded with its line."""
-    data(core).h_words.append((core.state.out.line, int(values["H"])))
+    """H: an auxiliary function passed to the PLC (§4.3), kept until the next H."""
+    data(core).h_word = int(values["H"])
 
 
 def check_spindle_with_homing(core: Seam, plan) -> CodeSpec | None:

@@ -77,8 +77,8 @@ class AzData:
     limit_epochs: list[tuple[int, tuple, tuple, int]] = field(default_factory=list)
     #: Spindle 2 (M13/M14/M15): +1 CW, -1 CCW, 0 stopped.
     spindle2: int = 0
-    #: H words sent to the PLC, (line, value).
-    h_words: list[tuple[int, int]] = field(default_factory=list)
+    #: The last H word sent to the PLC (kept until the next H, §4.3), None before the first.
+    h_word: int | None = None
 
 
 def data(core: Seam) -> AzData:
