@@ -82,7 +82,11 @@ def soft_limit(core: Seam, spec: CodeSpec, values: dict) -> None:
             letter = core.dialect.axes[axis]
             raise core.error(f"{spec.name}: the negative limit {letter}{d.low[axis]:g} lies above the "
                              f"positive limit {letter}{d.high[axis]:g}", "soft-limit")  # fmt: skip
-    d.limit_epochs.append((len(st.builder), tuple(d.low), tuple(d.high), st.out.line))
+    epoch = (len(st.builder), tuple(d.low), tuple(d.high), st.out.line)
+    if d.limit_epochs and d.limit_epochs[-1][0] == epoch[0]:
+        d.limit_epochs[-1] = epoch  # no segment made under the previous limits: they never applied
+    else:
+        d.limit_epochs.append(epoch)
 
 
 def check_soft_limits(core: Seam) -> None:
