@@ -50,20 +50,14 @@ def module_tests(path: str) -> dict[str, ast.FunctionDef]:
             if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}  # fmt: skip
 
 
-# ---------------------------------------------------------------------- the checks a dialect's indexes share
-#: An error code in backticks in an index's "Our code" cell.
-ERROR_CODE = re.compile(r"`([a-z0-9]+(?:-[a-z0-9]+)*)`")
-#: An empty cell.
-NONE = "—"
-
-
 def only_nodes(status: str) -> bool:
-    """The status cell is nothing but test nodes."""
+    """Whether a Status cell is nothing but test nodes."""
     return bool(NODE.search(status)) and NODE.sub("", status).replace(",", "").strip() == ""
 
 
 def alarm_kind(status: str) -> str:
-    """``tested``, ``deviation`` or ``not applicable`` (the latter two with a reason)."""
+    """An alarms-index Status cell's kind: ``tested`` (test nodes), ``deviation`` or ``not applicable`` (each
+    with its reason)."""
     for kind in ("deviation", "not applicable"):
         if status.startswith(f"{kind}: "):
             assert len(status) > len(kind) + 20, f"{kind} without a reason: {status!r}"
@@ -73,21 +67,27 @@ def alarm_kind(status: str) -> str:
 
 
 def check_nodes(status: str, row: str) -> None:
-    """Every test node the cell names exists."""
+    """Every test node a cell names exists."""
     for path, name in NODE.findall(status):
         assert (ROOT / path).is_file(), f"{row}: {path} does not exist"
         assert name in module_tests(path), f"{row}: {path} has no test function {name}"
 
 
-@functools.cache
-def alarm_cases(path: str) -> dict[str, list[tuple[str, int | None]]]:
-    """``CASES`` of an alarms test file (relative to the repository), parsed: row → [(code, alarm)]."""
+def minimal_cases(path: str) -> dict[str, list[tuple[str, int | None]]]:
+    """The ``CASES`` table of an alarms test file (row → [(program, code, alarm, line, …)]), parsed: row →
+    [(code, alarm)]."""
     tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
     node = next(n for n in tree.body if isinstance(n, ast.AnnAssign) and ast.unparse(n.target) == "CASES")
     out: dict[str, list[tuple[str, int | None]]] = {}
     for key, value in zip(node.value.keys, node.value.values, strict=True):  # type: ignore[union-attr]
         out[key.value] = [(case.elts[1].value, case.elts[2].value) for case in value.elts]  # type: ignore
     return out
+
+
+#: An error code in backticks in an index's "Our code" cell.
+ERROR_CODE = re.compile(r"`([a-z0-9]+(?:-[a-z0-9]+)*)`")
+#: An empty cell.
+NONE = "—"
 
 
 def raised_codes_missing(codes_cell: str) -> list[str]:

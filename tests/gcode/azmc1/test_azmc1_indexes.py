@@ -16,10 +16,10 @@ from doc_tables import (
     NODE,
     NONE,
     ROOT,
-    alarm_cases,
     alarm_kind,
     check_ids,
     check_nodes,
+    minimal_cases,
     module_tests,
     only_nodes,
     parse_table,
@@ -92,7 +92,7 @@ def test_alarm_rows_are_well_formed_and_their_codes_are_raised(row_id):
 
 
 def test_rows_with_minimal_programs_match_them():
-    cases = alarm_cases(ALARMS_TESTS)
+    cases = minimal_cases(ALARMS_TESTS)
     citing = {row["#"] for row in alarm_rows()
               if (ALARMS_TESTS, "test_manual_alarm") in NODE.findall(row["Status"])}  # fmt: skip
     assert citing == set(cases)
