@@ -3,10 +3,9 @@ code, or a finite tool path — never another exception, a hang or a NaN (issue 
 
 from __future__ import annotations
 
-from gcode_helpers import success_share
+from gcode_helpers import check_outcome, success_share
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_robustness import _check as check_program
 
 from cnc_gym.gcode import interpret
 
@@ -47,7 +46,7 @@ M30
 
 
 def _check(text: str, **options) -> None:
-    check_program(text, dialect="azmc1", max_blocks=20_000, **options)
+    check_outcome(text, dialect="azmc1", max_blocks=20_000, **options)
 
 
 def test_the_base_program_runs():

@@ -74,9 +74,10 @@ DIALECT = Dialect(
     machine_mcodes=MACHINE_MCODES,
     keywords=frozenset(),
     # The D record: the length along the plane's tool axis (type B), carried by that axis's next move
-    # (no axis word needed); D0..D40; start-up by G139 (transition blocks, type B) unless G138.
+    # (no axis word needed); D0..D40; start-up by G139 (transition blocks, type B) unless G138; a contour
+    # violation is an error, not corrected (§11.3.5).
     compensation=CompensationSettings(tool_length_type="B", startup_type="B", length_needs_axis=False,
-                                      offset_count=40),
+                                      offset_count=40, correct_interference=False),
     max_subprogram_nesting=10,
     options=AzOptions(),
 )

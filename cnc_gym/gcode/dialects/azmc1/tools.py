@@ -78,7 +78,6 @@ def cutter(core: Seam, spec: CodeSpec, values: dict) -> None:
     core.run_action("family_cutter_comp", spec, values)
     if comp.stage is not None:
         comp.stage.startup_type = data(core).approach
-        comp.stage.correct_interference = False  # §11.3.5: a contour violation is an error, not corrected
 
 
 # --------------------------------------------------------------------------- arcs

@@ -544,15 +544,13 @@ class OffsetStage:
     :meth:`set_position_offset`, :meth:`corner_arc` and :meth:`flush`.
     """
 
-    def __init__(self, machine, *, startup_type: str = "A", alarms=None,
-                 outer_corner_arcs: bool = False) -> None:  # fmt: skip
+    def __init__(self, machine, *, startup_type: str = "A", alarms=None, outer_corner_arcs: bool = False,
+                 correct_interference: bool = True) -> None:  # fmt: skip
         self.machine = machine
         self.alarms = alarms or {}
         self.startup_type = startup_type
         self.outer_corner_arcs = outer_corner_arcs  # CompensationSettings.outer_corner_arcs
-        #: Interference is corrected before it alarms (GSK/Fanuc, :func:`correct_interference`); False: any
-        #: interference is an alarm at once (controllers that only detect a contour violation).
-        self.correct_interference = True
+        self.correct_interference = correct_interference  # CompensationSettings.correct_interference
         self._position: Vec = machine.position  # programmed (uncompensated) position
         self.file_index = machine.file_index
         self.modes = machine.modes
@@ -1045,8 +1043,10 @@ def install(core: Seam) -> OffsetStage:
     st = core.state
     comp = st.comp
     if comp.stage is None:
-        comp.stage = OffsetStage(st.out, startup_type=comp.settings.startup_type, alarms=core.dialect.alarms,
-                                 outer_corner_arcs=comp.settings.outer_corner_arcs)  # fmt: skip
+        settings = comp.settings
+        comp.stage = OffsetStage(st.out, startup_type=settings.startup_type, alarms=core.dialect.alarms,
+                                 outer_corner_arcs=settings.outer_corner_arcs,
+                                 correct_interference=settings.correct_interference)  # fmt: skip
         st.out = comp.stage
         st.block_listeners.append(before_block)
     return comp.stage
