@@ -22,7 +22,6 @@ import numpy as np
 
 from cnc_gym.gcode.dialects.azmc1.options import data, options
 from cnc_gym.gcode.lang.fanuc import compensation
-from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
@@ -103,7 +102,7 @@ def check_soft_limits(core: Seam) -> None:
     highs = np.array([epoch[2] for epoch in d.limit_epochs])
     rows = np.arange(int(starts[0]), len(toolpath))
     first: tuple[int, int, float, str, float] | None = None
-    for index, points in _points(toolpath, rows):
+    for index, points in toolpath.extreme_points(rows):
         epoch = np.searchsorted(starts, index, side="right") - 1  # the last G98/G99 before the segment
         low, high = lows[epoch], highs[epoch]
         outside = (points < low) | (points > high)
@@ -130,26 +129,6 @@ def _first(outside: np.ndarray, index: np.ndarray) -> tuple[int, int]:
     hits = np.argwhere(outside)
     k, axis = hits[np.argmin(index[hits[:, 0]])]
     return int(k), int(axis)
-
-
-def _points(toolpath, rows: np.ndarray):
-    """(row indices, points): the segments' ends, and the axis extremes their arcs pass."""
-    yield rows, toolpath.end[rows]
-    arcs = rows[toolpath.kind[rows] == SegmentKind.ARC]
-    if not len(arcs):
-        return
-    axes = np.array([PLANE_AXES[Plane(p)] for p in Plane])[toolpath.plane[arcs].astype(np.int64)]
-    k = np.arange(len(arcs))
-    start_angle, sweep = toolpath.start_angle[arcs], toolpath.sweep[arcs]
-    radius, center = toolpath.radius[arcs], toolpath.center[arcs]
-    for theta in (0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi):
-        ccw_turn = (theta - start_angle) % (2 * np.pi)
-        turned = np.where(sweep >= 0, ccw_turn, (2 * np.pi - ccw_turn) % (2 * np.pi))
-        passed = turned <= np.abs(sweep) + 1e-12
-        point = toolpath.start[arcs].copy()
-        point[k, axes[:, 0]] = center[k, axes[:, 0]] + radius * np.cos(theta)
-        point[k, axes[:, 1]] = center[k, axes[:, 1]] + radius * np.sin(theta)
-        yield arcs[passed], point[passed]
 
 
 def homing(core: Seam, spec: CodeSpec, values: dict) -> None:
