@@ -40,7 +40,7 @@ from cnc_gym.config import (
     spec_of,
     text,
 )
-from cnc_gym.envs.feedrate_v1 import ACTION_MODE_V1, RankingReward
+from cnc_gym.envs.feedrate_v1 import ACTION_MODE_V1, RESIDUAL_RANGE, RankingReward
 from cnc_gym.envs.options import (
     CONTROL_PERIOD,
     DIALECT,
@@ -85,9 +85,7 @@ class EnvSettings:
         RankingReward, optional=True, doc="Feedrate-v1's reward weights (null: its defaults)")
     randomize: DomainRandomization | None = section(  # noqa: RUF009
         DomainRandomization, optional=True, doc="Feedrate-v1's domain randomisation (null: off)")
-    residual_range: float = number(
-        2.0, 1, 10, low_open=True, doc="Feedrate-v1, residual mode: the knob is the planner's × this^a",
-        why="a factor above 1; 10 spans 0.1 to 10 times the planner's override.")  # fmt: skip
+    residual_range: float = declared(RESIDUAL_RANGE, 2.0)
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
 
     def config_problems(self) -> Iterator[tuple[str, str]]:

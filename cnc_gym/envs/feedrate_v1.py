@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from cnc_gym.config import Choice, declared, number, parse_value, schema, section, spec_of
+from cnc_gym.config import Choice, Number, declared, number, parse_value, schema, section, spec_of
 from cnc_gym.envs.feedrate import FeedrateEnv
 from cnc_gym.envs.fused import (
     F_SIGNAL,
@@ -66,6 +66,9 @@ COST_BUDGET_MM = 0.0
 
 
 MACHINE_V1 = MachineRef(doc="the machine (of every episode, or the centre of the randomisation)")
+RESIDUAL_RANGE = Number(low=1, high=10, low_open=True, doc="residual mode: the override is the planner's "
+                        "× residual_range^a", why="a factor above 1; 10 spans 0.1 to 10 times the "
+                        "planner's override.")  # fmt: skip
 ACTION_MODE_V1 = Choice(choices=ACTION_MODES_V1, doc="what the action sets: the override knob, the feed, or "
                         "a factor on the deployable planner's override")
 
@@ -83,9 +86,7 @@ class EnvArgumentsV1:
         RankingReward, optional=True, doc="reward weights (null: the defaults)")
     randomize: DomainRandomization | None = section(  # noqa: RUF009
         DomainRandomization, optional=True, doc="domain randomisation (null: off)")
-    residual_range: float = number(
-        2.0, 1, 10, low_open=True, doc="residual mode: the knob is the planner's × residual_range^a",
-        why="a factor above 1; 10 spans 0.1 to 10 times the planner's override.")  # fmt: skip
+    residual_range: float = declared(RESIDUAL_RANGE, 2.0)
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
     lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
