@@ -496,8 +496,12 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         # the next block is executed" (manual §3.8): it runs on as in G64 with look-ahead.
         tapping_prev = (modes[prev] & SegmentMode.TAPPING_MODE) != 0
         no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt) & ~tapping_prev
-        stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead
-        wait[1:n] = has_exact | mode_change | aux_change
+        # A kink where some axis allows no velocity step (P1227 = 0) can only be passed at rest: it is a
+        # stop with an in-position check, as an exact stop (a limit of 0 that is no stop would leave the
+        # reference creeping towards the kink forever).
+        kink_stop = hard[1:n] <= 0.0
+        stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead | kink_stop
+        wait[1:n] = has_exact | mode_change | aux_change | kink_stop
     hard[stop] = 0.0
 
     # ------------------------------------------------------------------ dwells per point
