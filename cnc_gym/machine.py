@@ -196,6 +196,24 @@ class ControllerConfig:
     contour_tolerance_mm: float = number(0.05, 1e-6, 10, unit="mm", why="1 nm to 10 mm.",
                                          doc="contour error above this counts as a violation")  # fmt: skip
 
+    corner_smoothing_tolerance_mm: float = number(
+        0.0, 1e-6, 10, off=0, unit="mm", doc="corner smoothing of short line segments in continuous mode: "
+        "the largest deviation of the blend from the programmed corner (GSK P1401#1 EFL on, tolerance "
+        "P1473); 0 = off (EFL = 0)", why="1 nm to 10 mm.")  # fmt: skip
+    corner_smoothing_min_angle_deg: float = number(
+        150.0, 60, 180, unit="deg", doc="smooth only corners whose included angle is at least this (P1495; "
+        "180° = collinear)", why="GSK allows 120-180°; below 60° a blend within a small tolerance crawls "
+        "round a near-reversal.")  # fmt: skip
+    corner_smoothing_max_segment_mm: float = number(
+        0.0, 1e-3, 1e6, off=0, unit="mm", doc="smooth only junctions of lines at most this long (the "
+        "\"small segment\" condition); 0 = any length", why="1 µm to the travel range.")  # fmt: skip
+    path_max_accel_mm_s2: float = number(
+        0.0, 1, 1e6, off=0, unit="mm/s²", doc="limit on the norm of the path acceleration vector "
+        "(tangential and centripetal together); 0 = only the per-axis limits", why=_ACCEL_WHY)  # fmt: skip
+    path_max_jerk_mm_s3: float = number(
+        0.0, 10, 1e9, off=0, unit="mm/s³", doc="limit on the norm of the path jerk vector; 0 = only the "
+        "per-axis limits", why=_JERK_WHY)  # fmt: skip
+
     def config_problems(self) -> Iterator[tuple[str, str]]:
         """Rules across keys: ``(key, problem)``."""
         if self.min_arc_feed_mm_min > self.max_feed_mm_min:
