@@ -14,6 +14,8 @@ path speed                 ≤ programmed feed × max override (× 1 on override
 tangential acceleration    each axis's share ``|u_k(s)|·|s̈|`` ≤ its acceleration limit, pointwise
                            (the controller limits tangential acceleration by the axes' limits and the
                            centripetal part separately, by the curvature caps above)
+corner smoothing           on the path the controller follows: the blended one where the machine or
+                           the program smooths corners (docs/motion.md §6)
 junctions                  ≤ the controller's junction limit (corner step P1227 over the change of
                            direction, both neighbours' caps); 0 at every mandatory stop (exact stop,
                            dwell, rapid ↔ cut, tool/spindle change, program end)
@@ -164,7 +166,7 @@ def _cutting_problem(tp: Toolpath, limits, machine: MachineConfig, action_mode: 
     speed = np.concatenate((speed, [0.0]))
     # Tangent of each interval at its middle (toolpath arc length).
     s_mid = seg_f[rows[row_of], K.F_S0] + (j + 0.5) / pieces[row_of] * length[row_of]
-    _, tangent, _ = tp.evaluate(s_mid)
+    _, tangent, _ = (tp if limits.path is None else limits.path).evaluate(s_mid)  # the path followed
     keep = np.concatenate(([True], np.diff(grid) > 0))  # zero-length pieces add nothing
     if not np.all(keep):
         grid, speed = grid[keep], speed[keep]

@@ -41,7 +41,7 @@ from cnc_gym.machine import MachineConfig
 from cnc_gym.motion import kernel as K
 from cnc_gym.toolpath import SegmentKind, SegmentMode, Toolpath
 from cnc_gym.toolpath.segments import PLANE_AXES, Plane
-from cnc_gym.toolpath.smoothing import SmoothingRules, smooth_corners
+from cnc_gym.toolpath.smoothing import BlendCurve, SmoothingRules, blend_tables, smooth_corners
 
 #: Motion segments shorter than this are ignored (their modes still apply), mm.
 MIN_LENGTH_MM = 1e-6
@@ -63,6 +63,9 @@ class PathLimits:
     #: Rotary-only moves (timed holds of the XYZ reference): toolpath row, seconds, and the profile's
     #: travel (deg), speed (deg/s), acceleration, jerk, one row each (m, 6).
     rotary_holds: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    #: The path the controller follows where corner smoothing changed it (arc lengths ``P_S``/``F_S0`` are
+    #: along it); None: the programmed path itself.
+    path: Toolpath | None = None
 
 
 def rest_to_rest_time(distance: np.ndarray, speed: np.ndarray, accel: np.ndarray,
@@ -342,10 +345,17 @@ def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     geo: list[list] = [[] for _ in range(8)]
     table = []
     table_rows = 0
+    # Corner blends (smoothing) are sampled in bulk; other curves one by one.
+    blend_rows = [int(r) for r in rows[nurbs] if isinstance(tp.nurbs[int(r)], BlendCurve)]
+    blend_pieces = [int(counts[np.searchsorted(rows, r)]) for r in blend_rows]
+    blend_table = dict(zip(blend_rows, blend_tables([tp.nurbs[r] for r in blend_rows], blend_pieces,
+                                                    NURBS_TABLE_TOL_MM, NURBS_SAMPLES, NURBS_MAX_SAMPLES),
+                           strict=True)) if blend_rows else {}  # fmt: skip
     for r in rows[nurbs]:
         k = int(counts[np.searchsorted(rows, r)])
         length = float(tp.length[r])
-        for point, tangent, curvature in _curve_table(tp.nurbs[int(r)], length, k):
+        pieces_table = blend_table.get(int(r)) or _curve_table(tp.nurbs[int(r)], length, k)
+        for point, tangent, curvature in pieces_table:
             samples = len(point)
             spacing = length / k / (samples - 1)
             kappa_max = float(curvature.max())
@@ -381,6 +391,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     path) the limits describe the smoothed path (:func:`cnc_gym.toolpath.smoothing.smooth_corners`); the
     toolpath indices they report stay those of ``tp``."""
     ctl = machine.controller
+    programmed = tp
     tp, origin = smooth_corners(tp, smoothing_rules(machine), lookahead=ctl.lookahead_blocks > 1)
     dt = float(ctl.interpolation_period_s)
     axis = {name: np.array(machine.axis_array(name)) for name in (
@@ -616,4 +627,4 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         arr.flags.writeable = False
     return PathLimits(seg_f=np.ascontiguousarray(seg_f), seg_i=seg_i, pt_f=pt_f, pt_i=pt_i,
                       dwell_f=dwell_f, curve_f=np.ascontiguousarray(curve_f), rest_position=rest,
-                      rotary_holds=rotary_holds)  # fmt: skip
+                      rotary_holds=rotary_holds, path=None if tp is programmed else tp)  # fmt: skip

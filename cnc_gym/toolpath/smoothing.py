@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from cnc_gym.toolpath.nurbs import NurbsCurve
 from cnc_gym.toolpath.segments import SegmentKind, SegmentMode, Toolpath
@@ -73,11 +74,222 @@ def _unit_blend_deviation(turn: np.ndarray) -> np.ndarray:
     return distance.max(axis=1)
 
 
-def blend_curve(corner: np.ndarray, u_in: np.ndarray, u_out: np.ndarray, d: float) -> NurbsCurve:
-    """The G2 blend of half-length ``d`` at ``corner`` between directions ``u_in`` and ``u_out``."""
-    ctrl = np.array([corner - d * u_in, corner - 0.5 * d * u_in, corner, corner + 0.5 * d * u_out,
-                     corner + d * u_out])  # fmt: skip
-    return NurbsCurve(ctrl, np.ones(5), BLEND_KNOTS, order=4)
+@dataclass(frozen=True, eq=False)
+class BlendCurve(NurbsCurve):
+    """A corner blend: a :class:`NurbsCurve` (cubic, five control points, :data:`BLEND_KNOTS`) made in bulk
+    by :func:`blend_curves`, which measures all lengths at once. The general curve's evaluation tables are
+    built on first use (``at_length``, ``nearest``, ...); the controller samples blends in bulk with
+    :func:`blend_tables` and never needs them."""
+
+    def __post_init__(self) -> None:
+        pass  # valid by construction; ``length`` is set by blend_curves
+
+    def __getattr__(self, name: str):
+        # Only reached for attributes not set yet: NurbsCurve's private tables. Build them all once.
+        if name.startswith("_") and not name.startswith("__") and "_built" not in self.__dict__:
+            length = self.__dict__["length"]
+            object.__setattr__(self, "_built", True)
+            NurbsCurve.__post_init__(self)
+            object.__setattr__(self, "length", length)  # the measured length the tool path uses
+            return getattr(self, name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+
+def _control_points(corner: np.ndarray, u_in: np.ndarray, u_out: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """(m, 5, 3) control points of the blends."""
+    dd = d[:, None]
+    return np.stack((corner - dd * u_in, corner - 0.5 * dd * u_in, corner, corner + 0.5 * dd * u_out,
+                     corner + dd * u_out), axis=1)  # fmt: skip
+
+
+def blend_curves(corner: np.ndarray, u_in: np.ndarray, u_out: np.ndarray, d: np.ndarray) -> list[BlendCurve]:
+    """The G2 blends of half-lengths ``d`` (m,) at ``corner`` (m, 3) between unit directions ``u_in`` and
+    ``u_out`` (m, 3), with their arc lengths (Gauss-Legendre, to rounding)."""
+    ctrl = _control_points(corner, u_in, u_out, d)
+    lengths = _Blends(ctrl).total
+    weights = np.ones(5)
+    weights.flags.writeable = False
+    knots = BLEND_KNOTS.copy()
+    knots.flags.writeable = False
+    out = []
+    for points, length in zip(ctrl, lengths.tolist(), strict=True):
+        points.flags.writeable = False
+        curve = BlendCurve(points, weights, knots, 4)
+        object.__setattr__(curve, "length", length)
+        out.append(curve)
+    return out
+
+
+def blend_curve(corner: np.ndarray, u_in: np.ndarray, u_out: np.ndarray, d: float) -> BlendCurve:
+    """One blend (see :func:`blend_curves`)."""
+    return blend_curves(corner[None], u_in[None], u_out[None], np.array([d]))[0]
+
+
+# ------------------------------------------------------------------------------- bulk sampling by arc length
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(6)
+_INTERVALS_PER_SPAN = 32  # arc-length table resolution (each interval integrated by 6-point Gauss-Legendre)
+_NEWTON_STEPS = 3
+
+
+def _span_coefficients() -> np.ndarray:
+    """(2, 4, 5): per knot span, the power-basis coefficients (u⁰..u³, local u ∈ [0, 1]) of the five basis
+    functions."""
+    from scipy.interpolate import BSpline
+
+    coef = np.zeros((2, 4, 5))
+    u = np.array([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0])
+    for span in range(2):
+        basis = BSpline.design_matrix(0.5 * (span + u), BLEND_KNOTS, 3).toarray()
+        coef[span] = np.linalg.solve(np.vander(u, 4, increasing=True), basis)
+    return coef
+
+
+class _Blends:
+    """Exact evaluation of many blends at once, by the parameter τ = span + u ∈ [0, 2], and by arc length."""
+
+    _coef: np.ndarray | None = None
+
+    def __init__(self, ctrl: np.ndarray) -> None:
+        if _Blends._coef is None:
+            _Blends._coef = _span_coefficients()
+        # poly[m, span, r, xyz]: coefficient of u^r
+        self.poly = np.einsum("srk,mkd->msrd", _Blends._coef, ctrl)
+        m = len(ctrl)
+        g = 2 * _INTERVALS_PER_SPAN
+        self.tau = np.linspace(0.0, 2.0, g + 1)
+        a, b = self.tau[:-1], self.tau[1:]
+        nodes = 0.5 * (a + b)[:, None] + 0.5 * (b - a)[:, None] * _GL_X[None, :]  # (g, q)
+        blend = np.repeat(np.arange(m), nodes.size)
+        speed = np.linalg.norm(self.derivatives(blend, np.tile(nodes.ravel(), m))[1], axis=1)
+        pieces = (speed.reshape(m, g, -1) * _GL_W).sum(axis=2) * 0.5 * (b - a)
+        self.cum = np.concatenate((np.zeros((m, 1)), np.cumsum(pieces, axis=1)), axis=1)  # (m, g + 1)
+        self.total = self.cum[:, -1].copy()
+
+    def derivatives(self, blend: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Point, d/dτ and d²/dτ² of blend ``blend[i]`` at ``tau[i]``."""
+        span = np.minimum(tau.astype(np.int64), 1)
+        u = (tau - span)[:, None]
+        c = self.poly[blend, span]  # (n, 4, 3)
+        point = c[:, 0] + u * (c[:, 1] + u * (c[:, 2] + u * c[:, 3]))
+        d1 = c[:, 1] + u * (2.0 * c[:, 2] + 3.0 * u * c[:, 3])
+        d2 = 2.0 * c[:, 2] + 6.0 * u * c[:, 3]
+        return point, d1, d2
+
+    def at_length(self, blend: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Point, unit tangent and curvature of blend ``blend[i]`` at arc length ``s[i]``."""
+        n = len(s)
+        point, tangent, curvature = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n)
+        _at_length_kernel(self.poly, self.tau, self.cum, blend.astype(np.int64), s.astype(np.float64), _GL_X,
+                          _GL_W, point, tangent, curvature)  # fmt: skip
+        return point, tangent, curvature
+
+
+@njit(cache=True, inline="always")
+def _d1(poly: np.ndarray, b: int, tau: float, out: np.ndarray) -> None:
+    span = min(int(tau), 1)
+    u = tau - span
+    for k in range(3):
+        out[k] = poly[b, span, 1, k] + u * (2.0 * poly[b, span, 2, k] + 3.0 * u * poly[b, span, 3, k])
+
+
+@njit(cache=True)
+def _at_length_kernel(poly: np.ndarray, grid: np.ndarray, cum: np.ndarray, blend: np.ndarray, s: np.ndarray,
+                      gl_x: np.ndarray, gl_w: np.ndarray, point: np.ndarray, tangent: np.ndarray,
+                      curvature: np.ndarray) -> None:  # fmt: skip
+    """Arc length → parameter (the blend's cumulative table, then Newton on a Gauss-Legendre length from the
+    interval start), then point, unit tangent and curvature."""
+    g = len(grid) - 1
+    d1 = np.zeros(3)
+    e1 = np.zeros(3)
+    e2 = np.zeros(3)
+    for i in range(len(s)):
+        b = blend[i]
+        target = s[i]
+        lo, hi = 0, g - 1  # interval with cum[lo] <= target (bisection)
+        while lo < hi:
+            mid = (lo + hi + 1) // 2
+            if cum[b, mid] <= target:
+                lo = mid
+            else:
+                hi = mid - 1
+        a, c = grid[lo], grid[lo + 1]
+        width = cum[b, lo + 1] - cum[b, lo]
+        frac = (target - cum[b, lo]) / width if width > 0.0 else 0.0
+        tau = a + min(max(frac, 0.0), 1.0) * (c - a)
+        for _ in range(_NEWTON_STEPS):
+            length = 0.0
+            for q in range(len(gl_x)):
+                _d1(poly, b, 0.5 * (a + tau) + 0.5 * (tau - a) * gl_x[q], d1)
+                length += gl_w[q] * math.sqrt(d1[0] ** 2 + d1[1] ** 2 + d1[2] ** 2)
+            length = cum[b, lo] + 0.5 * (tau - a) * length
+            _d1(poly, b, tau, d1)
+            speed = math.sqrt(d1[0] ** 2 + d1[1] ** 2 + d1[2] ** 2)
+            if speed > 0.0:
+                tau = min(max(tau - (length - target) / speed, a), c)
+        span = min(int(tau), 1)
+        u = tau - span
+        for k in range(3):
+            p0, p1 = poly[b, span, 0, k], poly[b, span, 1, k]
+            p2, p3 = poly[b, span, 2, k], poly[b, span, 3, k]
+            point[i, k] = p0 + u * (p1 + u * (p2 + u * p3))
+            e1[k] = p1 + u * (2.0 * p2 + 3.0 * u * p3)
+            e2[k] = 2.0 * p2 + 6.0 * u * p3
+        speed = math.sqrt(e1[0] ** 2 + e1[1] ** 2 + e1[2] ** 2)
+        if speed > 0.0:
+            for k in range(3):
+                tangent[i, k] = e1[k] / speed
+            cx = e1[1] * e2[2] - e1[2] * e2[1]
+            cy = e1[2] * e2[0] - e1[0] * e2[2]
+            cz = e1[0] * e2[1] - e1[1] * e2[0]
+            curvature[i] = math.sqrt(cx * cx + cy * cy + cz * cz) / speed**3
+
+
+def blend_tables(curves: list[BlendCurve], pieces: list[int], tolerance_mm: float, first_samples: int,
+                 max_samples: int) -> list[list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:  # fmt: skip
+    """Per blend, per piece (``pieces[i]`` pieces of equal arc length): point, unit tangent and curvature at
+    equally spaced samples, refined per piece (first_samples, 2·first_samples − 1, … up to max_samples) until
+    the cubic Hermite between samples is within ``tolerance_mm`` of the blend at every interval midpoint —
+    the controller's NURBS table, for all blends at once."""
+    blends = _Blends(np.array([c.control_points for c in curves]))
+    lengths = np.array([c.length for c in curves])
+    owner = np.repeat(np.arange(len(curves)), pieces)
+    index = np.arange(len(owner)) - np.repeat(np.cumsum(pieces) - np.asarray(pieces), pieces)
+    h = lengths[owner] / np.asarray(pieces)[owner]
+    s0 = index * h
+    samples = np.full(len(owner), first_samples, dtype=np.int64)
+    result: list = [None] * len(owner)
+    pending = np.arange(len(owner))
+    while pending.size:
+        n_int = samples[pending] - 1
+        counts = n_int + 1
+        rep = np.repeat(np.arange(len(pending)), counts)
+        j = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+        step = (h[pending] / n_int)[rep]
+        s = np.minimum(s0[pending][rep] + j * step, lengths[owner[pending]][rep])
+        blend = owner[pending][rep]
+        point, tangent, curvature = blends.at_length(blend, s)
+        interval = j < counts[rep] - 1
+        mid_point, _, _ = blends.at_length(blend[interval], s[interval] + 0.5 * step[interval])
+        starts = np.flatnonzero(interval)
+        hermite = ((point[starts] + point[starts + 1]) / 2
+                   + step[interval][:, None] / 8 * (tangent[starts] - tangent[starts + 1]))  # fmt: skip
+        error = np.linalg.norm(hermite - mid_point, axis=1)
+        worst = np.maximum.reduceat(error, np.cumsum(n_int) - n_int)
+        again = (worst > tolerance_mm) & (samples[pending] < max_samples)
+        offsets = np.cumsum(counts) - counts
+        for piece, start, count, more in zip(pending.tolist(), offsets.tolist(), counts.tolist(),
+                                             again.tolist(), strict=True):  # fmt: skip
+            if not more:
+                rows = slice(start, start + count)
+                result[piece] = (point[rows], tangent[rows], curvature[rows])
+        samples[pending[again]] = 2 * n_int[again] + 1
+        pending = pending[again]
+    out = []
+    first = 0
+    for k in pieces:
+        out.append(result[first : first + k])
+        first += k
+    return out
 
 
 def smooth_corners(tp: Toolpath, rules: SmoothingRules,
@@ -155,9 +367,8 @@ def _with_blends(tp: Toolpath, corners: np.ndarray, d: np.ndarray, u: np.ndarray
     nurbs = {int(first[r]): c for r, c in tp.nurbs.items()}
     kind = tp.kind[origin].copy()
     feed = tp.feed[origin].copy()
-    for row, corner, dd in zip(blend_rows.tolist(), corners.tolist(), d.tolist(), strict=True):
-        c = tp.end[corner]
-        curve = blend_curve(c, u[corner], u[corner + 1], dd)
+    curves = blend_curves(tp.end[corners], u[corners], u[corners + 1], d)
+    for row, corner, curve in zip(blend_rows.tolist(), corners.tolist(), curves, strict=True):
         nurbs[row] = curve
         kind[row] = SegmentKind.NURBS
         start[row] = curve.control_points[0]

@@ -177,3 +177,33 @@ def test_blend_length_never_overlaps_its_neighbour():
     assert smoothed.total_length == pytest.approx(sum(c.length for c in smoothed.nurbs.values())
                                                   + smoothed.length[lines].sum())  # fmt: skip
     assert math.isfinite(smoothed.total_length)
+
+
+def test_bulk_blend_samples_match_the_exact_curve():
+    # The controller samples blends in bulk (blend_tables); the general NURBS evaluation must agree.
+    from cnc_gym.toolpath.smoothing import blend_curves, blend_tables
+
+    rng = np.random.default_rng(3)
+    u_in = rng.normal(size=(5, 3))
+    u_out = rng.normal(size=(5, 3))
+    u_in /= np.linalg.norm(u_in, axis=1)[:, None]
+    u_out /= np.linalg.norm(u_out, axis=1)[:, None]
+    curves = blend_curves(rng.normal(size=(5, 3)), u_in, u_out, rng.uniform(0.01, 2.0, 5))
+    tables = blend_tables(curves, [4] * 5, 1e-10, 9, 1025)
+    for curve, pieces in zip(curves, tables, strict=True):
+        s = np.concatenate([np.linspace(i * curve.length / 4, (i + 1) * curve.length / 4, len(p[0]))
+                            for i, p in enumerate(pieces)])  # fmt: skip
+        point, tangent, kappa = curve.at_length(s)
+        np.testing.assert_allclose(np.concatenate([p[0] for p in pieces]), point, atol=1e-9)
+        np.testing.assert_allclose(np.concatenate([p[1] for p in pieces]), tangent, atol=1e-7)
+        np.testing.assert_allclose(np.concatenate([p[2] for p in pieces]), kappa, rtol=1e-6, atol=1e-9)
+
+
+def test_time_optimal_bound_follows_the_smoothed_path():
+    from cnc_gym.motion.bound import compute_bound
+
+    tp = polyline(organic())
+    smooth, plain = machine(0.05), machine(0.0)
+    bound_smooth = compute_bound(tp, smooth).total_s
+    assert bound_smooth < compute_bound(tp, plain).total_s
+    assert bound_smooth <= Controller(tp, smooth, in_position_check=False).run_to_end().time_s[-1]
