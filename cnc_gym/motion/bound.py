@@ -105,7 +105,7 @@ class _ChainPath:
         return np.zeros((len(s), 3))  # positions and second derivatives: not needed / zero by design
 
 
-def _speed_cap(cap: np.ndarray):
+def speed_cap_constraint(cap: np.ndarray):
     """A toppra linear constraint: path speed ``ṡ ≤ cap[i]`` at grid point i (toppra's ``x = ṡ²``)."""
     from toppra.constraint import LinearConstraint
 
@@ -183,7 +183,7 @@ def _cutting_time(grid: np.ndarray, speed: np.ndarray, tangent: np.ndarray, acce
     logging.getLogger("toppra").setLevel(logging.ERROR)
     acceleration = JointAccelerationConstraint(np.asarray(accel, dtype=float),
                                                discretization_scheme=DiscretizationType.Collocation)
-    problem = toppra.algorithm.TOPPRA([acceleration, _speed_cap(speed)], _ChainPath(grid, tangent),
+    problem = toppra.algorithm.TOPPRA([acceleration, speed_cap_constraint(speed)], _ChainPath(grid, tangent),
                                       gridpoints=grid, solver_wrapper="seidel")  # fmt: skip
     _, sd, _, _ = problem.compute_parameterization(0.0, 0.0, return_data=True)
     if sd is None or not np.all(np.isfinite(sd)):
