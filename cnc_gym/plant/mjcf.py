@@ -110,18 +110,19 @@ def _machine(env: int, machine: MachineConfig) -> str:
         f'<body name="e{env}_table"><inertial pos="0 0 0" mass="{_f(mx.load_mass_kg)}" diaginertia="1 1 1"/>'
         f'{_joint(axis_names(env, 0, mx).load_joint, "-1 0 0", mx, True, h)}'
         f'{_box("0.45 0.2 0.04", "0 0 -0.05", c["table"], group)}'
-        f'<site name="e{env}_work" pos="0 0 {tip}"/></body>'
+        f'<site name="e{env}_work" pos="0 0 {tip}" group="5"/></body>'
         f'{_motor_body(env, 0, mx, "-1 0 0", h)}</body>'
     )
     parts.append(_motor_body(env, 1, my, "0 -1 0", h))
     parts.append(
         f'<body name="e{env}_head" pos="0 0 {tip}"><inertial pos="0 0 0" mass="{_f(mz.load_mass_kg)}" '
         f'diaginertia="1 1 1"/>{_joint(axis_names(env, 2, mz).load_joint, "0 0 1", mz, True, h)}'
-        f'{_box("0.12 0.15 0.2", "0 0.3 0.35", c["head"], group)}'
-        f'<geom type="cylinder" size="0.05 0.06" pos="0 0 0.13" rgba="{c["head"]}" group="{group}" '
+        f'{_box("0.1 0.2 0.15", "0 0.3 0.32", c["head"], group)}'  # the head on the column's ways
+        f'{_box("0.065 0.08 0.1", "0 0.08 0.22", c["head"], group)}'  # the spindle's nose
+        f'<geom type="cylinder" size="0.06 0.09" pos="0 0 0.16" rgba="{c["head"]}" group="{group}" '
         f'contype="0" conaffinity="0"/>'
         f'<geom type="cylinder" size="0.005 0.035" pos="0 0 0.035" rgba="{c["tool"]}" group="{group}" '
-        f'contype="0" conaffinity="0"/><site name="e{env}_tool" pos="0 0 0"/></body>'
+        f'contype="0" conaffinity="0"/><site name="e{env}_tool" pos="0 0 0" group="5"/></body>'
     )
     parts.append(_motor_body(env, 2, mz, "0 0 1", h))
     return "".join(parts)

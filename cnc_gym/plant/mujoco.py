@@ -283,6 +283,13 @@ class MujocoPlant:
         """Position gains in force, (n_envs, 3), 1/s."""
         return self._kv.copy()
 
+    @property
+    def loop_stiffness_n_m(self) -> np.ndarray:
+        """(n_envs, 3) N/m: the force a P velocity loop makes per metre of following error at rest,
+        Kp·Kv: a Coulomb friction F offsets the axis by F/(Kp·Kv) (the integral of a PI loop removes
+        the offset, not the spike at a reversal)."""
+        return self._kp * self._kv
+
     def set_kv_scale(self, kv_scale: np.ndarray, env: int | None = None) -> None:
         """Multiply the preset's per-axis Kv by ``kv_scale``, as :meth:`ServoPlant.set_kv_scale`."""
         scale = np.asarray(kv_scale, dtype=float)

@@ -139,7 +139,7 @@ def test_coulomb_friction_with_a_p_velocity_loop_offsets_by_friction_over_loop_s
     # therefore differs from the friction-free circle's by F/K of the reversing axis.
     friction = 100.0
     angle, deviation, plant = _friction_deviation(friction, 0.0)
-    stiffness = plant._kp * plant.kv_1_s[0]  # N/m per axis
+    stiffness = plant.loop_stiffness_n_m[0]  # N/m per axis
     for axis, reversals in ((0, (0, 180)), (1, (90, 270))):
         estimate_um = friction / stiffness[axis] * 1e6
         for centre in reversals:
@@ -156,7 +156,7 @@ def test_quadrant_glitches_appear_at_the_four_reversals_only_and_grow_with_frict
     peaks = {}
     for friction in (60.0, 120.0):
         angle, deviation, plant = _friction_deviation(friction, 0.01)
-        stiffness = plant._kp * plant.kv_1_s[0]
+        stiffness = plant.loop_stiffness_n_m[0]
         peaks[friction] = []
         for axis, centre in ((0, 0), (1, 90), (0, 180), (1, 270)):
             window = (angle >= centre) & near(angle, centre + 5, 5)  # within 10° after the reversal
