@@ -224,8 +224,9 @@ class AxisMechanicsConfig:
     motor_mass_kg: float = number(100.0, 0.01, 1e5, unit="kg", why=_MASS_WHY,
                                   doc="motor-side inertia as a mass along the axis: (rotor + coupling + "
                                       "screw inertia)·(2π/lead)²")  # fmt: skip
-    viscous_damping_n_s_m: float = number(0.0, 0, 1e7, unit="N·s/m", doc="viscous friction of the load's "
-                                          "guideways", why="0 to far above any lubricated guideway.")  # fmt: skip
+    viscous_damping_n_s_m: float = number(0.0, 0, 1e7, unit="N·s/m",
+                                          doc="viscous friction of the load's guideways",
+                                          why="0 to far above any lubricated guideway.")  # fmt: skip
     coulomb_friction_n: float = number(
         0.0, 0, 1e5, unit="N", doc="Coulomb (dry) friction of the load's guideways (MuJoCo frictionloss)",
         why="0 to 100 kN: rolling guides have 10-200 N, box ways some kN.")  # fmt: skip
@@ -235,8 +236,9 @@ class AxisMechanicsConfig:
             "0 = rigid", why="ball-screw drives have 50-1000 N/µm.")  # fmt: skip
     coupling_damping_n_s_m: float = number(0.0, 0, 1e7, unit="N·s/m", why="0 to far above any drive train.",
                                            doc="damping of the motor-load coupling")  # fmt: skip
-    backlash_mm: float = number(0.0, 0, 1, unit="mm", doc="dead band of the coupling (lost motion at a "
-                                "reversal); needs a coupling stiffness", why="worn screws reach 0.1 mm.")  # fmt: skip
+    backlash_mm: float = number(0.0, 0, 1, unit="mm", why="worn screws reach 0.1 mm.",
+                                doc="dead band of the coupling (lost motion at a reversal); needs a "
+                                    "coupling stiffness")  # fmt: skip
     position_feedback: str = choice("motor", ("motor", "load"), doc="where the position loop measures: "
                                     "`motor` (rotary encoder, semi-closed loop) or `load` (linear scale, "
                                     "full-closed loop)")  # fmt: skip
@@ -270,8 +272,9 @@ class PlantConfig:
     backend: str = choice("lti", PLANT_BACKENDS, doc="`lti`: the exact linear servo model (fast); `mujoco`: "
                           "the same loops driving masses with friction, compliance and backlash")  # fmt: skip
     timestep_s: float = number(
-        0.0005, 1e-5, 0.02, unit="s", doc="MuJoCo physics timestep: at most the interpolation period and a "
-        "whole fraction of it", why="10 µs resolves a 2 kHz resonance; the step's cost grows as 1/timestep.")  # fmt: skip
+        0.0005, 1e-5, 0.02, unit="s",
+        doc="MuJoCo physics timestep: at most the interpolation period and a whole fraction of it",
+        why="10 µs resolves a 2 kHz resonance; the step's cost grows as 1/timestep.")  # fmt: skip
     axes: PlantAxes = section(PlantAxes, doc="per-axis mechanics (see below)")  # noqa: RUF009
 
 

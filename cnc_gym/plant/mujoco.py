@@ -139,7 +139,12 @@ class MujocoPlant:
     relative to the table), ``motor_position`` (what a semi-closed loop measures), ``following_error``
     (raw reference − load position), ``reference`` (last raw reference). ``model`` and ``data`` are the
     MuJoCo objects (SI units; joint coordinates are the machine coordinates in metres).
+
+    ``compiled_step`` is False: the env steps this plant through its methods (the modular step), not
+    inside its own compiled step; ``model_version`` counts gain changes, as ServoPlant's.
     """
+
+    compiled_step = False
 
     def __init__(
         self,
@@ -163,9 +168,11 @@ class MujocoPlant:
         self.data = mujoco.MjData(self.model)
         self._index_model()
         self._tune_drives()
+        mujoco.mj_resetData(self.model, self.data)
         self._base_kv = np.array(machine.axis_array("kv_1_s"))
         self._kv_scale = np.ones((self.n_envs, 3))
         self._kv = self._base_kv * self._kv_scale
+        self.model_version = 0
         self._check_loops(np.ones(3))
         self._state = np.zeros((self.n_envs, 3, 2))  # velocity-loop integral, current-loop force
         self._history = np.zeros((self.n_envs, self._n_hist, 3))  # raw references, metres
@@ -311,21 +318,32 @@ class MujocoPlant:
             self._check_loops(row)
         self._kv_scale = new_scale
         self._kv = self._base_kv * new_scale
+        self.model_version += 1
+
+    @property
+    def kv_min(self) -> np.ndarray:
+        """(n_envs,) each env's lowest position gain, 1/s."""
+        return self._kv.min(axis=1)
 
     # ------------------------------------------------------------------ public API
-    def reset(self, position: np.ndarray) -> None:
+    def reset(self, position: np.ndarray, env: int | None = None) -> None:
         """Every axis at rest at ``position`` ((n_envs, 3) or (3,), mm), motor and load alike (a backlash
-        gap is centred), drives' states cleared; the reference history too."""
-        pos = np.broadcast_to(np.asarray(position, dtype=float), (self.n_envs, 3))
+        gap is centred), the drives' states cleared; the reference history too. With ``env``, only that
+        env (``position`` (3,)); the other machines in the model are left as they are."""
+        envs = np.arange(self.n_envs) if env is None else np.array([int(env)])
+        if envs.min() < 0 or envs.max() >= self.n_envs:
+            raise ValueError(f"env {env} out of range 0..{self.n_envs - 1}")
+        pos = np.broadcast_to(np.asarray(position, dtype=float), (len(envs), 3))
         if not np.all(np.isfinite(pos)):
             raise ValueError("plant reset position must be finite")
-        mujoco.mj_resetData(self.model, self.data)
-        pos_m = pos * _M_PER_MM
-        self.data.qpos[self._load_q] = pos_m
-        self.data.qpos[self._motor_q] = pos_m
-        mujoco.mj_forward(self.model, self.data)
-        self._state[:] = 0.0
-        self._history[:] = pos_m[:, None, :]
+        d, pos_m = self.data, pos * _M_PER_MM
+        d.qpos[self._load_q[envs]] = pos_m
+        d.qpos[self._motor_q[envs]] = pos_m
+        for dofs in (self._load_v[envs], self._motor_v[envs]):
+            d.qvel[dofs] = d.qacc[dofs] = d.qacc_warmstart[dofs] = d.qfrc_applied[dofs] = 0.0
+        d.ctrl[self._actuator[envs].ravel()] = 0.0
+        self._state[envs] = 0.0
+        self._history[envs] = pos_m[:, None, :]
 
     def step(self, reference: np.ndarray) -> np.ndarray:
         """Advance by one sample per reference row and return the load-side positions (mm), same shape.

@@ -132,7 +132,7 @@ class MachineView:
             raise RuntimeError(f"no off-screen OpenGL context: {self.reason}")
         model, data = self.plant.model, self.plant.data
         self._gl.make_current()
-        mujoco.mj_forward(model, data)
+        mujoco.mj_kinematics(model, data)  # body poses only: the dynamics' state is left as it is
         path = np.asarray(path_mm, dtype=float)
         if len(path):  # frame the programmed path: look at its middle from 3 times its size
             low, high = path.min(axis=0), path.max(axis=0)

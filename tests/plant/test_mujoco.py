@@ -245,6 +245,23 @@ def test_batched_envs_are_independent_machines():
         np.testing.assert_allclose(out[e], single.step(refs[e]), atol=1e-9)
 
 
+def test_resetting_one_env_leaves_the_others_running():
+    machine = load_machine("vmc-small-mujoco")
+    ref = np.repeat(circle(20.0, F5000, 0.3)[None], 2, axis=0)
+    batched, single = MujocoPlant(machine, n_envs=2), MujocoPlant(machine)
+    for p in (batched, single):
+        p.reset(np.array([20.0, 0, 0]))
+    half = ref.shape[1] // 2
+    batched.step(ref[:, :half])
+    single.step(ref[0, :half])
+    batched.reset(np.array([1.0, 2.0, 3.0]), env=1)
+    np.testing.assert_allclose(batched.position[1], [1, 2, 3])
+    np.testing.assert_allclose(batched.step(ref[:, half:])[0], single.step(ref[0, half:]), atol=1e-9)
+    assert batched.kv_min.shape == (2,) and batched.compiled_step is False
+    with pytest.raises(ValueError):
+        batched.reset(np.zeros(3), env=2)
+
+
 def test_per_env_kv_scale_equals_a_machine_with_those_gains():
     machine = rigid("vmc-small")
     scale = np.array([[1.0, 1.0, 1.0], [0.8, 1.1, 0.9]])
@@ -258,6 +275,7 @@ def test_per_env_kv_scale_equals_a_machine_with_those_gains():
     other.reset(np.array([20.0, 0, 0]))
     np.testing.assert_allclose(out[1], other.step(ref[1]), atol=1e-9)
     np.testing.assert_allclose(plant.kv_1_s, scale * np.array(machine.axis_array("kv_1_s")))
+    assert plant.model_version == 1
     with pytest.raises(ConfigError):
         plant.set_kv_scale(np.array([0.0, 1, 1]), env=0)
     with pytest.raises(ValueError):
