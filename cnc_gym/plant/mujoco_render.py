@@ -54,9 +54,9 @@ def open_gl_context(width: int, height: int) -> tuple[Any | None, str]:
             if name == "egl":
                 from mujoco.egl import GLContext
             elif name == "osmesa":
-                from mujoco.osmesa import GLContext  # type: ignore[no-redef]
+                from mujoco.osmesa import GLContext
             else:
-                from mujoco.glfw import GLContext  # type: ignore[no-redef]
+                from mujoco.glfw import GLContext
             context = GLContext(width, height)
             context.make_current()
             return context, ""
@@ -128,7 +128,7 @@ class MachineView:
     def draw(self, path_mm: np.ndarray, trace_mm: np.ndarray, trace_error_mm: np.ndarray,
              tolerance_mm: float) -> np.ndarray:  # fmt: skip
         """An (height, width, 3) uint8 picture; the camera looks at the tool."""
-        if not self.available:
+        if self._gl is None:
             raise RuntimeError(f"no off-screen OpenGL context: {self.reason}")
         model, data = self.plant.model, self.plant.data
         self._gl.make_current()
