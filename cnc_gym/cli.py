@@ -2,7 +2,8 @@
 
     cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...] [--program-dir DIR]
                           [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--policy P] [--json] [--plot FILE.png|DIR/]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--plant lti|mujoco] [--policy P] [--json]
+                        [--plot FILE.png|DIR/]
                         [--max-time SECONDS] [--max-blocks N] [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
@@ -63,6 +64,9 @@ def build_parser() -> argparse.ArgumentParser:
     run = add_command(sub, "run", "simulate a program through controller and servo plant")
     run.add_argument("program", metavar="PROGRAM", help=PROGRAM_HELP)
     _common(run)
+    run.add_argument("--plant", metavar="lti|mujoco", default=None,
+                     help="servo plant: lti (exact linear model) or mujoco (masses, friction, backlash); "
+                          "default: the machine preset's")  # fmt: skip
     run.add_argument("--policy", default="constant:1.0",
                      help="constant:<override>, classical, or a trained model's path (default constant:1.0)")
     run.add_argument("--json", action="store_true", help="print one JSON object with the results")

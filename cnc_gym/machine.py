@@ -33,6 +33,7 @@ or look-ahead window would need gigabytes). Each range's reason is in its declar
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Iterator
@@ -357,6 +358,16 @@ def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
     own.setdefault("name", Path(source).stem)
     built = {"axes": axes, "rotary_axes": rotary, "source": source}
     return from_mapping(MachineConfig, own, source, "", built)
+
+
+def with_plant_backend(machine: MachineConfig, backend: str | None) -> MachineConfig:
+    """``machine`` with ``plant.backend`` set to ``backend`` (None: as it is), e.g. for the env's
+    ``plant=`` and the CLI's ``--plant``; a name not in :data:`PLANT_BACKENDS` is a ConfigError."""
+    if backend is None or backend == machine.plant.backend:
+        return machine
+    if backend not in PLANT_BACKENDS:
+        raise ConfigError(f"plant must be one of {', '.join(PLANT_BACKENDS)}, got {shown(backend)}")
+    return dataclasses.replace(machine, plant=dataclasses.replace(machine.plant, backend=backend))
 
 
 def check_machine(machine: MachineConfig) -> MachineConfig:

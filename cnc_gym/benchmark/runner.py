@@ -45,6 +45,8 @@ class BenchConfig:
     seeds: list[int] = field(default_factory=lambda: [0])
     machine: str = "vmc-small"
     dialect: str = "gsk25i"
+    #: Servo plant backend (``lti`` or ``mujoco``); None: the machine preset's.
+    plant: str | None = None
     suite: str | None = None
     suite_version: int | None = None
     suite_sha256: str | None = None
@@ -133,7 +135,7 @@ def _bound_task(program: BenchProgram, machine: str, dialect: str) -> dict[str, 
 
 def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int], machine: str,
                   dialect: str, bound: dict[str, Any], common: dict[str, Any],
-                  progress: bool) -> list[dict[str, Any]]:  # fmt: skip
+                  progress: bool, plant: str | None = None) -> list[dict[str, Any]]:  # fmt: skip
     """Every seed of one (program, policy): records in seed order."""
     base = {**common, "split": program.split, "program": program.name,
             "program_sha256": _sha(program.text), "family": program.family, "tier": program.tier,
@@ -151,7 +153,8 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
     from agents import make_policy
 
     policy = make_policy(policy_spec, progress=None if progress else False)
-    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text], dialect=dialect, machine=machine)
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text], dialect=dialect, machine=machine,
+                         plant=plant)  # fmt: skip
     records = []
     try:
         for seed in seeds:
@@ -247,7 +250,7 @@ def _call(task: Callable[[], Any]) -> Any:
 
 def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
     """Run the benchmark; records sorted by (program order, policy order, seed)."""
-    from cnc_gym.machine import load_machine
+    from cnc_gym.machine import load_machine, with_plant_backend
     from cnc_gym.motion.bound import machine_digest
 
     if not config.programs:
@@ -259,10 +262,11 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
             from agents import make_policy
 
             make_policy(spec, progress=False)
-    mach = load_machine(config.machine)
+    mach = with_plant_backend(load_machine(config.machine), config.plant)
     common = {"suite": config.suite or "user", "suite_version": config.suite_version,
               "suite_sha256": config.suite_sha256, "machine": mach.name,
-              "machine_sha256": machine_digest(mach), "dialect": config.dialect, "commit": current_commit(),
+              "machine_sha256": machine_digest(mach), "plant": mach.plant.backend,
+              "dialect": config.dialect, "commit": current_commit(),
               "cnc_gym_version": _version()}  # fmt: skip
     bar = None
     total = len(config.programs) * (1 + len(config.policies))
@@ -276,7 +280,7 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
                        for p in config.programs]  # fmt: skip
         bounds = _run_tasks(bound_tasks, config, bar, "bench: bounds")
         episode_tasks = [functools.partial(_episode_task, program, spec, tuple(config.seeds), config.machine,
-                                           config.dialect, bound, common, serial_progress)
+                                           config.dialect, bound, common, serial_progress, config.plant)
                          for program, bound in zip(config.programs, bounds, strict=True)
                          for spec in config.policies]  # fmt: skip
         groups = _run_tasks(episode_tasks, config, bar, "bench: episodes")

@@ -15,7 +15,7 @@ from numba import njit
 from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig, load_machine
+from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.motion import kernel as _kernel
 from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
@@ -212,9 +212,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
     of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
     ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
-    ``lookahead_points``. ``reset(seed=..., options={"program": name_or_index})``: with several programs
-    the episode's program is drawn with ``self.np_random``; the option picks one (a name not in the set
-    is loaded for that episode).
+    ``lookahead_points``, ``plant`` (``"lti"`` or ``"mujoco"``: the servo plant, overriding the machine
+    preset's ``plant.backend``; see docs/plant.md). ``reset(seed=..., options={"program":
+    name_or_index})``: with several programs the episode's program is drawn with ``self.np_random``; the
+    option picks one (a name not in the set is loaded for that episode).
 
     ## Info
 
@@ -245,9 +246,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         render_mode: str | None = None,
         lookahead_mm: float = 24.0,
         lookahead_points: int = 8,
+        plant: str | None = None,
     ) -> None:
         from cnc_gym.motion import Controller
-        from cnc_gym.plant import ContourErrorMeter, ServoPlant
+        from cnc_gym.plant import ContourErrorMeter, make_plant
 
         self._controller_cls = Controller
         self._meter_cls = ContourErrorMeter
@@ -255,8 +257,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
-                             lookahead_mm=lookahead_mm, lookahead_points=lookahead_points)  # fmt: skip
-        self.machine: MachineConfig = load_machine(args.machine)
+                             lookahead_mm=lookahead_mm, lookahead_points=lookahead_points,
+                             plant=plant)  # fmt: skip
+        self.machine: MachineConfig = with_plant_backend(load_machine(args.machine), args.plant)
         self.action_mode = args.action_mode
         self.render_mode = args.render_mode
         self.dialect = args.dialect
@@ -286,7 +289,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._episode_cache: dict[str, dict[str, Any]] = {}
         self.program_names = [name for name, _ in self._programs]
 
-        self.plant = ServoPlant(self.machine, n_envs=1)
+        self.plant = make_plant(self.machine, n_envs=1)  # the preset's backend, or plant=
 
         # Spaces.
         self.action_space = spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
@@ -311,9 +314,13 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._settle_reference = np.zeros((self.ticks_per_step, 3))
         self._renderer = None
         if render_mode == "rgb_array":
-            from cnc_gym.envs.render import EpisodeRenderer
+            from cnc_gym.envs.render import EpisodeRenderer, MachineRenderer
 
-            self._renderer = EpisodeRenderer(self.tolerance_mm)  # records per step; draws on render()
+            # Records per step; draws on render(): MuJoCo's picture of the machine on the MuJoCo plant.
+            if self.machine.plant.backend == "mujoco":
+                self._renderer = MachineRenderer(self.tolerance_mm, self.plant)
+            else:
+                self._renderer = EpisodeRenderer(self.tolerance_mm)
         self._select(0)
         self._reset_stats()
 

@@ -119,9 +119,9 @@ def _machine(env: int, machine: MachineConfig) -> str:
         f'diaginertia="1 1 1"/>{_joint(axis_names(env, 2, mz).load_joint, "0 0 1", mz, True, h)}'
         f'{_box("0.1 0.2 0.15", "0 0.3 0.32", c["head"], group)}'  # the head on the column's ways
         f'{_box("0.065 0.08 0.1", "0 0.08 0.22", c["head"], group)}'  # the spindle's nose
-        f'<geom type="cylinder" size="0.06 0.09" pos="0 0 0.16" rgba="{c["head"]}" group="{group}" '
+        f'<geom type="cylinder" size="0.045 0.07" pos="0 0 0.16" rgba="{c["head"]}" group="{group}" '
         f'contype="0" conaffinity="0"/>'
-        f'<geom type="cylinder" size="0.005 0.035" pos="0 0 0.035" rgba="{c["tool"]}" group="{group}" '
+        f'<geom type="cylinder" size="0.005 0.045" pos="0 0 0.045" rgba="{c["tool"]}" group="{group}" '
         f'contype="0" conaffinity="0"/><site name="e{env}_tool" pos="0 0 0" group="5"/></body>'
     )
     parts.append(_motor_body(env, 2, mz, "0 0 1", h))

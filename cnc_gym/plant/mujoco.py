@@ -93,7 +93,7 @@ def _servo_law(qpos, qvel, qacc, adr, kv, par, state, filtered, k, alpha, period
                 ctrl[e * 3 + a] = w
 
 
-def _loop_matrix(kv: float, ff_unused: float, kp: float, tau: float, inv_tn: float, m_motor: float,
+def _loop_matrix(kv: float, kp: float, tau: float, inv_tn: float, m_motor: float,
                  m_load: float, stiffness: float, damping: float, viscous: float, load_feedback: bool,
                  lagged: bool) -> np.ndarray:  # fmt: skip
     """The linear closed loop of one axis (no friction, no backlash; reference 0) as ẋ = A x.
@@ -101,7 +101,6 @@ def _loop_matrix(kv: float, ff_unused: float, kp: float, tau: float, inv_tn: flo
     States: motor position and velocity, load position and velocity, force F (lagged loop), integral I.
     A rigid axis (stiffness 0) is one mass: the load states copy the motor's.
     """
-    del ff_unused  # the feed-forward acts on the reference only
     rigid = stiffness == 0
     a = np.zeros((6, 6))
     xm, vm, xl, vl, f, i = range(6)
@@ -260,7 +259,7 @@ class MujocoPlant:
             mech = self.machine.plant.axes.axis(a)
             kv = servo.kv_1_s * float(scale[a])
             k = mech.coupling_stiffness_n_um * 1e6
-            matrix = _loop_matrix(kv, servo.feedforward, self._kp[a], self._tau[a], self._inv_tn[a],
+            matrix = _loop_matrix(kv, self._kp[a], self._tau[a], self._inv_tn[a],
                                   self.motor_mass_kg[a] if k else self.axis_mass_kg[a],
                                   self.load_mass_kg[a] if k else 0.0, k, mech.coupling_damping_n_s_m,
                                   mech.viscous_damping_n_s_m, mech.position_feedback == "load",

@@ -104,7 +104,7 @@ class MachineView:
             return
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
-        self._camera.azimuth, self._camera.elevation, self._camera.distance = 120.0, -35.0, 0.9
+        self._camera.azimuth, self._camera.elevation, self._camera.distance = 90.0, -40.0, 0.9
         self._viewport = mujoco.MjrRect(0, 0, width, height)
         self._rgb = np.zeros((height, width, 3), dtype=np.uint8)
 
@@ -134,10 +134,10 @@ class MachineView:
         self._gl.make_current()
         mujoco.mj_kinematics(model, data)  # body poses only: the dynamics' state is left as it is
         path = np.asarray(path_mm, dtype=float)
-        if len(path):  # frame the programmed path: look at its middle from 3 times its size
+        if len(path):  # frame the programmed path: look at its middle from 5 times its size
             low, high = path.min(axis=0), path.max(axis=0)
             self._camera.lookat[:] = self._to_world((low + high) / 2.0)
-            self._camera.distance = float(np.clip(3.0 * np.max(high - low) / 1000.0, 0.2, 2.5))
+            self._camera.distance = float(np.clip(5.0 * np.max(high - low) / 1000.0, 0.25, 2.5))
         else:
             self._camera.lookat[:] = data.site("e0_tool").xpos
         mujoco.mjv_updateScene(model, data, self._option, None, self._camera, mujoco.mjtCatBit.mjCAT_ALL,
@@ -147,7 +147,7 @@ class MachineView:
         if len(trace) > 1:
             error = _thin(np.asarray(trace_error_mm, dtype=float))
             colours = [_error_rgba(e / (2.0 * tolerance_mm)) for e in error[1:]]
-            self._add_lines(trace, colours, 2.0)
+            self._add_lines(trace, colours, 4.0)
         mujoco.mjr_render(self._viewport, self._scene, self._context)
         mujoco.mjr_readPixels(self._rgb, None, self._viewport, self._context)
         return np.flipud(self._rgb).copy()
