@@ -1,15 +1,16 @@
 """The ``cnc-gym`` command.
 
-    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--block-skip N ...] [--program-dir DIR]
-                          [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--plant lti|mujoco] [--policy P] [--json]
-                        [--plot FILE.png|DIR/]
-                        [--max-time SECONDS] [--max-blocks N] [--no-progress]
+    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--block-skip N ...]
+                          [--program-dir DIR] [--max-blocks N]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--plant lti|mujoco] [--policy P]
+                        [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
+                        [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
 the rule of :mod:`cnc_gym.programs`. ``trace`` prints the canonical tool path as JSON Lines (``kind``,
-``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``run``
+``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``--units``
+sets the input unit at power-on (:data:`UNITS_HELP`). ``run``
 simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`). ``bench``
 benchmarks policies on a suite or your programs (:mod:`cnc_gym.benchmark.cli`).
 
@@ -28,6 +29,7 @@ from collections.abc import Sequence
 
 from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
+from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
@@ -41,6 +43,9 @@ EXIT_STATUS_HELP = """exit status:
        the results are printed (finished: false) and a line on stderr says why
   130  interrupted (Ctrl-C)"""
 
+UNITS_HELP = ("input unit at power-on, mm or inch (a controller parameter: a program without G20/G21 "
+              "is read in it; the program's own G20/G21 still rules). Default: the machine preset's "
+              "power_on_units, else the dialect's power-on code (G21)")
 PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PROGRAMS)} (a built-in name "
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
@@ -68,7 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="servo plant: lti (exact linear model) or mujoco (masses, friction, backlash); "
                           "default: the machine preset's")  # fmt: skip
     run.add_argument("--policy", default="constant:1.0",
-                     help="constant:<override>, classical, or a trained model's path (default constant:1.0)")
+                     help="constant:<override>, classical (deployable), oracle (re-simulates the plant: "
+                          "an oracle, not deployable), a trained model's path (.zip), or module:callable "
+                          "(default constant:1.0)")
     run.add_argument("--json", action="store_true", help="print one JSON object with the results")
     run.add_argument("--plot", metavar="FILE.png|DIR/",
                      help="save a plot of path, contour error and feed (.png, .pdf or .svg; a folder gets "
@@ -95,6 +102,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--machine", default=None,
                         help="machine preset name (configs/machines) or YAML path; default: none for trace, "
                              "the runner's default for run")  # fmt: skip
+    parser.add_argument("--units", choices=INPUT_UNITS, default=None, help=UNITS_HELP)
     parser.add_argument("--max-blocks", metavar="N", type=int, default=None,
                         help=f"bound on executed blocks; a runaway loop ends in too-many-blocks "
                              f"(default {DEFAULT_MAX_BLOCKS:,})")  # fmt: skip
@@ -123,7 +131,7 @@ def cmd_trace(args: argparse.Namespace) -> int:
 
         machine = load_machine(args.machine)
     options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
-               "program_dir": args.program_dir}  # fmt: skip
+               "program_dir": args.program_dir, "units": args.units}  # fmt: skip
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)

@@ -12,6 +12,7 @@ Layout of a preset file::
 
     name: vmc-small
     description: ...
+    power_on_units: inch                                                      # optional: mm or inch
     controller: {interpolation_period_s: 0.002, lookahead_blocks: 32, ...}   # ControllerConfig fields
     axis_defaults: {rapid_mm_min: 30000, kv_1_s: 40, ...}                     # AxisConfig fields
     axes: {x: {kv_1_s: 40}, y: {kv_1_s: 38}, z: {...}}                        # per-axis overrides
@@ -58,8 +59,9 @@ from cnc_gym.config import (
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
-__all__ = ["AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig", "PlantConfig",
-           "RotaryAxisConfig", "check_machine", "configs_dir", "load_machine", "machine_names"]  # fmt: skip
+__all__ = ["INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig",
+           "PlantConfig", "RotaryAxisConfig", "check_machine", "configs_dir", "load_machine",
+           "machine_names"]  # fmt: skip
 
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
@@ -72,6 +74,10 @@ _ACCEL_WHY = ("0.0001 g to 100 g: real axes reach about 0.1-5 g; values far outs
 _JERK_WHY = "real axes run at 10^3-10^7 mm/s³; values far outside make the planner's arithmetic overflow."
 _TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double precision."
 
+
+#: The input units a controller can be in at power-on (a preset's ``power_on_units``,
+#: ``interpret(units=)``, ``--units``): G21 millimetres or G20 inches.
+INPUT_UNITS = ("mm", "inch")
 
 _ROTARY_WHY = "as the linear axes', degrees counting as mm (the GSK rotary feed rule)."
 
@@ -283,6 +289,12 @@ class PlantConfig:
 class MachineConfig:
     name: str = text("", doc="the preset's name (default: the file's name)")
     description: str = text("", max_length=4096, doc="one paragraph for people")
+    #: The input unit in force at power-on (a controller parameter, as Fanuc's 0001#2 INI): an inch
+    #: machine reads a program without G20/G21 in inches. A program's own G20/G21 still rules; the
+    #: ``units=`` argument (``--units``) rules over this key.
+    power_on_units: str | None = choice(None, (None, *INPUT_UNITS), doc="input unit at power-on, `mm` or "
+                                        "`inch` (null: the dialect's power-on code: G21, Syntec G71); a "
+                                        "program's G20/G21 still rules")  # fmt: skip
     controller: ControllerConfig = section(ControllerConfig, doc="path-level controller parameters")  # noqa: RUF009
     axes: tuple[AxisConfig, AxisConfig, AxisConfig] = (AxisConfig(), AxisConfig(), AxisConfig())
     source: str = "<defaults>"

@@ -110,7 +110,8 @@ class RunResult:
 
 
 def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
-             max_blocks: int | None = None, plant: str | None = None, **kwargs: Any):  # fmt: skip
+             max_blocks: int | None = None, units: str | None = None, plant: str | None = None,
+             **kwargs: Any):  # fmt: skip
     """The Feedrate env on one program (interpreted up front, so program errors surface here); ``plant``
     (``lti`` or ``mujoco``) overrides the machine preset's plant backend."""
     import gymnasium
@@ -119,11 +120,13 @@ def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     from cnc_gym.machine import load_machine
     from cnc_gym.programs import load_program
 
-    options = {} if max_blocks is None else {"max_blocks": max_blocks}
+    options: dict[str, Any] = {"units": units}
+    if max_blocks is not None:
+        options["max_blocks"] = max_blocks
     # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
     loaded = load_program(program, dialect, load_machine(machine), **options)
     return gymnasium.make("cnc_gym/Feedrate-v0", programs=[loaded], dialect=dialect, machine=machine,
-                          plant=plant, **kwargs)  # fmt: skip
+                          units=units, plant=plant, **kwargs)  # fmt: skip
 
 
 def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
@@ -260,15 +263,17 @@ def _duration(seconds: float) -> str:
 def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
              policy: str | Any = "constant:1.0", progress: bool = False, max_time_s: float | None = None,
              max_blocks: int | None = None, log: TextIO | None = None,
-             plant: str | None = None) -> RunResult:  # fmt: skip
+             units: str | None = None, plant: str | None = None) -> RunResult:  # fmt: skip
     """Simulate ``program`` (built-in name, file or G-code text: the rule of :mod:`cnc_gym.programs`)
     under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
-    and a projection of the wall-clock time once it has run a while."""
+    and a projection of the wall-clock time once it has run a while. ``units``: the input unit at
+    power-on (``"mm"``/``"inch"``; default the machine preset's ``power_on_units``, else the dialect's)."""
     from agents import make_policy
 
     _check_max_time(max_time_s)
-    pol = make_policy(policy) if isinstance(policy, str) else policy
-    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, plant=plant)
+    pol = make_policy(policy, progress=progress) if isinstance(policy, str) else policy
+    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units,
+                   plant=plant)
     try:
         if log is not None:
             _announce_long_program(env.unwrapped, max_time_s, log)
@@ -311,7 +316,7 @@ def run_cli(args: Any) -> int:
     result = simulate(args.program, dialect=args.dialect, machine=machine, policy=args.policy,
                       progress=progress, max_time_s=getattr(args, "max_time", None),
                       max_blocks=getattr(args, "max_blocks", None), log=sys.stderr,
-                      plant=getattr(args, "plant", None))  # fmt: skip
+                      units=getattr(args, "units", None), plant=getattr(args, "plant", None))  # fmt: skip
     if plot is not None:
         target, is_folder = plot
         plot_run(result, target / default_plot_name(result) if is_folder else target)

@@ -43,6 +43,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -507,7 +508,7 @@ def _on_alarm(signum, frame):
     raise _OverTime
 
 
-def _classify(text: str, time_limit: float) -> tuple[str, float, str]:
+def _classify(text: str, time_limit: float, dialect: str = "gsk25i") -> tuple[str, float, str]:
     """(outcome, CPU seconds, detail) of one program in this process. ``interpret`` runs under the time
     bound ``max_seconds`` = ``time_limit`` / 2 (its ``time-budget`` error is an ordinary outcome); the
     CPU-time alarm at ``time_limit`` catches a program that gets past that bound."""
@@ -519,7 +520,7 @@ def _classify(text: str, time_limit: float) -> tuple[str, float, str]:
     start = time.process_time()
     signal.setitimer(signal.ITIMER_PROF, time_limit)
     try:
-        tp = interpret(text, file="fuzz.nc", max_seconds=time_limit / 2)
+        tp = interpret(text, file="fuzz.nc", dialect=dialect, max_seconds=time_limit / 2)
     except _OverTime:
         return "over-time", time.process_time() - start, ""
     except ProgramError as err:
@@ -565,10 +566,10 @@ def _worker(conn, time_limit: float, memory_limit_mb: float) -> None:
 
     while True:
         try:
-            text = conn.recv()
+            text, dialect = conn.recv()
         except EOFError:
             return
-        outcome = _classify(text, time_limit)
+        outcome = _classify(text, time_limit, dialect)
         conn.send((*outcome, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
 
 
@@ -594,10 +595,10 @@ class _Worker:
             self.conn.close()
             self.process = None
 
-    def run(self, text: str) -> tuple[str, float, str, float]:
+    def run(self, text: str, dialect: str = "gsk25i") -> tuple[str, float, str, float]:
         if self.process is None:
             self.start()
-        self.conn.send(text)
+        self.conn.send((text, dialect))
         # The CPU alarm ends a slow program inside the worker; this backstop catches one stuck in a long C
         # call (the alarm runs only between Python bytecodes): the worker's own CPU time, read from /proc
         # (wall time on a loaded machine says little), and a far wall-clock limit.
@@ -643,14 +644,16 @@ def _cli_command() -> list[str]:
     return [found] if found else [sys.executable, "-m", "cnc_gym.cli"]
 
 
-def check_cli(text: str, outcome: str, time_limit: float) -> str:
+def check_cli(text: str, outcome: str, time_limit: float, dialect: str = "gsk25i") -> str:
     """'' when ``cnc-gym trace`` agrees with the in-process outcome, else what differs."""
     with tempfile.TemporaryDirectory() as folder:  # an empty folder: M98/G65 find no other program files
         path = Path(folder) / "fuzz.nc"
         path.write_bytes(text.encode("utf-8", "surrogatepass"))
         try:
             done = subprocess.run(
-                [*_cli_command(), "trace", str(path)], capture_output=True, timeout=4 * time_limit + 60
+                [*_cli_command(), "trace", str(path), "--dialect", dialect],
+                capture_output=True,
+                timeout=4 * time_limit + 60,
             )
         except subprocess.TimeoutExpired:
             return "timeout" if outcome != "over-time" else ""
@@ -679,6 +682,7 @@ class Report:
     seed: int
     tried: int = 0
     by_kind: Counter = field(default_factory=Counter)
+    by_dialect: Counter = field(default_factory=Counter)
     outcomes: Counter = field(default_factory=Counter)
     cli_checked: int = 0
     slowest: list = field(default_factory=list)  # (cpu seconds, outcome, index), the 5 slowest
@@ -698,6 +702,7 @@ class Report:
             "seed": self.seed,
             "programs": self.tried,
             "by_kind": dict(self.by_kind),
+            "by_dialect": dict(self.by_dialect),
             "classes": self.classes(),
             "outcomes": dict(self.outcomes.most_common()),
             "cli_checked": self.cli_checked,
@@ -718,8 +723,11 @@ def fuzz(
     cli_every: int = 500,
     save: Path | None = None,
     progress: bool = False,
+    dialects: Sequence[str] = ("gsk25i",),
 ) -> Report:
-    """Run the fuzzer until ``programs_budget`` programs or ``seconds`` (whichever first)."""
+    """Run the fuzzer until ``programs_budget`` programs or ``seconds`` (whichever first). Program ``i``
+    runs under ``dialects[i % len(dialects)]`` (the grammar is the Fanuc family's: in another language
+    family most programs are errors, which still checks that every outcome is one clean line)."""
     report = Report(seed=seed)
     worker = _Worker(time_limit, memory_limit_mb)
     started = time.monotonic()
@@ -734,15 +742,17 @@ def fuzz(
                 break
             if seconds is not None and time.monotonic() - started >= seconds:
                 break
-            outcome, cpu, detail, rss = worker.run(text)
+            dialect = dialects[index % len(dialects)]
+            outcome, cpu, detail, rss = worker.run(text, dialect)
             report.tried += 1
             report.by_kind[kind] += 1
+            report.by_dialect[dialect] += 1
             report.peak_rss_mb = max(report.peak_rss_mb, rss)
             report.slowest = sorted([*report.slowest, (round(cpu, 3), outcome, index)], reverse=True)[:5]
             checkable = not outcome.startswith(BAD_PREFIXES) and outcome != "error:time-budget"
             if cli_every and index % cli_every == 0 and checkable:
                 report.cli_checked += 1
-                problem = check_cli(text, outcome, time_limit)
+                problem = check_cli(text, outcome, time_limit, dialect)
                 if problem:
                     outcome, detail = "cli-mismatch", problem
             report.outcomes[outcome] += 1
@@ -790,7 +800,20 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--save", type=Path, default=None, help="folder for the programs of the bad classes")
     parser.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    parser.add_argument(
+        "--dialect",
+        default="gsk25i",
+        help="dialect name, a comma-separated list taken in turn, or 'all' (every registered dialect); "
+        "default gsk25i",
+    )
     args = parser.parse_args(argv)
+    from cnc_gym.gcode import DIALECT_MODULES
+
+    built = sorted(name for name, module in DIALECT_MODULES.items() if module)
+    dialects = built if args.dialect == "all" else args.dialect.split(",")
+    unknown = [name for name in dialects if name not in built]
+    if unknown:
+        parser.error(f"unknown dialect {unknown[0]!r}: choose from {', '.join(built)} or all")
     budget = args.programs if args.programs is not None else (None if args.seconds else 10_000)
     report = fuzz(
         seed=args.seed,
@@ -801,12 +824,14 @@ def main(argv: list[str] | None = None) -> int:
         cli_every=args.cli_every,
         save=args.save,
         progress=not args.json,
+        dialects=dialects,
     )
     if args.json:
         print(json.dumps(report.as_dict()))
     else:
         print(
-            f"seed {report.seed}: {report.tried} programs ({dict(report.by_kind)}) "
+            f"seed {report.seed}: {report.tried} programs "
+            f"({dict(report.by_kind)}; {dict(report.by_dialect)}) "
             f"in {report.seconds:.0f} s, "
             f"{report.cli_checked} also through `cnc-gym trace`; "
             f"worker peak RSS {report.peak_rss_mb:.0f} MiB"

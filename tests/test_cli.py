@@ -137,6 +137,8 @@ def test_run_dispatches_to_the_runner(tmp_path, capsys, monkeypatch):
     assert main(["run", program, "--json", "--plot", "p.png", "--no-progress"]) == 0
     assert seen["program"] == program and seen["policy"] == "constant:1.0" and seen["json"] is True
     assert seen["plot"] == "p.png" and seen["no_progress"] is True and seen["dialect"] == "gsk25i"
+    assert seen["units"] is None
+    assert main(["run", program, "--units", "inch"]) == 0 and seen["units"] == "inch"
 
 
 def test_run_without_a_runner_is_a_one_line_error(tmp_path, capsys, monkeypatch):
@@ -239,3 +241,35 @@ def test_docs_cli_matches_the_code():
     assert f"exceeds {LONG_RUN_NOTICE_S / 60:g} minutes" in text
     assert f"| {EXIT_TRUNCATED} | `run` only: truncated" in text
     assert all(f"`{suffix}`" in text for suffix in PLOT_FORMATS)
+
+
+def test_trace_units_and_the_machine_presets_power_on_units(tmp_path, capsys):
+    # A program without G20/G21: --units inch reads X1. as 1 inch; a preset's power_on_units is the default
+    # of the option; the option rules over the preset; the program's G21 rules over both.
+    program = write(tmp_path, "G00 X1.\n")
+    inch_machine = tmp_path / "inch.yaml"
+    inch_machine.write_text("name: inch-shop\npower_on_units: inch\n")
+
+    def end_x(*argv):
+        status, out, err = run_main(["trace", *argv], capsys)
+        assert status == 0 and err == "", err
+        return json.loads(out.splitlines()[0])["end"][0]
+
+    assert end_x(program) == 1.0
+    assert end_x(program, "--units", "inch") == 25.4
+    assert end_x(program, "--units", "mm") == 1.0
+    assert end_x(program, "--machine", str(inch_machine)) == 25.4
+    assert end_x(program, "--machine", str(inch_machine), "--units", "mm") == 1.0
+    assert end_x(write(tmp_path, "G21 G00 X1.\n", "metric.nc"), "--units", "inch") == 1.0
+    assert end_x(program, "--dialect", "fanuc", "--units", "inch") == 25.4
+
+
+def test_units_option_errors(tmp_path, capsys):
+    program = write(tmp_path, "G00 X1.\n")
+    with pytest.raises(SystemExit) as exit_:
+        main(["trace", program, "--units", "cm"])
+    assert exit_.value.code == 2 and "invalid choice: 'cm'" in capsys.readouterr().err
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("power_on_units: metric\n")
+    status, out, err = run_main(["trace", program, "--machine", str(bad)], capsys)
+    assert status == 2 and out == "" and "power_on_units" in err and len(err.splitlines()) == 1

@@ -84,6 +84,18 @@ def test_cli_run_json(capsys, tmp_path):
     assert plot.read_bytes()[:4] == b"\x89PNG"
 
 
+def test_cli_run_units_inch(capsys, tmp_path):
+    # A rapid of X1. (no G20/G21): 25.4 mm in inch, 1 mm in mm, at the machine's rapid rate, so the
+    # nominal time is longer in inch by far (a feed move would scale its F with it and take the same time).
+    program = tmp_path / "inch.nc"
+    program.write_text("G00 X1.\n")
+    nominal = {}
+    for units in ("inch", "mm"):
+        assert main(["run", str(program), "--units", units, "--json", "--no-progress"]) == 0
+        nominal[units] = json.loads(capsys.readouterr().out)["nominal_time_s"]
+    assert nominal["inch"] > 5 * nominal["mm"] > 0
+
+
 @pytest.mark.parametrize("argv", [["run", "no-such-program"], ["run", "star", "--policy", "fast"],
                                   ["run", "star", "--policy", "nope.zip"]])  # fmt: skip
 def test_cli_run_errors_are_one_line(capsys, argv):
@@ -289,3 +301,19 @@ def test_drilled_holes_show_as_dots_seen_from_above():
         assert {ax.get_title() for ax in fig.axes} >= {"XZ view", "YZ view"}
     finally:
         plt.close(fig)
+
+
+def test_simulate_passes_its_progress_choice_to_the_policy(monkeypatch):
+    """``--no-progress`` (progress=False) must also silence a planner's own planning bar."""
+    import agents
+
+    seen = []
+    real = agents.make_policy
+
+    def spy(spec, *, progress=None):
+        seen.append(progress)
+        return real(spec, progress=progress)
+
+    monkeypatch.setattr(agents, "make_policy", spy)
+    simulate("G91 G01 X5 F600\nM30\n", policy="constant:1.0", progress=False)
+    assert seen == [False]

@@ -1,7 +1,8 @@
 """``cnc-gym bench``: benchmark policies on a suite split or on your own programs.
 
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split train|val|test] [--policy P ...]
-                  [--per-family N] [--seeds 0,1,2] [--machine M] [--dialect D] [--workers N] [--ray [ADDRESS]]
+                  [--per-family N] [--seeds 0,1,2] [--machine M] [--dialect D] [--units mm|inch]
+                  [--workers N] [--ray [ADDRESS]]
                   [--json OUT.jsonl] [--plot DIR] [--no-progress]
 
 :func:`register` adds the subcommand to the ``cnc-gym`` parser; everything else is imported when the
@@ -23,6 +24,8 @@ tolerance, 0 otherwise (docs/benchmark.md)."""
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``bench`` to the ``cnc-gym`` subcommands."""
+    from cnc_gym.machine import INPUT_UNITS
+
     bench = subparsers.add_parser("bench", help="benchmark policies on a suite split or your own programs",
                                   epilog=EPILOG,
                                   formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -39,6 +42,9 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     bench.add_argument("--plant", metavar="lti|mujoco", default=None,
                        help="servo plant for the episodes (default: the machine preset's)")
     bench.add_argument("--dialect", default=None, help="program dialect (default: the suite's, gsk25i)")
+    bench.add_argument("--units", choices=INPUT_UNITS, default=None,
+                       help="input unit at power-on for programs without G20/G21 (default: the machine "
+                            "preset's power_on_units, else the dialect's G21)")  # fmt: skip
     bench.add_argument("--workers", type=int, default=1, metavar="N",
                        help="local worker processes (default 1)")  # fmt: skip
     bench.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
@@ -86,9 +92,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
         raise CncGymError("each --policy may be given once")
     if args.programs:
         machine, dialect = args.machine or "vmc-small", args.dialect or "gsk25i"
-        programs = user_programs(args.programs, machine, dialect)
+        programs = user_programs(args.programs, machine, dialect, args.units)
         config = BenchConfig(programs=programs, policies=policies, seeds=seeds, machine=machine,
-                             dialect=dialect)  # fmt: skip
+                             dialect=dialect, units=args.units)  # fmt: skip
         title = f"{len(programs)} program(s)"
     else:
         name = args.suite or DEFAULT_SUITE
@@ -105,6 +111,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
             programs = kept
         config = BenchConfig(programs=programs, policies=policies, seeds=seeds,
                              machine=args.machine or suite.machine, dialect=args.dialect or suite.dialect,
+                             units=args.units,
                              suite=suite.name, suite_version=suite.version,
                              suite_sha256=suite.sha256)  # fmt: skip
         title = f"{suite.name} {split}"

@@ -45,6 +45,8 @@ class BenchConfig:
     seeds: list[int] = field(default_factory=lambda: [0])
     machine: str = "vmc-small"
     dialect: str = "gsk25i"
+    #: Input unit at power-on ("mm"/"inch"); None: the machine preset's, else the dialect's.
+    units: str | None = None
     #: Servo plant backend (``lti`` or ``mujoco``); None: the machine preset's.
     plant: str | None = None
     suite: str | None = None
@@ -69,7 +71,8 @@ def suite_programs(suite_name: str, split: str) -> tuple[list[BenchProgram], Any
     return programs, suite
 
 
-def user_programs(paths: Sequence[str], machine: str, dialect: str) -> list[BenchProgram]:
+def user_programs(paths: Sequence[str], machine: str, dialect: str,
+                  units: str | None = None) -> list[BenchProgram]:  # fmt: skip
     """Programs from files (``--programs``): family ``user``, tier measured like a suite's."""
     from cnc_gym.benchmark.suites import path_properties, tier_of
     from cnc_gym.machine import load_machine
@@ -88,7 +91,7 @@ def user_programs(paths: Sequence[str], machine: str, dialect: str) -> list[Benc
             raise CncGymError(f"{path}: cannot read: {exc}") from None
         name = path.stem if path.stem not in seen else str(path)
         seen.add(name)
-        _, toolpath = load_program(path, dialect, mach)  # a program error is one line, here
+        _, toolpath = load_program(path, dialect, mach, units=units)  # a program error is one line, here
         props = path_properties(toolpath, mach)
         out.append(BenchProgram(name=name, text=text, tier=tier_of(props),
                                 cut_length_mm=props["cut_length_mm"]))
@@ -123,18 +126,18 @@ def _sha(text: str) -> str:
 
 
 # ------------------------------------------------------------------------------------------- tasks
-def _bound_task(program: BenchProgram, machine: str, dialect: str) -> dict[str, Any]:
+def _bound_task(program: BenchProgram, machine: str, dialect: str, units: str | None) -> dict[str, Any]:
     from cnc_gym.machine import load_machine
     from cnc_gym.motion.bound import time_optimal_bound
     from cnc_gym.programs import load_program
 
     mach = load_machine(machine)
-    _, toolpath = load_program(program.text, dialect, mach)
+    _, toolpath = load_program(program.text, dialect, mach, units=units)
     return time_optimal_bound(toolpath, mach).to_dict()
 
 
 def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int], machine: str,
-                  dialect: str, bound: dict[str, Any], common: dict[str, Any],
+                  dialect: str, units: str | None, bound: dict[str, Any], common: dict[str, Any],
                   progress: bool, plant: str | None = None) -> list[dict[str, Any]]:  # fmt: skip
     """Every seed of one (program, policy): records in seed order."""
     base = {**common, "split": program.split, "program": program.name,
@@ -154,7 +157,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
 
     policy = make_policy(policy_spec, progress=None if progress else False)
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text], dialect=dialect, machine=machine,
-                         plant=plant)  # fmt: skip
+                         units=units, plant=plant)  # fmt: skip
     records = []
     try:
         for seed in seeds:
@@ -266,7 +269,7 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
     common = {"suite": config.suite or "user", "suite_version": config.suite_version,
               "suite_sha256": config.suite_sha256, "machine": mach.name,
               "machine_sha256": machine_digest(mach), "plant": mach.plant.backend,
-              "dialect": config.dialect, "commit": current_commit(),
+              "dialect": config.dialect, "units": config.units, "commit": current_commit(),
               "cnc_gym_version": _version()}  # fmt: skip
     bar = None
     total = len(config.programs) * (1 + len(config.policies))
@@ -276,11 +279,12 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
         bar = tqdm(total=total, desc="bench", file=sys.stderr, unit="task", dynamic_ncols=True)
     serial_progress = config.progress and config.workers <= 1 and not config.use_ray
     try:
-        bound_tasks = [functools.partial(_bound_task, p, config.machine, config.dialect)
+        bound_tasks = [functools.partial(_bound_task, p, config.machine, config.dialect, config.units)
                        for p in config.programs]  # fmt: skip
         bounds = _run_tasks(bound_tasks, config, bar, "bench: bounds")
         episode_tasks = [functools.partial(_episode_task, program, spec, tuple(config.seeds), config.machine,
-                                           config.dialect, bound, common, serial_progress, config.plant)
+                                           config.dialect, config.units, bound, common, serial_progress,
+                                           config.plant)
                          for program, bound in zip(config.programs, bounds, strict=True)
                          for spec in config.policies]  # fmt: skip
         groups = _run_tasks(episode_tasks, config, bar, "bench: episodes")

@@ -209,9 +209,11 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``programs`` (one program or a list: built-in names, paths, G-code text, ``ProgramText`` or interpreted
     ``Program``\ s, by the rule of :mod:`cnc_gym.programs`; None = the default task's set), ``dialect``,
-    ``machine`` (name, YAML path or ``MachineConfig``), ``action_mode``, ``control_period_s`` (a multiple
-    of the interpolation period), ``reward`` (None, a task YAML path or a dict of weights),
-    ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
+    ``machine`` (name, YAML path or ``MachineConfig``), ``units`` (the input unit at power-on, ``"mm"`` or
+    ``"inch"``, for programs without G20/G21; None: the machine preset's ``power_on_units``, else the
+    dialect's; an interpreted ``Program`` keeps the unit it was read in), ``action_mode``,
+    ``control_period_s`` (a multiple of the interpolation period), ``reward`` (None, a task YAML path or a
+    dict of weights), ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
     ``lookahead_points``, ``plant`` (``"lti"`` or ``"mujoco"``: the servo plant, overriding the machine
     preset's ``plant.backend``; see docs/plant.md). ``reset(seed=..., options={"program":
     name_or_index})``: with several programs the episode's program is drawn with ``self.np_random``; the
@@ -246,6 +248,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         render_mode: str | None = None,
         lookahead_mm: float = 24.0,
         lookahead_points: int = 8,
+        units: str | None = None,
         plant: str | None = None,
     ) -> None:
         from cnc_gym.motion import Controller
@@ -258,11 +261,12 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
                              lookahead_mm=lookahead_mm, lookahead_points=lookahead_points,
-                             plant=plant)  # fmt: skip
+                             units=units, plant=plant)  # fmt: skip
         self.machine: MachineConfig = with_plant_backend(load_machine(args.machine), args.plant)
         self.action_mode = args.action_mode
         self.render_mode = args.render_mode
         self.dialect = args.dialect
+        self.units = args.units
         self.reward_weights = resolve_reward(args.reward)
         ctrl = self.machine.controller
         self.interpolation_period_s = ctrl.interpolation_period_s
@@ -284,7 +288,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         # Programs: interpreted once (cached by cnc_gym.programs), controllers built lazily per program.
         programs = load_task("default").programs if args.programs is None else args.programs
         self._programs: list[tuple[str, Toolpath]] = [
-            load_program(p, dialect, self.machine) for p in programs
+            load_program(p, dialect, self.machine, units=self.units) for p in programs
         ]
         self._episode_cache: dict[str, dict[str, Any]] = {}
         self.program_names = [name for name, _ in self._programs]
@@ -358,7 +362,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             name, toolpath = self._programs[int(index_or_name)]
         elif isinstance(index_or_name, PROGRAM_TYPES):
             found = [p for p in self._programs if p[0] == index_or_name]
-            name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine)
+            name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine,
+                                                                 units=self.units)  # fmt: skip
         else:
             raise ConfigError(
                 f"options['program'] must be a name, path, text or index, got {index_or_name!r}"

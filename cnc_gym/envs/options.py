@@ -37,7 +37,7 @@ from cnc_gym.config import (
     shown,
 )
 from cnc_gym.errors import CncGymError, ConfigError
-from cnc_gym.machine import PLANT_BACKENDS
+from cnc_gym.machine import INPUT_UNITS, PLANT_BACKENDS
 from cnc_gym.motion import ActionError
 from cnc_gym.programs import PROGRAM_TYPES, ProgramLike
 
@@ -88,6 +88,10 @@ PROGRAM_NAMES = Items(
     item=Text(max_length=MAX_TEXT), single=True, max_items=1000, noun="program",
     doc="built-in program names or `.nc` paths (a single name is a list of one)")  # fmt: skip
 DIALECT = Text(max_length=100, doc="controller dialect of the programs")
+UNITS = Choice(choices=(None, *INPUT_UNITS),
+               doc="input unit at power-on, `mm` or `inch`, for programs without G20/G21 (null: the "
+                   "machine preset's `power_on_units`, else the dialect's power-on code); a program's "
+                   "G20/G21 still rules")  # fmt: skip
 MACHINE_NAME = Text(max_length=MAX_TEXT, doc="machine preset name or YAML path")
 ACTION_MODE = Choice(choices=ACTION_MODES, doc="what the action sets: the override knob or the feed")
 MAX_EPISODE_STEPS = Number(
@@ -151,6 +155,7 @@ class EnvArguments:
     ))  # fmt: skip
     dialect: str = declared(DIALECT, "gsk25i")
     machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
+    units: str | None = declared(UNITS)
     plant: str | None = declared(Choice(choices=(None, *PLANT_BACKENDS), doc="servo plant: `lti` (the exact "
                                         "linear model) or `mujoco` (masses, friction, compliance, backlash); "
                                         "null: the machine preset's `plant.backend`"))  # fmt: skip

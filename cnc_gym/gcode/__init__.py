@@ -31,6 +31,7 @@ from cnc_gym.gcode.settings import (
     FlowOptions,
     MacroCalls,
 )
+from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
@@ -99,7 +100,8 @@ def interpret(
     ``machine``: when given, the path (line ends, arc extremes) must stay within the axes' travel.
     ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (the controller parameter a
     machine sets; shop programs for inch machines often carry no G20); the program's own G20/G21 still
-    rules. Default: the dialect's power-on code (G21 on the GSK 25i and ``fanuc``).
+    rules. Default: ``machine``'s ``power_on_units`` when it sets one, else the dialect's power-on code
+    (G21 on every built-in dialect; Syntec's G71).
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
@@ -122,7 +124,7 @@ def interpret(
         options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
                               max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
                               main_m99=main_m99)  # fmt: skip
-        if units is not None and units not in ("mm", "inch"):
+        if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
         program = spec.language.reader(spec, calls).read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
@@ -132,7 +134,7 @@ def interpret(
         if collecting:
             gc.enable()
     if machine is not None:
-        _check_travel(toolpath, machine)
+        _check_travel(toolpath, machine, spec)
     return toolpath
 
 
@@ -209,13 +211,14 @@ def _reserved_codes(dialect: Dialect) -> dict[str, set[int]]:
     return {"g_macro": g_codes, "m_macro": m_codes, "m_sub": m_codes}
 
 
-def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
+def _check_travel(toolpath: Toolpath, machine: MachineConfig, dialect: Dialect) -> None:
     """Stored stroke check: every point of the path within each axis's [min, max] travel.
 
     Lines are checked at their ends; arcs also at the axis extremes their sweep passes (0°, 90°, 180°,
-    270° in the plane). The first offending segment is reported, with the operation volume's stored
-    stroke limit 1 alarm: 500 "OVER TRAVEL:+n" beyond the + side, 501 "OVER TRAVEL:-n" beyond the − side
-    (n = the axis number, GSK 25i operation manual §2.5.4).
+    270° in the plane). The first offending segment is reported as "OVER TRAVEL:+n" beyond the + side,
+    "OVER TRAVEL:-n" beyond the − side (n = the axis number), with the dialect's stored stroke limit 1
+    alarm, conditions ``travel-limit/+`` and ``travel-limit/-`` (GSK 25i operation manual §2.5.4: 500
+    and 501; Fanuc OT500/OT501; none where the dialect's list has no number).
     """
     n = len(toolpath)
     if not n:
@@ -253,4 +256,4 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig) -> None:
         raise ProgramError(f"OVER TRAVEL:{side}{axis + 1}: {name}{value:.4f} (machine) is beyond the travel "
                            f"limit {low[axis]:g} .. {high[axis]:g} of machine {machine.name}",
                            code="travel-limit", file=file, line=line,
-                           alarm=500 if side == "+" else 501)  # fmt: skip
+                           alarm=dialect.alarm("travel-limit", f"travel-limit/{side}"))  # fmt: skip

@@ -59,8 +59,9 @@ class Seam(Protocol):
     dialect: Dialect
     state: State
 
-    def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
-        """A ProgramError with the dialect's alarm number for ``code`` (file and line added later)."""
+    def error(self, message: str, code: str, *, alarm: str | int | None = None) -> ProgramError:
+        """A ProgramError with the dialect's alarm number for ``code``, or for the condition ``alarm``
+        names (:meth:`Dialect.error`); file and line added later."""
         ...
 
     @property
@@ -356,8 +357,13 @@ class Dialect:
     other_axes: str = "ABCUVW"
     #: Expression functions: name → (number of arguments, function on floats).
     functions: Mapping[str, tuple[int, Callable[..., float]]] = field(default_factory=dict)
-    #: Stable error code → controller alarm number (the ``alarm=`` of ProgramError).
+    #: Stable error code → controller alarm number (the ``alarm=`` of ProgramError). A key may also be a
+    #: *condition*, ``"<code>/<what>"``, where the controller numbers one case of a code apart (GSK:
+    #: ``"cycle-argument/special-plane"`` 227 beside ``"cycle-argument"`` 61); the family's checks name
+    #: conditions, never numbers, so a dialect prints only its own numbers (:meth:`error`).
     alarms: Mapping[str, int] = field(default_factory=dict)
+    #: ``#3000 = n`` stops with alarm ``user_alarm_base + n`` (GSK 25i and Fanuc: 3000); None: no number.
+    user_alarm_base: int | None = None
     #: A number without a decimal point is in mm/inch/s (True, GSK 1800#0 DPI = 1) or in least increments.
     integer_is_unit: bool = True
     #: Least input increment in mm (G21) and inch (G20); literals are truncated to it, variables rounded.
@@ -429,14 +435,21 @@ class Dialect:
             object.__setattr__(self, "gcodes", {**self.gcodes, key: replace(spec, group=1)})
         object.__setattr__(self, "roles", Roles.from_tables(self.gcodes))
 
-    def alarm(self, code: str) -> int | None:
-        return self.alarms.get(code)
+    def alarm(self, code: str, condition: str | int | None = None) -> int | None:
+        """The alarm number of an error: the number of ``condition`` when one is named (a key of
+        :attr:`alarms`, none when this dialect has no number for it; an int is a dialect's own number,
+        passed by its own features), else the number of ``code``."""
+        if condition is None:
+            return self.alarms.get(code)
+        if isinstance(condition, str):
+            return self.alarms.get(condition)
+        return condition
 
-    def error(self, message: str, code: str, *, alarm: int | None = None, column: int | None = None,
+    def error(self, message: str, code: str, *, alarm: str | int | None = None, column: int | None = None,
               ) -> ProgramError:  # fmt: skip
-        """A ProgramError with this dialect's alarm number for ``code`` (file/line filled in later)."""
-        return ProgramError(message, code=code, alarm=alarm if alarm is not None else self.alarms.get(code),
-                            column=column)  # fmt: skip
+        """A ProgramError with this dialect's alarm number for ``code`` or for the condition ``alarm``
+        (:meth:`alarm`); file and line are filled in later."""
+        return ProgramError(message, code=code, alarm=self.alarm(code, alarm), column=column)
 
 
 #: Dialect names → module under cnc_gym.gcode.dialects, or None where not built yet.

@@ -30,6 +30,7 @@ from cnc_gym.gcode.dialect import BlockPlan
 from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.settings import FlowOptions, ToolMeasurement, skip_signal_surfaces
 from cnc_gym.gcode.state import CompensationState, State
+from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
 
 if TYPE_CHECKING:
@@ -46,7 +47,8 @@ class Interpreter:
     """Runs one :class:`Program` for one dialect into a :class:`ToolpathBuilder` (the seam's core).
 
     ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (a controller parameter; the
-    program's own G20/G21 still rules); None: the dialect's power-on code.
+    program's own G20/G21 still rules); None: the machine preset's ``power_on_units``, else the dialect's
+    power-on code.
     """
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
@@ -120,6 +122,8 @@ class Interpreter:
             if spec.action in dialect.power_on_actions:
                 self._actions[spec.action](self, spec, None)
         st.motion_key = next(k for k in dialect.power_on if dialect.gcodes[k].action == "motion")
+        if units is None and machine is not None:
+            units = machine.power_on_units  # the preset's parameter, below an explicit argument
         if units is not None:
             self._power_on_units(units)
         self.update_modes()
@@ -127,9 +131,9 @@ class Interpreter:
     def _power_on_units(self, units: str) -> None:
         """The input unit in force at power-on (a controller parameter), as if its code had run."""
         roles = self.dialect.roles
-        key = {"mm": roles.metric, "inch": roles.inch}.get(units) if isinstance(units, str) else None
-        if units not in ("mm", "inch"):
+        if units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
+        key = roles.metric if units == "mm" else roles.inch
         if key is None:
             raise ConfigError(f"dialect {self.dialect.name} has no code for {units} input")
         spec = self.dialect.gcodes[key]
@@ -155,7 +159,7 @@ class Interpreter:
             finish(self)
         return st.builder.build()
 
-    def error(self, message: str, code: str, *, alarm: int | None = None) -> ProgramError:
+    def error(self, message: str, code: str, *, alarm: str | int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
 
     def check_budget(self) -> None:

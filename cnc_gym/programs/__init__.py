@@ -134,24 +134,28 @@ def resolve_program(program: str | os.PathLike | ProgramText) -> ProgramSource:
 
 def load_program(program: ProgramLike, dialect: str = "gsk25i",
                  machine: MachineConfig | None = None, *,
-                 max_blocks: int = DEFAULT_MAX_BLOCKS) -> Program:  # fmt: skip
+                 max_blocks: int = DEFAULT_MAX_BLOCKS, units: str | None = None) -> Program:  # fmt: skip
     """Interpret a program once and cache it. Returns :class:`Program` ``(name, toolpath)``.
 
     ``program`` follows the rule of the module docstring; the name is the built-in name, the file's stem,
     or the text's name. Program errors raise :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message
     [code]``). With ``machine`` the program may move the machine's rotary axes and must stay within its
     travel (see :func:`cnc_gym.gcode.interpret`). ``max_blocks`` bounds the executed blocks (a runaway
-    loop ends in ``too-many-blocks``). A :class:`Program` is returned as it is.
+    loop ends in ``too-many-blocks``). ``units``: the input unit at power-on, ``"mm"`` or ``"inch"``
+    (default: the machine's ``power_on_units``, else the dialect's; see :func:`cnc_gym.gcode.interpret`).
+    A :class:`Program` is returned as it is.
     """
     if isinstance(program, Program):
         return program
     source = resolve_program(program)
     key = machine  # machines are frozen and hashable: part of the cache key
     if source.path is None:  # text
-        return Program(source.name, _load_text(source.text or "", source.name, dialect, key, max_blocks))
+        return Program(source.name, _load_text(source.text or "", source.name, dialect, key, max_blocks,
+                                               units))  # fmt: skip
     # The modification time is part of the cache key so an edited file is read again.
     mtime = 0.0 if source.kind == "builtin" else source.path.stat().st_mtime
-    return Program(source.name, _load_file(str(source.path.resolve()), dialect, mtime, key, max_blocks))
+    return Program(source.name, _load_file(str(source.path.resolve()), dialect, mtime, key, max_blocks,
+                                           units))  # fmt: skip
 
 
 def _file_source(path: Path) -> ProgramSource:
@@ -182,18 +186,19 @@ def _text_name(text: str) -> str:
 
 @lru_cache(maxsize=64)
 def _load_file(path: str, dialect: str, mtime: float, machine: MachineConfig | None,
-               max_blocks: int) -> Toolpath:  # fmt: skip
+               max_blocks: int, units: str | None) -> Toolpath:  # fmt: skip
     from cnc_gym.gcode import interpret_file
 
-    return interpret_file(path, dialect=dialect, machine=machine, max_blocks=max_blocks)
+    return interpret_file(path, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units)
 
 
 @lru_cache(maxsize=64)
 def _load_text(text: str, name: str, dialect: str, machine: MachineConfig | None,
-               max_blocks: int) -> Toolpath:  # fmt: skip
+               max_blocks: int, units: str | None) -> Toolpath:  # fmt: skip
     from cnc_gym.gcode import interpret
 
-    return interpret(text, dialect=dialect, file=f"<{name}>", machine=machine, max_blocks=max_blocks)
+    return interpret(text, dialect=dialect, file=f"<{name}>", machine=machine, max_blocks=max_blocks,
+                     units=units)  # fmt: skip
 
 
 __all__ = [

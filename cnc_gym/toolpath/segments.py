@@ -228,7 +228,10 @@ class Toolpath:
 
     # --------------------------------------------------------------- geometry
     def segment_at(self, s: np.ndarray | float) -> np.ndarray:
-        """Index of the segment containing arc length ``s`` (zero-length segments are never returned)."""
+        """Index of the segment containing arc length ``s`` (zero-length segments are never returned).
+        An empty tool path has no segment to return: ValueError."""
+        if not len(self):
+            raise ValueError("the tool path is empty: no segment contains any arc length")
         s_arr = np.clip(np.asarray(s, dtype=float), 0.0, self.total_length)
         idx = np.searchsorted(self.s_start, s_arr, side="right") - 1
         idx = np.clip(idx, 0, max(len(self) - 1, 0))

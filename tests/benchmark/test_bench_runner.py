@@ -161,3 +161,19 @@ def test_no_policy_beats_the_bound(pieces):
         if finished:
             assert info["cycle_time_s"] >= bound
         env.close()
+
+
+def test_cli_units_reads_user_programs_in_inch(tmp_path, capsys):
+    # A program without G20/G21: --units inch makes X1. an inch, so the path is 25.4 times longer; the
+    # records say which unit was in force (null: the preset's, else the dialect's).
+    program = tmp_path / "part.nc"
+    program.write_text("G00 X0 Y0\nG01 X1. Y1. F100.\n")
+    records = {}
+    for units in ("inch", None):
+        out = tmp_path / f"{units}.jsonl"
+        argv = ["bench", "--programs", str(program), "--policy", "bound", "--json", str(out), "--no-progress"]
+        assert main([*argv, *(["--units", units] if units else [])]) == 0
+        (records[units],) = read_jsonl([out])
+    capsys.readouterr()
+    assert records["inch"]["units"] == "inch" and records[None]["units"] is None
+    assert records["inch"]["cut_length_mm"] == pytest.approx(25.4 * records[None]["cut_length_mm"])

@@ -46,6 +46,7 @@ def make(**kwargs):
         ({"lookahead_points": np.float64(8.5)}, "lookahead_points must be an integer"),
         ({"lookahead_mm": 1e300}, "lookahead_mm must be in (0, 10000] mm"),
         ({"render_mode": "human"}, "render_mode must be one of null, rgb_array"),
+        ({"units": "cm"}, "units must be one of null, mm, inch, got 'cm'"),
     ],
 )
 def test_bad_arguments_are_one_config_error_line(kwargs, fragment):
@@ -149,3 +150,34 @@ def test_the_control_period_must_be_a_multiple_of_the_machines_period():
     with pytest.raises(ConfigError, match="whole multiple of the interpolation period"):
         make(control_period_s=0.003)
     assert make(machine=load_machine("gsk25i"), control_period_s=0.02).ticks_per_step == 10
+
+
+def test_units_sets_the_power_on_unit_of_the_programs():
+    # A program without G20/G21: X1. is 1 inch with units="inch" (also for a program picked at reset),
+    # 1 mm by default; the preset's power_on_units is the default of the argument; G21 in the text rules.
+    from cnc_gym.envs.vector import FeedrateVectorEnv
+    from cnc_gym.machine import machine_from_dict
+
+    text = "G00 X0 Y0\nG01 X1. F20.\n"
+
+    def end_x(env):
+        return float(env.toolpath.end[-1][0])
+
+    inch = make(programs=[text], units="inch")
+    inch.reset(seed=0)
+    assert end_x(inch) == pytest.approx(25.4)
+    inch.reset(options={"program": "G01 X2. F20.\n"})  # loaded at reset, in the same unit
+    assert end_x(inch) == pytest.approx(50.8)
+    default = make(programs=[text])
+    default.reset(seed=0)
+    assert end_x(default) == pytest.approx(1.0)
+    preset = machine_from_dict({"power_on_units": "inch"}, source="inch.yaml")
+    by_preset = make(programs=[text], machine=preset)
+    by_preset.reset(seed=0)
+    assert end_x(by_preset) == pytest.approx(25.4)
+    metric = make(programs=["G21\n" + text], units="inch")
+    metric.reset(seed=0)
+    assert end_x(metric) == pytest.approx(1.0)
+    vector = FeedrateVectorEnv(2, programs=[text], units="inch")
+    vector.reset(seed=0)
+    assert all(end_x(e) == pytest.approx(25.4) for e in vector.envs)

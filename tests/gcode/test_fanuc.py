@@ -268,6 +268,47 @@ def test_a_mastercam_style_program_with_cutter_compensation():
 
 def test_dialect_table_differences_are_data():
     fanuc, gsk = get_dialect(FANUC), get_dialect("gsk25i")
-    assert fanuc.language is gsk.language  # one family: the same lexer, expressions, flow and calls
+    # One family: the same expressions, variables, flow and calls; the lexer is the family's with the
+    # least-unit reading of numbers without a decimal point (DPI = 0, lang/fanuc/least_units.py).
+    assert (fanuc.language.runner, fanuc.language.variables, fanuc.language.system_variables) == (
+        gsk.language.runner, gsk.language.variables, gsk.language.system_variables)
+    assert issubclass(fanuc.language.reader, gsk.language.reader)
     assert fanuc.corner_words == {",C", ",R"} and gsk.corner_words == {",L", ",R"}
     assert not fanuc.compensation.length_needs_axis and gsk.compensation.length_needs_axis
+
+
+# --------------------------------------------------------------------------- least input increments in G20
+def test_a_number_without_a_point_counts_least_increments_of_the_unit_in_force():
+    # Fanuc IS-B, DPI = 0: X1000 is 1000 × 0.001 mm = 1 mm in G21, 1000 × 0.0001 inch = 0.1 inch = 2.54 mm
+    # in G20, whether G20 comes in the block, before it, or from the power-on setting.
+    assert close(moves("G21 G00 X1000\n", dialect=FANUC)[0]["end"], [1.0, 0.0, 0.0])
+    assert close(moves("G20 G00 X1000\n", dialect=FANUC)[0]["end"], [2.54, 0.0, 0.0])
+    assert close(moves("G20\nG00 X1000 Y-2500\n", dialect=FANUC)[0]["end"], [2.54, -6.35, 0.0])
+    assert close(moves("G00 X1000\n", dialect=FANUC, units="inch")[0]["end"], [2.54, 0.0, 0.0])
+    # The unit is the one in force when the block runs: a subprogram read before its caller's G20 still
+    # reads X1000 as 0.1 inch.
+    sub = "G20\nM98 P1000\nM30\nO1000\nG00 X1000\nM99\n"
+    assert close(moves(sub, dialect=FANUC)[0]["end"], [2.54, 0.0, 0.0])
+    # Four decimals are 0.0001 inch in G20 (not cut to the metric 0.001 while the text is read).
+    assert close(moves("G20 G00 X1.2345\n", dialect=FANUC)[0]["end"], [1.2345 * 25.4, 0.0, 0.0])
+    # An arc's I/J count the same way: I1000 in G20 is a 0.1 inch radius.
+    (arc,) = [r for r in moves("G20\nG02 X2000 Y0 I1000 F10.\n", dialect=FANUC) if r["kind"] == "arc"]
+    assert close(arc["end"], [5.08, 0.0, 0.0]) and close(arc["radius"], 2.54)
+
+
+def test_counts_and_times_are_not_lengths():
+    # K (repeats) is a count: K3 is three holes, in G21 and G20; G04 X1500 is 1.5 s in either unit.
+    for unit in ("G21", "G20"):
+        holes = [r for r in moves(f"{unit}\nG91 G81 X10. Y0 Z-5. R-1. K3 F100.\n", dialect=FANUC)
+                 if r["kind"] == "rapid" and r["start"][2] == r["end"][2]]  # fmt: skip  # positionings
+        assert len(holes) == 3, unit
+        (dwell,) = [r for r in interpret(f"{unit}\nG04 X1500\n", dialect=FANUC).to_records()]
+        assert dwell["seconds"] == 1.5
+
+
+def test_gsk25i_reads_a_number_without_a_point_in_the_unit_itself():
+    # GSK 25i programming manual §1.7 with 1800#0 DPI = 1 (the standard setting): a value without a
+    # decimal point is in mm or inch, so X10 in G20 is 10 inch; its least increment is 0.0001 in both.
+    assert close(moves("G20 G00 X10\n")[0]["end"], [254.0, 0.0, 0.0])
+    assert close(moves("G21 G00 X10\n")[0]["end"], [10.0, 0.0, 0.0])
+    assert close(moves("G20 G00 X1.23456\n")[0]["end"], [1.2345 * 25.4, 0.0, 0.0])  # truncated

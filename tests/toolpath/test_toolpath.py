@@ -153,3 +153,9 @@ def test_nearest_matches_dense_sampling(cx, cy, radius, theta0, sweep, rise, pla
     assert dist[0] >= brute - spacing  # cannot beat the true minimum by more than the sampling error
     point_at_s, _, _ = tp.evaluate(s[0])
     assert np.linalg.norm(point_at_s[0] - np.array(query)) == pytest.approx(dist[0], abs=1e-6)
+
+
+def test_an_empty_tool_path_has_no_segment_at_any_length():
+    tp = ToolpathBuilder().build()
+    with pytest.raises(ValueError, match="empty"):
+        tp.segment_at(0.0)

@@ -11,12 +11,17 @@ from cnc_gym.gcode.dialect import Dialect
 from cnc_gym.gcode.dialects.fanuc import blocks
 from cnc_gym.gcode.dialects.fanuc.codes import ADDRESSES, ALARMS, G_CODES, M_CODES, MACHINE_MCODES, POWER_ON
 from cnc_gym.gcode.lang import fanuc
-from cnc_gym.gcode.lang.fanuc import checks, codes, cycles
+from cnc_gym.gcode.lang.fanuc import checks, codes, cycles, least_units
 from cnc_gym.gcode.settings import CompensationSettings, CycleParameters
 
 #: The family's block checks with the G00/G01-beside-G28 rule (blocks.py).
 HOOKS = replace(fanuc.HOOKS, checks=(cycles.check_codes, blocks.motion_with_reference_return,
                                      checks.axis_owners, cycles.check_mode))  # fmt: skip
+
+#: The family's language with the least-unit reading of numbers without a decimal point (DPI = 0): X1000
+#: is 1 mm in G21 and 0.1 inch in G20 (lang/fanuc/least_units.py).
+LANGUAGE = replace(fanuc.LANGUAGE, name="fanuc", reader=least_units.LeastUnitReader,
+                   evaluate=least_units.evaluate)  # fmt: skip
 
 DIALECT = Dialect(
     name="fanuc",
@@ -29,14 +34,15 @@ DIALECT = Dialect(
     words=codes.WORDS,
     actions=dict(fanuc.ACTIONS),
     cycles=dict(fanuc.CYCLES),
-    language=fanuc.LANGUAGE,
+    language=LANGUAGE,
     hooks=HOOKS,
     axes="XYZ",
     other_axes="ABCUVW",
     functions=codes.FUNCTIONS,
     alarms=ALARMS,
+    user_alarm_base=3000,  # #3000 = n (0..200): alarm 3000 + n
     # Parameter 3401#0 DPI = 0, the Fanuc standard: a number without a decimal point is in least input
-    # increments (X1000 = 1 mm); IS-B: 0.001 mm, 0.0001 inch.
+    # increments of the unit in force (X1000 = 1 mm in G21, 0.1 inch in G20); IS-B: 0.001 mm, 0.0001 inch.
     integer_is_unit=False,
     least_increment_mm=0.001,
     least_increment_inch=0.0001,

@@ -66,7 +66,9 @@ ADDRESSES = {
     ",R": AddressRule(0.0, BIG, "length"),
 }
 
-#: Our error codes → Fanuc 0i-M program alarms (PS numbers) where the condition is the same.
+#: Our error codes (or conditions ``"<code>/<what>"``, lang/fanuc) → Fanuc 0i-M alarms (PS numbers; OT for
+#: the stroke limit) where the condition is the same. A code or condition missing here carries no number:
+#: the GSK 25i's numbers for conditions Fanuc numbers otherwise or not at all are never shown.
 ALARMS = {
     "word-too-long": 3,  # TOO MANY DIGITS
     "missing-address": 4,  # ADDRESS NOT FOUND
@@ -74,6 +76,7 @@ ALARMS = {
     "bad-sign": 6,  # ILLEGAL USE OF NEGATIVE SIGN
     "decimal-point-not-allowed": 7,  # ILLEGAL USE OF DECIMAL POINT
     "bad-number": 7,
+    "bad-number/decimal-point": 7,
     "bad-character": 9,  # ILLEGAL ADDRESS INPUT
     "unknown-code": 10,  # IMPROPER G-CODE
     "not-implemented": 10,
@@ -82,17 +85,21 @@ ALARMS = {
     "arc-radius-mismatch": 20,  # OVER TOLERANCE OF RADIUS
     "arc-bad-offset": 21,  # ILLEGAL PLANE AXIS COMMANDED
     "length-no-axis": 27,  # NO AXES COMMANDED IN G43/G44
-    "bad-offset-value": 29,  # ILLEGAL OFFSET VALUE
+    "bad-offset-value": 32,  # ILLEGAL OFFSET VALUE IN G10 (G10 or a system variable written)
+    "bad-offset-value/variable": 32,
     "bad-offset-number": 30,  # ILLEGAL OFFSET NUMBER
     "comp-no-intersection": 33,  # NO SOLUTION AT CRC
     "comp-arc-startup": 34,  # NO CIRC ALLOWED IN ST-UP/EXT BLK
     "comp-plane-change": 37,  # CAN NOT CHANGE PLANE IN CRC
     "comp-interference": 41,  # INTERFERENCE IN CRC
+    "g31-in-cutter-compensation": 36,  # CAN NOT COMMANDED G31
     "cycle-not-allowed": 44,  # G27-G30 NOT ALLOWED IN FIXED CYC
     "cycle-missing-q": 45,  # ADDRESS Q NOT FOUND (G73/G83)
+    "bad-reference": 46,  # ILLEGAL REFERENCE RETURN COMMAND (G30 P other than 2-4)
     "program-not-found": 59,  # PROGRAM NUMBER NOT FOUND
     "sequence-not-found": 60,  # SEQUENCE NUMBER NOT FOUND
     "missing-program-number": 76,  # ADDRESS P NOT DEFINED
+    "reference-check-failed": 92,  # ZERO RETURN CHECK (G27) ERROR
     "nesting": 77,  # SUB PROGRAM NESTING ERROR
     "overflow": 111,  # CALCULATED DATA OVERFLOW
     "division-by-zero": 112,  # DIVIDED BY ZERO
@@ -104,4 +111,8 @@ ALARMS = {
     "math-domain": 119,  # ILLEGAL ARGUMENT
     "bad-macro-command": 125,  # FORMAT ERROR IN MACRO
     "do-end": 126,  # ILLEGAL LOOP NUMBER
+    "do-end/loop-number": 126,
+    "rigid-tap/spindle-speed": 200,  # ILLEGAL S CODE COMMAND (rigid tapping S out of range)
+    "travel-limit/+": 500,  # OT500 + OVERTRAVEL (SOFT 1)
+    "travel-limit/-": 501,  # OT501 - OVERTRAVEL (SOFT 1)
 }

@@ -55,6 +55,7 @@ DIALECT = Dialect(
     parameter_ranges=PARAMETER_RANGES,
     functions=codes.FUNCTIONS,
     alarms=ALARMS,
+    user_alarm_base=3000,  # #3000 = n: alarm 3000 + n (§3.7.3)
     integer_is_unit=True,  # 1800#0 DPI standard setting 1: X10 = 10 mm (§2.5; parameter manual §4.7)
     least_increment_mm=0.0001,  # §3.2.19
     least_increment_inch=0.0001,

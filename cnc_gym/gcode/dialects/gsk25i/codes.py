@@ -73,6 +73,7 @@ ADDRESSES = {
 
 
 # --------------------------------------------------------------------------- alarms (the manual's alarm list)
+#: Error code, or condition ``"<code>/<what>"`` where the list numbers one case of a code apart → alarm.
 ALARMS = {
     "too-many-digits": 3,
     "missing-value": 5,
@@ -80,6 +81,7 @@ ALARMS = {
     "bad-sign": 6,
     "decimal-point-not-allowed": 7,
     "bad-number": 8,
+    "bad-number/decimal-point": 7,  # ILLEGAL USE OF DECIMAL POINT (a second point, a point alone)
     "value-out-of-range": 8,
     "bad-character": 9,
     "unknown-code": 10,
@@ -100,6 +102,10 @@ ALARMS = {
     "bad-scale-factor": 110,
     "reference-check-failed": 46,
     "bad-reference": 46,
+    "bad-reference/no-intermediate": 46,  # G29 before any G28/G30
+    # Stored stroke limit 1 (GSK 25i operation manual §2.5.4): "OVER TRAVEL:+n" / "OVER TRAVEL:-n".
+    "travel-limit/+": 500,
+    "travel-limit/-": 501,
     "division-by-zero": 208,
     "bad-expression": 206,
     "missing-operand": 207,
@@ -111,7 +117,9 @@ ALARMS = {
     # Tool compensation (§3.5; compensation.py, offsets.py).
     "length-no-axis": 27,
     "bad-offset-number": 30,
-    "bad-offset-value": 32,
+    "bad-offset-value": 32,  # ILLEGAL OFFSET VALUE IN G10
+    "bad-offset-value/variable": 29,  # ILLEGAL OFFSET VALUE (#2001… written)
+    "g31-in-cutter-compensation": 36,
     "comp-no-intersection": 33,
     "comp-arc-startup": 34,
     "comp-plane-change": 37,
@@ -125,6 +133,11 @@ ALARMS = {
     "cycle-argument": 61,
     "bad-cycle": 61,
     "rigid-tap": 61,
+    "rigid-tap/spindle-speed": 200,  # S above the gear's rigid-tapping maximum
+    "cycle-too-long": 61,
+    "cycle-argument/special-in-drilling": 214,  # CANNED CYCLE PUNCHING G73-G89 DEFINED
+    "cycle-argument/special-plane": 227,  # a special cycle outside G17
+    "cycle-not-allowed/other": 61,  # G10, or a plane change moving the drilling axis, in cycle mode
     "cycle-missing-q": 45,
     "cycle-not-allowed": 44,
     # G37 tool length measurement (alarm 80 "illegal G37 measurement").
@@ -139,6 +152,7 @@ ALARMS = {
     "missing-program-number": 76,  # ADDRESS P NOT DEFINED
     "nesting": 77,  # SUBPROGRAM NESTING ERROR (subprograms and macro calls)
     "do-end": 96,  # NO CORRESPONDING OF DO-END
+    "do-end/loop-number": 97,  # ILLEGAL CYCLE NUMBER (DOm, ENDm with m not 1..3)
     "read-only-variable": 107,
     "bad-macro-command": 205,
 }

@@ -26,10 +26,11 @@ from cnc_gym.gcode.dialects.syntec import (
 )
 from cnc_gym.gcode.dialects.syntec.codes import ADDRESSES, ALARMS, G_CODES, M_CODES, M_GROUPS, POWER_ON
 from cnc_gym.gcode.dialects.syntec.options import SyntecOptions
-from cnc_gym.gcode.dialects.syntec.reader import SyntecReader, evaluate
+from cnc_gym.gcode.dialects.syntec.reader import SyntecReader
 from cnc_gym.gcode.lang import fanuc
 from cnc_gym.gcode.lang.fanuc import checks, codes
 from cnc_gym.gcode.lang.fanuc import cycles as family_cycles
+from cnc_gym.gcode.lang.fanuc.least_units import evaluate
 from cnc_gym.gcode.settings import CompensationSettings, CycleParameters
 
 #: The family's block hooks with Syntec's word normaliser and checks, its default feed (§G01: "1000 mm/min

@@ -8,9 +8,10 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.canonical import PolarState, rotation_stage
-from cnc_gym.gcode.dialects.syntec.modes import angle, is_whole, skip_next_line, spindle_clamp, whole_count
+from cnc_gym.gcode.dialects.syntec.modes import angle, skip_next_line, spindle_clamp
 from cnc_gym.gcode.dialects.syntec.options import options
 from cnc_gym.gcode.lang.fanuc import compensation, coordinates, corners, reference, transforms
+from cnc_gym.gcode.lang.fanuc.least_units import is_whole, whole_count
 from cnc_gym.gcode.lang.fanuc.transforms import check_coordinate_command
 from cnc_gym.toolpath import PLANE_AXES
 

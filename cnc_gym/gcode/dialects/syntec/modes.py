@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.dialects.syntec.codes import THREAD
 from cnc_gym.gcode.dialects.syntec.options import data, options
-from cnc_gym.gcode.dialects.syntec.reader import least_units
 from cnc_gym.gcode.lang.fanuc import modal, nurbs
 from cnc_gym.gcode.lang.fanuc import motion as family_motion
+from cnc_gym.gcode.lang.fanuc.least_units import is_whole, whole_count
 from cnc_gym.machine import ControllerConfig
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
@@ -50,38 +50,6 @@ class SmoothingNotHonoured(UserWarning):
 
 
 # ---------------------------------------------------------------------- literals
-def word_node(core: Seam, letter: str):
-    """The block's word ``letter`` as read: ``(value or node, text or None)``, or None when absent."""
-    for word in core.state.block_words:
-        if word[0] == letter:
-            return word[1], word[-1]
-    return None
-
-
-def is_whole(core: Seam, letter: str) -> bool:
-    """Whether the block's ``letter`` word is a literal without a decimal point."""
-    found = word_node(core, letter)
-    if found is None:
-        return False
-    value, text = found
-    if text is not None:
-        return "." not in text
-    return isinstance(value, tuple) and least_units(value) is not None
-
-
-def whole_count(core: Seam, letter: str, value: float) -> float:
-    """A literal without a decimal point as its digits (``X2500`` → 2500, whatever the unit in force);
-    ``value`` otherwise."""
-    found = word_node(core, letter)
-    if found is not None:
-        node, text = found
-        if text is not None and "." not in text:
-            return float(text)
-        if isinstance(node, tuple) and least_units(node) is not None:
-            return float(least_units(node))  # type: ignore[arg-type]
-    return value
-
-
 def count(core: Seam, letter: str, values: dict) -> float:
     """A count in a length address (K of the canned cycles and hole patterns): the literal's digits
     (``K2`` is 2, not 2 least units)."""

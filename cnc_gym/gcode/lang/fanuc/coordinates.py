@@ -54,7 +54,7 @@ def wcs_extra(core: Seam, spec: CodeSpec, values: dict) -> None:
     number = values.get("P", 1.0)
     if number != int(number) or not 1 <= number <= EXTRA_WCS:
         raise core.error(f"G54.1 P{number:g}: additional work coordinate systems are P1..P{EXTRA_WCS}",
-                         "bad-offset-number", alarm=30)  # fmt: skip
+                         "bad-offset-number")  # fmt: skip
     st.offsets.select_wcs(st.offsets.n_standard_wcs + int(number) - 1)
     st.extra_wcs = int(number)
     core.resync_program_position()

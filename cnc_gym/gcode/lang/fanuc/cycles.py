@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.codes import CodeSpec
 from cnc_gym.gcode.dialect import CycleKind, Hole
-from cnc_gym.gcode.lang.fanuc import compensation
+from cnc_gym.gcode.lang.fanuc import compensation, least_units
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode
 
 if TYPE_CHECKING:
@@ -319,7 +319,7 @@ def limit(core: Seam, count: float, what: str) -> None:
     """A cycle block may make at most :data:`MAX_STEPS` pecks, passes or holes (``cycle-too-long``)."""
     if not count <= MAX_STEPS:  # also catches NaN
         raise core.error(f"{what}: {count:.0f} is more than the {MAX_STEPS} one block may make",
-                         "cycle-too-long", alarm=61)  # fmt: skip
+                         "cycle-too-long")  # fmt: skip
 
 
 def times(repeats: int, holes: int) -> str:
@@ -339,10 +339,12 @@ def _dwell_from_p(core: Seam, values: dict) -> float:
 
 
 def _repeats(core: Seam, values: dict) -> int:
-    """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (§3.4)."""
+    """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (§3.4).
+    A count, not a length, where numbers without a decimal point are least units (``K3`` is 3)."""
     if "K" not in values:
         return 1
-    k = abs(values["K"])
+    k = values["K"] if core.dialect.integer_is_unit else least_units.whole_count(core, "K", values["K"])
+    k = abs(k)
     if k != int(k) or k > 99999:
         raise core.error(f"K{values['K']:g}: the repeat count must be a whole number 0..99999", "bad-cycle")
     return int(k)
@@ -363,7 +365,7 @@ def _store_shift_ij(core: Seam, spec: CodeSpec, values: dict, scale: float) -> N
     for axis, letter in ((0, "I"), (1, "J")):
         if letter in values and axis == w and values[letter] != 0.0:
             raise core.error(f"{spec.name} {letter}{values[letter]:g}: {letter} would shift along the "
-                             f"drilling axis {core.dialect.axes[w]}", "cycle-argument", alarm=61)  # fmt: skip
+                             f"drilling axis {core.dialect.axes[w]}", "cycle-argument")  # fmt: skip
     state = core.state.cycle
     if "I" in values:
         state.shift_i = values["I"] * scale
@@ -392,14 +394,14 @@ def enter(core: Seam, spec: CodeSpec) -> None:
     state = st.cycle
     kind = core.dialect.cycles[spec.value]  # type: ignore[index]
     if state.rigid_pending and not kind.tapping:
-        raise core.error(f"M29 rigid tapping is followed by {spec.name}, not G74/G84", "rigid-tap", alarm=61)
+        raise core.error(f"M29 rigid tapping is followed by {spec.name}, not G74/G84", "rigid-tap")
     if state.rigid and state.kind is not None and state.kind.tapping and spec != state.spec:
-        raise core.error(f"{spec.name} in rigid tapping mode: cancel with G80 first", "rigid-tap", alarm=61)
+        raise core.error(f"{spec.name} in rigid tapping mode: cancel with G80 first", "rigid-tap")
     if kind.special and state.kind is not None and not state.kind.special:
         # Alarm 214 "CANNED CYCLE PUNCHING G73-G89 DEFINED": a special cycle while a drilling cycle is
         # modal (our reading of the alarm text; the manual's examples always start them from G80).
         raise core.error(f"{spec.name} while the drilling cycle {state.spec.name} is active: cancel it with "  # type: ignore[union-attr]
-                         "G80", "cycle-argument", alarm=214)  # fmt: skip
+                         "G80", "cycle-argument", alarm="cycle-argument/special-in-drilling")  # fmt: skip
     if state.spec is None:
         state.initial = core.program_position[drilling_axes(core)[2]]  # latched on entering the mode (§3.4)
     state.spec = spec
@@ -425,7 +427,8 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
     spec, kind = state.spec, state.kind
     assert spec is not None and kind is not None  # enter() or the modal cycle set them
     if kind.special and st.plane != Plane.XY:
-        raise core.error(f"{spec.name} works in the G17 plane only", "cycle-argument", alarm=227)
+        raise core.error(f"{spec.name} works in the G17 plane only", "cycle-argument",
+                         alarm="cycle-argument/special-plane")  # fmt: skip
     s = st.scale
     letters = core.dialect.axes
     bottom_letter = letters[w]
@@ -451,7 +454,7 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
     if state.r is None or state.z is None:
         missing = " and ".join(n for n, val in (("R", state.r), (bottom_letter, state.z)) if val is None)
         raise core.error(f"{spec.name} needs {missing}: the first drilling block gives all the hole data",
-                         "cycle-missing-data", alarm=61)  # fmt: skip
+                         "cycle-missing-data")  # fmt: skip
     if st.comp.side:
         # "In the canned cycle mode, the tool offset is ignored" (§3.4.1): compensation is suspended for the
         # block like for G53/G27-G30 (compensation.py: the last compensated block ends with its vector
@@ -463,16 +466,16 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
         raise core.error(f"{spec.name} needs a feed: no F programmed yet" if feed is None else
                          f"{spec.name} with F0: the feed is zero", "missing-feed")  # fmt: skip
     if kind.pecking and not state.q:
-        raise core.error(f"{spec.name} needs Q (peck depth) in a drilling block", "cycle-missing-q", alarm=45)
+        raise core.error(f"{spec.name} needs Q (peck depth) in a drilling block", "cycle-missing-q")
     cycle_params = core.dialect.cycle_params
     if state.rigid:
         if st.spindle_speed > cycle_params.rigid_tap_max_rpm:
             raise core.error(f"rigid tapping at S{st.spindle_speed:g} exceeds the gear maximum "
                              f"{cycle_params.rigid_tap_max_rpm:g} r/min (P2140-P2142)", "rigid-tap",
-                             alarm=200)  # fmt: skip
+                             alarm="rigid-tap/spindle-speed")  # fmt: skip
         if feed > cycle_params.max_cutting_feed:
             raise core.error(f"rigid tapping F{feed:g} mm/min exceeds the cutting-feed limit "
-                             f"{cycle_params.max_cutting_feed:g} (P1225)", "rigid-tap", alarm=61)  # fmt: skip
+                             f"{cycle_params.max_cutting_feed:g} (P1225)", "rigid-tap")  # fmt: skip
     roles = core.dialect.roles
     return_initial = st.modal.get(roles.return_group) != roles.return_r  # type: ignore[arg-type]
     axis_words = [None if a == w else values.get(letter) for a, letter in enumerate("XYZ")]
@@ -483,11 +486,10 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
         bottom = state.z + (r_level if state.z_from_r else 0.0)
         if kind.back_boring and cycle_params.g87_variant == 2:
             if bottom <= r_level:
-                raise core.error(f"{spec.name} back boring needs {bottom_letter} above R", "cycle-levels",
-                                 alarm=61)  # fmt: skip
+                raise core.error(f"{spec.name} back boring needs {bottom_letter} above R", "cycle-levels")
         elif bottom >= r_level:
             raise core.error(f"{spec.name}: the hole bottom {bottom_letter} must lie below the R level",
-                             "cycle-levels", alarm=61)  # fmt: skip
+                             "cycle-levels")  # fmt: skip
         here = core.program_position
         target = (hole_xy[0], hole_xy[1], None) if hole_xy is not None else core.resolve_target(*words)
         hole = (here[0] if target[0] is None else target[0], here[1] if target[1] is None else target[1],
@@ -568,7 +570,7 @@ def rigid_tap(core: Seam, spec: CodeSpec, values: dict) -> None:
     """M29: rigid tapping for the next G74/G84 (§3.4.14)."""
     state = core.state.cycle
     if state.rigid or state.rigid_pending:
-        raise core.error("M29 while rigid tapping is already selected", "rigid-tap", alarm=61)
+        raise core.error("M29 while rigid tapping is already selected", "rigid-tap")
     state.rigid_pending = True
     _sync_general_path(core)
 
@@ -582,13 +584,14 @@ def check_codes(core: Seam, plan: BlockPlan) -> CodeSpec | None:
         group01 = plan.by_group.get(1)  # G00-G03, also G06.2 (not a "motion" action)
         if group01 is not None:
             raise core.error(f"{group01.name} (group 01) in the block of the canned cycle "
-                             f"{cycle_spec.name}", "cycle-group01", alarm=61)  # fmt: skip
+                             f"{cycle_spec.name}", "cycle-group01")  # fmt: skip
     return plan.axis_owner
 
 
-#: Codes refused in the cycle mode, by action, with their alarm (GSK: G27-G30 44, G10 61).
-_NOT_IN_CYCLE = {"reference_check": 44, "reference_return": 44, "reference_return_from": 44,
-                 "reference_return_n": 44, "data_input": 61}  # fmt: skip
+#: Codes refused in the cycle mode, by action, with their alarm condition (GSK: G27-G30 44, G10 61).
+_NOT_IN_CYCLE = {"reference_check": "cycle-not-allowed", "reference_return": "cycle-not-allowed",
+                 "reference_return_from": "cycle-not-allowed", "reference_return_n": "cycle-not-allowed",
+                 "data_input": "cycle-not-allowed/other"}  # fmt: skip
 
 
 def check_mode(core: Seam, plan: BlockPlan) -> CodeSpec | None:
@@ -604,7 +607,7 @@ def check_mode(core: Seam, plan: BlockPlan) -> CodeSpec | None:
     if state.rigid_pending:
         cycle_code = cycle_spec.value if cycle_spec is not None else None
         if cycle_code is None and ("S" in plan.values or any(a in plan.values for a in core.dialect.axes)):
-            raise core.error("S or an axis move between M29 and G74/G84", "rigid-tap", alarm=61)
+            raise core.error("S or an axis move between M29 and G74/G84", "rigid-tap")
     if (cycle_spec is not None and cycle_spec.action == "cycle_cancel") or group01 is not None:
         cancel(core)
     elif state.spec is not None:
@@ -618,7 +621,8 @@ def check_mode(core: Seam, plan: BlockPlan) -> CodeSpec | None:
         if plane is not None and follows and plane.value != st.plane:
             # With FXY = 1 the plane picks the drilling axis, which may not change in a cycle (§3.4.3).
             raise core.error(f"{plane.name} changes the drilling axis in canned-cycle mode: cancel the "
-                             "cycle with G80 first", "cycle-not-allowed", alarm=61)  # fmt: skip
+                             "cycle with G80 first", "cycle-not-allowed",
+                             alarm="cycle-not-allowed/other")  # fmt: skip
     return plan.axis_owner
 
 

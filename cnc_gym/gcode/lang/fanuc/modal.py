@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from cnc_gym.gcode.lang.fanuc import compensation, corners, transforms
+from cnc_gym.gcode.lang.fanuc import compensation, corners, least_units, transforms
 from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:
@@ -177,7 +177,9 @@ def stop(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 
 def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G04: P in ms (integer), X in s; P wins; neither = exact stop (§3.2.6)."""
+    """G04: P in ms (integer), X in s; P wins; neither = exact stop (§3.2.6). Where numbers without a
+    decimal point are least units (DPI = 0), X without one is in ms whatever the length unit in force
+    (``G04 X1500`` is 1.5 s in G20 too)."""
     for letter in "YZ":
         if letter in values:
             raise core.error(f"address {letter} has no meaning with G04", "unused-word")
@@ -191,7 +193,8 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
         seconds = round(raw) / 1000.0
     elif "X" in values:
         raw = values["X"]
-        seconds = raw
+        whole = not core.dialect.integer_is_unit and least_units.is_whole(core, "X")
+        seconds = least_units.whole_count(core, "X", raw) / 1000.0 if whole else raw
     else:
         out.dwell(0.0, SegmentMode.EXACT_STOP)
         return

@@ -26,7 +26,7 @@ def skip(core: Seam, spec: CodeSpec, values: dict) -> None:
     roles = core.dialect.roles
     if core.state.modal.get(roles.cutter_group, roles.cutter_cancel) != roles.cutter_cancel:  # type: ignore[arg-type]
         raise core.error("G31 in cutter compensation mode (cancel it with G40 first, GSK 25i §3.2.8)",
-                         "g31-in-cutter-compensation", alarm=36)  # fmt: skip
+                         "g31-in-cutter-compensation")  # fmt: skip
     letters = core.dialect.axes
     target = core.resolve_target(*(values.get(letter) for letter in letters))
     if target != (None, None, None):

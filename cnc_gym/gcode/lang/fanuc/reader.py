@@ -60,6 +60,8 @@ _NUMBER_AT = re.compile(_NUMBER)
 _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 #: Addresses of a call block that keep their own rules (the rest are arguments: any sign, decimal point).
 _CALL_CONTROL = "GNOPL"
+#: The alarm condition of a misplaced decimal point (a second point, a point without digits).
+DECIMAL_POINT = "bad-number/decimal-point"
 
 
 class Reader:
@@ -154,7 +156,8 @@ class Reader:
         finally:
             self._o_blocks, self._last_comment = o_blocks, comment
 
-    def error(self, message: str, code: str, line: int, column: int | None = None, alarm: int | None = None):
+    def error(self, message: str, code: str, line: int, column: int | None = None,
+              alarm: str | int | None = None):  # fmt: skip
         err = self.dialect.error(message, code, column=column, alarm=alarm)
         err.line = line
         return err
@@ -308,8 +311,9 @@ class Reader:
                     value = float(digits)
                 if not low <= value <= high:
                     self._literal(letter, digits, rules[letter], line)  # raises with the right code
-            except ValueError:  # "1.2.3", ".": alarm 7 ILLEGAL USE OF DECIMAL POINT
-                raise self.error(f"bad number {letter}{digits}", "bad-number", line, alarm=7) from None
+            except ValueError:  # "1.2.3", ".": GSK/Fanuc alarm 7 ILLEGAL USE OF DECIMAL POINT
+                raise self.error(f"bad number {letter}{digits}", "bad-number", line,
+                                 alarm=DECIMAL_POINT) from None  # fmt: skip
             except ProgramError:
                 if (self._mentions_call(text) or self._code_rules(text) is not None
                         or letter in self._deferred_letters):  # fmt: skip
@@ -376,7 +380,7 @@ class Reader:
             # Before the truncation below, which would cut X1.23456.7 to X1.2345 (alarm 7 ILLEGAL USE OF
             # DECIMAL POINT).
             raise self.error(f"bad number {letter}{digits}: a second decimal point", "bad-number", line,
-                             alarm=7)  # fmt: skip
+                             alarm=DECIMAL_POINT)  # fmt: skip
         if has_point:
             if not point_allowed:
                 raise self.error(f"{letter}{digits}: no decimal point allowed in {letter}",
@@ -661,7 +665,7 @@ class Reader:
         m = int(parser.constant(digits))
         if not 1 <= m <= 3:
             raise self.error(f"{word}{m}: the loop identifier is 1, 2 or 3 (GSK 25i §3.7.5)", "do-end", line,
-                             start + 1, alarm=97)  # fmt: skip  # alarm 97 ILLEGAL CYCLE NUMBER
+                             start + 1, alarm="do-end/loop-number")  # fmt: skip
         return m
 
     def _keyword(self, text: str, pos: int) -> str | None:
@@ -686,9 +690,9 @@ class Reader:
             if end < len(text) and (text[end] == "." or text[end].isdigit()):
                 bad = _NUMBER_AT.match(text, end)
                 tail = text[end : (bad.end() if bad else end + 1)]
-                # alarm 7 ILLEGAL USE OF DECIMAL POINT (a second point), else 8 ILLEGAL DATA
+                # a second point (GSK/Fanuc alarm 7 ILLEGAL USE OF DECIMAL POINT), else bad-number's
                 raise self.error(f"bad number {letter}{match.group()}{tail}", "bad-number", line, start,
-                                 alarm=7 if "." in tail else None)  # fmt: skip
+                                 alarm=DECIMAL_POINT if "." in tail else None)  # fmt: skip
             digits = match.group()
             if len(digits) >= self._max_word_length:  # the address letter makes it one character longer
                 raise self.error(f"{letter}{digits}: a word is at most {self._max_word_length} characters "
@@ -709,7 +713,7 @@ class Reader:
             raise self.error(f"{letter}{sign}: sign without a number", "bad-sign", line, start)  # alarm 6
         if c == "." or c.isdigit():
             raise self.error(f"bad number after {letter}", "bad-number", line, start,
-                             alarm=7 if c == "." else None)  # fmt: skip
+                             alarm=DECIMAL_POINT if c == "." else None)  # fmt: skip
         raise self.error(f"address {letter} has no value", "missing-value", line, start)
 
     def _assignment(self, text: str, pos: int, line: int) -> tuple[tuple, int]:

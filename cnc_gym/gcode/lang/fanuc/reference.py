@@ -84,7 +84,7 @@ def _g29(core: Seam, spec, values: dict) -> None:
     missing = [letters[a] for a in axes if core.state.g28_intermediate[a] is None]
     if missing:
         raise core.error(f"G29 {''.join(missing)}: no intermediate point stored for that axis (G28/G30 "
-                         "first)", "bad-reference", alarm=46)  # fmt: skip
+                         "first)", "bad-reference", alarm="bad-reference/no-intermediate")  # fmt: skip
     stored = core.state.g28_intermediate
     middle = (stored[0], stored[1], stored[2])
     core.move_linear(True, middle)
@@ -105,7 +105,8 @@ REFERENCE_CHECK_MM = 0.0001
 
 def _g27(core: Seam, spec, values: dict) -> None:
     """``G27 IP_`` (§3.3.1): rapid to IP, then check that the commanded axes are on reference
-    position 1; if not, alarm (46, the list's "ILLEGAL REFER. RETURN COMMAND")."""
+    position 1; if not, ``reference-check-failed`` (GSK alarm 46, the list's "ILLEGAL REFER. RETURN
+    COMMAND")."""
     check_coordinate_command(core, "G27", reference=True)
     axes = _commanded(core, values)
     letters = core.dialect.axes
@@ -115,8 +116,7 @@ def _g27(core: Seam, spec, values: dict) -> None:
     off = [letters[a] for a in axes if abs(m[a] - reference[a]) > REFERENCE_CHECK_MM]
     if off:
         where = ", ".join(f"{letters[a]} machine {m[a]:.4f} vs {reference[a]:.4f}" for a in axes)
-        raise core.error(f"G27: not on the reference position ({where})", "reference-check-failed",
-                         alarm=46)  # fmt: skip
+        raise core.error(f"G27: not on the reference position ({where})", "reference-check-failed")
 
 
 #: Dwell at the overshoot point of G60 (§3.2.7: "the defaulted dwell time is 1s").

@@ -103,7 +103,7 @@ class SystemVariables:
         self.date = float(now.tm_year * 10000 + now.tm_mon * 100 + now.tm_mday)
         self.time_of_day = float(now.tm_hour * 10000 + now.tm_min * 100 + now.tm_sec)
 
-    def _error(self, message: str, code: str, alarm: int | None = None) -> ProgramError:
+    def _error(self, message: str, code: str, alarm: str | int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
 
     @property
@@ -287,9 +287,9 @@ class SystemVariables:
                     number,
                     (value or 0.0) * self._scale,
                     wear=wear,
-                    # alarm 29 ILLEGAL OFFSET VALUE (32 is the G10 form's "… IN G10")
-                    error=lambda message, code: self._error(message, code,
-                                                            29 if code == "bad-offset-value" else None),
+                    # GSK: alarm 29 ILLEGAL OFFSET VALUE here, 32 "… IN G10" for the G10 form
+                    error=lambda message, code: self._error(
+                        message, code, "bad-offset-value/variable" if code == "bad-offset-value" else None),
                 )
                 return
         if 2500 <= index <= 2906:
@@ -351,7 +351,8 @@ class SystemVariables:
                               "bad-variable")
         runner = self.core.state.flow
         message = getattr(runner, "message", None) or f"user alarm {int(number)}"
-        raise self._error(message[:26], "user-alarm", alarm=3000 + int(number))
+        base = self.dialect.user_alarm_base
+        raise self._error(message[:26], "user-alarm", alarm=None if base is None else base + int(number))
 
     def count_part(self) -> None:
         """M02/M30: one more part done (§4.1.3)."""
