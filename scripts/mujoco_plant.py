@@ -6,6 +6,7 @@ plant interface directly (no controller), as the tests in tests/plant/test_mujoc
 
     .venv/bin/python scripts/mujoco_plant.py            # all tables
     .venv/bin/python scripts/mujoco_plant.py --speed    # only the plant step timing
+    .venv/bin/python scripts/mujoco_plant.py --plot docs/images/plant   # also the figures
 """
 
 from __future__ import annotations
@@ -168,10 +169,63 @@ def speed(repeats: int = 5, steps: int = 400) -> None:
     print()
 
 
+def plots(folder: Path) -> None:
+    """quadrant_glitches.png (radial error round the circle, friction off and on) and machine.png (MuJoCo's
+    off-screen picture of vmc-small-mujoco cutting the star, where OpenGL can be had)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder.mkdir(parents=True, exist_ok=True)
+    ref = circle()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+    for ax, integral in zip(axes, (0.0, 0.01), strict=True):
+        base = with_mechanics("vmc-small", **{**RIGID, "velocity_integral_time_s": integral})
+        for force in (0.0, 60.0, 120.0, 240.0):
+            angle, r = radial_um(MujocoPlant(with_mechanics(base, coulomb_friction_n=force)), ref)
+            order = np.argsort(angle)
+            ax.plot(angle[order], r[order], lw=1.2, label=f"{force:g} N")
+        for reversal in (0, 90, 180, 270):
+            ax.axvline(reversal, color="0.8", lw=0.8, zorder=0)
+        loop = f"PI velocity loop (Tn {integral * 1e3:g} ms)" if integral else "P velocity loop"
+        ax.set_title(f"vmc-small loops, rigid axes, {loop}", fontsize=9)
+        ax.set_xlabel("angle on the circle (°); axis reversals at 0, 90, 180, 270", fontsize=8)
+        ax.set_xticks(range(0, 361, 45))
+    axes[0].set_ylabel("radial error (µm)", fontsize=8)
+    axes[1].legend(title="Coulomb friction", fontsize=7, title_fontsize=7)
+    fig.suptitle("MuJoCo plant, circle R 50 mm at F5000: quadrant glitches", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(folder / "quadrant_glitches.png", dpi=100)
+    plt.close(fig)
+    print(f"wrote {folder / 'quadrant_glitches.png'}")
+
+    import gymnasium
+
+    import cnc_gym  # noqa: F401  (registers the env ids)
+
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"], machine="vmc-small-mujoco",
+                         render_mode="rgb_array")  # fmt: skip
+    env.reset(seed=0)
+    for _ in range(400):
+        env.step(np.array([0.6], dtype=np.float32))
+    renderer = env.unwrapped._renderer
+    image = env.render()
+    if renderer._view is not None and renderer._view.available:
+        plt.imsave(folder / "machine.png", image)
+        print(f"wrote {folder / 'machine.png'}")
+    else:
+        print("no off-screen OpenGL here: machine.png not written")
+    env.close()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--speed", action="store_true", help="only the step timing")
+    parser.add_argument("--plot", metavar="DIR", help="also write the figures into DIR")
     args = parser.parse_args(argv)
+    if args.plot:
+        plots(Path(args.plot))
     if not args.speed:
         agreement()
         friction()

@@ -134,10 +134,10 @@ class MachineView:
         self._gl.make_current()
         mujoco.mj_kinematics(model, data)  # body poses only: the dynamics' state is left as it is
         path = np.asarray(path_mm, dtype=float)
-        if len(path):  # frame the programmed path: look at its middle from 5 times its size
+        if len(path):  # frame the programmed path: look at its middle from 3.5 times its size
             low, high = path.min(axis=0), path.max(axis=0)
             self._camera.lookat[:] = self._to_world((low + high) / 2.0)
-            self._camera.distance = float(np.clip(5.0 * np.max(high - low) / 1000.0, 0.25, 2.5))
+            self._camera.distance = float(np.clip(3.5 * np.max(high - low) / 1000.0, 0.15, 2.5))
         else:
             self._camera.lookat[:] = data.site("e0_tool").xpos
         mujoco.mjv_updateScene(model, data, self._option, None, self._camera, mujoco.mjtCatBit.mjCAT_ALL,
