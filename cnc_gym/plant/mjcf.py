@@ -16,7 +16,8 @@ is exactly ``(x, y, z)``. A rigid axis is one body; the motor side's inertia is 
 ``armature`` (a reflected inertia: it resists that axis's acceleration only, and the axes that carry it
 do not feel it). A compliant axis has a second body for the motor side (a small mass whose ``armature``
 is the motor-side inertia) joined to the load by a fixed tendon ``load − motor`` with the coupling's
-stiffness and damping; backlash is the tendon spring's dead band (``springlength`` = ±backlash/2).
+stiffness and damping; backlash is the tendon spring's dead band (``springlength`` = ±backlash/2; the
+tendon's damping has no dead band, so it also acts inside the gap).
 
 Guideway friction acts on the load joints: viscous ``damping`` and Coulomb ``frictionloss``. Gravity is
 off (a VMC's Z is counterbalanced; X and Y move horizontally) and so are contacts (nothing touches).
