@@ -99,7 +99,7 @@ def test_byte_order_mark_and_latin1_files(tmp_path, capsys):
 
 def test_bad_dialect_and_machine_are_one_line_errors(tmp_path, capsys):
     program = write(tmp_path, "G00 X1\n")
-    for argv in (["--dialect", "h4cm"], ["--dialect", "nonsense"], ["--machine", "no-such-machine"]):
+    for argv in (["--dialect", "nonsense"], ["--machine", "no-such-machine"]):
         status, out, err = run_main(["trace", program, *argv], capsys)
         assert status == 2 and out == "" and len(err.splitlines()) == 1, argv
 

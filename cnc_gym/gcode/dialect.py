@@ -456,7 +456,7 @@ class Dialect:
 DIALECT_MODULES: dict[str, str | None] = {
     "gsk25i": "cnc_gym.gcode.dialects.gsk25i",
     "fanuc": "cnc_gym.gcode.dialects.fanuc",
-    "h4cm": None,
+    "h4cm": "cnc_gym.gcode.dialects.h4cm",
     "syntec": "cnc_gym.gcode.dialects.syntec",
     "azmc1": None,
 }

@@ -48,3 +48,37 @@ def module_tests(path: str) -> dict[str, ast.FunctionDef]:
     tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
     return {node.name: node for node in tree.body
             if isinstance(node, ast.FunctionDef) and node.name.startswith("test_")}  # fmt: skip
+
+
+def only_nodes(status: str) -> bool:
+    """Whether a Status cell is nothing but test nodes."""
+    return bool(NODE.search(status)) and NODE.sub("", status).replace(",", "").strip() == ""
+
+
+def alarm_kind(status: str) -> str:
+    """An alarms-index Status cell's kind: ``tested`` (test nodes), ``deviation`` or ``not applicable`` (each
+    with its reason)."""
+    for kind in ("deviation", "not applicable"):
+        if status.startswith(f"{kind}: "):
+            assert len(status) > len(kind) + 20, f"{kind} without a reason: {status!r}"
+            return kind
+    assert only_nodes(status), f"status is neither test nodes, deviation nor not applicable: {status!r}"
+    return "tested"
+
+
+def check_nodes(status: str, row: str) -> None:
+    """Every test node a cell names exists."""
+    for path, name in NODE.findall(status):
+        assert (ROOT / path).is_file(), f"{row}: {path} does not exist"
+        assert name in module_tests(path), f"{row}: {path} has no test function {name}"
+
+
+def minimal_cases(path: str) -> dict[str, list[tuple[str, int | None]]]:
+    """The ``CASES`` table of an alarms test file (row → [(program, code, alarm, line, …)]), parsed: row →
+    [(code, alarm)]."""
+    tree = ast.parse((ROOT / path).read_text(encoding="utf-8"))
+    node = next(n for n in tree.body if isinstance(n, ast.AnnAssign) and ast.unparse(n.target) == "CASES")
+    out: dict[str, list[tuple[str, int | None]]] = {}
+    for key, value in zip(node.value.keys, node.value.values, strict=True):  # type: ignore[union-attr]
+        out[key.value] = [(case.elts[1].value, case.elts[2].value) for case in value.elts]  # type: ignore
+    return out

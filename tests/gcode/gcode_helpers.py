@@ -6,6 +6,7 @@ import math
 import os
 from contextvars import ContextVar
 
+import numpy as np
 import pytest
 
 from cnc_gym.errors import ProgramError
@@ -26,6 +27,26 @@ def program_error(text: str, **kw) -> ProgramError:
     with pytest.raises(ProgramError) as info:
         interpret(text, **kw)
     return info.value
+
+
+def compact(rows: list[dict]) -> list[tuple]:
+    """Trace records as compact tuples: ("R", end) rapid, ("F", end, feed) line, ("D", seconds) dwell, ("A",
+    end, centre, radius, sweep°) arc; coordinates rounded to 1 µm."""
+    out: list[tuple] = []
+    for r in rows:
+        end = tuple(round(c, 3) + 0.0 for c in r.get("end", ()))
+        if r["kind"] == "rapid":
+            out.append(("R", end))
+        elif r["kind"] == "line":
+            out.append(("F", end, r["feed"]))
+        elif r["kind"] == "dwell":
+            out.append(("D", r["seconds"]))
+        elif r["kind"] == "arc":
+            out.append(("A", end, tuple(round(c, 3) + 0.0 for c in r["center"]), round(r["radius"], 3),
+                        round(r["sweep_deg"], 3)))  # fmt: skip
+        else:
+            out.append((r["kind"], end))
+    return out
 
 
 def close(a, b, tol: float = 1e-6) -> bool:
@@ -76,3 +97,19 @@ def success_share(minimum: float):
 
 
 _REPORT = bool(os.environ.get("CNC_GYM_SHARE_REPORT"))
+
+
+def check_outcome(text: str, **options) -> None:
+    """A property's check: ``text`` ends in a one-line ProgramError with a code, or in a finite tool path
+    (no NaN anywhere a number belongs); the outcome is counted for :func:`success_share`."""
+    try:
+        tp = interpret(text, **options)
+    except ProgramError as err:
+        assert err.code and "\n" not in str(err)
+        tally(False)
+        return
+    tally(True)
+    for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
+        assert np.all(np.isfinite(getattr(tp, name))), name
+    assert np.all(np.isfinite(tp.feed) | (tp.kind == 0) | (tp.kind == 3))  # rapids and dwells carry NaN feed
+    assert np.all(np.isfinite(tp.rotary_start)) and np.all(np.isfinite(tp.rotary_end))

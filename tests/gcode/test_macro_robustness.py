@@ -3,13 +3,9 @@ never a hang (the ``max_blocks`` bound), never a NaN."""
 
 from __future__ import annotations
 
-import numpy as np
-from gcode_helpers import success_share, tally
+from gcode_helpers import check_outcome, success_share
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from cnc_gym.errors import ProgramError
-from cnc_gym.gcode import interpret
 
 MAX_BLOCKS = 3000
 
@@ -54,24 +50,12 @@ STATEMENT = st.one_of(
 LINE = st.tuples(st.sampled_from(["", "", "N1 ", "N2 ", "N3 ", "N10 "]), STATEMENT).map("".join)
 
 
-def _check(text: str) -> None:
-    try:
-        tp = interpret(text, max_blocks=MAX_BLOCKS)
-    except ProgramError as err:
-        assert err.code and "\n" not in str(err)
-        tally(False)
-        return
-    tally(True)
-    for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
-        assert np.all(np.isfinite(getattr(tp, name))), name
-
-
 @success_share(0.05)
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(LINE, max_size=14), st.lists(LINE, max_size=6), st.lists(LINE, max_size=6))
 def test_random_macro_programs(main, sub, macro):
     text = "\n".join(main) + "\nM30\nO1\n" + "\n".join(sub) + "\nM99\nO2\n" + "\n".join(macro) + "\nM99\n"
-    _check(text)
+    check_outcome(text, max_blocks=MAX_BLOCKS)
 
 
 SEEDS = [
@@ -95,4 +79,4 @@ def test_mutated_macro_programs(seed, edits):
         i = position % (len(text) + 1)
         # Replace one character (or insert at the end) with the fragment.
         text = text[:i] + insert + text[i + 1 :]
-    _check(text)
+    check_outcome(text, max_blocks=MAX_BLOCKS)

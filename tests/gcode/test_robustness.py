@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from gcode_helpers import success_share, tally
+from gcode_helpers import check_outcome, success_share, tally
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -19,32 +19,18 @@ WORDS = st.sampled_from([
 ])  # fmt: skip
 
 
-def _check(text: str, **options) -> None:
-    try:
-        tp = interpret(text, **options)
-    except ProgramError as err:
-        assert err.code and "\n" not in str(err)
-        tally(False)
-        return
-    tally(True)
-    for name in ("start", "end", "radius", "sweep", "dwell_s", "length"):
-        assert np.all(np.isfinite(getattr(tp, name))), name
-    assert np.all(np.isfinite(tp.feed) | (tp.kind == 0) | (tp.kind == 3))  # rapids and dwells carry NaN feed
-    assert np.all(np.isfinite(tp.rotary_start)) and np.all(np.isfinite(tp.rotary_end))
-
-
 @success_share(0.003)
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.text(alphabet=ALPHABET, max_size=80))
 def test_random_characters(text):
-    _check(text)
+    check_outcome(text)
 
 
 @success_share(0.03)
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(WORDS, max_size=30).map(" ".join))
 def test_random_word_soup(text):
-    _check(text)
+    check_outcome(text)
 
 
 # The machine-dependent paths: rotary axis B (gsk25i preset), G37 with a simulated instrument, G31 with a
@@ -61,7 +47,7 @@ MACHINE_WORDS = st.sampled_from([
 def test_random_machine_programs(text, signal):
     from cnc_gym.machine import load_machine
 
-    _check(text, machine=load_machine("gsk25i"), skip_signal={"X": signal},
+    check_outcome(text, machine=load_machine("gsk25i"), skip_signal={"X": signal},
            tool_measurement={"signal_at": {1: signal}, "decel_mm": 10.0, "band_mm": 5.0})  # fmt: skip
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from gcode_helpers import compact
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
@@ -30,23 +31,8 @@ def records(text: str, **kw) -> list[dict]:
 
 
 def path(text: str, **kw) -> list[tuple]:
-    """Rows as compact tuples: ("R", end) rapid, ("F", end, feed) line, ("D", seconds) dwell, ("A", end,
-    centre, radius, sweep°) arc; coordinates rounded to 1 µm."""
-    out = []
-    for r in records(text, **kw):
-        end = tuple(round(c, 3) + 0.0 for c in r.get("end", ()))
-        if r["kind"] == "rapid":
-            out.append(("R", end))
-        elif r["kind"] == "line":
-            out.append(("F", end, r["feed"]))
-        elif r["kind"] == "dwell":
-            out.append(("D", r["seconds"]))
-        elif r["kind"] == "arc":
-            out.append(("A", end, tuple(round(c, 3) + 0.0 for c in r["center"]), round(r["radius"], 3),
-                        round(r["sweep_deg"], 3)))  # fmt: skip
-        else:
-            out.append((r["kind"], end))
-    return out
+    """The tool path as compact rows (gcode_helpers.compact)."""
+    return compact(records(text, **kw))
 
 
 def error(text: str, **kw) -> ProgramError:

@@ -8,12 +8,21 @@ add up. Test nodes are found by parsing the test files (no pytest subprocess).
 
 from __future__ import annotations
 
-import ast
 import functools
 import re
 
 import pytest
-from doc_tables import NODE, ROOT, check_ids, module_tests, parse_table
+from doc_tables import (
+    NODE,
+    ROOT,
+    alarm_kind,
+    check_ids,
+    check_nodes,
+    minimal_cases,
+    module_tests,
+    only_nodes,
+    parse_table,
+)
 
 EXAMPLES_DOC = ROOT / "docs" / "syntec_examples.md"
 ALARMS_DOC = ROOT / "docs" / "syntec_alarms.md"
@@ -40,34 +49,10 @@ def alarm_rows() -> list[dict[str, str]]:
     return table
 
 
-def only_nodes(status: str) -> bool:
-    return bool(NODE.search(status)) and NODE.sub("", status).replace(",", "").strip() == ""
-
-
-def alarm_kind(status: str) -> str:
-    for kind in ("deviation", "not applicable"):
-        if status.startswith(f"{kind}: "):
-            assert len(status) > len(kind) + 20, f"{kind} without a reason: {status!r}"
-            return kind
-    assert only_nodes(status), f"status is neither test nodes, deviation nor not applicable: {status!r}"
-    return "tested"
-
-
-def check_nodes(status: str, row: str) -> None:
-    for path, name in NODE.findall(status):
-        assert (ROOT / path).is_file(), f"{row}: {path} does not exist"
-        assert name in module_tests(path), f"{row}: {path} has no test function {name}"
-
-
 @functools.cache
 def cases() -> dict[str, list[tuple[str, int | None]]]:
-    """``CASES`` of test_syntec_alarms.py, parsed: row → [(code, alarm)]."""
-    tree = ast.parse((ROOT / ALARMS_TESTS).read_text(encoding="utf-8"))
-    node = next(n for n in tree.body if isinstance(n, ast.AnnAssign) and ast.unparse(n.target) == "CASES")
-    out: dict[str, list[tuple[str, int | None]]] = {}
-    for key, value in zip(node.value.keys, node.value.values, strict=True):  # type: ignore[union-attr]
-        out[key.value] = [(case.elts[1].value, case.elts[2].value) for case in value.elts]  # type: ignore
-    return out
+    """``CASES`` of the alarms tests, parsed: row → [(code, alarm)]."""
+    return minimal_cases(ALARMS_TESTS)
 
 
 # ---------------------------------------------------------------------- the examples index

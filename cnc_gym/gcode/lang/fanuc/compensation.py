@@ -544,10 +544,12 @@ class OffsetStage:
     :meth:`set_position_offset`, :meth:`corner_arc` and :meth:`flush`.
     """
 
-    def __init__(self, machine, *, startup_type: str = "A", alarms=None) -> None:
+    def __init__(self, machine, *, startup_type: str = "A", alarms=None,
+                 outer_corner_arcs: bool = False) -> None:  # fmt: skip
         self.machine = machine
         self.alarms = alarms or {}
         self.startup_type = startup_type
+        self.outer_corner_arcs = outer_corner_arcs  # CompensationSettings.outer_corner_arcs
         self._position: Vec = machine.position  # programmed (uncompensated) position
         self.file_index = machine.file_index
         self.modes = machine.modes
@@ -872,6 +874,7 @@ class OffsetStage:
                 return
             self.corner_arc_pending = False  # G39 before a cancel or the end: no corner to round
         b_el = nxt.move if nxt is not None else None
+        role = "cancel"
         try:
             if nxt is not None and nxt.role == "cancel" and self.cancel_direction is not None:
                 virtual = PlaneElement(
@@ -893,6 +896,11 @@ class OffsetStage:
         except CompensationError as err:
             err.line = err.line or line
             raise
+        if self.outer_corner_arcs and role == "offset" and nxt is not None and c.kind.startswith("outer"):
+            # An arc round the outer corner, as G39 would make one (CompensationSettings.outer_corner_arcs).
+            self.corner_arc_direction = self.corner_arc_feed = None
+            self._corner_arc_resolve(a, nxt)
+            return
         try:
             rest = self._emit_block(a, [c.end_a, *c.lead_b])
         except CompensationError as err:
@@ -1028,7 +1036,8 @@ def install(core: Seam) -> OffsetStage:
     st = core.state
     comp = st.comp
     if comp.stage is None:
-        comp.stage = OffsetStage(st.out, startup_type=comp.settings.startup_type, alarms=core.dialect.alarms)
+        comp.stage = OffsetStage(st.out, startup_type=comp.settings.startup_type, alarms=core.dialect.alarms,
+                                 outer_corner_arcs=comp.settings.outer_corner_arcs)  # fmt: skip
         st.out = comp.stage
         st.block_listeners.append(before_block)
     return comp.stage
