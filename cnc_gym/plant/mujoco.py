@@ -40,6 +40,8 @@ from cnc_gym.machine import AXIS_NAMES, MachineConfig, load_machine
 from cnc_gym.plant.mjcf import axis_names, machine_mjcf
 
 _M_PER_MM = 1e-3
+#: MuJoCo's warnings of a state that is no longer finite (it then resets the simulation).
+_DIVERGED = tuple(getattr(mujoco.mjtWarning, f"mjWARN_BAD{what}") for what in ("QACC", "QVEL", "QPOS"))
 #: Largest |λ|·timestep allowed for the fastest mode (the coupling's resonance, the velocity loop): the
 #: explicit parts of the step are stable up to 2 and within 5 % of the true frequency up to 1.
 MAX_OMEGA_TIMESTEP = 1.0
@@ -174,6 +176,7 @@ class MujocoPlant:
         self.model_version = 0
         self._check_loops(np.ones(3))
         self._state = np.zeros((self.n_envs, 3, 2))  # velocity-loop integral, current-loop force
+        self._diverged = 0  # MuJoCo's count of non-finite states so far
         self._history = np.zeros((self.n_envs, self._n_hist, 3))  # raw references, metres
         if kv_scale is not None:
             self.set_kv_scale(kv_scale)
@@ -380,9 +383,13 @@ class MujocoPlant:
                 _servo_law(qpos, qvel, qacc, adr, kv, par, state, filtered, k, middle, period, h, ctrl)
                 mujoco.mj_step(m, d)
             actual[:, k] = qpos[self._load_q] - self._report_shift_s * qvel[self._load_v]
-        if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number or not np.all(np.isfinite(actual)):
-            raise FloatingPointError(f"{self.machine.source}: the MuJoCo plant diverged (reference too far "
-                                     "or too fast for the machine's mechanics)")  # fmt: skip
+        bad = sum(d.warning[w].number for w in _DIVERGED)
+        if bad != self._diverged or not np.all(np.isfinite(actual)):
+            # MuJoCo resets a simulation whose state is no longer finite (and counts it): say so, never
+            # return the reset state as motion.
+            self._diverged = bad
+            raise ConfigError(f"{self.machine.source}: the MuJoCo plant diverged: its mechanics (plant "
+                              "section) cannot follow this reference at this timestep")  # fmt: skip
         actual *= 1.0 / _M_PER_MM
         return actual[0] if squeeze else actual
 

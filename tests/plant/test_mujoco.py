@@ -302,6 +302,13 @@ def test_reset_settled_and_bad_input():
         MujocoPlant("vmc-small-mujoco", n_envs=2).step(np.zeros((3, 3)))
 
 
+def test_a_diverged_simulation_is_an_error_not_motion():
+    plant = MujocoPlant("vmc-small-mujoco")
+    plant.data.qvel[0] = np.nan  # what an exploding simulation leaves; MuJoCo then resets it
+    with pytest.raises(ConfigError, match="diverged"):
+        plant.step(np.zeros((5, 3)))
+
+
 def test_unstable_or_too_coarse_mechanics_are_config_errors():
     with pytest.raises(ConfigError, match="unstable"):  # a reset time far below the current loop's lag
         MujocoPlant(with_mechanics("vmc-small", velocity_integral_time_s=1e-4))
