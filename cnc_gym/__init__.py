@@ -1,12 +1,54 @@
 """cnc-gym: Gymnasium environments for CNC feed-rate control on real G-code.
 
-Importing the package registers ``cnc_gym/Feedrate-v0`` (the env module itself is imported lazily by
-``gymnasium.make``, so ``import cnc_gym`` stays cheap for interpreter-only users).
+Importing the package registers ``cnc_gym/Feedrate-v0`` with Gymnasium: at once when Gymnasium is
+already imported, otherwise the moment it is (a post-import hook on ``gymnasium.envs.registration``).
+So ``import cnc_gym`` stays cheap for interpreter-only users: ``cnc-gym trace`` never loads Gymnasium,
+numba or scipy. The env module itself is imported by ``gymnasium.make``.
 """
 
-from gymnasium.envs.registration import register, registry
+from __future__ import annotations
+
+import importlib.abc
+import importlib.machinery
+import sys
+from types import ModuleType
 
 __version__ = "0.1.0"
 
-if "cnc_gym/Feedrate-v0" not in registry:
-    register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv")
+_REGISTRATION = "gymnasium.envs.registration"
+
+
+def _register() -> None:
+    from gymnasium.envs.registration import register, registry
+
+    if "cnc_gym/Feedrate-v0" not in registry:
+        register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv")
+
+
+class _RegisterOnImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Finds ``gymnasium.envs.registration`` with the usual finders, loads it, then registers the envs."""
+
+    def find_spec(self, fullname, path, target=None):  # type: ignore[no-untyped-def]
+        if fullname != _REGISTRATION:
+            return None
+        spec = importlib.machinery.PathFinder.find_spec(fullname, path)
+        if spec is None or spec.loader is None:
+            return None
+        self._loader = spec.loader
+        spec.loader = self
+        return spec
+
+    def create_module(self, spec):  # type: ignore[no-untyped-def]
+        return self._loader.create_module(spec)
+
+    def exec_module(self, module: ModuleType) -> None:
+        self._loader.exec_module(module)
+        if self in sys.meta_path:
+            sys.meta_path.remove(self)
+        _register()
+
+
+if _REGISTRATION in sys.modules:
+    _register()
+elif not any(isinstance(finder, _RegisterOnImport) for finder in sys.meta_path):
+    sys.meta_path.insert(0, _RegisterOnImport())

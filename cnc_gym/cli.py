@@ -23,7 +23,6 @@ false`` and a line on stderr says why; 130 interrupted.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 
@@ -140,7 +139,9 @@ def cmd_trace(args: argparse.Namespace) -> int:
     else:
         toolpath = interpret_file(source.path, **options)
     # The whole program is interpreted before anything is printed: an error leaves stdout empty.
-    text = "".join(json.dumps(record) + "\n" for record in toolpath.to_records())
+    from cnc_gym.toolpath.records import toolpath_jsonl
+
+    text = toolpath_jsonl(toolpath)
     try:
         sys.stdout.write(text)
         sys.stdout.flush()

@@ -10,19 +10,16 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from numba import njit
 
+from cnc_gym.envs.fused import FeedrateBatch, ObservationSpec, RewardSpec
 from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
-from cnc_gym.motion import kernel as _kernel
+from cnc_gym.plant import make_plant
 from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
-
-# Columns of the controller's rows (Controller.advance_rows) the step reads.
-_O_X, _O_Z1, _O_SEG, _O_S = _kernel.O_X, _kernel.O_Z + 1, _kernel.O_SEG, _kernel.O_S
 
 #: Scalar observation entries, in order (the look-ahead block follows them).
 SCALAR_FEATURES = (
@@ -71,49 +68,39 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
     return max(cut_s + rapid_s + dwell_s + rotary_s, 1e-3)
 
 
-@njit(cache=True, nogil=True)
-def _error_statistics(error, reference, actual):
-    """``(max, sum of squares, last)`` of a step's contour errors and the last sample's following error
-    ‖reference − actual‖."""
-    e_max = 0.0
-    sum_sq = 0.0
-    for e in error:
-        sum_sq += e * e
-        if e > e_max:
-            e_max = e
-    dx = reference[-1, 0] - actual[-1, 0]
-    dy = reference[-1, 1] - actual[-1, 1]
-    dz = reference[-1, 2] - actual[-1, 2]
-    return e_max, sum_sq, error[-1], math.sqrt(dx * dx + dy * dy + dz * dz)
+def observation_spec_v0(lookahead_points: int, v_ref: float, a_ref: float, max_override: float,
+                        tolerance_mm: float, lookahead_mm: float) -> ObservationSpec:
+    """Feedrate-v0's observation (the table in :class:`FeedrateEnv`'s docstring), entry by entry."""
+    scalars = {  # feature: signal, scale, low, high
+        "speed": ("speed", 1 / v_ref, 0, 2),
+        "accel": ("accel", 1 / a_ref, -2, 2),
+        "override": ("override", 1 / max_override, 0, 1),
+        "knob": ("knob", 1.0, -1, 1),
+        "following_error": ("following_error", 1 / _FOLLOWING_ERROR_REF_MM, 0, 5),
+        "contour_error_step": ("contour_error_step", 1 / tolerance_mm, 0, 5),
+        "contour_error_now": ("contour_error_now", 1 / tolerance_mm, 0, 5),
+        "progress": ("path_fraction", 1.0, 0, 1),
+        "distance_to_stop": ("distance_to_stop", 1 / lookahead_mm, 0, 1),
+    }
+    blocks = {  # look-ahead row: transform, parameter, scale, high (low 0)
+        "speed_limit": ("none", 0.0, 1 / v_ref, 2),
+        "curvature": ("saturate", _CURVATURE_LENGTH_MM, 1.0, 1),
+        "turn_angle": ("none", 0.0, 1 / math.pi, 1),
+        "programmed_feed": ("none", 0.0, 1 / v_ref, 2),
+    }
+    signals = tuple(scalars[feature] for feature in SCALAR_FEATURES)
+    lookahead = tuple((row, *blocks[row][:3], 0.0, blocks[row][3]) for row in LOOKAHEAD_FEATURES)
+    return ObservationSpec(signals, lookahead, lookahead_points)
 
 
-@njit(cache=True, nogil=True)
-def _assemble_observation(raw, speed_limit, curvature, turn_angle, feed, scale, low, high):
-    """The observation: ``raw`` scalars (9) then the four look-ahead blocks, times ``scale``, clipped.
-
-    Curvature κ enters as κL/(1 + κL) (L = _CURVATURE_LENGTH_MM); NaN from upstream becomes 0 (a NaN
-    would poison a policy).
-    """
-    n = speed_limit.shape[0]
-    base = raw.shape[0]
-    obs = np.empty(base + 4 * n, dtype=np.float32)
-    for i in range(base + 4 * n):
-        if i < base:
-            x = raw[i]
-        elif i < base + n:
-            x = speed_limit[i - base]
-        elif i < base + 2 * n:
-            kl = curvature[i - base - n] * _CURVATURE_LENGTH_MM
-            x = kl / (kl + 1.0)
-        elif i < base + 3 * n:
-            x = turn_angle[i - base - 2 * n]
-        else:
-            x = feed[i - base - 3 * n]
-        x *= scale[i]
-        if x != x:
-            x = 0.0
-        obs[i] = min(max(x, low[i]), high[i])
-    return obs
+def reward_spec_v0(weights: RewardWeights) -> RewardSpec:
+    """Feedrate-v0's reward (the formula in :class:`FeedrateEnv`'s docstring), term by term."""
+    return RewardSpec((
+        ("progress_delta", "linear", 0.0, weights.progress),
+        ("time_fraction", "linear", 0.0, -weights.time),
+        ("error_ratio", "capped_square", weights.error_ratio_cap, -weights.contour_error),
+        ("violated", "linear", 0.0, -weights.violation),
+    ))  # fmt: skip
 
 
 class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -229,6 +216,13 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     ``override`` (applied), ``feed_mm_min`` (current path speed × 60), ``path_s``, ``progress``,
     ``program``, ``steps``. At the end of an episode these are the episode's totals.
 
+    ## Implementation
+
+    A step is one compiled call (:mod:`cnc_gym.envs.fused`): the controller's periods, the servo plant,
+    the contour error, the statistics, the reward and the observation, on state held in arrays. The
+    observation and the reward are declared (:func:`observation_spec_v0`, :func:`reward_spec_v0`). The
+    vector env (:class:`~cnc_gym.envs.vector.FeedrateVectorEnv`) runs N episodes in one such call.
+
     ## Version History
 
     - v0: first version.
@@ -251,11 +245,6 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         units: str | None = None,
         plant: str | None = None,
     ) -> None:
-        from cnc_gym.motion import Controller
-        from cnc_gym.plant import ContourErrorMeter, make_plant
-
-        self._controller_cls = Controller
-        self._meter_cls = ContourErrorMeter
         # Every argument checked once, against one schema (cnc_gym/envs/options.py).
         args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                              control_period_s=control_period_s, reward=reward,
@@ -290,34 +279,21 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self._programs: list[tuple[str, Toolpath]] = [
             load_program(p, dialect, self.machine, units=self.units) for p in programs
         ]
-        self._episode_cache: dict[str, dict[str, Any]] = {}
         self.program_names = [name for name, _ in self._programs]
 
-        self.plant = make_plant(self.machine, n_envs=1)  # the preset's backend, or plant=
-
-        # Spaces.
+        # Spaces, observation and reward: declared once (observation_spec_v0, reward_spec_v0), assembled by
+        # the compiled step.
         self.action_space = spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
-        n = self.lookahead_points
-        low = np.array([0, -2, 0, -1, 0, 0, 0, 0, 0] + [0] * (4 * n), dtype=np.float32)
-        high = np.array([2, 2, 1, 1, 5, 5, 5, 1, 1] + [2] * n + [1] * n + [1] * n + [2] * n, dtype=np.float32)
-        self.observation_space = spaces.Box(low, high, dtype=np.float32)
-        self._raw = np.zeros(len(SCALAR_FEATURES))
-        base = len(SCALAR_FEATURES)
-        self._la_blocks = [slice(base + i * n, base + (i + 1) * n) for i in range(len(LOOKAHEAD_FEATURES))]
-        scale = np.ones(len(low))
-        tol = self.tolerance_mm
-        scale[:9] = [1 / self._v_ref, 1 / self._a_ref, 1 / self.max_override, 1.0,
-                     1 / _FOLLOWING_ERROR_REF_MM, 1 / tol, 1 / tol, 1.0, 1 / self.lookahead_mm]  # fmt: skip
-        scale[self._la_blocks[0]] = 1 / self._v_ref
-        scale[self._la_blocks[2]] = 1 / math.pi
-        scale[self._la_blocks[3]] = 1 / self._v_ref
-        self._obs_scale = scale  # entry 7 (progress) is set per program: 1 / path length
-        self._obs_low, self._obs_high = low.astype(np.float64), high.astype(np.float64)
+        self._obs_spec = observation_spec_v0(self.lookahead_points, self._v_ref, self._a_ref,
+                                             self.max_override, self.tolerance_mm,
+                                             self.lookahead_mm)  # fmt: skip
+        self._reward_spec = reward_spec_v0(self.reward_weights)
+        self.observation_space = spaces.Box(self._obs_spec.low, self._obs_spec.high, dtype=np.float32)
 
-        # Per-tick buffers for the settle phase after the controller has finished.
-        self._settle_reference = np.zeros((self.ticks_per_step, 3))
         self._renderer = None
-        if render_mode == "rgb_array":
+        self._batch = self.make_batch(1)
+        self.plant = self._batch.plant
+        if self.render_mode == "rgb_array":
             from cnc_gym.envs.render import EpisodeRenderer, MachineRenderer
 
             # Records per step; draws on render(): MuJoCo's picture of the machine on the MuJoCo plant.
@@ -325,100 +301,88 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                 self._renderer = MachineRenderer(self.tolerance_mm, self.plant)
             else:
                 self._renderer = EpisodeRenderer(self.tolerance_mm)
-        self._select(0)
-        self._reset_stats()
+        self._batch.reset([0], [self.program_slot(self._batch, 0)])  # a valid state before the first reset
+        self._sync()
 
-    # ------------------------------------------------------------------------------------------ episode
-    def _episode_objects(self, name: str, toolpath: Toolpath) -> dict[str, Any]:
-        """Controller, meter and nominal time of a program (built once, reused by every reset)."""
-        key = f"{name}:{id(toolpath)}"
-        objects = self._episode_cache.get(key)
-        if objects is None:
+    # ------------------------------------------------------------------------------------------ batches
+    def make_batch(self, n_envs: int, parallel: bool | None = None,
+                   plant: Any | None = None) -> FeedrateBatch:  # fmt: skip
+        """``n_envs`` episodes of this env's task stepped together: the engine of this env (one episode)
+        and of its vector env (:class:`~cnc_gym.envs.fused.FeedrateBatch`). ``plant``: a plant backend for
+        ``n_envs`` envs (default: the machine's ``plant.backend``, which the env's ``plant=`` sets: the LTI
+        servo plant is stepped inside the compiled step, the MuJoCo plant through its methods)."""
+        config = {
+            "ticks_per_step": self.ticks_per_step, "tolerance_mm": self.tolerance_mm,
+            "in_position_mm": self.in_position_mm, "max_override": self.max_override,
+            "max_feed_mm_min": self.max_feed_mm_min, "lookahead_mm": self.lookahead_mm,
+            "lookahead_points": self.lookahead_points, "feed_mode": self.action_mode == "feed",
+            # The contour window reaches back over the largest possible lag (max feed / Kv).
+            "window_back_mm": self._max_lag_mm,
+        }  # fmt: skip
+        if plant is None and self.machine.plant.backend != "lti":
+            plant = make_plant(self.machine, n_envs)
+        return FeedrateBatch(n_envs, self.machine, config, self._obs_spec, self._reward_spec,
+                             parallel=parallel, plant=plant)
+
+    def resolve_program(self, choice: int | ProgramLike) -> tuple[str, Toolpath]:
+        """A program of the set by index or name, or any other program (name, path, text…) loaded."""
+        if isinstance(choice, int | np.integer) and not isinstance(choice, bool):
+            if not 0 <= choice < len(self._programs):
+                raise ConfigError(f"program index {choice} out of range 0..{len(self._programs) - 1}")
+            return self._programs[int(choice)]
+        if isinstance(choice, PROGRAM_TYPES):
+            found = [p for p in self._programs if p[0] == choice]
+            return found[0] if found else load_program(choice, self.dialect, self.machine, units=self.units)
+        raise ConfigError(f"options['program'] must be a name, path, text or index, got {choice!r}")
+
+    def program_slot(self, batch: FeedrateBatch, choice: int | ProgramLike) -> int:
+        """The bank index of a program in ``batch`` (packed on first use with its nominal time, budget)."""
+        name, toolpath = self.resolve_program(choice)
+        slot = batch.find_program(name, toolpath)
+        if slot is None:
             t_nominal = nominal_time_s(toolpath, self.machine)
             budget = self._max_episode_steps_arg or (
                 math.ceil(5.0 * t_nominal / self.control_period_s) + math.ceil(1.0 / self.control_period_s)
             )
-            kind = toolpath.kind
-            objects = {
-                "controller": self._controller_cls(toolpath, self.machine),
-                # The window reaches back over the largest possible lag (max feed / Kv) so that on
-                # short-segment programs the actual point is never measured against the wrong segment.
-                "meter": self._meter_cls(toolpath, window_back_mm=self._max_lag_mm),
-                "nominal_time_s": t_nominal,
-                "max_episode_steps": int(budget),
-                "cutting": (kind == SegmentKind.LINE)
-                | (kind == SegmentKind.ARC)
-                | (kind == SegmentKind.NURBS),
-                "start": toolpath.start[0].copy() if len(toolpath) else np.zeros(3),
-                "lines": [int(x) for x in toolpath.line],
-            }
-            self._episode_cache[key] = objects
-        return objects
+            slot = batch.add_program(name, toolpath, self.control_period_s / t_nominal, int(budget))
+        return slot
 
-    def _select(self, index_or_name: int | str) -> None:
-        if isinstance(index_or_name, int | np.integer) and not isinstance(index_or_name, bool):
-            if not 0 <= index_or_name < len(self._programs):
-                raise ConfigError(f"program index {index_or_name} out of range 0..{len(self._programs) - 1}")
-            name, toolpath = self._programs[int(index_or_name)]
-        elif isinstance(index_or_name, PROGRAM_TYPES):
-            found = [p for p in self._programs if p[0] == index_or_name]
-            name, toolpath = found[0] if found else load_program(index_or_name, self.dialect, self.machine,
-                                                                 units=self.units)  # fmt: skip
-        else:
-            raise ConfigError(
-                f"options['program'] must be a name, path, text or index, got {index_or_name!r}"
-            )
-        objects = self._episode_objects(name, toolpath)
-        self.program_name: str = name
-        self.toolpath: Toolpath = toolpath
-        self.controller = objects["controller"]
-        self.meter = objects["meter"]
-        self.nominal_time_s: float = objects["nominal_time_s"]
-        self.max_episode_steps: int = objects["max_episode_steps"]
-        self._cutting_segments: np.ndarray = objects["cutting"]
-        self._start = objects["start"]
-        self._total_length = max(toolpath.total_length, 1e-9)
-        self._source_lines: list[int] = objects["lines"]
-        self._obs_scale[7] = 1.0 / self._total_length
-        self._time_reward = self.reward_weights.time * self.control_period_s / self.nominal_time_s
+    def draw_program(self, rng: np.random.Generator) -> int:
+        """The episode's program index in the set: drawn with ``rng`` when there are several."""
+        return int(rng.integers(len(self._programs))) if len(self._programs) > 1 else 0
 
-    def _reset_stats(self) -> None:
-        self._steps = 0
-        self._ticks = 0
-        self._error_max_mm = 0.0
-        self._error_sq_sum = 0.0
-        self._error_samples = 0
-        self._violations = 0
-        self._violation_length_mm = 0.0
-        self._violation_time_s = 0.0
-        self._last_path_s = self.controller.path_s
-        self._knob = 0.0
-        self._last_segment = 0
-        self._last_reference = self._start
-        self._last_error_step = 0.0
-        self._last_error_now = 0.0
-        self._following_error_mm = 0.0
-        self._progress = 0.0
-        if self._renderer is not None:
-            self._renderer.clear()
+    def _sync(self) -> None:
+        """The current episode's program attributes."""
+        program = self._batch.program(0)
+        self.program_name: str = program.name
+        self.toolpath: Toolpath = program.toolpath
+        self.nominal_time_s: float = nominal_time_s(program.toolpath, self.machine)
+        self.max_episode_steps: int = program.max_episode_steps
 
+    @property
+    def controller(self):
+        """The controller of the current episode (a live view of the episode's state)."""
+        return self._batch.controller(0)
+
+    @property
+    def meter(self):
+        """The contour meter of the current program."""
+        return self._batch.program(0).meter
+
+    # ------------------------------------------------------------------------------------------ episode
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         choice = reset_choice(options)
         super().reset(seed=seed)
-        self._needs_reset = False
         if choice is None:
-            choice = int(self.np_random.integers(len(self._programs))) if len(self._programs) > 1 else 0
-        self._select(choice)
-        self.controller.reset()
-        self.meter.reset()
-        self.plant.reset(self._start[None, :])
-        self._reset_stats()
-        self._progress = self._path_progress()
+            choice = self.draw_program(self.np_random)
+        self._batch.reset([0], [self.program_slot(self._batch, choice)])
+        self._needs_reset = False
+        self._sync()
         if self._renderer is not None:
             self._renderer.start(self)
-        return self._observe(), self._info(0.0, 0.0)
+        return self._batch.observations[0].copy(), self._batch.info(0)
 
     # --------------------------------------------------------------------------------------------- step
     def _parse_action(self, action: Any) -> float:
@@ -431,144 +395,20 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         return parse_action(action)  # every other form, checked (cnc_gym/envs/options.py)
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        knob = self._parse_action(action)
-        self._knob = knob
-        if not len(self.toolpath):  # a program without motion (only M30, or empty): done at once, in 0 s
-            self._steps += 1
-            return self._observe(), 0.0, True, False, self._info(0.0, 0.0)
-        controller = self.controller
-        n = self.ticks_per_step
-        if not controller.finished:
-            # The kernel's rows, not a MotionChunk: the step needs only positions and segments.
-            if self.action_mode == "override":
-                rows = controller.advance_rows(n, override=(knob + 1.0) * 0.5 * self.max_override)
-            else:
-                rows = controller.advance_rows(n, feed_mm_min=(knob + 1.0) * 0.5 * self.max_feed_mm_min)
-            reference = rows[:, _O_X:_O_Z1]
-            segment = rows[:, _O_SEG].astype(np.int64)
-            path_s = rows[:, _O_S]
-            if len(reference) < n:  # the program ended inside this step: hold the end point
-                reference = np.concatenate((reference, np.repeat(reference[-1:], n - len(reference), axis=0)))
-                segment = np.concatenate((segment, np.repeat(segment[-1:], n - len(segment))))
-                path_s = np.concatenate((path_s, np.repeat(path_s[-1:], n - len(path_s))))
-            self._last_segment = int(segment[-1])
-            self._last_reference = reference[-1]
-        else:  # settling at the end: the reference rests at the last point
-            reference = self._settle_reference
-            reference[:] = self._last_reference
-            segment = np.full(n, self._last_segment)
-            path_s = None
-        actual = self.plant.step(reference[None])[0]
-        # In-position check (P1471), sampled once per control step: the controller holds the reference on
-        # an exact stop, a rapid end or start, or the program end until the servo is settled there.
-        if controller.waiting_in_position and self.plant.settled(self.in_position_mm)[0]:
-            controller.release_in_position()
-        # The reference only moves forward, so equal first and last segments mean one segment for the whole
-        # step: the meter's scalar-hint path (same window, same result) skips the per-sample bookkeeping.
-        first_segment = int(segment[0])
-        one_segment = first_segment == int(segment[-1])
-        error = self.meter.measure(actual, first_segment if one_segment else segment)
-        self._ticks += n
-        self._steps += 1
-
-        e_max, sum_sq, e_now, self._following_error_mm = _error_statistics(error, reference, actual)
-        # The meter returns 0 where the reference is on a rapid or dwell, so the sum of squares over all
-        # samples is the sum over cutting samples; only the count needs the cutting mask.
-        if one_segment:
-            n_cut = n if self._cutting_segments[first_segment] else 0
-        else:
-            n_cut = int(np.count_nonzero(self._cutting_segments[segment]))
-        if n_cut:
-            self._error_sq_sum += sum_sq
-            self._error_samples += n_cut
-        if e_max > self._error_max_mm:
-            self._error_max_mm = e_max
-        violated = e_max > self.tolerance_mm
-        self._violations += violated
-        if violated:  # per servo sample: the reference's path advance and time while over tolerance
-            over = error > self.tolerance_mm
-            if path_s is not None:
-                advance = np.diff(path_s, prepend=self._last_path_s)
-                self._violation_length_mm += float(np.sum(advance[over]))
-            self._violation_time_s += int(np.count_nonzero(over)) * self.interpolation_period_s
-        if path_s is not None:
-            self._last_path_s = float(path_s[-1])
-        self._last_error_step = e_max
-        self._last_error_now = e_now
-
-        w = self.reward_weights
-        ratio = min(e_max / self.tolerance_mm, w.error_ratio_cap)
-        finished = controller.finished
-        progress = 1.0 if finished else min(controller.path_s / self._total_length, 1.0)  # _path_progress
-        reward = (
-            w.progress * (progress - self._progress)
-            - self._time_reward
-            - w.contour_error * ratio * ratio
-            - (w.violation if violated else 0.0)
-        )
-        self._progress = progress
-
-        terminated = finished and bool(self.plant.settled(self.in_position_mm)[0])
-        truncated = (not terminated) and self._steps >= self.max_episode_steps
+        batch = self._batch
+        batch.actions[0] = self._parse_action(action)
+        batch.step()  # one compiled call: controller, plant, contour error, statistics, reward, observation
+        reward, terminated, truncated, info = batch.outcome(0)
         if self._renderer is not None:
-            self._renderer.record(actual, error)
-        return self._observe(), reward, terminated, truncated, self._info(e_max, 1.0 if violated else 0.0)
-
-    def _path_progress(self) -> float:
-        """``p = min(s / L, 1)``, and exactly 1 once the controller has finished the program."""
-        if self.controller.finished:
-            return 1.0
-        return min(self.controller.path_s / self._total_length, 1.0)
-
-    # ------------------------------------------------------------------------------------ observations
-    def _observe(self) -> np.ndarray:
-        # The nine scalars into a preallocated buffer; one compiled call scales, clips and appends the
-        # look-ahead blocks (one numpy ufunc each cost more than the whole call).
-        raw = self._raw
-        controller = self.controller
-        # (speed limit, curvature, turn angle, feed, [distance to stop]) rows; arguments checked in __init__
-        ahead = controller.lookahead_rows(self._lookahead_horizon, self.lookahead_points)
-        raw[0] = controller.speed
-        raw[1] = controller.accel
-        raw[2] = controller.override_applied
-        raw[3] = self._knob
-        raw[4] = self._following_error_mm
-        raw[5] = self._last_error_step
-        raw[6] = self._last_error_now
-        raw[7] = controller.path_s
-        raw[8] = ahead[4, 0]
-        return _assemble_observation(raw, ahead[0], ahead[1], ahead[2], ahead[3], self._obs_scale,
-                                     self._obs_low, self._obs_high)  # fmt: skip
-
-    def _info(self, step_error_mm: float, cost: float) -> dict[str, Any]:
-        controller = self.controller
-        segment = min(max(controller.segment_index, 0), len(self._source_lines) - 1)
-        rms = math.sqrt(self._error_sq_sum / self._error_samples) if self._error_samples else 0.0
-        path_s = controller.path_s
-        return {
-            "cycle_time_s": self._ticks * self.interpolation_period_s,
-            "contour_error_mm": step_error_mm,
-            "contour_error_max_mm": self._error_max_mm,
-            "contour_error_rms_mm": rms,
-            "tolerance_mm": self.tolerance_mm,
-            "violations": self._violations,
-            "violation_length_mm": self._violation_length_mm,
-            "violation_time_s": self._violation_time_s,
-            "cost": cost,
-            "line": self._source_lines[segment] if self._source_lines else 0,
-            "override": controller.override_applied,
-            "feed_mm_min": controller.speed * 60.0,
-            "path_s": path_s,
-            "progress": self._progress,
-            "program": self.program_name,
-            "steps": self._steps,
-        }
+            self._renderer.record(*batch.last_samples(0)[:2])
+        return batch.observations[0].copy(), reward, terminated, truncated, info
 
     # ------------------------------------------------------------------------------------------ render
     def render(self) -> np.ndarray | None:
         if self.render_mode is None:
             gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array'")
             return None
+        assert self._renderer is not None  # built with render_mode "rgb_array"
         return self._renderer.draw(self)
 
     def close(self) -> None:

@@ -179,9 +179,11 @@ class EpisodeRenderer:
         ax_path, ax_err = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.1, 1.0]})
         tol = self.tolerance_mm
         ax_path.plot(path_xy[:, 0], path_xy[:, 1], color="0.75", lw=2.5, label="programmed")
+        error_max = 0.0
         if self._samples.count:
             series = self._samples.arrays()
             error = series["error"]
+            error_max = float(error.max())  # each bin holds its samples' max: the episode's max
             xy = np.column_stack((series["x"], series["y"]))
             if len(xy) > 1:
                 # Colour each sample by its contour error: green within tolerance, red at 2× tolerance.
@@ -201,7 +203,7 @@ class EpisodeRenderer:
         ax_path.set_title(f"{env.program_name}: tool path", fontsize=9)
         ax_path.set_xlabel("X (mm)", fontsize=8)
         ax_path.set_ylabel("Y (mm)", fontsize=8)
-        ax_err.set_title(f"contour error, max {env._error_max_mm * 1000:.1f} µm", fontsize=9)
+        ax_err.set_title(f"contour error, max {error_max * 1000:.1f} µm", fontsize=9)
         ax_err.set_xlabel("time (s)", fontsize=8)
         ax_err.set_ylabel("µm", fontsize=8)
         for ax in (ax_path, ax_err):

@@ -91,7 +91,13 @@ class Controller:
     :class:`MotionChunk`; ``lookahead`` returns :class:`LookaheadFeatures` for observations.
     """
 
-    def __init__(self, toolpath: Toolpath, machine: MachineConfig, in_position_check: bool = True) -> None:
+    def __init__(self, toolpath: Toolpath, machine: MachineConfig, in_position_check: bool = True, *,
+                 limits: PathLimits | None = None,
+                 state: tuple[np.ndarray, np.ndarray] | None = None) -> None:  # fmt: skip
+        """``limits``: the tool path's :func:`build_limits` on ``machine`` if already built (they are the
+        expensive part). ``state``: the ``(float, int)`` state vectors (``kernel.N_STATE_F``,
+        ``kernel.N_STATE_I``) to run on, e.g. one env's rows of a batch, taken as they are (their owner
+        resets them); by default the controller's own, reset."""
         self.toolpath = toolpath
         #: Hold the reference at every in-position stop until :meth:`release_in_position` (see
         #: ``docs/motion.md``); False runs straight on from every stop once the reference is at rest.
@@ -100,15 +106,15 @@ class Controller:
         ctl = machine.controller
         self.dt = float(ctl.interpolation_period_s)
         self.max_override = float(ctl.max_override)
-        self.limits: PathLimits = build_limits(toolpath, machine)
+        self.limits: PathLimits = build_limits(toolpath, machine) if limits is None else limits
         self._n_seg = self.limits.seg_f.shape[0]
-        # Window in motion segments (a NURBS piece counts as one). Without look-ahead every block ends at rest
-        # anyway; 2 keeps the pieces of one NURBS block flowing (the window end is never the next junction).
-        window = max(int(ctl.lookahead_blocks), 2)
-        self._cfg = np.array([self.dt, window, ctl.override_slew_per_s, *self.limits.rest_position])
-        self._scratch = np.zeros((window + 2, 3))
-        self._st_f = np.zeros(K.N_STATE_F)
-        self._st_i = np.zeros(K.N_STATE_I, dtype=np.int64)
+        self._cfg = kernel_config(machine, self.limits)
+        self._scratch = np.zeros((int(self._cfg[1]) + 2, 3))
+        own_state = state is None
+        if state is None:
+            state = (np.zeros(K.N_STATE_F), np.zeros(K.N_STATE_I, dtype=np.int64))
+        self._st_f: np.ndarray = state[0]
+        self._st_i: np.ndarray = state[1]
         # Rotary axes: each period's angles follow from its row (linear in path_s on a move, the hold's own
         # jerk-limited profile on a rotary-only move, counted in periods since the hold began).
         self._rotary = None
@@ -116,25 +122,21 @@ class Controller:
             holds = self.limits.rotary_holds
             self._rotary = {int(row): tuple(profile) for row, *profile in holds}
         self._hold = (-1, 0)  # (toolpath row of the rotary-only move under way, periods so far)
-        self.reset()
+        if own_state:
+            self.reset()
+        else:
+            self._last_position = self._rest_position_now()
 
     # ------------------------------------------------------------------ state
+    def use_state(self, state: tuple[np.ndarray, np.ndarray]) -> None:
+        """Run on the ``(float, int)`` state vectors ``state`` from now on, their values taken as the
+        controller's state (e.g. the rows of a batch's state arrays after the batch was copied)."""
+        self._st_f, self._st_i = state
+
     def reset(self) -> None:
         """Back to the program start: t = 0, at rest, override 100 %."""
-        self._st_f[:] = 0.0
-        self._st_f[K.S_OV] = -1.0  # unset: the first advance() takes the knob as it is
-        st_i = self._st_i
-        st_i[:] = 0
-        st_i[K.K_DWELL] = -1
-        pt_i = self.limits.pt_i
-        if pt_i[0, K.Q_DW1] > pt_i[0, K.Q_DW0]:  # dwells before the first move
-            st_i[K.K_PHASE] = K.PHASE_DWELL
-            st_i[K.K_DWELL] = pt_i[0, K.Q_DW0]
-            self._st_f[K.S_DWELL_LEFT] = self.limits.dwell_f[pt_i[0, K.Q_DW0], 0]
-        elif self._n_seg == 0:
-            st_i[K.K_PHASE] = K.PHASE_DONE
-        if self._n_seg:
-            self._st_f[K.S_S] = self.limits.pt_f[0, K.P_S]
+        lim = self.limits
+        K.reset_state(lim.pt_i, lim.pt_f, lim.dwell_f, self._n_seg, self._st_f, self._st_i)
         self._last_position = self._rest_position_now()
         self._hold = (-1, 0)
 
@@ -192,12 +194,7 @@ class Controller:
     @property
     def segment_index(self) -> int:
         """Toolpath index of the segment the reference is on (a dwell's index while dwelling)."""
-        st_i = self._st_i
-        if st_i[K.K_DWELL] >= 0 and st_i[K.K_PHASE] != K.PHASE_MOVE:
-            return int(self.limits.dwell_f[st_i[K.K_DWELL], 1])
-        if self._n_seg == 0:
-            return -1
-        return int(self.limits.seg_i[st_i[K.K_SEG], K.I_TP])
+        return int(K.segment_index(self.limits.seg_i, self.limits.dwell_f, self._st_i))
 
     @property
     def position(self) -> np.ndarray:
@@ -285,15 +282,16 @@ class Controller:
             parts.append(self._advance_raw(chunk, knob, stop_when_done=True, wait=False))
             done += chunk
         out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
-        chunk = _chunk(out)
+        result = _chunk(out)
         if self._rotary is not None:
-            chunk.rotary = self._rotary_reference(chunk)
-        return chunk
+            result.rotary = self._rotary_reference(result)
+        return result
 
     def _rotary_reference(self, chunk: MotionChunk) -> np.ndarray:
         """The rotary axes' angles at the end of each period of ``chunk`` (call once per chunk, in order)."""
         tp = self.toolpath
         rows = chunk.segment
+        assert tp.rotary_start is not None and tp.rotary_end is not None and self._rotary is not None
         start, end = tp.rotary_start[rows], tp.rotary_end[rows]
         length = tp.length[rows]
         # On a move: the share of the row's XYZ length covered (the axes move linearly with the row).
@@ -329,12 +327,9 @@ class Controller:
         """:meth:`lookahead` without checks or the record, for hot loops that validated their arguments
         once: rows speed limit, curvature, turn angle, programmed feed, and [distance to stop, …], (5, n)."""
         lim = self.limits
-        k = int(self._st_i[K.K_SEG])
         done = self._st_i[K.K_PHASE] == K.PHASE_DONE
-        if self._n_seg and k >= self._n_seg:
-            k = self._n_seg - 1
-        return K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, k, float(self._st_f[K.S_S]),
-                                  bool(done), horizon_mm, n_points)  # fmt: skip
+        return K.lookahead_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, int(self._st_i[K.K_SEG]),
+                                  float(self._st_f[K.S_S]), bool(done), horizon_mm, n_points)  # fmt: skip
 
     # ------------------------------------------------------------------ introspection (tests, planners)
     def segment_limits(self) -> dict[str, np.ndarray]:
@@ -354,6 +349,17 @@ class Controller:
     @property
     def cutting_kinds(self) -> tuple[int, int]:
         return (int(SegmentKind.LINE), int(SegmentKind.ARC))
+
+
+def kernel_config(machine: MachineConfig, limits: PathLimits) -> np.ndarray:
+    """The kernel's ``cfg`` of a tool path on a machine: [dt, window blocks, override slew per s, rest x, y,
+    z]. The window counts motion segments (a NURBS piece as one); without look-ahead every block ends at
+    rest anyway, and 2 keeps the pieces of one NURBS block flowing (the window end is never the next
+    junction)."""
+    ctl = machine.controller
+    window = max(int(ctl.lookahead_blocks), 2)
+    return np.array([ctl.interpolation_period_s, window, ctl.override_slew_per_s, *limits.rest_position],
+                    dtype=np.float64)
 
 
 def _chunk(out: np.ndarray) -> MotionChunk:

@@ -589,19 +589,62 @@ def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i:
     ``stop_when_done`` the run ends on the period that finishes the program (fewer rows). With ``wait``
     the reference holds at every in-position stop (PHASE_WAIT) until :func:`release_wait` is called.
     """
+    out = np.zeros((n_ticks, N_OUT))
+    done = advance_into(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, knob, rapid_ov,
+                        cmd, pts, out, stop_when_done, wait)  # fmt: skip
+    return out[:done]
+
+
+@njit(cache=True)
+def advance_into(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
+                 dwell_f: np.ndarray, curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray,
+                 st_i: np.ndarray, mode: int, knob: float, rapid_ov: float, cmd: float, pts: np.ndarray,
+                 out: np.ndarray, stop_when_done: bool, wait: bool) -> int:  # fmt: skip
+    """:func:`advance_kernel` into ``out`` (one row per tick, ``len(out)`` ticks, every column written);
+    returns the number of rows run (fewer with ``stop_when_done``)."""
     dt = cfg[0]
     window = int(cfg[1])
     slew_step = cfg[2] * dt
     n_seg = seg_f.shape[0]
-    out = np.zeros((n_ticks, N_OUT))
-    for tick in range(n_ticks):
+    for tick in range(out.shape[0]):
+        for col in range(N_OUT):
+            out[tick, col] = 0.0
         _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts,
               out, tick, dt, window, slew_step, n_seg, wait)
         if st_i[K_PHASE] == PHASE_DONE:
             out[tick, O_DONE] = 1.0
             if stop_when_done:
-                return out[: tick + 1]
-    return out
+                return tick + 1
+    return out.shape[0]
+
+
+@njit(cache=True)
+def reset_state(pt_i: np.ndarray, pt_f: np.ndarray, dwell_f: np.ndarray, n_seg: int, st_f: np.ndarray,
+                st_i: np.ndarray) -> None:  # fmt: skip
+    """The state at the program start: t = 0, at rest, override unset (the first period takes the knob as
+    it is), on the first segment or its leading dwells, or done where there is no motion at all."""
+    st_f[:] = 0.0
+    st_f[S_OV] = -1.0
+    st_i[:] = 0
+    st_i[K_DWELL] = -1
+    if pt_i[0, Q_DW1] > pt_i[0, Q_DW0]:  # dwells before the first move
+        st_i[K_PHASE] = PHASE_DWELL
+        st_i[K_DWELL] = pt_i[0, Q_DW0]
+        st_f[S_DWELL_LEFT] = dwell_f[pt_i[0, Q_DW0], 0]
+    elif n_seg == 0:
+        st_i[K_PHASE] = PHASE_DONE
+    if n_seg:
+        st_f[S_S] = pt_f[0, P_S]
+
+
+@njit(cache=True, inline="always")
+def segment_index(seg_i: np.ndarray, dwell_f: np.ndarray, st_i: np.ndarray) -> int:
+    """Toolpath row the reference is on (a dwell's row while dwelling; -1 with no motion at all)."""
+    if st_i[K_DWELL] >= 0 and st_i[K_PHASE] != PHASE_MOVE:
+        return int(dwell_f[st_i[K_DWELL], 1])
+    if seg_i.shape[0] == 0:
+        return -1
+    return seg_i[st_i[K_SEG], I_TP]
 
 
 @njit(cache=True)
@@ -908,20 +951,31 @@ def _after_dwell(pt_i: np.ndarray, dwell_f: np.ndarray, st_f: np.ndarray, st_i: 
 @njit(cache=True)
 def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, k: int,
                      s: float, done: bool, horizon: float, n: int) -> np.ndarray:  # fmt: skip
-    """Features of the path ahead in ``n`` equal bins of ``horizon / n`` mm starting at arc length s.
+    """Features of the path ahead in ``n`` equal bins of ``horizon / n`` mm starting at arc length s
+    (:func:`lookahead_into`); rows: limit, curvature, turn, feed; [4, 0] the distance to the next stop."""
+    out = np.zeros((5, n))
+    lookahead_into(seg_f, pt_f, pt_i, k, s, done, horizon, out)
+    return out
+
+
+@njit(cache=True)
+def lookahead_into(seg_f: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, k: int, s: float, done: bool,
+                   horizon: float, out: np.ndarray) -> None:  # fmt: skip
+    """Features of the path ahead in ``n = out.shape[1]`` equal bins of ``horizon / n`` mm starting at arc
+    length s on motion segment k, into ``out`` (5, n) (zeroed first).
 
     Per bin: the static speed limit (100 % override; minimum over the bin, junction limits inside
     included, 0 at mandatory stops and beyond the end), the largest curvature, the largest junction
-    turning angle, the programmed feed at the bin's far end. Also the distance to the next mandatory stop.
+    turning angle, the programmed feed at the bin's far end. ``out[4, 0]``: the distance to the next
+    mandatory stop.
     """
+    n = out.shape[1]
     n_seg = seg_f.shape[0]
-    out = np.zeros((5, n))  # rows: limit, curvature, turn, feed; out[4, 0] = distance to the next stop
-    limit = out[0]
-    curv = out[1]
-    turn = out[2]
-    feed = out[3]
+    out[:, :] = 0.0
     if n_seg == 0 or done:
-        return out
+        return
+    if k >= n_seg:
+        k = n_seg - 1
     q_stop = pt_i[k + 1, Q_NEXT_STOP]
     d_stop = max(pt_f[q_stop, P_S] - s, 0.0)
     width = horizon / n
@@ -951,9 +1005,8 @@ def lookahead_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_
             if s_end >= hi or m + 1 >= n_seg:  # bins are (lo, hi]: a block starting at hi is not in it
                 break
             m += 1
-        limit[b] = 0.0 if hi >= total else best
-        curv[b] = kmax
-        turn[b] = ang
-        feed[b] = seg_f[m, F_FEED] if hi < total else 0.0
+        out[0, b] = 0.0 if hi >= total else best
+        out[1, b] = kmax
+        out[2, b] = ang
+        out[3, b] = seg_f[m, F_FEED] if hi < total else 0.0
     out[4, 0] = d_stop
-    return out

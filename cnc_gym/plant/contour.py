@@ -4,8 +4,8 @@ The rule (docs/architecture.md, the ``cnc-gym run`` contract): contour error is 
 sample, on cutting moves only, against the programmed path after compensation (the tool path's segments).
 
 - **Which samples count.** A sample counts when the *reference* is on a cutting segment (line, arc,
-  helix). Where the reference segment is a rapid or a dwell the error is 0 by definition: rapids do not
-  cut, and during a dwell the axes stand still on the path's end point.
+  helix, NURBS). Where the reference segment is a rapid or a dwell the error is 0 by definition: rapids
+  do not cut, and during a dwell the axes stand still on the path's end point.
 - **Against what.** The nearest point on the *cutting* segments (rapids left out, dwells have no length)
   in a window that moves with the reference: segments ``[hint − window_back, hint + window_ahead]``,
   stretched backwards until it covers at least ``window_back_mm`` of path (the actual position lags the
@@ -14,55 +14,138 @@ sample, on cutting moves only, against the programmed path after compensation (t
   just after a rapid → cut junction that the controller did not stop at, the lag left on the rapid is
   measured against the cutting segments (the rapid is not a candidate).
 - **Exactness.** Lines: clamped projection. Flat arcs: the radial distance where the point's angle lies
-  inside the swept range, else the nearer end point. Helices and NURBS: the tool path's own exact
-  service (:meth:`~cnc_gym.toolpath.Toolpath.nearest`), one call per such segment in the window. This
-  module is a faster re-implementation of ``cnc_gym/toolpath/nearest.py`` for lines and flat arcs: one
-  numba-compiled loop over points × window segments (:func:`_measure_kernel`) on per-segment constants
-  packed once per tool path, with no per-call allocation beyond the result; the tests check the two agree.
-- **Speed.** One ``measure`` call of 5 points on a window of ~10 segments costs ~1–2 µs (the numpy
-  version it replaced: ~14 µs, more on 0.5 mm polylines, whose window moves every control step). The
-  kernel is compiled on first use and cached on disk (``cache=True``): ~1 s the first time, then ~0.1 s.
+  inside the swept range, else the nearer end point. Helices: :func:`~cnc_gym.toolpath.nearest.helix_nearest`
+  (the exact global minimum over the sweep). NURBS: :func:`~cnc_gym.toolpath.nearest.nurbs_distance2` (the
+  curve's own exact search, compiled). The tests check the meter against the tool path's service
+  (:meth:`~cnc_gym.toolpath.Toolpath.nearest`).
+- **Speed.** One numba-compiled loop over points × window segments (:func:`measure_kernel`) on
+  per-segment constants packed once per tool path (:class:`ContourTables`), with no per-call allocation
+  beyond the result. Lines and flat arcs are measured first; a helix or NURBS segment is searched only
+  where a lower bound on its distance (the projected arc and the height range of a helix, the bounding
+  sphere of a curve) is below the best distance so far, and each point's own segment first, so the
+  searches that cannot win are skipped. One ``measure`` call of 5 points on a window of ~10 segments
+  costs ~1–2 µs on lines and arcs. The env's fused step calls the same kernel.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
+from cnc_gym.toolpath.nearest import helix_nearest, nurbs_distance2, nurbs_table
 from cnc_gym.toolpath.segments import PLANE_AXES, Plane, SegmentKind, Toolpath
 
 _PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
 
 
 # Segment classes of the kernel.
-_SKIP, _LINE, _FLAT_ARC, _OTHER = 0, 1, 2, 3
-# Columns of the packed per-segment float table ``geometry`` (n, 14).
+SKIP, LINE, FLAT_ARC, HELIX, NURBS = 0, 1, 2, 3, 4
+# Columns of the packed per-segment float table ``geometry`` (n, 15).
 #   lines: a (0..2), d = end − a (3..5), 1/|d|² or 0 for a zero-length line (6)
-#   flat arcs: centre u, v (0, 1), w of the plane (2), radius (3), start angle (4), |sweep| (5),
-#              direction ±1 (6), start point (7..9) and end point (10..12) from the arc's geometry
-_N_GEOMETRY = 13
+#   flat arcs and helices: centre u, v (0, 1), w at the start (2), radius (3), start angle (4), |sweep| (5),
+#              direction ±1 (6), start point (7..9) and end point (10..12) from the arc's geometry;
+#   helices also: rise along w (13), signed sweep (14)
+N_GEOMETRY = 15
 _TWO_PI = 2.0 * math.pi
 
 
+class ContourTables(NamedTuple):
+    """A tool path packed for :func:`measure_kernel` (built once per tool path by :func:`pack_contour`)."""
+
+    seg_class: np.ndarray  # (n,) int64: SKIP (rapid, dwell), LINE, FLAT_ARC, HELIX, NURBS
+    axes: np.ndarray  # (n, 3) int64: plane axes (u, v, w)
+    geometry: np.ndarray  # (n, N_GEOMETRY) float64, see the column list above
+    first_back: np.ndarray  # (n,) int64: first segment of the window for each lowest hint
+    nurbs_f: np.ndarray  # (r,) float64: the NURBS rows' search tables, one after the other
+    nurbs_i: np.ndarray  # (n, 5) int64: a NURBS row's header in nurbs_f (nurbs_table), 0 elsewhere
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _line_or_arc_d2(c, g, iu, iv, iw, px, py, pz, pu, pv, pw) -> float:
+    """Squared distance to a line (c = LINE) or flat arc (c = FLAT_ARC) from its geometry row g."""
+    if c == LINE:
+        rx = px - g[0]
+        ry = py - g[1]
+        rz = pz - g[2]
+        t = (rx * g[3] + ry * g[4] + rz * g[5]) * g[6]
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+        dx = rx - t * g[3]
+        dy = ry - t * g[4]
+        dz = rz - t * g[5]
+        return dx * dx + dy * dy + dz * dz
+    du = pu - g[0]
+    dv = pv - g[1]
+    # Angle travelled from the start in the arc's direction, in [0, 2π) (Python-style mod).
+    phi = (math.atan2(dv, du) - g[4]) * g[6]
+    phi = phi - _TWO_PI * math.floor(phi / _TWO_PI)
+    if phi <= g[5]:
+        off = math.hypot(du, dv) - g[3]
+        dw = pw - g[2]
+        return off * off + dw * dw
+    # outside the swept range: the nearer end point
+    ex = px - g[7]
+    ey = py - g[8]
+    ez = pz - g[9]
+    d2 = ex * ex + ey * ey + ez * ez
+    ex = px - g[10]
+    ey = py - g[11]
+    ez = pz - g[12]
+    return min(d2, ex * ex + ey * ey + ez * ez)
+
+
 @njit(cache=True, nogil=True)
-def _measure_kernel(points, hints, n_segments, seg_class, axes, geometry, first_back, window_ahead, out):
+def _curved_d2(c, g, header, nurbs_f, iu, iv, iw, px, py, pz, pu, pv, pw, bound2) -> float:
+    """Squared distance to a helix or NURBS segment, or ``inf`` where a lower bound shows it cannot be
+    below ``bound2``."""
+    if c == HELIX:
+        # Lower bound: the distance to the projected arc in the plane, and to the height range along w.
+        du = pu - g[0]
+        dv = pv - g[1]
+        if g[5] >= _TWO_PI:
+            planar = abs(math.hypot(du, dv) - g[3])
+        else:
+            phi = (math.atan2(dv, du) - g[4]) * g[6]
+            phi = phi - _TWO_PI * math.floor(phi / _TWO_PI)
+            if phi <= g[5]:
+                planar = abs(math.hypot(du, dv) - g[3])
+            else:
+                planar = min(math.hypot(pu - g[7 + iu], pv - g[7 + iv]),
+                             math.hypot(pu - g[10 + iu], pv - g[10 + iv]))  # fmt: skip
+        w_lo = min(g[2], g[2] + g[13])
+        w_hi = max(g[2], g[2] + g[13])
+        gap = max(w_lo - pw, pw - w_hi, 0.0)
+        if planar * planar + gap * gap >= bound2:
+            return math.inf
+        d2, _ = helix_nearest(pu, pv, pw, g[0], g[1], g[2], g[13], g[3], g[4], g[14])
+        return d2
+    return nurbs_distance2(nurbs_f, header, px, py, pz, bound2)
+
+
+@njit(cache=True, nogil=True)
+def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f, nurbs_i, window_ahead,
+                   out) -> tuple[int, int]:  # fmt: skip
     """Contour error of each point into ``out``; returns ``(first, last)`` of the window used.
 
     ``hints``: one hint for all points (length 1) or one per point. A point counts where its own hint
     (or the common hint) is an in-range cutting segment (lines, flat arcs, helices, NURBS); the window is
     ``[first_back[lo], min(n, hi + window_ahead + 1))`` over the counted hints' range ``[lo, hi]``.
-    Points that do not count get 0. Helices/NURBS in the window are left to the caller (class _OTHER);
-    if no point counts the window is (0, 0).
+    Points that do not count get 0; if no point counts the window is (0, 0).
     """
+    n_segments = seg_class.shape[0]
     m = points.shape[0]
     per_point = hints.shape[0] != 1
     lo = n_segments
     hi = -1
+    curved = False
     for i in range(hints.shape[0]):
         h = hints[i]
-        if 0 <= h < n_segments and seg_class[h] != _SKIP:
+        if 0 <= h < n_segments and seg_class[h] != SKIP:
             if h < lo:
                 lo = h
             if h > hi:
@@ -73,59 +156,56 @@ def _measure_kernel(points, hints, n_segments, seg_class, axes, geometry, first_
         return 0, 0
     first = first_back[lo]
     last = min(n_segments, hi + window_ahead + 1)
+    for s in range(first, last):
+        if seg_class[s] >= HELIX:
+            curved = True
     for i in range(m):
-        if per_point:
-            h = hints[i]
-            if not (0 <= h < n_segments and seg_class[h] != _SKIP):
-                out[i] = 0.0
-                continue
+        own = hints[i] if per_point else hints[0]
+        if per_point and not (0 <= own < n_segments and seg_class[own] != SKIP):
+            out[i] = 0.0
+            continue
         px = points[i, 0]
         py = points[i, 1]
         pz = points[i, 2]
         best = np.inf
+        # Lines and flat arcs, the point's own segment first: then an arc whose circle is farther than the
+        # best so far (the lower bound leaves a margin for rounding) needs no angle.
+        if LINE <= seg_class[own] <= FLAT_ARC and first <= own < last:
+            iu, iv, iw = axes[own, 0], axes[own, 1], axes[own, 2]
+            best = _line_or_arc_d2(seg_class[own], geometry[own], iu, iv, iw, px, py, pz, points[i, iu],
+                                   points[i, iv], points[i, iw])  # fmt: skip
         for s in range(first, last):
             c = seg_class[s]
-            if c == _LINE:
-                g = geometry[s]
-                rx = px - g[0]
-                ry = py - g[1]
-                rz = pz - g[2]
-                t = (rx * g[3] + ry * g[4] + rz * g[5]) * g[6]
-                if t < 0.0:
-                    t = 0.0
-                elif t > 1.0:
-                    t = 1.0
-                dx = rx - t * g[3]
-                dy = ry - t * g[4]
-                dz = rz - t * g[5]
-                d2 = dx * dx + dy * dy + dz * dz
-            elif c == _FLAT_ARC:
+            if c == LINE:
+                d2 = _line_or_arc_d2(c, geometry[s], 0, 1, 2, px, py, pz, px, py, pz)
+            elif c == FLAT_ARC:
                 g = geometry[s]
                 pu = points[i, axes[s, 0]]
                 pv = points[i, axes[s, 1]]
                 pw = points[i, axes[s, 2]]
                 du = pu - g[0]
                 dv = pv - g[1]
-                # Angle travelled from the start in the arc's direction, in [0, 2π) (Python-style mod).
-                phi = (math.atan2(dv, du) - g[4]) * g[6]
-                phi = phi - _TWO_PI * math.floor(phi / _TWO_PI)
-                if phi <= g[5]:
-                    off = math.hypot(du, dv) - g[3]
-                    dw = pw - g[2]
-                    d2 = off * off + dw * dw
-                else:  # outside the swept range: the nearer end point
-                    ex = px - g[7]
-                    ey = py - g[8]
-                    ez = pz - g[9]
-                    d2 = ex * ex + ey * ey + ez * ez
-                    ex = px - g[10]
-                    ey = py - g[11]
-                    ez = pz - g[12]
-                    d2 = min(d2, ex * ex + ey * ey + ez * ez)
+                dw = pw - g[2]
+                off = math.sqrt(du * du + dv * dv) - g[3]
+                if off * off + dw * dw > best * (1.0 + 1e-9):
+                    continue
+                d2 = _line_or_arc_d2(c, g, axes[s, 0], axes[s, 1], axes[s, 2], px, py, pz, pu, pv, pw)
             else:
                 continue
             if d2 < best:
                 best = d2
+        if curved:
+            # Helices and NURBS, the point's own segment first (usually the nearest: the others then fail
+            # their lower bound).
+            for step in range(last - first + 1):
+                s = own if step == 0 else first + step - 1
+                if (step > 0 and s == own) or not first <= s < last or seg_class[s] < HELIX:
+                    continue
+                iu, iv, iw = axes[s, 0], axes[s, 1], axes[s, 2]
+                d2 = _curved_d2(seg_class[s], geometry[s], nurbs_i[s], nurbs_f, iu, iv, iw, px, py, pz,
+                                points[i, iu], points[i, iv], points[i, iw], best)  # fmt: skip
+                if d2 < best:
+                    best = d2
         out[i] = math.sqrt(best)
     return first, last
 
@@ -152,21 +232,8 @@ class ContourErrorMeter:
         self.window_back = int(window_back)
         self.window_ahead = int(window_ahead)
         self.window_back_mm = float(window_back_mm)
-        kind = np.asarray(toolpath.kind)
-        self._cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
         self._n = len(toolpath)
-        self._seg_class, self._axes, self._geometry = _pack_segments(toolpath)
-        others = np.flatnonzero(self._seg_class == _OTHER)
-        self._others = others if len(others) else None
-        # First segment of the window for each lowest hint: window_back segments back, stretched back to
-        # cover window_back_mm of path (see _window_range).
-        idx = np.arange(self._n)
-        first = np.maximum(0, idx - self.window_back)
-        if self.window_back_mm > 0 and self._n:
-            s_from = toolpath.s_start[: self._n] - self.window_back_mm
-            by_mm = np.maximum(0, np.searchsorted(toolpath.s_start, s_from, side="right") - 1)
-            first = np.minimum(first, by_mm)
-        self._first_back = np.ascontiguousarray(first, dtype=np.int64)
+        self.tables = pack_contour(toolpath, self.window_back, self.window_back_mm)
         self._hint1 = np.zeros(1, dtype=np.int64)
         self.reset()
 
@@ -178,13 +245,8 @@ class ContourErrorMeter:
         """``[first, last)`` segments searched for a reference on ``segment_hint`` (int or array)."""
         hint = np.asarray(segment_hint)
         lo, hi = (int(hint.min()), int(hint.max())) if hint.ndim else (int(hint), int(hint))
-        return self._window_range(lo, hi)
-
-    def _window_range(self, lo: int, hi: int) -> tuple[int, int]:
-        """The window rule (the kernel reads the same precomputed ``_first_back`` table)."""
-        first = int(self._first_back[lo]) if 0 <= lo < self._n else max(0, lo - self.window_back)
-        last = min(self._n, hi + self.window_ahead + 1)
-        return first, last
+        first = int(self.tables.first_back[lo]) if 0 <= lo < self._n else max(0, lo - self.window_back)
+        return first, min(self._n, hi + self.window_ahead + 1)
 
     # ------------------------------------------------------------------ measuring
     def measure(self, points: np.ndarray, segment_hint: int | np.ndarray) -> np.ndarray:
@@ -216,48 +278,30 @@ class ContourErrorMeter:
                     return np.zeros(0)
                 hints = np.ascontiguousarray(hints, dtype=np.int64)
         out = np.empty(m)
-        first, last = _measure_kernel(pts, hints, self._n, self._seg_class, self._axes, self._geometry,
-                                      self._first_back, self.window_ahead, out)  # fmt: skip
-        if self._others is not None and last > first:
-            self._measure_others(pts, hints, first, last, out)
+        t = self.tables
+        measure_kernel(pts, hints, t.seg_class, t.axes, t.geometry, t.first_back, t.nurbs_f, t.nurbs_i,
+                       self.window_ahead, out)  # fmt: skip
         return out
 
-    def _measure_others(
-        self, pts: np.ndarray, hints: np.ndarray, first: int, last: int, out: np.ndarray
-    ) -> None:
-        """Helices and NURBS in the window: the tool path's exact service, one call per segment."""
-        others = self._others[(self._others >= first) & (self._others < last)]
-        if len(others) == 0:
-            return
-        in_range = (hints >= 0) & (hints < self._n)
-        counted = np.zeros(len(hints), dtype=bool)
-        counted[in_range] = self._cutting[hints[in_range]]
-        if len(hints) == 1:
-            counted = np.broadcast_to(counted, (len(pts),))
-        # Points whose window had no line or flat arc came back as inf.
-        for seg in others:
-            d, _, _ = self.toolpath.nearest(pts, int(seg), int(seg) + 1, cutting_only=True)
-            np.minimum(out, np.where(counted, d, 0.0), out=out)
 
-
-def _pack_segments(tp: Toolpath) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-segment kernel class (n,) int8, plane axes (n, 3) int64 and float table (n, 13)."""
+def pack_contour(tp: Toolpath, window_back: int, window_back_mm: float) -> ContourTables:
+    """Per-segment kernel class, plane axes, geometry, window start and NURBS tables of ``tp``."""
     n = len(tp)
     kind = np.asarray(tp.kind)
     axes = np.ascontiguousarray(_PLANE_AXES_TABLE[np.asarray(tp.plane).astype(np.int64)], dtype=np.int64)
-    if n == 0:
-        return np.zeros(0, dtype=np.int8), axes.reshape(0, 3), np.zeros((0, _N_GEOMETRY))
+    seg_class = np.full(n, SKIP, dtype=np.int64)
+    geometry = np.zeros((n, N_GEOMETRY))
+    nurbs_i = np.zeros((n, 5), dtype=np.int64)
+    nurbs_blocks: list[np.ndarray] = []
     rows = np.arange(n)
     u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
     is_arc = kind == SegmentKind.ARC
     rise = tp.end[rows, w] - tp.start[rows, w]
-    flat_arc = is_arc & (rise == 0)
-    seg_class = np.full(n, _SKIP, dtype=np.int8)
-    seg_class[kind == SegmentKind.LINE] = _LINE
-    seg_class[flat_arc] = _FLAT_ARC
-    seg_class[(is_arc & (rise != 0)) | (kind == SegmentKind.NURBS)] = _OTHER
+    seg_class[kind == SegmentKind.LINE] = LINE
+    seg_class[is_arc & (rise == 0)] = FLAT_ARC
+    seg_class[is_arc & (rise != 0)] = HELIX
+    seg_class[kind == SegmentKind.NURBS] = NURBS
 
-    geometry = np.zeros((n, _N_GEOMETRY))
     lines = kind == SegmentKind.LINE
     delta = tp.end - tp.start
     len2 = np.einsum("ij,ij->i", delta, delta)
@@ -265,9 +309,10 @@ def _pack_segments(tp: Toolpath) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     geometry[lines, 3:6] = delta[lines]
     geometry[lines, 6] = np.where(len2[lines] > 0, 1.0 / np.where(len2[lines] > 0, len2[lines], 1.0), 0.0)
 
-    a = np.flatnonzero(flat_arc)
+    a = np.flatnonzero(is_arc)
+    k = np.arange(len(a))
     center = tp.center[a]
-    cu, cv = center[np.arange(len(a)), u[a]], center[np.arange(len(a)), v[a]]
+    cu, cv = center[k, u[a]], center[k, v[a]]
     radius, theta0, sweep = tp.radius[a], tp.start_angle[a], tp.sweep[a]
     w0 = tp.start[a, w[a]]
     geometry[a, 0] = cu
@@ -277,12 +322,40 @@ def _pack_segments(tp: Toolpath) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     geometry[a, 4] = theta0
     geometry[a, 5] = np.abs(sweep)
     geometry[a, 6] = np.where(sweep >= 0, 1.0, -1.0)
-    # End points from the arc's geometry (as the reference service evaluates them).
+    # End points from the arc's geometry (as the reference service evaluates them; w at the start).
     for col, theta in ((7, theta0), (10, theta0 + sweep)):
         ends = np.empty((len(a), 3))
-        k = np.arange(len(a))
         ends[k, u[a]] = cu + radius * np.cos(theta)
         ends[k, v[a]] = cv + radius * np.sin(theta)
         ends[k, w[a]] = w0
         geometry[a, col : col + 3] = ends
-    return seg_class, axes, np.ascontiguousarray(geometry)
+    geometry[a, 13] = rise[a]
+    geometry[a, 14] = sweep
+
+    offset = 0
+    for row in np.flatnonzero(kind == SegmentKind.NURBS):
+        floats, header = nurbs_table(tp.nurbs[int(row)], offset)
+        nurbs_blocks.append(floats)
+        nurbs_i[row] = header
+        offset += len(floats)
+    nurbs_f = np.concatenate(nurbs_blocks) if nurbs_blocks else np.zeros(1)
+
+    # First segment of the window for each lowest hint: window_back segments back, stretched back to cover
+    # window_back_mm of path.
+    first = np.maximum(0, rows - window_back)
+    if window_back_mm > 0 and n:
+        s_from = tp.s_start[:n] - window_back_mm
+        by_mm = np.maximum(0, np.searchsorted(tp.s_start, s_from, side="right") - 1)
+        first = np.minimum(first, by_mm)
+    return ContourTables(seg_class, axes.reshape(n, 3), np.ascontiguousarray(geometry),
+                         np.ascontiguousarray(first, dtype=np.int64), nurbs_f, nurbs_i)  # fmt: skip
+
+
+def _dependencies() -> None:
+    from cnc_gym.numba_cache import refresh_on_change
+    from cnc_gym.toolpath import nearest
+
+    refresh_on_change(__name__, [nearest])
+
+
+_dependencies()  # the meter links the compiled helix and NURBS searches: drop it when they change

@@ -22,13 +22,16 @@ Vectorisation: for a given number of ticks n the recursion is lifted into one ma
 ``[state (3), raw reference history (H ≥ N), new references (n)]`` to ``[actual x_1..x_n, state_n,
 ẋ_n]``; a step is that matrix-vector product for every (axis, env), done in place on the state by
 one numba-compiled loop (:func:`_step_kernel`: ~1 µs for 5 ticks of one env, where the numpy batched
-matmul it replaced spent ~5 µs in call overhead; compiled on first use, cached on disk). Lifted matrices
-are cached per n (n up to ``MAX_LIFTED_TICKS``; longer steps are done in chunks). With per-env Kv
-(``set_kv_scale``) there is one lifted matrix per (axis, env).
+matmul it replaced spent ~5 µs in call overhead; compiled on first use, cached on disk). The per-env
+step (:func:`step_env`) and settle test (:func:`settled_env`) are what the env's fused step calls too.
+Discrete models and lifted matrices are computed once per process for a machine's axes and a block
+length n (n up to ``MAX_LIFTED_TICKS``; longer steps are done in chunks), so N envs of one machine
+share them. With per-env Kv (``set_kv_scale``) there is one lifted matrix per (axis, env).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -84,47 +87,123 @@ def axis_discrete_model(
 
 
 @njit(cache=True, nogil=True)
-def _step_kernel(lifted, state, history, velocity, reference, actual) -> bool:
-    """One block of ticks for every (axis, env), in place: the lifted matrix times
+def step_env(lifted, state, history, velocity, env, reference, actual) -> None:
+    """One block of ticks of env ``env``, in place: for every axis the lifted matrix times
     ``[state (3), raw history (H), new references (n)]`` (see :meth:`ServoPlant._lift_models`).
 
-    ``lifted`` (3, 1 or E, n + 4, 3 + H + n); ``state`` (3, 3, E), ``history`` (3, H, E), ``velocity``
-    (3, E) are updated; ``reference`` (E, n, 3) in, ``actual`` (E, n, 3) out. Returns False, touching
-    nothing, if a reference is not finite.
+    ``lifted`` (3, 1 or E, n + 4, 3 + H + n) (the env's own matrices, or one shared); ``state`` (3, 3, E),
+    ``history`` (3, H, E), ``velocity`` (3, E) are updated; ``reference`` (n, 3) in, ``actual`` (n, 3)
+    out. The caller checks that the references are finite. Shared by :meth:`ServoPlant.step` and the
+    env's fused step, so both give the same numbers.
     """
-    n_envs, n_ticks = reference.shape[0], reference.shape[1]
+    n_ticks = reference.shape[0]
     n_hist = history.shape[1]
-    total = 0.0
-    for e in range(n_envs):
-        for k in range(n_ticks):
-            for a in range(3):
-                total += reference[e, k, a]
-    if not math.isfinite(total):
-        return False
-    n_cols = _N_STATES + n_hist + n_ticks
-    inputs = np.empty(n_cols)
+    matrix_env = env if lifted.shape[1] > 1 else 0
     for a in range(3):
-        for e in range(n_envs):
-            matrix = lifted[a, e if lifted.shape[1] > 1 else 0]
-            for j in range(_N_STATES):
-                inputs[j] = state[a, j, e]
+        matrix = lifted[a, matrix_env]
+        z0 = state[a, 0, env]
+        z1 = state[a, 1, env]
+        z2 = state[a, 2, env]
+        for row in range(n_ticks + _N_STATES + 1):
+            # The columns in order (state, history, references): the same sums as one dot product.
+            acc = matrix[row, 0] * z0
+            acc += matrix[row, 1] * z1
+            acc += matrix[row, 2] * z2
             for j in range(n_hist):
-                inputs[_N_STATES + j] = history[a, j, e]
+                acc += matrix[row, _N_STATES + j] * history[a, j, env]
             for j in range(n_ticks):
-                inputs[_N_STATES + n_hist + j] = reference[e, j, a]
-            for row in range(n_ticks + _N_STATES + 1):
-                acc = 0.0
-                for col in range(n_cols):
-                    acc += matrix[row, col] * inputs[col]
-                if row < n_ticks:
-                    actual[e, row, a] = acc
-                elif row < n_ticks + _N_STATES:
-                    state[a, row - n_ticks, e] = acc
-                else:
-                    velocity[a, e] = acc
-            for j in range(n_hist):  # the last H raw references
-                history[a, j, e] = inputs[_N_STATES + n_ticks + j]
+                acc += matrix[row, _N_STATES + n_hist + j] * reference[j, a]
+            if row < n_ticks:
+                actual[row, a] = acc
+            elif row < n_ticks + _N_STATES:
+                state[a, row - n_ticks, env] = acc
+            else:
+                velocity[a, env] = acc
+        # Keep the last H raw references (older history shifts forward when fewer than H are new).
+        keep = n_hist - n_ticks
+        for j in range(n_hist):
+            if j < keep:
+                history[a, j, env] = history[a, j + n_ticks, env]
+            else:
+                history[a, j, env] = reference[j - keep, a]
+
+
+@njit(cache=True, nogil=True)
+def settled_env(state, history, velocity, env, tolerance_mm, kv_min) -> bool:
+    """:meth:`ServoPlant.settled` of one env (``kv_min``: the env's lowest position gain)."""
+    n_hist = history.shape[1]
+    for a in range(3):
+        last = history[a, n_hist - 1, env]
+        for j in range(n_hist - 1):
+            if history[a, j, env] != last:
+                return False
+    err2 = 0.0
+    speed2 = 0.0
+    for a in range(3):
+        e = history[a, n_hist - 1, env] - state[a, 0, env]
+        err2 += e * e
+        speed2 += velocity[a, env] * velocity[a, env]
+    slow = kv_min * tolerance_mm
+    return err2 <= tolerance_mm * tolerance_mm and speed2 <= slow * slow
+
+
+@njit(cache=True, nogil=True)
+def _all_finite(reference) -> bool:
+    total = 0.0
+    for x in reference.ravel():
+        total += x
+    return math.isfinite(total)
+
+
+@njit(cache=True, nogil=True)
+def _step_kernel(lifted, state, history, velocity, reference, actual) -> bool:
+    """One block of ticks for every env (:func:`step_env`); ``reference`` (E, n, 3) in, ``actual`` (E, n,
+    3) out. Returns False, touching nothing, if a reference is not finite."""
+    if not _all_finite(reference):
+        return False
+    for e in range(reference.shape[0]):
+        step_env(lifted, state, history, velocity, e, reference[e], actual[e])
     return True
+
+
+AxisKey = tuple[float, float, float, float, float]  # kv_1_s, feedforward, velocity_loop_hz, damping, period_s
+
+
+@functools.lru_cache(maxsize=256)
+def _discrete_model(kv: float, feedforward: float, velocity_loop_hz: float, damping: float,
+                    period_s: float) -> tuple[tuple[np.ndarray, ...], float]:  # fmt: skip
+    """:func:`axis_discrete_model` (read-only arrays) and the spectral radius of its state matrix, once per
+    process and parameter set: N envs of one machine share them (no matrix exponential per env)."""
+    model = axis_discrete_model(kv, feedforward, velocity_loop_hz, damping, period_s)
+    for array in model:
+        array.flags.writeable = False
+    used = _N_STATES if velocity_loop_hz > 0 else 1  # the ideal loop has the state x only
+    return model, float(np.abs(np.linalg.eigvals(model[0][:used, :used])).max())
+
+
+@functools.lru_cache(maxsize=256)
+def _lifted_axes(models: tuple[AxisKey, ...], n_hist: int, n_filter: int, n_ticks: int) -> np.ndarray:
+    """The lifted matrices of :meth:`ServoPlant._lift_models`, shared by every plant (never written).
+
+    H ≥ N raw references are carried; the filtered reference r_j is the mean of raw_{j−N+1}..raw_j.
+    """
+    n_cols = _N_STATES + n_hist + n_ticks
+    # Filtered reference r_j (j = 0..n) as rows over the raw columns: mean of the N raws ending at j.
+    filt = np.zeros((n_ticks + 1, n_cols))
+    for j in range(n_ticks + 1):
+        last_col = _N_STATES + n_hist - 1 + j  # column of raw_j
+        filt[j, last_col - n_filter + 1 : last_col + 1] = 1.0 / n_filter
+    out = np.zeros((3, n_ticks + _N_STATES + 1, n_cols))
+    for axis, key in enumerate(models):
+        a, b_prev, b_cur, c_vel, d_vel = _discrete_model(*key)[0]
+        z = np.zeros((_N_STATES, n_cols))
+        z[:, :_N_STATES] = np.eye(_N_STATES)
+        for k in range(1, n_ticks + 1):
+            z = a @ z + np.outer(b_prev, filt[k - 1]) + np.outer(b_cur, filt[k])
+            out[axis, k - 1] = z[0]
+        out[axis, n_ticks : n_ticks + _N_STATES] = z
+        out[axis, -1] = c_vel @ z + d_vel[0] * filt[n_ticks - 1] + d_vel[1] * filt[n_ticks]
+    return out
 
 
 class ServoPlant:
@@ -138,7 +217,15 @@ class ServoPlant:
 
     Attributes (all ``(n_envs, 3)``, mm and mm/s): ``position``, ``velocity``, ``following_error``
     (raw reference − actual at the last sample), ``reference`` (last raw reference).
+
+    The plant interface the env relies on (any backend provides it): ``n_envs``, ``reset(position,
+    env=None)``, ``step(reference (n_envs, n, 3)) → actual``, ``settled(tolerance) → (n_envs,) bool``.
+    This backend also has ``compiled_step``: its state arrays (``_state``, ``_history``, ``_velocity``,
+    with :func:`step_env` and :func:`settled_env`) can be stepped inside the env's fused kernel.
     """
+
+    #: The env's fused kernel may step this plant's arrays directly (see the class docstring).
+    compiled_step = True
 
     def __init__(
         self,
@@ -161,9 +248,11 @@ class ServoPlant:
         # kv_scale that differs between envs): lifted (3, n_envs, rows, cols).
         self._kv_scale = np.ones((self.n_envs, 3))
         self._shared_models = self._axis_models(np.ones(3))
-        self._env_models: list[list[tuple]] | None = None
+        self._env_models: list[tuple[AxisKey, ...]] | None = None
         self._lifted: dict[int, np.ndarray] = {}
         self._lifted4: dict[int, np.ndarray] = {}  # the same as (3, 1 or n_envs, rows, cols), for the kernel
+        #: Counts changes of the gains (set_kv_scale), for callers that keep values derived from them.
+        self.model_version = 0
         # Internal layout is axis-major so that one batched matmul over axes serves every env.
         self._state = np.zeros((3, _N_STATES, self.n_envs))
         self._history = np.zeros((3, self._n_hist, self.n_envs))  # last raw references
@@ -178,24 +267,23 @@ class ServoPlant:
         """Position gains in force, (n_envs, 3), 1/s."""
         return self._base_kv * self._kv_scale
 
-    def _axis_models(self, scale: np.ndarray) -> list[tuple]:
-        """Discrete models of X, Y, Z with Kv multiplied by ``scale`` (3,); unstable loops are refused."""
-        models = []
+    def _axis_models(self, scale: np.ndarray) -> tuple[AxisKey, ...]:
+        """X, Y, Z with Kv multiplied by ``scale`` (3,), as the keys of their discrete models (the models
+        are computed once per process and key: :func:`_discrete_model`); unstable loops are refused."""
+        keys = []
         for name, axis, factor in zip(AXIS_NAMES, self.machine.axes, scale, strict=True):
             kv = axis.kv_1_s * float(factor)
-            model = axis_discrete_model(
-                kv, axis.feedforward, axis.velocity_loop_hz, axis.velocity_loop_damping, self.period_s
-            )
-            used = _N_STATES if axis.velocity_loop_hz > 0 else 1  # the ideal loop has the state x only
-            if np.abs(np.linalg.eigvals(model[0][:used, :used])).max() >= 1.0:
+            key = (float(kv), float(axis.feedforward), float(axis.velocity_loop_hz),
+                   float(axis.velocity_loop_damping), self.period_s)  # fmt: skip
+            if _discrete_model(*key)[1] >= 1.0:
                 # Routh-Hurwitz on s³ + 2ζωn s² + ωn² s + ωn² Kv: stable iff Kv < 2ζωn.
                 raise ConfigError(
                     f"{self.machine.source}: axes.{name}: the servo loop is unstable (kv_1_s = {kv:g}, "
                     f"velocity_loop_hz = {axis.velocity_loop_hz}, damping = {axis.velocity_loop_damping}); "
                     "a velocity loop needs kv_1_s < 2·damping·2π·velocity_loop_hz"
                 )
-            models.append(model)
-        return models
+            keys.append(key)
+        return tuple(keys)
 
     def set_kv_scale(self, kv_scale: np.ndarray, env: int | None = None) -> None:
         """Multiply the preset's per-axis Kv by ``kv_scale``: (3,) or (n_envs, 3) for all envs, or (3,)
@@ -207,7 +295,7 @@ class ServoPlant:
             scale = np.broadcast_to(scale, (self.n_envs, 3)) if scale.ndim <= 1 else scale
             if scale.shape != (self.n_envs, 3):
                 raise ValueError(f"kv_scale must be (3,) or (n_envs={self.n_envs}, 3), got {scale.shape}")
-            envs = range(self.n_envs)
+            envs: list[int] = list(range(self.n_envs))
         else:
             if scale.shape != (3,):
                 raise ValueError(f"kv_scale for one env must be (3,), got {scale.shape}")
@@ -218,6 +306,7 @@ class ServoPlant:
         if not np.all(np.isfinite(scale)) or np.any(scale <= 0):
             raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
         self._lifted4.clear()
+        self.model_version += 1
         new_scale = self._kv_scale.copy()
         for e in envs:
             new_scale[e] = scale[e]
@@ -228,7 +317,7 @@ class ServoPlant:
             self._lifted.clear()
         else:
             if self._env_models is None:
-                self._env_models = [list(self._shared_models) for _ in range(self.n_envs)]
+                self._env_models = [self._shared_models for _ in range(self.n_envs)]
                 self._lifted = {
                     n: np.repeat(lifted[:, None], self.n_envs, axis=1) for n, lifted in self._lifted.items()
                 }
@@ -260,39 +349,24 @@ class ServoPlant:
             self._lifted4[n_ticks] = cached
         return cached
 
-    def _lift_models(self, models: list[tuple], n_ticks: int) -> np.ndarray:
-        """(3, n + 3 + 1, 3 + H + n): [z_0, raw_{1−H}..raw_0, raw_1..raw_n] → [x_1..x_n, z_n, ẋ_n].
-
-        H ≥ N raw references are carried; the filtered reference r_j is the mean of raw_{j−N+1}..raw_j.
-        """
-        n_hist, n_filter = self._n_hist, self.filter_samples
-        n_cols = _N_STATES + n_hist + n_ticks
-        # Filtered reference r_j (j = 0..n) as rows over the raw columns: mean of the N raws ending at j.
-        filt = np.zeros((n_ticks + 1, n_cols))
-        for j in range(n_ticks + 1):
-            last_col = _N_STATES + n_hist - 1 + j  # column of raw_j
-            filt[j, last_col - n_filter + 1 : last_col + 1] = 1.0 / n_filter
-        out = np.zeros((3, n_ticks + _N_STATES + 1, n_cols))
-        for axis, (a, b_prev, b_cur, c_vel, d_vel) in enumerate(models):
-            z = np.zeros((_N_STATES, n_cols))
-            z[:, :_N_STATES] = np.eye(_N_STATES)
-            for k in range(1, n_ticks + 1):
-                z = a @ z + np.outer(b_prev, filt[k - 1]) + np.outer(b_cur, filt[k])
-                out[axis, k - 1] = z[0]
-            out[axis, n_ticks : n_ticks + _N_STATES] = z
-            out[axis, -1] = c_vel @ z + d_vel[0] * filt[n_ticks - 1] + d_vel[1] * filt[n_ticks]
-        return out
+    def _lift_models(self, models: tuple[AxisKey, ...], n_ticks: int) -> np.ndarray:
+        """(3, n + 3 + 1, 3 + H + n): [z_0, raw_{1−H}..raw_0, raw_1..raw_n] → [x_1..x_n, z_n, ẋ_n]
+        (:func:`_lifted_axes`, computed once per process for a machine's axes and a block length)."""
+        return _lifted_axes(models, self._n_hist, self.filter_samples, n_ticks)
 
     # ------------------------------------------------------------------ public API
-    def reset(self, position: np.ndarray) -> None:
-        """Put every axis at rest at ``position`` ((n_envs, 3) or (3,)); the reference history too."""
-        pos = np.broadcast_to(np.asarray(position, dtype=float), (self.n_envs, 3))
+    def reset(self, position: np.ndarray, env: int | None = None) -> None:
+        """Put every axis at rest at ``position`` ((n_envs, 3) or (3,)); the reference history too. With
+        ``env``, only that env (``position`` (3,))."""
+        envs = slice(None) if env is None else slice(int(env), int(env) + 1)
+        n = self.n_envs if env is None else 1
+        pos = np.broadcast_to(np.asarray(position, dtype=float), (n, 3))
         if not np.all(np.isfinite(pos)):
             raise ValueError("plant reset position must be finite")
-        self._state[:] = 0.0
-        self._state[:, 0, :] = pos.T
-        self._history[:] = pos.T[:, None, :]
-        self._velocity[:] = 0.0
+        self._state[:, :, envs] = 0.0
+        self._state[:, 0, envs] = pos.T
+        self._history[:, :, envs] = pos.T[:, None, :]
+        self._velocity[:, envs] = 0.0
 
     def step(self, reference: np.ndarray) -> np.ndarray:
         """Advance by one sample per reference row and return the actual positions, same shape.
@@ -360,11 +434,17 @@ class ServoPlant:
         is at most min(Kv)·tolerance — the speed a P loop has that far from its target, so a settling
         axis passes and one that is still crossing the band does not.
         """
-        tol = float(tolerance_mm)
-        hist = self._history
-        ref_at_rest = np.all(hist == hist[:, -1:, :], axis=(0, 1))
-        err = hist[:, -1, :] - self._state[:, 0, :]
-        close = np.einsum("ae,ae->e", err, err) <= tol * tol
-        speed2 = np.einsum("ae,ae->e", self._velocity, self._velocity)
-        slow = speed2 <= (self.kv_1_s.min(axis=1) * tol) ** 2
-        return ref_at_rest & close & slow
+        out = np.empty(self.n_envs, dtype=bool)
+        _settled_kernel(self._state, self._history, self._velocity, float(tolerance_mm), self.kv_min, out)
+        return out
+
+    @property
+    def kv_min(self) -> np.ndarray:
+        """Lowest position gain of each env, (n_envs,), 1/s (the settle test's speed bound)."""
+        return self.kv_1_s.min(axis=1)
+
+
+@njit(cache=True, nogil=True)
+def _settled_kernel(state, history, velocity, tolerance_mm, kv_min, out) -> None:
+    for e in range(out.shape[0]):
+        out[e] = settled_env(state, history, velocity, e, tolerance_mm, kv_min[e])

@@ -28,7 +28,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import BSpline
 
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
 _INITIAL_LEAVES_PER_SPAN = 8
@@ -117,6 +116,8 @@ class NurbsCurve:
         ``_poly[j, r, 4 d + c]``: coefficient of u^r in the d-th t-derivative of homogeneous coordinate c
         on span j, with u = (t - mid_j) / half_j ∈ [-1, 1].
         """
+        from scipy.interpolate import BSpline  # here, not at import: the interpreter alone never needs scipy
+
         k = self.order
         degree = k - 1
         homogeneous = np.column_stack((self.control_points * self.weights[:, None], self.weights))

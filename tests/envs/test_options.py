@@ -180,4 +180,4 @@ def test_units_sets_the_power_on_unit_of_the_programs():
     assert end_x(metric) == pytest.approx(1.0)
     vector = FeedrateVectorEnv(2, programs=[text], units="inch")
     vector.reset(seed=0)
-    assert all(end_x(e) == pytest.approx(25.4) for e in vector.envs)
+    assert all(end_x(vector.batch.program(e)) == pytest.approx(25.4) for e in range(vector.num_envs))

@@ -325,3 +325,44 @@ def test_compiled_meter_equals_toolpath_nearest_on_random_paths_and_hints():
                 np.testing.assert_allclose(single, tp.nearest(points, first, last)[0], rtol=1e-9, atol=1e-9)
             else:
                 np.testing.assert_array_equal(single, 0.0)
+
+
+def test_nurbs_and_helices_agree_with_toolpath_nearest():
+    # Rows of every cutting kind with NURBS curves among them (the meter's compiled search against the
+    # curve's own numpy search, through Toolpath.nearest), points near the path and far from it.
+    from cnc_gym.toolpath.nurbs import NurbsCurve
+
+    rng = np.random.default_rng(77)
+    builder = ToolpathBuilder()
+    here = np.zeros(3)
+    for number in range(30):
+        choice = number % 3
+        if choice == 0:
+            ctrl = here + np.cumsum(rng.normal(size=(6, 3)) * np.array([3.0, 3.0, 0.5]), axis=0)
+            ctrl[0] = here
+            knots = np.concatenate((np.zeros(4), np.sort(rng.uniform(0, 1, 2)), np.ones(4)))
+            builder.nurbs(NurbsCurve(ctrl, rng.uniform(0.5, 2.0, 6), knots, order=4), feed=1000.0,
+                          line=number + 1)  # fmt: skip
+            there = ctrl[-1].copy()
+        elif choice == 1:
+            center = here + np.array([rng.normal(0, 3), rng.normal(0, 3), 0.0])
+            sweep = rng.uniform(-9.0, 9.0)
+            radius = math.hypot(*(here - center)[:2])
+            angle = math.atan2(here[1] - center[1], here[0] - center[0]) + sweep
+            there = np.array([center[0] + radius * math.cos(angle), center[1] + radius * math.sin(angle),
+                              here[2] + rng.normal(0, 2)])  # fmt: skip
+            builder.arc(tuple(here), tuple(there), tuple(center), Plane.XY, sweep, feed=1000.0,
+                        line=number + 1)  # fmt: skip
+        else:
+            there = here + rng.normal(0, 3, 3)
+            builder.line(tuple(here), tuple(there), feed=1000.0, line=number + 1)
+        here = there
+    tp = builder.build()
+    meter = ContourErrorMeter(tp, window_back=2, window_ahead=4)
+    _, on_path = tp.sample(0.3)
+    for _ in range(150):
+        hint = int(rng.integers(0, len(tp)))
+        points = on_path[rng.integers(0, len(on_path), 5)] + rng.normal(0, rng.choice([0.01, 1.0]), (5, 3))
+        first, last = meter.window(hint)
+        expected, _, _ = tp.nearest(points, first, last)
+        np.testing.assert_allclose(meter.measure(points, hint), expected, rtol=0, atol=1e-9)

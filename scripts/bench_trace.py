@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Benchmark ``cnc-gym trace`` on a 100 000-line G01/G02 program against LinuxCNC's ``rs274 -g``.
+
+Each command runs in a fresh process (start-up included, as a user runs it), its output written to a
+file; the commands are interleaved over ``--repeats`` repeats and the median of each is reported, in
+wall time and in CPU time (the child's user + system seconds), with the ratio to the reference.
+
+- **reference**: ``rs274 -g`` (LinuxCNC's stand-alone interpreter, Debian package ``linuxcnc-uspace``)
+  on the same program, when it is on PATH (the program's ``O1000`` line, which rs274ngc would read as
+  an O-word, is left out of its copy); else only cnc-gym's figures are printed;
+- ``--before DIR``: also time the ``cnc_gym`` package in DIR (another checkout, e.g. from
+  ``git archive``), run with ``PYTHONPATH=DIR``: before/after figures in one run;
+- **split**: where ``cnc-gym trace`` spends its time: start-up (the same command on a one-line program),
+  interpretation and JSON Lines writing (each timed in this process, CPU time).
+
+Usage::
+
+    .venv/bin/python scripts/bench_trace.py                        # 100 000 lines, 5 repeats
+    .venv/bin/python scripts/bench_trace.py --before /tmp/main-checkout --json out.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_interpreter import generate_program  # the interpreter benchmark's program
+
+STARTUP = "cnc-gym trace (start-up: a one-line program)"
+_TRACE = "import sys; from cnc_gym.cli import main; sys.argv[0] = 'cnc-gym'; sys.exit(main())"
+
+
+def timed_run(command: list[str], output: Path, env: dict[str, str] | None = None) -> tuple[float, float]:
+    """(wall s, CPU s) of ``command`` in a fresh process, its stdout written to ``output``."""
+    with output.open("wb") as out:
+        wall = time.perf_counter()
+        # (run from the output's folder: ``python -c`` puts the working directory first on sys.path)
+        process = subprocess.Popen(command, stdout=out, stderr=subprocess.PIPE, env=env, cwd=output.parent)
+        _, status, usage = os.wait4(process.pid, 0)
+        wall = time.perf_counter() - wall
+    process.returncode = os.waitstatus_to_exitcode(status)
+    if process.returncode != 0:
+        stderr = process.stderr.read().decode() if process.stderr else ""
+        raise SystemExit(f"{' '.join(command)} failed ({process.returncode}): {stderr.strip()}")
+    if process.stderr:
+        process.stderr.close()
+    return wall, usage.ru_utime + usage.ru_stime
+
+
+def split(text: str) -> dict[str, float]:
+    """CPU seconds of interpreting ``text`` and of writing its JSON Lines, in this process."""
+    from cnc_gym.gcode import interpret
+    from cnc_gym.toolpath.records import toolpath_jsonl
+
+    interpret("G01 X1 F100\n")  # first-use costs out of the figure
+    start = time.process_time()
+    toolpath = interpret(text, file="<bench>")
+    middle = time.process_time()
+    toolpath_jsonl(toolpath)
+    return {"interpret_cpu_s": middle - start, "write_cpu_s": time.process_time() - middle,
+            "rows": len(toolpath)}  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lines", type=int, default=100_000, help="program length (default 100 000)")
+    parser.add_argument("--repeats", type=int, default=5, help="interleaved repeats (default 5)")
+    parser.add_argument("--before", metavar="DIR", help="also time the cnc_gym package in DIR")
+    parser.add_argument("--json", metavar="FILE", help="write every figure to FILE as JSON")
+    args = parser.parse_args(argv)
+
+    work = Path(tempfile.mkdtemp(prefix="bench_trace_"))
+    try:
+        program = work / "program.nc"
+        program.write_text(generate_program(args.lines))
+        tiny = work / "tiny.nc"
+        tiny.write_text("G01 X1 F100\nM30\n")
+        trace = [sys.executable, "-c", _TRACE, "trace"]
+        commands: dict[str, tuple[list[str], dict[str, str] | None]] = {
+            "cnc-gym trace": ([*trace, str(program)], None),
+            STARTUP: ([*trace, str(tiny)], None),
+        }
+        if args.before:
+            before_env = {**os.environ, "PYTHONPATH": str(Path(args.before).resolve())}
+            commands["cnc-gym trace, --before"] = ([*trace, str(program)], before_env)
+        rs274 = shutil.which("rs274")
+        if rs274:
+            ngc = work / "program.ngc"
+            ngc.write_text(program.read_text().replace("O1000\n", "", 1))
+            commands["rs274 -g"] = ([rs274, "-g", str(ngc)], None)
+        times: dict[str, dict[str, list[float]]] = {name: {"wall": [], "cpu": []} for name in commands}
+        for _ in range(args.repeats):
+            for name, (command, environment) in commands.items():
+                wall, cpu = timed_run(command, work / "out.txt", environment)
+                times[name]["wall"].append(wall)
+                times[name]["cpu"].append(cpu)
+        result: dict = {"lines": args.lines, "repeats": args.repeats}
+        reference = "rs274 -g" if rs274 else None
+        print(f"{args.lines:,}-line G01/G02 program, fresh processes, median of {args.repeats}")
+        print(f"{'command':46s} {'wall s':>7s} {'CPU s':>7s}" + ("   ratio to rs274 (wall | CPU)" if reference
+                                                                   else ""))  # fmt: skip
+        medians = {name: {k: statistics.median(v) for k, v in t.items()} for name, t in times.items()}
+        for name, m in medians.items():
+            line = f"{name:46s} {m['wall']:7.3f} {m['cpu']:7.3f}"
+            if reference:
+                ref = medians[reference]
+                m["ratio_wall"], m["ratio_cpu"] = m["wall"] / ref["wall"], m["cpu"] / ref["cpu"]
+                line += f"   {m['ratio_wall']:5.2f}× | {m['ratio_cpu']:5.2f}×"
+            print(line)
+        if not rs274:
+            print("(rs274 not on PATH: install Debian's linuxcnc-uspace for the reference)")
+        result["commands"] = medians
+        parts = split(program.read_text())
+        result["split"] = {"startup_cpu_s": medians[STARTUP]["cpu"], **parts}
+        print(f"split of cnc-gym trace (CPU s): start-up {result['split']['startup_cpu_s']:.3f}, "
+              f"interpret {parts['interpret_cpu_s']:.3f}, write {parts['write_cpu_s']:.3f} "
+              f"({parts['rows']:,} tool-path rows)")
+        if args.json:
+            Path(args.json).write_text(json.dumps(result, indent=1))
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,89 @@
+"""The compiled nearest-point searches (helix, NURBS) against brute force and the NURBS curve's own search."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cnc_gym.toolpath.nearest import helix_nearest, nurbs_distance2, nurbs_table
+from cnc_gym.toolpath.nurbs import NurbsCurve
+
+
+def helix_brute_d2(p, cu, cv, w0, rise, radius, theta0, sweep) -> float:
+    """Least squared distance over 400 001 samples of the sweep, refined around the best one."""
+    f = np.linspace(0.0, 1.0, 400_001)
+
+    def d2(f):
+        ang = theta0 + sweep * f
+        return (cu + radius * np.cos(ang) - p[0]) ** 2 + (cv + radius * np.sin(ang) - p[1]) ** 2 + (
+            w0 + rise * f - p[2]) ** 2  # fmt: skip
+
+    values = d2(f)
+    i = int(np.argmin(values))
+    fine = np.linspace(f[max(i - 1, 0)], f[min(i + 1, len(f) - 1)], 4001)
+    return float(min(values.min(), d2(fine).min()))
+
+
+@pytest.mark.parametrize("case", ["near", "axis", "far", "steep", "flat"])
+def test_helix_nearest_is_the_global_minimum(case):
+    # Random helices and points of five kinds: near the helix (contour error), on and near the axis (many
+    # equal minima), far away, steep helices (rise ≫ radius·sweep: the distance is convex), and flat arcs.
+    # The compiled search must never be worse than brute force, nor better than its resolution.
+    rng = np.random.default_rng(["near", "axis", "far", "steep", "flat"].index(case))
+    for _ in range(150):
+        cu, cv, w0 = rng.normal(size=3) * 5
+        radius = float(rng.uniform(0.2, 10.0))
+        theta0 = float(rng.uniform(-4.0, 4.0))
+        sweep = float(rng.uniform(-20.0, 20.0))
+        rise = {"steep": 200.0, "flat": 0.0}.get(case, float(rng.normal() * 5))
+        f = rng.uniform(0.0, 1.0)
+        on = np.array([cu + radius * math.cos(theta0 + sweep * f), cv + radius * math.sin(theta0 + sweep * f),
+                       w0 + rise * f])  # fmt: skip
+        p = {
+            "near": on + rng.normal(size=3) * 0.01,
+            "axis": np.array([cu, cv, w0 + rise * rng.uniform(-0.2, 1.2)]) + rng.normal(size=3) * 1e-4,
+            "far": on + rng.normal(size=3) * 20.0,
+        }.get(case, on + rng.normal(size=3) * 0.5)
+        d2, frac = helix_nearest(p[0], p[1], p[2], cu, cv, w0, rise, radius, theta0, sweep)
+        brute = helix_brute_d2(p, cu, cv, w0, rise, radius, theta0, sweep)
+        assert math.sqrt(d2) <= math.sqrt(brute) + 1e-12
+        assert math.sqrt(d2) >= math.sqrt(brute) - 1e-6
+        assert 0.0 <= frac <= 1.0
+
+
+def random_curve(rng: np.random.Generator, n_ctrl: int, order: int) -> NurbsCurve:
+    ctrl = np.cumsum(rng.normal(size=(n_ctrl, 3)) * np.array([3.0, 3.0, 0.6]), axis=0)
+    knots = np.concatenate((np.zeros(order), np.sort(rng.uniform(0, 1, n_ctrl - order)), np.ones(order)))
+    return NurbsCurve(ctrl, rng.uniform(0.3, 3.0, n_ctrl), knots, order=order)
+
+
+@pytest.mark.parametrize("n_ctrl", [4, 7, 40, 120])  # 120 control points: a table past the pruning size
+def test_nurbs_distance_matches_the_curves_own_search(n_ctrl):
+    rng = np.random.default_rng(n_ctrl)
+    for order in (2, 3, 4):
+        curve = random_curve(rng, n_ctrl, order)
+        floats, header = nurbs_table(curve)
+        offsets = rng.normal(size=(40, 3)) * rng.choice([1e-3, 0.1, 5.0])
+        points = curve.evaluate(rng.uniform(0, 1, 40)) + offsets
+        expected, _, _ = curve.nearest(points)
+        got = np.array([math.sqrt(nurbs_distance2(floats, header, *p, math.inf)) for p in points])
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9)
+        # With a bound: the distance where it is below the bound, else anything at or above the bound
+        # (the caller keeps the least distance, and the bound is its best so far).
+        for p, d in zip(points[:10], expected[:10], strict=True):
+            assert nurbs_distance2(floats, header, *p, (0.5 * d) ** 2) >= (0.5 * d) ** 2
+            above = nurbs_distance2(floats, header, *p, (2 * d + 1e-6) ** 2)
+            assert math.sqrt(above) == pytest.approx(d, abs=1e-9)
+
+
+def test_nurbs_tables_of_two_curves_share_one_array():
+    # The contour meter concatenates the tables of every NURBS row; the header's offset finds each one.
+    rng = np.random.default_rng(9)
+    a, b = random_curve(rng, 6, 4), random_curve(rng, 9, 3)
+    fa, _ = nurbs_table(a)
+    fb, hb = nurbs_table(b, offset=len(fa))
+    both = np.concatenate((fa, fb))
+    p = b.evaluate([0.3])[0] + 0.01
+    assert nurbs_distance2(both, hb, *p, math.inf) == nurbs_distance2(fb, nurbs_table(b)[1], *p, math.inf)
