@@ -36,8 +36,9 @@ import numpy as np
 from numba import njit
 
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import AXIS_NAMES, MachineConfig, load_machine
+from cnc_gym.machine import AXIS_NAMES, MachineConfig
 from cnc_gym.plant.mjcf import axis_names, machine_mjcf
+from cnc_gym.plant.servo import checked_kv_scale, plant_machine, reference_rows
 
 _M_PER_MM = 1e-3
 #: MuJoCo's warnings of a state that is no longer finite (it then resets the simulation).
@@ -153,12 +154,7 @@ class MujocoPlant:
         n_envs: int = 1,
         kv_scale: np.ndarray | None = None,
     ) -> None:
-        if isinstance(machine, str):
-            machine = load_machine(machine)
-        if int(n_envs) < 1:
-            raise ValueError(f"n_envs must be at least 1, got {n_envs}")
-        self.machine = machine
-        self.n_envs = int(n_envs)
+        self.machine, self.n_envs = machine, n_envs = plant_machine(machine, n_envs)
         ctrl = machine.controller
         self.period_s = float(ctrl.interpolation_period_s)
         self.timestep_s = float(machine.plant.timestep_s)
@@ -301,21 +297,7 @@ class MujocoPlant:
 
     def set_kv_scale(self, kv_scale: np.ndarray, env: int | None = None) -> None:
         """Multiply the preset's per-axis Kv by ``kv_scale``, as :meth:`ServoPlant.set_kv_scale`."""
-        scale = np.asarray(kv_scale, dtype=float)
-        new_scale = self._kv_scale.copy()
-        if env is None:
-            scale = np.broadcast_to(scale, (self.n_envs, 3)) if scale.ndim <= 1 else scale
-            if scale.shape != (self.n_envs, 3):
-                raise ValueError(f"kv_scale must be (3,) or (n_envs={self.n_envs}, 3), got {scale.shape}")
-            new_scale[:] = scale
-        else:
-            if scale.shape != (3,):
-                raise ValueError(f"kv_scale for one env must be (3,), got {scale.shape}")
-            if not 0 <= env < self.n_envs:
-                raise ValueError(f"env {env} out of range 0..{self.n_envs - 1}")
-            new_scale[env] = scale
-        if not np.all(np.isfinite(new_scale)) or np.any(new_scale <= 0):
-            raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
+        new_scale = checked_kv_scale(kv_scale, self._kv_scale, env)
         for row in np.unique(new_scale, axis=0):
             self._check_loops(row)
         self._kv_scale = new_scale
@@ -352,14 +334,7 @@ class MujocoPlant:
 
         ``reference`` is (n_envs, n_ticks, 3), or (n_ticks, 3) when ``n_envs == 1`` (mm).
         """
-        ref = np.asarray(reference, dtype=np.float64)
-        squeeze = ref.ndim == 2
-        if squeeze:
-            if self.n_envs != 1:
-                raise ValueError(f"reference must be (n_envs={self.n_envs}, n_ticks, 3), got {ref.shape}")
-            ref = ref[None]
-        if ref.ndim != 3 or ref.shape[0] != self.n_envs or ref.shape[2] != 3:
-            raise ValueError(f"reference must be (n_envs={self.n_envs}, n_ticks, 3), got {ref.shape}")
+        ref, squeeze = reference_rows(reference, self.n_envs)
         n_ticks = ref.shape[1]
         if n_ticks == 0:
             return ref[0].copy() if squeeze else ref.copy()
