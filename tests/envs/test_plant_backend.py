@@ -112,3 +112,22 @@ def test_bench_records_name_the_plant(tmp_path, capsys):
     assert main(argv) == 0
     records = [json.loads(line) for line in out.read_text().splitlines()]
     assert records and {r["plant"] for r in records} == {"mujoco"}
+
+
+def test_vector_env_on_the_mujoco_plant_steps_each_env_as_a_single_env():
+    from cnc_gym.envs.vector import FeedrateVectorEnv
+
+    knobs = np.linspace(-0.5, 0.8, 60)
+    vector = FeedrateVectorEnv(2, programs=["circle"], machine="vmc-small-mujoco")
+    assert isinstance(vector.batch.plant, MujocoPlant) and vector.batch.plant.n_envs == 2
+    vector.reset(seed=0)
+    rewards = []
+    for knob in knobs:
+        _, reward, _, _, _ = vector.step(np.array([[knob], [0.3]], dtype=np.float32))
+        rewards.append(reward)
+    vector.close()
+    single = gym.make("cnc_gym/Feedrate-v0", programs=["circle"], machine="vmc-small-mujoco")
+    single.reset(seed=0)
+    alone = [single.step(np.array([knob], dtype=np.float32))[1] for knob in knobs]
+    single.close()
+    np.testing.assert_allclose(np.array(rewards)[:, 0], alone, rtol=1e-9, atol=1e-12)
