@@ -7,16 +7,19 @@ and the benchmark take either. The machine (:mod:`cnc_gym.plant.mjcf`) is built 
 spring-damper with an optional dead band (backlash).
 
 The servo law, per axis, computed at every physics step (``plant.timestep_s``, a whole fraction of the
-interpolation period) from the state at the step's start and applied through the axis's actuator::
+interpolation period) and applied through the axis's actuator on the motor side::
 
     reference     r(t): the (post-filtered) samples joined linearly (first-order hold), ṙ = Δr/T
     position loop u = Kv·(r − x_fb) + f·ṙ                   x_fb: motor (semi-closed) or load (scale)
     velocity loop F* = Kp·(u − v_motor + I/Tn),  İ = u − v_motor   (I only with a PI loop, Tn > 0)
-      velocity_loop_hz > 0:  F follows F* through the current loop's lag τ (actuator ``filterexact``)
-                             with Kp = m·ωn/(2ζ), τ = 1/(2ζωn)
-      velocity_loop_hz = 0:  F = F* at once with Kp = m/timestep (the bias term −Kp·v of the actuator,
-                             integrated implicitly): the velocity follows u within about one step
+      velocity_loop_hz > 0:  the force F follows F* through the current loop's first-order lag τ
+                             (integrated exactly; a ``motor`` actuator applies it), Kp = m·ωn/(2ζ),
+                             τ = 1/(2ζωn)
+      velocity_loop_hz = 0:  F = F* at once with Kp = m/(timestep/8) (a ``general`` actuator whose bias
+                             −Kp·v MuJoCo integrates implicitly): the velocity follows u within an eighth
+                             of a step
 
+Where in the step the law is evaluated is chosen for second-order accuracy (see :func:`_servo_law`).
 ``m`` is the axis's whole moving mass along its direction (taken from the compiled model's mass matrix:
 the Y drive moves the saddle and the table). On a rigid axis without friction the force is m·ẍ, so the
 closed loop is the LTI plant's exactly: ẍ' = ωn²(u − ẋ) − 2ζωn·ẍ (velocity_loop_hz > 0) or ẋ = u
