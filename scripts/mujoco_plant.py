@@ -17,6 +17,7 @@ import math
 import statistics
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,8 @@ from cnc_gym.plant.mujoco import MujocoPlant
 
 PERIOD = 0.002
 F5000 = 5000.0 / 60.0
+# The friction tables build P-velocity-loop machines with friction on purpose (the plant warns about them).
+warnings.filterwarnings("ignore", message=".*with a P velocity loop the Coulomb friction")
 
 
 def with_mechanics(machine: MachineConfig | str, **mechanics) -> MachineConfig:

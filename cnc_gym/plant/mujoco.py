@@ -33,6 +33,7 @@ servo law is one compiled loop (numba) over (env, axis) per physics step.
 from __future__ import annotations
 
 import math
+import warnings
 
 import mujoco
 import numpy as np
@@ -174,6 +175,7 @@ class MujocoPlant:
         self._kv = self._base_kv * self._kv_scale
         self.model_version = 0
         self._check_loops(np.ones(3))
+        self._warn_friction_without_integral()
         self._state = np.zeros((self.n_envs, 3, 2))  # velocity-loop integral, current-loop force
         self._diverged = 0  # MuJoCo's count of non-finite states so far
         self._history = np.zeros((self.n_envs, self._n_hist, 3))  # raw references, metres
@@ -284,6 +286,24 @@ class MujocoPlant:
                     f"fastest mode is {omega / (2 * math.pi):.4g} Hz; use at most "
                     f"{MAX_OMEGA_TIMESTEP / omega:.3g} s (a whole fraction of the interpolation period)"
                 )
+
+    def _warn_friction_without_integral(self) -> None:
+        """A P velocity loop holds a Coulomb friction F only with a following error F/(Kp·Kv): an axis can
+        stop that far from its target, and beyond the in-position width the controller never releases it
+        (the episode then ends at its step budget). Real drives integrate (a PI loop): say so, once."""
+        width = self.machine.controller.in_position_mm * _M_PER_MM
+        held = []
+        for a, name in enumerate(AXIS_NAMES):
+            mech = self.machine.plant.axes.axis(a)
+            offset = mech.coulomb_friction_n / (self._kp[a] * self._kv[0, a])
+            if mech.velocity_integral_time_s == 0 and offset > width:
+                held.append(f"{name} {offset / _M_PER_MM:.3g} mm ({mech.coulomb_friction_n:g} N)")
+        if held:
+            warnings.warn(
+                f"{self.machine.source}: plant.axes: with a P velocity loop the Coulomb friction can hold an "
+                f"axis this far from its target: {', '.join(held)}, beyond in_position_mm "
+                f"({width / _M_PER_MM:g}), so the controller may never see it in position; a PI loop "
+                "(velocity_integral_time_s) removes the offset", stacklevel=3)
 
     # ------------------------------------------------------------------ gains
     @property

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -117,6 +118,10 @@ def test_step_response_matches_the_lti_plant(preset):
 
 
 # ------------------------------------------------------------------------------------------ friction
+# The P-loop friction tests build such machines on purpose.
+P_LOOP_FRICTION = pytest.mark.filterwarnings("ignore:.*with a P velocity loop the Coulomb friction")
+
+
 def _glitch_machine(friction_n: float, integral_s: float) -> MachineConfig:
     return with_mechanics(rigid("vmc-small"), coulomb_friction_n=friction_n,
                           velocity_integral_time_s=integral_s)  # fmt: skip
@@ -130,6 +135,7 @@ def _friction_deviation(friction_n: float, integral_s: float):
     return angle, with_friction - base, plant
 
 
+@P_LOOP_FRICTION
 def test_coulomb_friction_with_a_p_velocity_loop_offsets_by_friction_over_loop_stiffness():
     # The estimate. The P velocity loop makes a force Kp·(u − v) with u = Kv·e (plus feed-forward), so
     # holding a friction force F needs a following error F/(Kp·Kv): the loop is a spring of stiffness
@@ -172,6 +178,7 @@ def test_quadrant_glitches_appear_at_the_four_reversals_only_and_grow_with_frict
     assert np.all((ratios > 1.8) & (ratios < 2.05))
 
 
+@P_LOOP_FRICTION
 def test_friction_holds_an_axis_against_a_smaller_force():
     # MuJoCo's frictionloss is dry friction: with a 200 N friction force and a loop that can only push
     # with Kp·Kv·e (a 10 µm move of a P loop with K = 3.2 N/µm: at most 32 N) the table stays put, but
@@ -300,6 +307,17 @@ def test_reset_settled_and_bad_input():
         plant.reset(np.array([np.inf, 0, 0]))
     with pytest.raises(ValueError):
         MujocoPlant("vmc-small-mujoco", n_envs=2).step(np.zeros((3, 3)))
+
+
+def test_friction_on_a_p_velocity_loop_beyond_the_in_position_width_is_warned():
+    # vmc-small's X: K = Kp·Kv = 3.23 N/µm, so 100 N of friction can hold it 31 µm off (> 10 µm).
+    with pytest.warns(UserWarning, match=r"P velocity loop .*: x 0.0309 mm \(100 N\), y 0.0195 mm") as caught:
+        MujocoPlant(_glitch_machine(100.0, 0.0))
+    assert len(caught) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        MujocoPlant(_glitch_machine(100.0, 0.01))  # a PI loop: no warning
+        MujocoPlant(_glitch_machine(20.0, 0.0))  # 6 µm: within the width
 
 
 def test_a_diverged_simulation_is_an_error_not_motion():
