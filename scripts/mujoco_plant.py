@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from cnc_gym.machine import MachineConfig, load_machine
+from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend
 from cnc_gym.plant import ServoPlant
 from cnc_gym.plant.mujoco import MujocoPlant
 
@@ -81,6 +81,17 @@ def agreement() -> None:
             print(f"| {preset} | {timestep * 1e3:g} ms | {r_lti.min():.2f} … {r_lti.max():.2f} | "
                   f"{r_mj.min():.2f} … {r_mj.max():.2f} | {np.abs(a - b).max() * 1e3:.3f} |")  # fmt: skip
     print(f"\np-loop-30 closed form R(1 − 1/√(1 + (v/(R·Kv))²)) = {-closed:.2f} µm\n")
+    print("Presets without a plant section on MuJoCo (default mechanics: rigid, no friction), same circle:\n")
+    print("| preset | max |MuJoCo − LTI| (µm) | over the second turn (µm) |")
+    print("|---|---|---|")
+    for preset in ("vmc-small", "p-loop-30", "gsk25i", "h4cm"):
+        machine = with_plant_backend(load_machine(preset), "mujoco")
+        lti, mj = ServoPlant(machine), MujocoPlant(machine)
+        for p in (lti, mj):
+            p.reset(np.array([50.0, 0, 0]))
+        diff = np.abs(lti.step(ref) - mj.step(ref)) * 1e3
+        print(f"| {preset} | {diff.max():.3f} | {diff[len(ref) // 2 :].max():.3f} |")
+    print()
 
 
 def friction() -> None:
