@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from cnc_gym.config import escaped
+from cnc_gym.errors import ConfigError
 from cnc_gym.plant.contour import ContourErrorMeter
 from cnc_gym.plant.servo import ServoPlant
 
@@ -25,7 +27,11 @@ def make_plant(machine: MachineConfig, n_envs: int = 1, backend: str | None = No
 
     machine = with_plant_backend(machine, backend)
     if machine.plant.backend == "mujoco":
-        from cnc_gym.plant.mujoco import MujocoPlant
+        try:
+            from cnc_gym.plant.mujoco import MujocoPlant
+        except (ImportError, RuntimeError) as exc:  # not installed, or a bad MUJOCO_GL at its import
+            why = escaped(str(exc))
+            raise ConfigError(f"{machine.source}: the MuJoCo plant cannot be loaded: {why}") from None
 
         return MujocoPlant(machine, n_envs=n_envs)
     return ServoPlant(machine, n_envs=n_envs)

@@ -131,3 +131,14 @@ def test_vector_env_on_the_mujoco_plant_steps_each_env_as_a_single_env():
     alone = [single.step(np.array([knob], dtype=np.float32))[1] for knob in knobs]
     single.close()
     np.testing.assert_allclose(np.array(rewards)[:, 0], alone, rtol=1e-9, atol=1e-12)
+
+
+def test_mujoco_that_cannot_load_is_one_config_error(monkeypatch):
+    import sys
+
+    from cnc_gym.machine import load_machine
+    from cnc_gym.plant import make_plant
+
+    monkeypatch.setitem(sys.modules, "cnc_gym.plant.mujoco", None)  # as if MuJoCo were not installed
+    with pytest.raises(ConfigError, match="the MuJoCo plant cannot be loaded"):
+        make_plant(load_machine("vmc-small-mujoco"))
