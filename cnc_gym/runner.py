@@ -157,6 +157,7 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         bar = tqdm(total=100, desc=desc, file=sys.stderr, leave=False, bar_format=bar_format)
     started = time.perf_counter()
     projection_due = started + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
+    baseline: tuple[float, float] | None = None  # (wall clock, simulated s) at the first projection sample
     try:
         while not (terminated or truncated):
             action = policy.act(observation, info)
@@ -172,8 +173,17 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
                     bar.refresh()
                 now = time.perf_counter()
                 if log is not None and now >= projection_due:
-                    projection_due = math.inf
-                    _project_wall_time(log, info, nominal, max_time_s, now - started)
+                    # Two samples, _PROJECTION_AFTER_WALL_S apart, after the first such interval: the rate
+                    # between them leaves out start-up (compiling, the first in-position wait), which
+                    # once made a 31 s run project hours.
+                    simulated = float(info.get("cycle_time_s", 0.0))
+                    if baseline is None or now <= baseline[0]:
+                        baseline = (now, simulated)
+                        projection_due = now + _PROJECTION_AFTER_WALL_S
+                    else:
+                        projection_due = math.inf
+                        _project_wall_time(log, info, nominal, max_time_s, rate=(simulated - baseline[1])
+                                           / (now - baseline[0]))  # fmt: skip
             if max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9:
                 stopped_at_max_time = True
                 break
@@ -236,17 +246,18 @@ def _check_max_time(max_time_s: float | None) -> None:
         raise ConfigError(f"--max-time (max_time_s) must be a positive number of seconds, got {max_time_s!r}")
 
 
-def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_time_s: float | None,
-                       wall_s: float) -> None:  # fmt: skip
-    """One stderr line when the run, at its speed so far, will take long in wall-clock time."""
+def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_time_s: float | None, *,
+                       rate: float) -> None:  # fmt: skip
+    """One stderr line when the run, at ``rate`` simulated seconds per wall-clock second, will take long
+    in wall-clock time."""
     simulated = float(info.get("cycle_time_s", 0.0))
-    if simulated <= 0 or wall_s <= 0:
+    if not rate > 0:
         return
     target = nominal if max_time_s is None else min(nominal, max_time_s)
-    remaining = (target - simulated) * wall_s / simulated
+    remaining = (target - simulated) / rate
     if remaining > _PROJECTION_NOTICE_WALL_S:
         print(f"cnc-gym run: {info.get('program', 'program')}: about {_duration(remaining)} of wall-clock "
-              f"time to go at the speed so far ({simulated / wall_s:.0f} simulated s per s); "
+              f"time to go at the speed so far ({rate:.0f} simulated s per s); "
               "Ctrl-C stops it, --max-time SECONDS bounds it", file=log)  # fmt: skip
 
 
