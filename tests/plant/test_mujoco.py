@@ -320,7 +320,8 @@ def test_friction_on_a_p_velocity_loop_beyond_the_in_position_width_is_warned():
         MujocoPlant(_glitch_machine(20.0, 0.0))  # 6 µm: within the width
 
 
-def test_a_diverged_simulation_is_an_error_not_motion():
+def test_a_diverged_simulation_is_an_error_not_motion(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo logs its warning to MUJOCO_LOG.TXT in the working folder
     plant = MujocoPlant("vmc-small-mujoco")
     plant.data.qvel[0] = np.nan  # what an exploding simulation leaves; MuJoCo then resets it
     with pytest.raises(ConfigError, match="diverged"):
