@@ -110,10 +110,10 @@ class RunResult:
 
 
 def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
-             max_blocks: int | None = None, units: str | None = None, env_id: str = "cnc_gym/Feedrate-v0",
-             **kwargs: Any):  # fmt: skip
+             max_blocks: int | None = None, units: str | None = None, plant: str | None = None,
+             env_id: str = "cnc_gym/Feedrate-v0", **kwargs: Any):  # fmt: skip
     """The Feedrate env (``env_id``) on one program (interpreted up front, so program errors surface
-    here)."""
+    here); ``plant`` (``lti`` or ``mujoco``) overrides the machine preset's plant backend."""
     import gymnasium
 
     import cnc_gym  # noqa: F401  (registers the env ids)
@@ -126,7 +126,7 @@ def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
     loaded = load_program(program, dialect, load_machine(machine), **options)
     return gymnasium.make(env_id, programs=[loaded], dialect=dialect, machine=machine, units=units,
-                          **kwargs)  # fmt: skip
+                          plant=plant, **kwargs)  # fmt: skip
 
 
 def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
@@ -274,7 +274,7 @@ def _duration(seconds: float) -> str:
 def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
              policy: str | Any = "constant:1.0", progress: bool = False, max_time_s: float | None = None,
              max_blocks: int | None = None, log: TextIO | None = None,
-             units: str | None = None) -> RunResult:  # fmt: skip
+             units: str | None = None, plant: str | None = None) -> RunResult:  # fmt: skip
     """Simulate ``program`` (built-in name, file or G-code text: the rule of :mod:`cnc_gym.programs`)
     under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
     and a projection of the wall-clock time once it has run a while. ``units``: the input unit at
@@ -285,7 +285,8 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     pol = make_policy(policy, progress=progress) if isinstance(policy, str) else policy
     # A trained model runs in the env version and settings it was trained with (agents/model.py).
     env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units,
-                   env_id=getattr(pol, "env_id", "cnc_gym/Feedrate-v0"), **getattr(pol, "env_kwargs", {}))
+                   plant=plant, env_id=getattr(pol, "env_id", "cnc_gym/Feedrate-v0"),
+                   **getattr(pol, "env_kwargs", {}))
     try:
         if log is not None:
             _announce_long_program(env.unwrapped, max_time_s, log)
@@ -328,7 +329,7 @@ def run_cli(args: Any) -> int:
     result = simulate(args.program, dialect=args.dialect, machine=machine, policy=args.policy,
                       progress=progress, max_time_s=getattr(args, "max_time", None),
                       max_blocks=getattr(args, "max_blocks", None), log=sys.stderr,
-                      units=getattr(args, "units", None))  # fmt: skip
+                      units=getattr(args, "units", None), plant=getattr(args, "plant", None))  # fmt: skip
     if plot is not None:
         target, is_folder = plot
         plot_run(result, target / default_plot_name(result) if is_folder else target)

@@ -34,7 +34,7 @@ from cnc_gym.envs.planner_prior import PlannerPrior
 from cnc_gym.envs.randomization import DomainRandomization, MachineDraw, draw_machine
 from cnc_gym.errors import ConfigError
 from cnc_gym.machine import MachineConfig
-from cnc_gym.plant import ServoPlant
+from cnc_gym.plant import make_plant
 from cnc_gym.programs import ProgramLike
 from cnc_gym.toolpath import Toolpath
 
@@ -92,6 +92,7 @@ class EnvArgumentsV1:
     lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
     lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
     units: str | None = declared(spec_of(EnvArguments, "units"))
+    plant: str | None = declared(spec_of(EnvArguments, "plant"))
 
 
 def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
@@ -197,8 +198,8 @@ class FeedrateEnvV1(FeedrateEnv):
     ## Arguments
 
     v0's (``programs``, ``dialect``, ``machine``, ``control_period_s``, ``max_episode_steps``,
-    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``), and ``action_mode`` (with
-    ``residual``),
+    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``, ``plant``), and ``action_mode``
+    (with ``residual``),
     ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
     (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
     ``residual_range``. ``reset(seed=..., options={{"program": ...}})`` as v0.
@@ -231,12 +232,13 @@ class FeedrateEnvV1(FeedrateEnv):
         lookahead_mm: float = 24.0,
         lookahead_points: int = 8,
         units: str | None = None,
+        plant: str | None = None,
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                                 control_period_s=control_period_s, reward=reward, randomize=randomize,
                                 residual_range=residual_range, max_episode_steps=max_episode_steps,
                                 render_mode=render_mode, lookahead_mm=lookahead_mm,
-                                lookahead_points=lookahead_points, units=units)  # fmt: skip
+                                lookahead_points=lookahead_points, units=units, plant=plant)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
         self.reward_weights = args.reward or RankingReward()
@@ -262,7 +264,7 @@ class FeedrateEnvV1(FeedrateEnv):
         #: The current episode's machine draw and feed scale (None and 1 without randomisation).
         self.episode_draw: MachineDraw | None = None
         self.feed_scale = 1.0
-        self._pool: list[tuple[MachineDraw, ServoPlant] | None] = [None] * self.randomize.machines
+        self._pool: list[tuple[MachineDraw, Any] | None] = [None] * self.randomize.machines
         self._observation = np.zeros(self.layout.size, dtype=np.float32)
         self._machine_values = self.layout.machine_values(self.machine)
         self._planner_override = 1.0
@@ -282,7 +284,7 @@ class FeedrateEnvV1(FeedrateEnv):
             k = int(self.np_random.integers(len(self._pool)))
             if self._pool[k] is None:
                 draw = draw_machine(self.base_machine, self.randomize, self.np_random)
-                self._pool[k] = (draw, ServoPlant(draw.machine, n_envs=1))
+                self._pool[k] = (draw, make_plant(draw.machine, n_envs=1))
             self.episode_draw, plant = self._pool[k]  # type: ignore[misc]
             self.feed_scale = float(self.np_random.uniform(*self.randomize.feed_scale))
             self.machine = self.episode_draw.machine
