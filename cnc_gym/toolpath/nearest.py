@@ -303,10 +303,10 @@ def nurbs_table(curve, offset: int = 0) -> tuple[np.ndarray, np.ndarray]:
         curve._origin, [curve._nearest_step_tolerance], centre, [radius],
         curve._poly.reshape(-1),  # (spans, k, 12)
         curve._interior_breaks, curve._mid, curve._inv_half,  # spans - 1, spans, spans
-        curve._sample_t, curve._sample_rel_t.T.reshape(-1), curve._sample_rel_sq,  # n, n × 3, n
+        curve._sample_t, curve._sample_rel_t.reshape(-1), curve._sample_rel_sq,  # n, 3 × n (x, y, z), n
         curve._sample_d1_t[0].T.reshape(-1), curve._sample_d1_t[1].T.reshape(-1),  # n × 3 right, left
         curve._sample_rel_d1[0], curve._sample_rel_d1[1],  # n, n
-        interval_centre.reshape(-1), np.sum(interval_centre**2, axis=1),  # (n - 1) × (3, 1)
+        interval_centre.T.reshape(-1), np.sum(interval_centre**2, axis=1),  # 3 × (n - 1) (blocks), n - 1
         interval_radius,  # n - 1
     ]  # fmt: skip
     tab_f = np.concatenate([np.asarray(b, dtype=np.float64).ravel() for b in blocks])
@@ -326,7 +326,7 @@ def _dot3(a, i, x0, x1, x2) -> float:
     return a[3 * i] * x0 + a[3 * i + 1] * x1 + a[3 * i + 2] * x2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h) -> None:
     """Homogeneous coordinates (x, y, z, w) and their first two t-derivatives at t into h (12,)."""
     span = np.searchsorted(breaks, t, side="right")
@@ -428,6 +428,7 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     interval_centre_sq, o = _take(tab_f, o, n - 1)
     interval_radius, o = _take(tab_f, o, n - 1)
     rel_sq_p = r0 * r0 + r1 * r1 + r2 * r2
+    x_c, y_c, z_c = interval_centre[: n - 1], interval_centre[n - 1 : 2 * n - 2], interval_centre[2 * n - 2 :]
     d2_sample = work[:n]
     h = work[n : n + 12]
     if bound2 < math.inf:
@@ -436,18 +437,18 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
         reach0 = math.sqrt(bound2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
         for i in range(n - 1):
             reach = reach0 + interval_radius[i]
-            centre2 = interval_centre_sq[i] - 2.0 * _dot3(interval_centre, i, r0, r1, r2) + rel_sq_p
+            centre2 = interval_centre_sq[i] - 2.0 * (x_c[i] * r0 + y_c[i] * r1 + z_c[i] * r2) + rel_sq_p
             if centre2 <= reach * reach:
                 break
         else:
             return math.inf
 
-    # The nearest sample: an upper bound of the distance.
-    best_sample = 0
+    # The nearest sample: an upper bound of the distance. (Coordinates in x, y, z blocks: the loops
+    # vectorise.)
+    x_t, y_t, z_t = rel_t[:n], rel_t[n : 2 * n], rel_t[2 * n :]
     for i in range(n):
-        d2_sample[i] = rel_sq[i] - 2.0 * _dot3(rel_t, i, r0, r1, r2) + rel_sq_p
-        if d2_sample[i] < d2_sample[best_sample]:
-            best_sample = i
+        d2_sample[i] = rel_sq[i] - 2.0 * (x_t[i] * r0 + y_t[i] * r1 + z_t[i] * r2) + rel_sq_p
+    best_sample = np.argmin(d2_sample)
     upper = math.sqrt(max(min(d2_sample[best_sample], bound2), 0.0)) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
     # The nearest sample, refined in place (a one-sample bracket).
     t = sample_t[best_sample]
@@ -457,7 +458,7 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     # knot, other than the nearest sample is farther than it.)
     for i in range(n - 1):
         reach = upper + interval_radius[i]
-        centre2 = interval_centre_sq[i] - 2.0 * _dot3(interval_centre, i, r0, r1, r2) + rel_sq_p
+        centre2 = interval_centre_sq[i] - 2.0 * (x_c[i] * r0 + y_c[i] * r1 + z_c[i] * r2) + rel_sq_p
         if centre2 > reach * reach:
             continue
         g_lo = rel_d1_right[i] - _dot3(d1_right, i, r0, r1, r2)
