@@ -2,8 +2,9 @@
 
     cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--block-skip N ...]
                           [--program-dir DIR] [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--policy P] [--json]
-                        [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N] [--no-progress]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--plant lti|mujoco] [--policy P]
+                        [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
+                        [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
@@ -67,6 +68,9 @@ def build_parser() -> argparse.ArgumentParser:
     run = add_command(sub, "run", "simulate a program through controller and servo plant")
     run.add_argument("program", metavar="PROGRAM", help=PROGRAM_HELP)
     _common(run)
+    run.add_argument("--plant", metavar="lti|mujoco", default=None,
+                     help="servo plant: lti (exact linear model) or mujoco (masses, friction, backlash); "
+                          "default: the machine preset's")  # fmt: skip
     run.add_argument("--policy", default="constant:1.0",
                      help="constant:<override>, classical (deployable), oracle (re-simulates the plant: "
                           "an oracle, not deployable), a trained model's path (.zip), or module:callable "

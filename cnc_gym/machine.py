@@ -17,10 +17,15 @@ Layout of a preset file::
     axis_defaults: {rapid_mm_min: 30000, kv_1_s: 40, ...}                     # AxisConfig fields
     axes: {x: {kv_1_s: 40}, y: {kv_1_s: 38}, z: {...}}                        # per-axis overrides
     rotary_axes: {b: {rapid_deg_min: 3600, ...}}                              # optional A/B/C axes
+    plant: {backend: mujoco, timestep_s: 0.0005, axes: {x: {load_mass_kg: 150, ...}, ...}}  # optional
 
 Rotary axes (``RotaryAxisConfig``) are optional: a machine without them rejects A/B/C words by name. The
 controller times their moves and keeps their speed, acceleration and jerk within limits; the plant
 simulates the three linear axes only (contour error is the tool's XYZ error, see docs/motion.md).
+
+The ``plant`` section (``PlantConfig``) picks the servo backend: ``lti`` (the default: the exact linear
+model of :mod:`cnc_gym.plant.servo`) or ``mujoco`` (:mod:`cnc_gym.plant.mujoco`: the same loops driving
+masses with friction, compliance and backlash, in SI units). The LTI backend reads only ``backend``.
 
 The ranges are physical: wide enough for any real machine, narrow enough that the simulation stays
 finite, fast and small (a tiny rate would make an episode last hours of simulated time, a huge filter
@@ -29,6 +34,7 @@ or look-ahead window would need gigabytes). Each range's reason is in its declar
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Iterator
@@ -53,8 +59,9 @@ from cnc_gym.config import (
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
-__all__ = ["INPUT_UNITS", "AxisConfig", "ControllerConfig", "MachineConfig", "RotaryAxisConfig",
-           "check_machine", "configs_dir", "load_machine", "machine_names"]  # fmt: skip
+__all__ = ["INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig",
+           "PlantConfig", "RotaryAxisConfig", "check_machine", "configs_dir", "load_machine",
+           "machine_names"]  # fmt: skip
 
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
@@ -196,10 +203,104 @@ class ControllerConfig:
     contour_tolerance_mm: float = number(0.05, 1e-6, 10, unit="mm", why="1 nm to 10 mm.",
                                          doc="contour error above this counts as a violation")  # fmt: skip
 
+    corner_smoothing_tolerance_mm: float = number(
+        0.0, 1e-6, 10, off=0, unit="mm", doc="corner smoothing of short line segments in continuous mode: "
+        "the largest deviation of the blend from the programmed corner (GSK P1401#1 EFL on, tolerance "
+        "P1473); 0 = off (EFL = 0)", why="1 nm to 10 mm.")  # fmt: skip
+    corner_smoothing_min_angle_deg: float = number(
+        150.0, 60, 180, unit="deg", doc="smooth only corners whose included angle is at least this (P1495; "
+        "180° = collinear)", why="GSK allows 120-180°; below 60° a blend within a small tolerance crawls "
+        "round a near-reversal.")  # fmt: skip
+    corner_smoothing_max_segment_mm: float = number(
+        0.0, 1e-3, 1e6, off=0, unit="mm", doc="smooth only junctions of lines at most this long (the "
+        "\"small segment\" condition); 0 = any length", why="1 µm to the travel range.")  # fmt: skip
+    path_max_accel_mm_s2: float = number(
+        0.0, 1, 1e6, off=0, unit="mm/s²", doc="limit on the norm of the path acceleration vector "
+        "(tangential and centripetal together); 0 = only the per-axis limits", why=_ACCEL_WHY)  # fmt: skip
+    path_max_jerk_mm_s3: float = number(
+        0.0, 10, 1e9, off=0, unit="mm/s³", doc="limit on the norm of the path jerk vector; 0 = only the "
+        "per-axis limits", why=_JERK_WHY)  # fmt: skip
+
     def config_problems(self) -> Iterator[tuple[str, str]]:
         """Rules across keys: ``(key, problem)``."""
         if self.min_arc_feed_mm_min > self.max_feed_mm_min:
             yield "min_arc_feed_mm_min", f"must not exceed max_feed_mm_min ({self.max_feed_mm_min:g})"
+
+
+#: The servo backends a preset's ``plant.backend`` (and ``plant=`` / ``--plant``) may name.
+PLANT_BACKENDS = ("lti", "mujoco")
+_MASS_WHY = "10 g to 100 t: any feed axis's moving parts; the loop gains are tuned to the mass."
+
+
+@dataclass(frozen=True)
+class AxisMechanicsConfig:
+    """The mechanics of one feed axis for the MuJoCo plant, in SI units (the LTI plant ignores them).
+
+    The motor side (rotor, coupling, ball screw) and the load side (table, saddle or head) are two bodies
+    joined by the screw's axial spring-damper, with an optional dead band (backlash) in between; with
+    ``coupling_stiffness_n_um: 0`` the axis is rigid (one body). The drive's velocity loop is tuned to the
+    axis's whole moving mass (what the commissioning engineer's autotuning measures), so masses change
+    the loop's disturbance rejection, not its reference response.
+    """
+
+    load_mass_kg: float = number(200.0, 0.01, 1e5, unit="kg", why=_MASS_WHY,
+                                 doc="mass of the axis's own moving body: X the table (with workpiece), "
+                                     "Y the saddle (it also carries the table), Z the head")  # fmt: skip
+    motor_mass_kg: float = number(100.0, 0.01, 1e5, unit="kg", why=_MASS_WHY,
+                                  doc="motor-side inertia as a mass along the axis: (rotor + coupling + "
+                                      "screw inertia)·(2π/lead)²")  # fmt: skip
+    viscous_damping_n_s_m: float = number(0.0, 0, 1e7, unit="N·s/m",
+                                          doc="viscous friction of the load's guideways",
+                                          why="0 to far above any lubricated guideway.")  # fmt: skip
+    coulomb_friction_n: float = number(
+        0.0, 0, 1e5, unit="N", doc="Coulomb (dry) friction of the load's guideways (MuJoCo frictionloss)",
+        why="0 to 100 kN: rolling guides have 10-200 N, box ways some kN.")  # fmt: skip
+    coupling_stiffness_n_um: float = number(
+        0.0, 1, 1e6, off=0, unit="N/µm",
+        doc="axial stiffness between motor and load (screw, nut, bearings, as datasheets quote it); "
+            "0 = rigid", why="ball-screw drives have 50-1000 N/µm.")  # fmt: skip
+    coupling_damping_n_s_m: float = number(0.0, 0, 1e7, unit="N·s/m", why="0 to far above any drive train.",
+                                           doc="damping of the motor-load coupling")  # fmt: skip
+    backlash_mm: float = number(0.0, 0, 1, unit="mm", why="worn screws reach 0.1 mm.",
+                                doc="dead band of the coupling (lost motion at a reversal); needs a "
+                                    "coupling stiffness")  # fmt: skip
+    position_feedback: str = choice("motor", ("motor", "load"), doc="where the position loop measures: "
+                                    "`motor` (rotary encoder, semi-closed loop) or `load` (linear scale, "
+                                    "full-closed loop)")  # fmt: skip
+    velocity_integral_time_s: float = number(
+        0.0, 1e-4, 10, off=0, unit="s",
+        doc="reset time Tn of a PI velocity loop; 0 = P velocity loop (as the LTI plant)",
+        why="drives use 1-100 ms; the loop must stay stable (checked when the plant is built).")  # fmt: skip
+
+    def config_problems(self) -> Iterator[tuple[str, str]]:
+        """Rules across keys: ``(key, problem)``."""
+        if self.backlash_mm > 0 and self.coupling_stiffness_n_um == 0:
+            yield "backlash_mm", "needs coupling_stiffness_n_um > 0 (a dead band sits between two bodies)"
+
+
+@dataclass(frozen=True)
+class PlantAxes:
+    """The mechanics of X, Y and Z."""
+
+    x: AxisMechanicsConfig = section(AxisMechanicsConfig, doc="X: the table")  # noqa: RUF009
+    y: AxisMechanicsConfig = section(AxisMechanicsConfig, doc="Y: the saddle, carrying the table")  # noqa: RUF009
+    z: AxisMechanicsConfig = section(AxisMechanicsConfig, doc="Z: the head")  # noqa: RUF009
+
+    def axis(self, index: int) -> AxisMechanicsConfig:
+        return (self.x, self.y, self.z)[index]
+
+
+@dataclass(frozen=True)
+class PlantConfig:
+    """Which servo plant turns the reference into motion, and (MuJoCo) the machine's mechanics."""
+
+    backend: str = choice("lti", PLANT_BACKENDS, doc="`lti`: the exact linear servo model (fast); `mujoco`: "
+                          "the same loops driving masses with friction, compliance and backlash")  # fmt: skip
+    timestep_s: float = number(
+        0.0005, 1e-5, 0.02, unit="s",
+        doc="MuJoCo physics timestep: at most the interpolation period and a whole fraction of it",
+        why="10 µs resolves a 2 kHz resonance; the step's cost grows as 1/timestep.")  # fmt: skip
+    axes: PlantAxes = section(PlantAxes, doc="per-axis mechanics (see below)")  # noqa: RUF009
 
 
 @dataclass(frozen=True)
@@ -217,6 +318,7 @@ class MachineConfig:
     source: str = "<defaults>"
     #: Rotary axes by upper-case letter, in A, B, C order (empty: a 3-axis machine).
     rotary_axes: RotaryAxes = field(default_factory=RotaryAxes)
+    plant: PlantConfig = section(PlantConfig, doc="servo backend and mechanics (see below)")  # noqa: RUF009
 
     def __post_init__(self) -> None:
         if not isinstance(self.rotary_axes, RotaryAxes):
@@ -226,6 +328,14 @@ class MachineConfig:
     def rotary_letters(self) -> str:
         """The rotary axes' letters, e.g. ``"B"`` (``""`` on a 3-axis machine)."""
         return "".join(self.rotary_axes)
+
+    def config_problems(self) -> Iterator[tuple[str, str]]:
+        """Rules across sections: ``(key, problem)``."""
+        period, step = self.controller.interpolation_period_s, self.plant.timestep_s
+        substeps = period / step
+        if step > period * (1 + 1e-9) or abs(substeps - round(substeps)) > 1e-6 * substeps:
+            yield "plant.timestep_s", (f"must be the interpolation period ({period:g} s) divided by a whole "
+                                       f"number, got {step:g}")  # fmt: skip
 
     def axis_array(self, name: str) -> tuple[float, float, float]:
         """One AxisConfig field for X, Y, Z, e.g. ``machine.axis_array("kv_1_s")``."""
@@ -278,6 +388,16 @@ def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
     own.setdefault("name", Path(source).stem)
     built = {"axes": axes, "rotary_axes": rotary, "source": source}
     return from_mapping(MachineConfig, own, source, "", built)
+
+
+def with_plant_backend(machine: MachineConfig, backend: str | None) -> MachineConfig:
+    """``machine`` with ``plant.backend`` set to ``backend`` (None: as it is), e.g. for the env's
+    ``plant=`` and the CLI's ``--plant``; a name not in :data:`PLANT_BACKENDS` is a ConfigError."""
+    if backend is None or backend == machine.plant.backend:
+        return machine
+    if backend not in PLANT_BACKENDS:
+        raise ConfigError(f"plant must be one of {', '.join(PLANT_BACKENDS)}, got {shown(backend)}")
+    return dataclasses.replace(machine, plant=dataclasses.replace(machine.plant, backend=backend))
 
 
 def check_machine(machine: MachineConfig) -> MachineConfig:

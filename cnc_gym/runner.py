@@ -110,8 +110,10 @@ class RunResult:
 
 
 def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
-             max_blocks: int | None = None, units: str | None = None, **kwargs: Any):  # fmt: skip
-    """The Feedrate env on one program (interpreted up front, so program errors surface here)."""
+             max_blocks: int | None = None, units: str | None = None, plant: str | None = None,
+             **kwargs: Any):  # fmt: skip
+    """The Feedrate env on one program (interpreted up front, so program errors surface here); ``plant``
+    (``lti`` or ``mujoco``) overrides the machine preset's plant backend."""
     import gymnasium
 
     import cnc_gym  # noqa: F401  (registers the env ids)
@@ -124,7 +126,7 @@ def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
     loaded = load_program(program, dialect, load_machine(machine), **options)
     return gymnasium.make("cnc_gym/Feedrate-v0", programs=[loaded], dialect=dialect, machine=machine,
-                          units=units, **kwargs)  # fmt: skip
+                          units=units, plant=plant, **kwargs)  # fmt: skip
 
 
 def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
@@ -155,6 +157,7 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         bar = tqdm(total=100, desc=desc, file=sys.stderr, leave=False, bar_format=bar_format)
     started = time.perf_counter()
     projection_due = started + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
+    baseline: tuple[float, float] | None = None  # (wall clock, simulated s) at the first projection sample
     try:
         while not (terminated or truncated):
             action = policy.act(observation, info)
@@ -170,8 +173,17 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
                     bar.refresh()
                 now = time.perf_counter()
                 if log is not None and now >= projection_due:
-                    projection_due = math.inf
-                    _project_wall_time(log, info, nominal, max_time_s, now - started)
+                    # Two samples, _PROJECTION_AFTER_WALL_S apart, after the first such interval: the rate
+                    # between them leaves out start-up (compiling, the first in-position wait), which
+                    # once made a 31 s run project hours.
+                    simulated = float(info.get("cycle_time_s", 0.0))
+                    if baseline is None or now <= baseline[0]:
+                        baseline = (now, simulated)
+                        projection_due = now + _PROJECTION_AFTER_WALL_S
+                    else:
+                        projection_due = math.inf
+                        _project_wall_time(log, info, nominal, max_time_s, rate=(simulated - baseline[1])
+                                           / (now - baseline[0]))  # fmt: skip
             if max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9:
                 stopped_at_max_time = True
                 break
@@ -234,17 +246,18 @@ def _check_max_time(max_time_s: float | None) -> None:
         raise ConfigError(f"--max-time (max_time_s) must be a positive number of seconds, got {max_time_s!r}")
 
 
-def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_time_s: float | None,
-                       wall_s: float) -> None:  # fmt: skip
-    """One stderr line when the run, at its speed so far, will take long in wall-clock time."""
+def _project_wall_time(log: TextIO, info: dict[str, Any], nominal: float, max_time_s: float | None, *,
+                       rate: float) -> None:  # fmt: skip
+    """One stderr line when the run, at ``rate`` simulated seconds per wall-clock second, will take long
+    in wall-clock time."""
     simulated = float(info.get("cycle_time_s", 0.0))
-    if simulated <= 0 or wall_s <= 0:
+    if not rate > 0:
         return
     target = nominal if max_time_s is None else min(nominal, max_time_s)
-    remaining = (target - simulated) * wall_s / simulated
+    remaining = (target - simulated) / rate
     if remaining > _PROJECTION_NOTICE_WALL_S:
         print(f"cnc-gym run: {info.get('program', 'program')}: about {_duration(remaining)} of wall-clock "
-              f"time to go at the speed so far ({simulated / wall_s:.0f} simulated s per s); "
+              f"time to go at the speed so far ({rate:.0f} simulated s per s); "
               "Ctrl-C stops it, --max-time SECONDS bounds it", file=log)  # fmt: skip
 
 
@@ -261,7 +274,7 @@ def _duration(seconds: float) -> str:
 def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
              policy: str | Any = "constant:1.0", progress: bool = False, max_time_s: float | None = None,
              max_blocks: int | None = None, log: TextIO | None = None,
-             units: str | None = None) -> RunResult:  # fmt: skip
+             units: str | None = None, plant: str | None = None) -> RunResult:  # fmt: skip
     """Simulate ``program`` (built-in name, file or G-code text: the rule of :mod:`cnc_gym.programs`)
     under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
     and a projection of the wall-clock time once it has run a while. ``units``: the input unit at
@@ -270,7 +283,8 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
 
     _check_max_time(max_time_s)
     pol = make_policy(policy, progress=progress) if isinstance(policy, str) else policy
-    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units)
+    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units,
+                   plant=plant)
     try:
         if log is not None:
             _announce_long_program(env.unwrapped, max_time_s, log)
@@ -313,7 +327,7 @@ def run_cli(args: Any) -> int:
     result = simulate(args.program, dialect=args.dialect, machine=machine, policy=args.policy,
                       progress=progress, max_time_s=getattr(args, "max_time", None),
                       max_blocks=getattr(args, "max_blocks", None), log=sys.stderr,
-                      units=getattr(args, "units", None))  # fmt: skip
+                      units=getattr(args, "units", None), plant=getattr(args, "plant", None))  # fmt: skip
     if plot is not None:
         target, is_folder = plot
         plot_run(result, target / default_plot_name(result) if is_folder else target)

@@ -13,6 +13,9 @@ seconds, all threads; steadier than wall time on a shared machine, larger than i
   threads (``auto``: the env's default rule; ``both``: each N serial and in threads);
 - program families (``--families``): ``flat`` (the built-in set: lines and flat arcs), ``helix`` (a
   helical bore, one G03 block per half turn), ``nurbs`` (a chain of cubic G06.2 curves);
+- **plants** (``--plants``): ``cnc_gym/Feedrate-v0`` on ``vmc-small-mujoco`` with ``plant="lti"`` and
+  ``plant="mujoco"`` (the same machine, loops and programs; docs/plant.md), single env and
+  ``FeedrateVectorEnv(8)``, each against Pendulum-v1 and the MuJoCo figure against the LTI one;
 - **build**: the time to construct ``FeedrateVectorEnv(64)`` (compiled code loaded from the disk cache);
 - ``--profile``: where a Feedrate-v0 step spends its time: cProfile of the Python layers around the one
   compiled call (actions sampled beforehand, not counted), and the compiled work split into its parts
@@ -25,6 +28,7 @@ Usage::
     .venv/bin/python scripts/bench_env.py --quick             # fewer steps and repeats
     .venv/bin/python scripts/bench_env.py --families flat --envs 64 --json out.json
     .venv/bin/python scripts/bench_env.py --profile --families flat helix
+    .venv/bin/python scripts/bench_env.py --families flat --envs --plants   # only the plants
 """
 
 from __future__ import annotations
@@ -209,6 +213,35 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
 
 
 # ---------------------------------------------------------------------------------------------- main
+def compare_plants(args: argparse.Namespace, show: Callable[[str, dict], None]) -> list[dict]:
+    """Feedrate-v0 on vmc-small-mujoco with the LTI and the MuJoCo plant (single env and 8 envs), against
+    Pendulum-v1, and MuJoCo's rate over LTI's (the MuJoCo runs take a quarter of the steps)."""
+    rows = []
+    for family in args.families:
+        programs = FAMILIES[family]()
+        kwargs = {"machine": "vmc-small-mujoco", **({} if programs is None else {"programs": programs})}
+        for n in (1, 8):
+            rates = {}
+            for plant in ("lti", "mujoco"):
+                steps = max(50, args.steps // (4 if plant == "mujoco" else 1) // n)
+                if n == 1:
+                    env = gym.make("cnc_gym/Feedrate-v0", plant=plant, **kwargs)
+                    r = against_pendulum(env, run_single, steps, 1, args.repeats)
+                    label = f"Feedrate-v0 {plant}"
+                else:
+                    env = FeedrateVectorEnv(n, plant=plant, **kwargs)
+                    r = against_pendulum(env, run_vector, steps, n, args.repeats)
+                    label = f"FeedrateVectorEnv({n}) {plant}"
+                env.close()
+                show(f"{label} [{family}, vmc-small-mujoco]", r)  # the same machine on either plant
+                rates[plant] = r
+                rows.append({"plant": plant, "envs": n, "family": family, **r})
+            slower = rates["lti"]["wall"] / rates["mujoco"]["wall"]
+            print(f"{'':46s} the MuJoCo plant: {slower:.0f}× fewer steps/s than the LTI plant "
+                  f"(CPU time: {rates['lti']['cpu'] / rates['mujoco']['cpu']:.0f}×)")
+    return rows
+
+
 def feedrate_ids() -> list[str]:
     return sorted(env_id for env_id in gym.registry if env_id.startswith("cnc_gym/Feedrate"))
 
@@ -231,6 +264,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--parallel", choices=["auto", "on", "off", "both"], default="auto")
     parser.add_argument("--profile", action="store_true", help="profile a Feedrate-v0 step (see above)")
     parser.add_argument("--quick", action="store_true", help="1000 steps, 3 repeats, N ∈ {1, 64}")
+    parser.add_argument("--plants", action="store_true",
+                        help="also the MuJoCo plant against the LTI plant on vmc-small-mujoco (see above)")
     parser.add_argument("--json", metavar="FILE", help="write every figure to FILE as JSON")
     args = parser.parse_args(argv)
     if args.quick:
@@ -263,6 +298,8 @@ def main(argv: list[str] | None = None) -> int:
                 venv.close()
                 show(f"FeedrateVectorEnv({n}) {'threads' if threads else 'serial'} [{family}]", r)
                 result["vector"].append({"envs": n, "parallel": threads, "family": family, **r})
+    if args.plants:
+        result["plants"] = compare_plants(args, show)
     result["build_vector_64_s"] = build_time(64)
     print(f"FeedrateVectorEnv(64) construction: {result['build_vector_64_s']:.3f} s (compiled code cached)")
     if args.profile:

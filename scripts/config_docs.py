@@ -21,7 +21,15 @@ from agents.training import EnvSettings, PPOSettings, TrainConfig
 from cnc_gym.config import markdown_table
 from cnc_gym.envs.options import EnvArguments, RewardWeights
 from cnc_gym.envs.task import TaskConfig
-from cnc_gym.machine import AxisConfig, ControllerConfig, MachineConfig, RotaryAxisConfig
+from cnc_gym.machine import (
+    AxisConfig,
+    AxisMechanicsConfig,
+    ControllerConfig,
+    MachineConfig,
+    PlantAxes,
+    PlantConfig,
+    RotaryAxisConfig,
+)
 
 REPO = Path(__file__).resolve().parent.parent
 #: Table name → (schema, key prefix shown in the table).
@@ -30,6 +38,9 @@ TABLES: dict[str, tuple[type, str]] = {
     "machine.controller": (ControllerConfig, "controller."),
     "machine.axis": (AxisConfig, ""),
     "machine.rotary": (RotaryAxisConfig, ""),
+    "machine.plant": (PlantConfig, "plant."),
+    "machine.plant.axes": (PlantAxes, "plant.axes."),
+    "machine.plant.axis": (AxisMechanicsConfig, ""),
     "task": (TaskConfig, ""),
     "reward": (RewardWeights, ""),
     "train": (TrainConfig, ""),

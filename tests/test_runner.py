@@ -317,3 +317,31 @@ def test_simulate_passes_its_progress_choice_to_the_policy(monkeypatch):
     monkeypatch.setattr(agents, "make_policy", spy)
     simulate("G91 G01 X5 F600\nM30\n", policy="constant:1.0", progress=False)
     assert seen == [False]
+
+
+def test_the_projection_leaves_out_a_slow_start(monkeypatch):
+    """The wall-clock projection uses the rate after start-up: 20 steps of 1 s each (compiling, say), then
+    10 ms per step. Projecting from the start would say 0.1 simulated s per s; the rate after it is ~1."""
+    import types
+
+    clock = types.SimpleNamespace(now=0.0)
+    monkeypatch.setattr(runner, "time", types.SimpleNamespace(perf_counter=lambda: clock.now))
+    monkeypatch.setattr(runner, "LONG_RUN_NOTICE_S", 1e9)
+    monkeypatch.setattr(runner, "_PROJECTION_NOTICE_WALL_S", -1.0)
+    steps = []
+
+    class SlowStart:
+        def reset(self, env):
+            pass
+
+        def act(self, observation, info):
+            steps.append(None)
+            clock.now += 1.0 if len(steps) <= 20 else 0.01
+            return np.array([1.0], dtype=np.float32)
+
+    log = io.StringIO()
+    simulate("star", policy=SlowStart(), log=log)
+    (line,) = log.getvalue().splitlines()
+    rate = float(line.split("(")[1].split()[0])
+    period = gymnasium.make("cnc_gym/Feedrate-v0").unwrapped.control_period_s
+    assert rate == pytest.approx(period / 0.01, rel=0.2)

@@ -39,6 +39,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                        help="at most N programs of each family of the split (a quick look)")  # fmt: skip
     bench.add_argument("--seeds", default="0", help="comma-separated episode seeds (default 0)")
     bench.add_argument("--machine", default=None, help="machine preset or YAML (default: the suite's)")
+    bench.add_argument("--plant", metavar="lti|mujoco", default=None,
+                       help="servo plant for the episodes (default: the machine preset's)")
     bench.add_argument("--dialect", default=None, help="program dialect (default: the suite's, gsk25i)")
     bench.add_argument("--units", choices=INPUT_UNITS, default=None,
                        help="input unit at power-on for programs without G20/G21 (default: the machine "
@@ -114,6 +116,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
                              suite_sha256=suite.sha256)  # fmt: skip
         title = f"{suite.name} {split}"
     config.workers = args.workers
+    config.plant = args.plant
     if args.ray is not None:
         config.use_ray, config.ray_address = True, args.ray or None
     config.progress = not args.no_progress and sys.stderr.isatty()

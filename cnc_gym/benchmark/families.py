@@ -246,6 +246,41 @@ def freeform(rng: np.random.Generator, tier: str, split: str) -> tuple[str, list
     return desc, _approach(*pts[0]) + moves.lines
 
 
+# ------------------------------------------------------------------------------------------------- kirl
+def kirl(rng: np.random.Generator, tier: str, split: str) -> tuple[str, list[str]]:
+    """KIRL-style planar outline (the shapes of Zhang et al.'s benchmark: a shark is 245 points, 240 mm): a
+    closed, elongated organic curve through 8-14 random points, written as about 250 G01 chords of equal
+    length (about 1 mm) at F600, KIRL's 10 mm/s. Run it on the ``kirl-planar`` machine. Harder tiers have
+    more lobes (sharper turns between chords)."""
+    from scipy.interpolate import CubicSpline
+
+    knots = int(rng.integers({"easy": 8, "medium": 10, "hard": 12}[tier], {"easy": 10, "medium": 12,
+                                                                            "hard": 15}[tier]))  # fmt: skip
+    theta = np.linspace(0, 2 * np.pi, knots, endpoint=False) + rng.uniform(-0.15, 0.15, knots)
+    r = rng.uniform(0.55, 1.15, knots)
+    aspect = rng.uniform(1.5, 2.8)
+    x, y = aspect * r * np.cos(theta), r * np.sin(theta)
+    curve = CubicSpline(np.arange(knots + 1), np.column_stack((np.append(x, x[0]), np.append(y, y[0]))),
+                        bc_type="periodic")  # fmt: skip
+    t = np.linspace(0, knots, 20001)
+    p = curve(t)
+    s = np.concatenate(([0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))))
+    length = float(rng.uniform(200.0, 280.0))
+    p = p * (length / s[-1])
+    s = s * (length / s[-1])
+    n = int(rng.integers(230, 261))
+    at = np.linspace(0.0, length, n + 1)
+    pts = np.column_stack((np.interp(at, s, p[:, 0]), np.interp(at, s, p[:, 1])))
+    pts -= pts.min(axis=0) - 5.0  # in the first quadrant, 5 mm from the axes, as KIRL's data
+    moves = _Moves(*pts[0], -1.0)
+    for px, py in pts[1:]:
+        moves.line(float(px), float(py), 600.0)
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    desc = (f"KIRL-style closed outline through {knots} points as {n} G01 chords of {seg.mean():.3f} mm, "
+            f"{seg.sum():.1f} mm in all, F600")
+    return desc, _approach(*pts[0]) + moves.lines
+
+
 # ------------------------------------------------------------------------------------------------- arcs
 def arcs(rng: np.random.Generator, tier: str, split: str) -> tuple[str, list[str]]:
     """A helical entry (G02/G03 with Z) then a tangent chain of arcs of many radii, turning both ways."""
@@ -375,6 +410,7 @@ FAMILIES: dict[str, Generator] = {
     "holes": holes,
     "raster": raster,
     "engraving": engraving,
+    "kirl": kirl,
 }
 
 

@@ -27,8 +27,8 @@ from typing import Any
 #: Record keys every ``cnc-gym bench`` JSON Lines record carries (more may follow).
 RECORD_KEYS = (
     "suite", "suite_version", "suite_sha256", "split", "program", "program_sha256", "family", "tier",
-    "machine", "machine_sha256", "dialect", "units", "policy", "seed", "commit", "cnc_gym_version", "bound_s",
-    "bound_version", "cycle_time_s", "time_ratio", "violation_length_mm", "violation_time_s",
+    "machine", "machine_sha256", "plant", "dialect", "units", "policy", "seed", "commit", "cnc_gym_version",
+    "bound_s", "bound_version", "cycle_time_s", "time_ratio", "violation_length_mm", "violation_time_s",
     "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm", "violations", "steps", "finished",
     "feasible", "score", "total_return", "reference",
 )  # fmt: skip

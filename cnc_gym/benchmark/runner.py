@@ -47,6 +47,8 @@ class BenchConfig:
     dialect: str = "gsk25i"
     #: Input unit at power-on ("mm"/"inch"); None: the machine preset's, else the dialect's.
     units: str | None = None
+    #: Servo plant backend (``lti`` or ``mujoco``); None: the machine preset's.
+    plant: str | None = None
     suite: str | None = None
     suite_version: int | None = None
     suite_sha256: str | None = None
@@ -136,7 +138,7 @@ def _bound_task(program: BenchProgram, machine: str, dialect: str, units: str | 
 
 def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int], machine: str,
                   dialect: str, units: str | None, bound: dict[str, Any], common: dict[str, Any],
-                  progress: bool) -> list[dict[str, Any]]:  # fmt: skip
+                  progress: bool, plant: str | None = None) -> list[dict[str, Any]]:  # fmt: skip
     """Every seed of one (program, policy): records in seed order."""
     base = {**common, "split": program.split, "program": program.name,
             "program_sha256": _sha(program.text), "family": program.family, "tier": program.tier,
@@ -155,7 +157,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
 
     policy = make_policy(policy_spec, progress=None if progress else False)
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text], dialect=dialect, machine=machine,
-                         units=units)  # fmt: skip
+                         units=units, plant=plant)  # fmt: skip
     records = []
     try:
         for seed in seeds:
@@ -251,7 +253,7 @@ def _call(task: Callable[[], Any]) -> Any:
 
 def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
     """Run the benchmark; records sorted by (program order, policy order, seed)."""
-    from cnc_gym.machine import load_machine
+    from cnc_gym.machine import load_machine, with_plant_backend
     from cnc_gym.motion.bound import machine_digest
 
     if not config.programs:
@@ -263,11 +265,11 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
             from agents import make_policy
 
             make_policy(spec, progress=False)
-    mach = load_machine(config.machine)
+    mach = with_plant_backend(load_machine(config.machine), config.plant)
     common = {"suite": config.suite or "user", "suite_version": config.suite_version,
               "suite_sha256": config.suite_sha256, "machine": mach.name,
-              "machine_sha256": machine_digest(mach), "dialect": config.dialect, "units": config.units,
-              "commit": current_commit(),
+              "machine_sha256": machine_digest(mach), "plant": mach.plant.backend,
+              "dialect": config.dialect, "units": config.units, "commit": current_commit(),
               "cnc_gym_version": _version()}  # fmt: skip
     bar = None
     total = len(config.programs) * (1 + len(config.policies))
@@ -281,7 +283,8 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
                        for p in config.programs]  # fmt: skip
         bounds = _run_tasks(bound_tasks, config, bar, "bench: bounds")
         episode_tasks = [functools.partial(_episode_task, program, spec, tuple(config.seeds), config.machine,
-                                           config.dialect, config.units, bound, common, serial_progress)
+                                           config.dialect, config.units, bound, common, serial_progress,
+                                           config.plant)
                          for program, bound in zip(config.programs, bounds, strict=True)
                          for spec in config.policies]  # fmt: skip
         groups = _run_tasks(episode_tasks, config, bar, "bench: episodes")

@@ -63,6 +63,9 @@ class SuiteSpec:
     description: str = ""
 
 
+#: The families of cnc-bench-v1 (frozen: a family added later goes into a suite of its own).
+V1_FAMILIES = ("contour", "pocket", "freeform", "arcs", "holes", "raster", "engraving")
+
 SPECS: dict[str, SuiteSpec] = {
     "cnc-bench-v1": SuiteSpec(
         name="cnc-bench-v1",
@@ -74,11 +77,21 @@ SPECS: dict[str, SuiteSpec] = {
             # `engraving` is held out of train; the test split's freeform programs also include chords of
             # 0.02-0.05 mm, below the train split's range.
             "train": {"contour": 40, "pocket": 40, "freeform": 40, "arcs": 40, "holes": 36, "raster": 40},
-            "val": {family: 10 for family in FAMILIES},
-            "test": {family: 10 for family in FAMILIES},
+            "val": {family: 10 for family in V1_FAMILIES},
+            "test": {family: 10 for family in V1_FAMILIES},
         },
         builtins={"train": ("circle", "star", "freeform", "pocket")},
         description="Seven families of 2-D and 3-D milling programs plus the four built-ins, on vmc-small.",
+    ),
+    "kirl-planar-v1": SuiteSpec(
+        name="kirl-planar-v1",
+        version=1,
+        seed=20261124,
+        machine="kirl-planar",
+        dialect="gsk25i",
+        composition={"train": {"kirl": 16}, "val": {"kirl": 4}, "test": {"kirl": 4}},
+        description="KIRL-style closed outlines of about 250 one-millimetre chords on KIRL's limits "
+                    "(kirl-planar: 10 mm/s, 100 mm/s², 10 000 mm/s³ as norms, 0.5 mm deviation).",
     ),
 }
 

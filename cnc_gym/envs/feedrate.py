@@ -15,8 +15,9 @@ from cnc_gym.envs.fused import FeedrateBatch, ObservationSpec, RewardSpec
 from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig, load_machine
+from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
+from cnc_gym.plant import make_plant
 from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
@@ -200,9 +201,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     dialect's; an interpreted ``Program`` keeps the unit it was read in), ``action_mode``,
     ``control_period_s`` (a multiple of the interpolation period), ``reward`` (None, a task YAML path or a
     dict of weights), ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
-    ``lookahead_points``. ``reset(seed=..., options={"program": name_or_index})``: with several programs
-    the episode's program is drawn with ``self.np_random``; the option picks one (a name not in the set
-    is loaded for that episode).
+    ``lookahead_points``, ``plant`` (``"lti"`` or ``"mujoco"``: the servo plant, overriding the machine
+    preset's ``plant.backend``; see docs/plant.md). ``reset(seed=..., options={"program":
+    name_or_index})``: with several programs the episode's program is drawn with ``self.np_random``; the
+    option picks one (a name not in the set is loaded for that episode).
 
     ## Info
 
@@ -241,14 +243,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         lookahead_mm: float = 24.0,
         lookahead_points: int = 8,
         units: str | None = None,
+        plant: str | None = None,
     ) -> None:
         # Every argument checked once, against one schema (cnc_gym/envs/options.py).
         args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
                              lookahead_mm=lookahead_mm, lookahead_points=lookahead_points,
-                             units=units)  # fmt: skip
-        self.machine: MachineConfig = load_machine(args.machine)
+                             units=units, plant=plant)  # fmt: skip
+        self.machine: MachineConfig = with_plant_backend(load_machine(args.machine), args.plant)
         self.action_mode = args.action_mode
         self.render_mode = args.render_mode
         self.dialect = args.dialect
@@ -288,12 +291,16 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self.observation_space = spaces.Box(self._obs_spec.low, self._obs_spec.high, dtype=np.float32)
 
         self._renderer = None
-        if self.render_mode == "rgb_array":
-            from cnc_gym.envs.render import EpisodeRenderer
-
-            self._renderer = EpisodeRenderer(self.tolerance_mm)  # records per step; draws on render()
         self._batch = self.make_batch(1)
         self.plant = self._batch.plant
+        if self.render_mode == "rgb_array":
+            from cnc_gym.envs.render import EpisodeRenderer, MachineRenderer
+
+            # Records per step; draws on render(): MuJoCo's picture of the machine on the MuJoCo plant.
+            if self.machine.plant.backend == "mujoco":
+                self._renderer = MachineRenderer(self.tolerance_mm, self.plant)
+            else:
+                self._renderer = EpisodeRenderer(self.tolerance_mm)
         self._batch.reset([0], [self.program_slot(self._batch, 0)])  # a valid state before the first reset
         self._sync()
 
@@ -302,7 +309,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                    plant: Any | None = None) -> FeedrateBatch:  # fmt: skip
         """``n_envs`` episodes of this env's task stepped together: the engine of this env (one episode)
         and of its vector env (:class:`~cnc_gym.envs.fused.FeedrateBatch`). ``plant``: a plant backend for
-        ``n_envs`` envs (default: the LTI servo plant, stepped inside the compiled step)."""
+        ``n_envs`` envs (default: the machine's ``plant.backend``, which the env's ``plant=`` sets: the LTI
+        servo plant is stepped inside the compiled step, the MuJoCo plant through its methods)."""
         config = {
             "ticks_per_step": self.ticks_per_step, "tolerance_mm": self.tolerance_mm,
             "in_position_mm": self.in_position_mm, "max_override": self.max_override,
@@ -311,6 +319,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             # The contour window reaches back over the largest possible lag (max feed / Kv).
             "window_back_mm": self._max_lag_mm,
         }  # fmt: skip
+        if plant is None and self.machine.plant.backend != "lti":
+            plant = make_plant(self.machine, n_envs)
         return FeedrateBatch(n_envs, self.machine, config, self._obs_spec, self._reward_spec,
                              parallel=parallel, plant=plant)
 

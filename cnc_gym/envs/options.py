@@ -37,7 +37,7 @@ from cnc_gym.config import (
     shown,
 )
 from cnc_gym.errors import CncGymError, ConfigError
-from cnc_gym.machine import INPUT_UNITS
+from cnc_gym.machine import INPUT_UNITS, PLANT_BACKENDS
 from cnc_gym.motion import ActionError
 from cnc_gym.programs import PROGRAM_TYPES, ProgramLike
 
@@ -156,6 +156,9 @@ class EnvArguments:
     dialect: str = declared(DIALECT, "gsk25i")
     machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
     units: str | None = declared(UNITS)
+    plant: str | None = declared(Choice(choices=(None, *PLANT_BACKENDS), doc="servo plant: `lti` (the exact "
+                                        "linear model) or `mujoco` (masses, friction, compliance, backlash); "
+                                        "null: the machine preset's `plant.backend`"))  # fmt: skip
     action_mode: str = declared(ACTION_MODE, "override")
     control_period_s: float = declared(CONTROL_PERIOD, 0.01)
     reward: Any = declared(RewardRef(doc="reward weights (None: configs/tasks/default.yaml)"))  # noqa: RUF009

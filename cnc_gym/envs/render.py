@@ -12,7 +12,7 @@ on an Agg canvas (no display needed) and reused.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -217,6 +217,50 @@ class EpisodeRenderer:
             self._figure.clf()
         self._figure = None
         self._canvas = None
+
+
+class MachineRenderer(EpisodeRenderer):
+    """``render_mode="rgb_array"`` on the MuJoCo plant: MuJoCo's off-screen picture of the machine as it
+    stands, with the programmed path on the table and the tool's trace coloured by contour error
+    (:class:`~cnc_gym.plant.mujoco_render.MachineView`). Where no OpenGL context can be made (no EGL, no
+    OSMesa) it warns once, naming the reason, and draws :class:`EpisodeRenderer`'s matplotlib picture.
+    """
+
+    def __init__(self, tolerance_mm: float, plant: Any, max_bins: int = DEFAULT_MAX_BINS) -> None:
+        super().__init__(tolerance_mm, max_bins)
+        self._plant = plant
+        self._view: Any = None
+        self._path_xyz: np.ndarray | None = None
+
+    def start(self, env: FeedrateEnv) -> None:
+        if self._path_key != id(env.toolpath) or self._path_xyz is None:
+            self._path_xyz = env.toolpath.sample(0.5)[1]
+        super().start(env)
+
+    def draw(self, env: FeedrateEnv) -> np.ndarray:
+        if self._view is None:
+            import gymnasium
+
+            from cnc_gym.plant.mujoco_render import MachineView
+
+            self._view = MachineView(self._plant)
+            if not self._view.available:
+                gymnasium.logger.warn(f"render: no off-screen OpenGL context for MuJoCo's renderer ("
+                                      f"{self._view.reason}); drawing the matplotlib picture instead")
+        if not self._view.available:
+            return super().draw(env)
+        if self._path_xyz is None or self._path_key != id(env.toolpath):
+            self.start(env)
+        series = self._samples.arrays()
+        trace = np.column_stack((series["x"], series["y"], series["z"]))
+        assert self._path_xyz is not None  # start() sets it
+        return self._view.draw(self._path_xyz, trace, series["error"], self.tolerance_mm)
+
+    def close(self) -> None:
+        super().close()
+        if self._view is not None:
+            self._view.close()
+            self._view = None
 
 
 def _norm(vmin: float, vmax: float):

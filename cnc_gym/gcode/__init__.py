@@ -32,7 +32,6 @@ from cnc_gym.gcode.settings import (
     MacroCalls,
 )
 from cnc_gym.machine import INPUT_UNITS
-from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentKind
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
@@ -225,23 +224,8 @@ def _check_travel(toolpath: Toolpath, machine: MachineConfig, dialect: Dialect) 
         return
     low = np.array(machine.axis_array("min_position_mm"))
     high = np.array(machine.axis_array("max_position_mm"))
-    candidates = [(np.arange(n), toolpath.end)]
-    arcs = np.flatnonzero(toolpath.kind == SegmentKind.ARC)
-    if len(arcs):
-        axes = np.array([PLANE_AXES[Plane(p)] for p in Plane])[toolpath.plane[arcs].astype(np.int64)]
-        rows = np.arange(len(arcs))
-        start_angle, sweep = toolpath.start_angle[arcs], toolpath.sweep[arcs]
-        radius, center = toolpath.radius[arcs], toolpath.center[arcs]
-        for theta in (0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi):
-            ccw_turn = (theta - start_angle) % (2 * np.pi)
-            turned = np.where(sweep >= 0, ccw_turn, (2 * np.pi - ccw_turn) % (2 * np.pi))
-            passed = turned <= np.abs(sweep) + 1e-12
-            point = toolpath.start[arcs].copy()
-            point[rows, axes[:, 0]] = center[rows, axes[:, 0]] + radius * np.cos(theta)
-            point[rows, axes[:, 1]] = center[rows, axes[:, 1]] + radius * np.sin(theta)
-            candidates.append((arcs[passed], point[passed]))
     first = None
-    for index, points in candidates:
+    for index, points in toolpath.extreme_points():
         outside = (points < low) | (points > high)
         if outside.any():
             k, axis = np.argwhere(outside)[0]

@@ -287,7 +287,8 @@ class OffsetStack:
         # G54..G59 (index 0..5), then G54.1 P1..P48 (index 6..53).
         self.wcs: list[list[float]] = [[0.0, 0.0, 0.0] for _ in range(n_wcs + n_extra_wcs)]
         self.n_standard_wcs = n_wcs
-        self.active_wcs = 0
+        #: Index of the work system in force; None: none (machine coordinates, a DIN controller's G53).
+        self.active_wcs: int | None = 0
         self.local: list[float] = [0.0, 0.0, 0.0]  # G52
         self.floating: list[float] | None = None  # G92 origin in machine coordinates, or None
         self.tool_length: list[float] = [0.0, 0.0, 0.0]  # G43/G44 vector (compensation module)
@@ -297,12 +298,16 @@ class OffsetStack:
     @property
     def extra_wcs_number(self) -> int:
         """The G54.1 P number in force (#4130), 0 while G54..G59 is selected."""
+        if self.active_wcs is None:
+            return 0
         extra = self.active_wcs - self.n_standard_wcs + 1
         return extra if extra > 0 else 0
 
     def work_origin(self) -> list[float]:
         if self.floating is not None:
             return list(self.floating)
+        if self.active_wcs is None:
+            return list(self.external)
         w = self.wcs[self.active_wcs]
         return [self.external[a] + w[a] for a in range(3)]
 
@@ -313,9 +318,13 @@ class OffsetStack:
         self.origin = (work[0] + local[0] + length[0], work[1] + local[1] + length[1],
                        work[2] + local[2] + length[2])  # fmt: skip
 
-    def select_wcs(self, index: int) -> None:
-        """G54..G59 (0..5), G54.1 P1..P48 (6..53). GSK: selecting any work coordinate system drops a G92
-        floating system (§3.2.13)."""
+    def select_wcs(self, index: int | None) -> None:
+        """G54..G59 (0..5), G54.1 P1..P48 (6..53); None: no work coordinate system, the work origin is the
+        machine zero (plus the external offset): a DIN controller's G53 "no zero offset". GSK: selecting
+        any work coordinate system drops a G92 floating system (§3.2.13). An index outside the stack is a
+        ValueError (a negative one would silently pick a slot from the end)."""
+        if index is not None and not 0 <= index < len(self.wcs):
+            raise ValueError(f"work coordinate system index {index} is not 0..{len(self.wcs) - 1}")
         self.active_wcs = index
         self.floating = None
         self.update()

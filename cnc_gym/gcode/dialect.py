@@ -458,7 +458,7 @@ DIALECT_MODULES: dict[str, str | None] = {
     "fanuc": "cnc_gym.gcode.dialects.fanuc",
     "h4cm": "cnc_gym.gcode.dialects.h4cm",
     "syntec": "cnc_gym.gcode.dialects.syntec",
-    "azmc1": None,
+    "azmc1": "cnc_gym.gcode.dialects.azmc1",
 }
 
 _CACHE: dict[str, Dialect] = {}

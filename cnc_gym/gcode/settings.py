@@ -92,7 +92,7 @@ class CompensationSettings:
     cancel at outer corners (GSK "2602#2 TPH", not in the parameter volume; Fanuc's standard is A, and the
     manual's worked example describes A: "offset by the radius vertical to the next block", §3.5.2).
     ``d_is_diameter``: 2601#7 ODI (see offsets.py). ``offset_count``: H/D numbers 0..count.
-    ``length_needs_axis``: see the field. ``outer_corner_arcs``: see the field.
+    ``length_needs_axis``, ``outer_corner_arcs``, ``correct_interference``: see the fields.
     """
 
     tool_length_type: str = "B"
@@ -104,6 +104,9 @@ class CompensationSettings:
     #: Outer corners between two compensated blocks get an arc of the offset radius about the programmed
     #: corner (as G39 makes one), instead of the type C intersection or extension points (HUST's corner type).
     outer_corner_arcs: bool = False
+    #: Interference of a compensated block is corrected before it alarms (GSK/Fanuc: corner vectors are
+    #: dropped, §3.5.3); False: any interference is an alarm at once (a DIN controller's contour violation).
+    correct_interference: bool = True
     offset_count: int = 256
     geometry_limit_mm: float = 999.999
     wear_limit_mm: float = 99.999

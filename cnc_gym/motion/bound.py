@@ -14,6 +14,8 @@ path speed                 ≤ programmed feed × max override (× 1 on override
 tangential acceleration    each axis's share ``|u_k(s)|·|s̈|`` ≤ its acceleration limit, pointwise
                            (the controller limits tangential acceleration by the axes' limits and the
                            centripetal part separately, by the curvature caps above)
+corner smoothing           on the path the controller follows: the blended one where the machine or
+                           the program smooths corners (docs/motion.md §6)
 junctions                  ≤ the controller's junction limit (corner step P1227 over the change of
                            direction, both neighbours' caps); 0 at every mandatory stop (exact stop,
                            dwell, rapid ↔ cut, tool/spindle change, program end)
@@ -103,7 +105,7 @@ class _ChainPath:
         return np.zeros((len(s), 3))  # positions and second derivatives: not needed / zero by design
 
 
-def _speed_cap(cap: np.ndarray):
+def speed_cap_constraint(cap: np.ndarray):
     """A toppra linear constraint: path speed ``ṡ ≤ cap[i]`` at grid point i (toppra's ``x = ṡ²``)."""
     from toppra.constraint import LinearConstraint
 
@@ -164,7 +166,7 @@ def _cutting_problem(tp: Toolpath, limits, machine: MachineConfig, action_mode: 
     speed = np.concatenate((speed, [0.0]))
     # Tangent of each interval at its middle (toolpath arc length).
     s_mid = seg_f[rows[row_of], K.F_S0] + (j + 0.5) / pieces[row_of] * length[row_of]
-    _, tangent, _ = tp.evaluate(s_mid)
+    _, tangent, _ = (tp if limits.path is None else limits.path).evaluate(s_mid)  # the path followed
     keep = np.concatenate(([True], np.diff(grid) > 0))  # zero-length pieces add nothing
     if not np.all(keep):
         grid, speed = grid[keep], speed[keep]
@@ -181,7 +183,7 @@ def _cutting_time(grid: np.ndarray, speed: np.ndarray, tangent: np.ndarray, acce
     logging.getLogger("toppra").setLevel(logging.ERROR)
     acceleration = JointAccelerationConstraint(np.asarray(accel, dtype=float),
                                                discretization_scheme=DiscretizationType.Collocation)
-    problem = toppra.algorithm.TOPPRA([acceleration, _speed_cap(speed)], _ChainPath(grid, tangent),
+    problem = toppra.algorithm.TOPPRA([acceleration, speed_cap_constraint(speed)], _ChainPath(grid, tangent),
                                       gridpoints=grid, solver_wrapper="seidel")  # fmt: skip
     _, sd, _, _ = problem.compute_parameterization(0.0, 0.0, return_data=True)
     if sd is None or not np.all(np.isfinite(sd)):

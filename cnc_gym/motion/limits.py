@@ -41,6 +41,7 @@ from cnc_gym.machine import MachineConfig
 from cnc_gym.motion import kernel as K
 from cnc_gym.toolpath import SegmentKind, SegmentMode, Toolpath
 from cnc_gym.toolpath.segments import PLANE_AXES, Plane
+from cnc_gym.toolpath.smoothing import BlendCurve, SmoothingRules, blend_tables, smooth_corners
 
 #: Motion segments shorter than this are ignored (their modes still apply), mm.
 MIN_LENGTH_MM = 1e-6
@@ -62,6 +63,9 @@ class PathLimits:
     #: Rotary-only moves (timed holds of the XYZ reference): toolpath row, seconds, and the profile's
     #: travel (deg), speed (deg/s), acceleration, jerk, one row each (m, 6).
     rotary_holds: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    #: The path the controller follows where corner smoothing changed it (arc lengths ``P_S``/``F_S0`` are
+    #: along it); None: the programmed path itself.
+    path: Toolpath | None = None
 
 
 def rest_to_rest_time(distance: np.ndarray, speed: np.ndarray, accel: np.ndarray,
@@ -341,10 +345,17 @@ def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     geo: list[list] = [[] for _ in range(8)]
     table = []
     table_rows = 0
+    # Corner blends (smoothing) are sampled in bulk; other curves one by one.
+    blend_rows = [int(r) for r in rows[nurbs] if isinstance(tp.nurbs[int(r)], BlendCurve)]
+    blend_pieces = [int(counts[np.searchsorted(rows, r)]) for r in blend_rows]
+    blend_table = dict(zip(blend_rows, blend_tables([tp.nurbs[r] for r in blend_rows], blend_pieces,
+                                                    NURBS_TABLE_TOL_MM, NURBS_SAMPLES, NURBS_MAX_SAMPLES),
+                           strict=True)) if blend_rows else {}  # fmt: skip
     for r in rows[nurbs]:
         k = int(counts[np.searchsorted(rows, r)])
         length = float(tp.length[r])
-        for point, tangent, curvature in _curve_table(tp.nurbs[int(r)], length, k):
+        pieces_table = blend_table.get(int(r)) or _curve_table(tp.nurbs[int(r)], length, k)
+        for point, tangent, curvature in pieces_table:
             samples = len(point)
             spacing = length / k / (samples - 1)
             kappa_max = float(curvature.max())
@@ -365,9 +376,23 @@ def _pieces(tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
     return idx, s0, piece_len, (*out, np.array(geo[6]), np.array(geo[7]), np.concatenate(table))
 
 
-def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
-    """Compute every static limit of ``tp`` on ``machine`` (see the module docstring)."""
+def smoothing_rules(machine: MachineConfig) -> SmoothingRules:
+    """The machine's corner-smoothing parameters (P1401#1 EFL / P1473, P1495, the segment-length rule)."""
     ctl = machine.controller
+    return SmoothingRules(tolerance_mm=ctl.corner_smoothing_tolerance_mm,
+                          min_angle_deg=ctl.corner_smoothing_min_angle_deg,
+                          max_segment_mm=ctl.corner_smoothing_max_segment_mm)  # fmt: skip
+
+
+def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
+    """Compute every static limit of ``tp`` on ``machine`` (see the module docstring).
+
+    With corner smoothing (``controller.corner_smoothing_tolerance_mm``, or tolerances carried by the tool
+    path) the limits describe the smoothed path (:func:`cnc_gym.toolpath.smoothing.smooth_corners`); the
+    toolpath indices they report stay those of ``tp``."""
+    ctl = machine.controller
+    programmed = tp
+    tp, origin = smooth_corners(tp, smoothing_rules(machine), lookahead=ctl.lookahead_blocks > 1)
     dt = float(ctl.interpolation_period_s)
     axis = {name: np.array(machine.axis_array(name)) for name in (
         "rapid_mm_min", "max_feed_mm_min", "max_accel_mm_s2", "max_jerk_mm_s3", "rapid_accel_mm_s2",
@@ -416,6 +441,17 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     # A NURBS curve bends in any direction: all three axes count.
     a_n = np.where(is_nurbs, min(ctl.max_centripetal_accel_mm_s2, acc_ax.min()), a_n)
     j_n = np.where(is_nurbs, jerk_ax.min(), j_n)
+    # Path-norm limits (controller.path_max_accel_mm_s2 / path_max_jerk_mm_s3; 0 = off). On a curve the
+    # acceleration vector is a_t·t + v²κ·n and the jerk vector (j_t − κ²v³)·t + 3κv·a_t·n (+ κ'v³·n): each
+    # term gets its share of the norm (√½ each for the acceleration, ⅓ each for the jerk), so the norms hold
+    # on lines and arcs; on a line the tangential term is all there is.
+    curved = kappa > 0
+    path_a = ctl.path_max_accel_mm_s2 if ctl.path_max_accel_mm_s2 > 0 else np.inf
+    path_j = ctl.path_max_jerk_mm_s3 if ctl.path_max_jerk_mm_s3 > 0 else np.inf
+    path_a_t = np.where(curved, path_a * math.sqrt(0.5), path_a)
+    path_j_t = np.where(curved, path_j / 3.0, path_j)
+    a_n = np.minimum(a_n, path_a * math.sqrt(0.5))
+    j_n = np.minimum(j_n, path_j / 3.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = np.where(kappa > 0, 1.0 / np.maximum(kappa, 1e-300), np.inf)
         v_centripetal = np.sqrt(a_n / kappa)
@@ -428,6 +464,11 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     base = np.where(cutting, feed, rapid_rate)
     acc = np.where(cutting, projected(acc_ax), projected(axis["rapid_accel_mm_s2"]))
     jerk = np.where(cutting, projected(jerk_ax), projected(axis["rapid_jerk_mm_s3"]))
+    acc = np.minimum(acc, path_a_t)
+    jerk = np.minimum(jerk, path_j_t)
+    if math.isfinite(path_j):  # the cross term 3κ·v·a_t ≤ J/3 at every speed up to the cap
+        with np.errstate(divide="ignore"):
+            acc = np.minimum(acc, np.where(curved, path_j / np.maximum(9.0 * kappa * cap, 1e-300), np.inf))
     rotary_rate = np.zeros((n, 0))
     if tp.rotary_axes:
         # A rotary axis moving with the XYZ path turns at rate·v (deg per mm of path × mm/s): its speed,
@@ -496,8 +537,12 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         # the next block is executed" (manual §3.8): it runs on as in G64 with look-ahead.
         tapping_prev = (modes[prev] & SegmentMode.TAPPING_MODE) != 0
         no_lookahead = (ctl.lookahead_blocks <= 1) & (prev != nxt) & ~tapping_prev
-        stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead
-        wait[1:n] = has_exact | mode_change | aux_change
+        # A kink where some axis allows no velocity step (P1227 = 0) can only be passed at rest: it is a
+        # stop with an in-position check, as an exact stop (a limit of 0 that is no stop would leave the
+        # reference creeping towards the kink forever).
+        kink_stop = hard[1:n] <= 0.0
+        stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead | kink_stop
+        wait[1:n] = has_exact | mode_change | aux_change | kink_stop
     hard[stop] = 0.0
 
     # ------------------------------------------------------------------ dwells per point
@@ -514,7 +559,9 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
             at = np.searchsorted(dwell_rows, rotary_only)
             rotary_holds = _rotary_only_profiles(tp, machine, rotary_only, _rotary_rates(tp, machine)[1])
             dwell_f[at, 0] = rotary_holds[:, 1]
-        dwell_f[: len(dwell_rows), 1] = dwell_rows
+        dwell_f[: len(dwell_rows), 1] = origin[dwell_rows]
+        if len(rotary_holds):
+            rotary_holds[:, 0] = origin[rotary_holds[:, 0].astype(np.int64)]
         dwell_f[: len(dwell_rows), 2:5] = tp.start[dwell_rows]
 
     # next mandatory stop at or after each point
@@ -548,7 +595,7 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     seg_i = np.zeros((n, K.N_SEG_I), dtype=np.int64)
     seg_i[:, K.I_KIND] = tp.kind[idx]
     seg_i[:, K.I_PU : K.I_PW + 1] = plane_axes
-    seg_i[:, K.I_TP] = idx
+    seg_i[:, K.I_TP] = origin[idx]
     seg_i[:, K.I_LOCKED] = (modes[idx] & SegmentMode.OVERRIDE_LOCKED) != 0
     seg_i[:, K.I_RAPID] = ~cutting
     seg_i[:, K.I_TABLE] = -1
@@ -580,4 +627,4 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         arr.flags.writeable = False
     return PathLimits(seg_f=np.ascontiguousarray(seg_f), seg_i=seg_i, pt_f=pt_f, pt_i=pt_i,
                       dwell_f=dwell_f, curve_f=np.ascontiguousarray(curve_f), rest_position=rest,
-                      rotary_holds=rotary_holds)  # fmt: skip
+                      rotary_holds=rotary_holds, path=None if tp is programmed else tp)  # fmt: skip

@@ -206,6 +206,54 @@ def _lifted_axes(models: tuple[AxisKey, ...], n_hist: int, n_filter: int, n_tick
     return out
 
 
+def plant_machine(machine: MachineConfig | str, n_envs: int) -> tuple[MachineConfig, int]:
+    """A plant's machine (a preset name is loaded) and number of envs (at least 1), for every backend."""
+    if isinstance(machine, str):
+        machine = load_machine(machine)
+    if int(n_envs) < 1:
+        raise ValueError(f"n_envs must be at least 1, got {n_envs}")
+    return machine, int(n_envs)
+
+
+def checked_kv_scale(kv_scale: np.ndarray, current: np.ndarray, env: int | None) -> np.ndarray:
+    """The per-env Kv multipliers ((n_envs, 3)) after ``set_kv_scale(kv_scale, env)`` from ``current``:
+    ``kv_scale`` (3,) or (n_envs, 3) for all envs, or (3,) for one ``env``. A wrong shape or env is a
+    ValueError, a multiplier that is not positive and finite a ConfigError."""
+    n_envs = current.shape[0]
+    scale = np.asarray(kv_scale, dtype=float)
+    new_scale = current.copy()
+    if env is None:
+        scale = np.broadcast_to(scale, (n_envs, 3)) if scale.ndim <= 1 else scale
+        if scale.shape != (n_envs, 3):
+            raise ValueError(f"kv_scale must be (3,) or (n_envs={n_envs}, 3), got {scale.shape}")
+        new_scale[:] = scale
+    else:
+        if scale.shape != (3,):
+            raise ValueError(f"kv_scale for one env must be (3,), got {scale.shape}")
+        if not 0 <= env < n_envs:
+            raise ValueError(f"env {env} out of range 0..{n_envs - 1}")
+        new_scale[env] = scale
+    if not np.all(np.isfinite(scale)) or np.any(scale <= 0):
+        raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
+    return new_scale
+
+
+def reference_rows(reference: np.ndarray, n_envs: int) -> tuple[np.ndarray, bool]:
+    """A plant step's reference as float64 (n_envs, n_ticks, 3), and whether it came as (n_ticks, 3) (one
+    env); ValueError on any other shape."""
+    ref = reference
+    if type(ref) is not np.ndarray or ref.dtype != np.float64:
+        ref = np.asarray(reference, dtype=np.float64)
+    squeeze = ref.ndim == 2
+    if squeeze:
+        if n_envs != 1:
+            raise ValueError(f"reference must be (n_envs={n_envs}, n_ticks, 3), got {ref.shape}")
+        ref = ref[None]
+    if ref.ndim != 3 or ref.shape[0] != n_envs or ref.shape[2] != 3:
+        raise ValueError(f"reference must be (n_envs={n_envs}, n_ticks, 3), got {ref.shape}")
+    return ref, squeeze
+
+
 class ServoPlant:
     """Servo axes X, Y, Z of ``n_envs`` machines: reference positions in, actual positions out.
 
@@ -233,12 +281,7 @@ class ServoPlant:
         n_envs: int = 1,
         kv_scale: np.ndarray | None = None,
     ) -> None:
-        if isinstance(machine, str):
-            machine = load_machine(machine)
-        if int(n_envs) < 1:
-            raise ValueError(f"n_envs must be at least 1, got {n_envs}")
-        self.machine = machine
-        self.n_envs = int(n_envs)
+        self.machine, self.n_envs = machine, n_envs = plant_machine(machine, n_envs)
         self.period_s = float(machine.controller.interpolation_period_s)
         self.filter_samples = max(1, round(machine.controller.post_filter_s / self.period_s))
         # Raw references kept: the filter window, and at least two so settled() can see a moving reference.
@@ -290,26 +333,10 @@ class ServoPlant:
         for one ``env``. Takes effect from the next step; the state is kept. Cached lifted matrices are
         rebuilt for the envs that change (a few ms per env), so call it at resets, not every step.
         """
-        scale = np.asarray(kv_scale, dtype=float)
-        if env is None:
-            scale = np.broadcast_to(scale, (self.n_envs, 3)) if scale.ndim <= 1 else scale
-            if scale.shape != (self.n_envs, 3):
-                raise ValueError(f"kv_scale must be (3,) or (n_envs={self.n_envs}, 3), got {scale.shape}")
-            envs: list[int] = list(range(self.n_envs))
-        else:
-            if scale.shape != (3,):
-                raise ValueError(f"kv_scale for one env must be (3,), got {scale.shape}")
-            if not 0 <= env < self.n_envs:
-                raise ValueError(f"env {env} out of range 0..{self.n_envs - 1}")
-            scale = np.broadcast_to(scale, (self.n_envs, 3)).copy()
-            envs = [env]
-        if not np.all(np.isfinite(scale)) or np.any(scale <= 0):
-            raise ConfigError(f"kv_scale must be positive and finite, got {kv_scale!r}")
+        new_scale = checked_kv_scale(kv_scale, self._kv_scale, env)
+        envs: list[int] = list(range(self.n_envs)) if env is None else [env]
         self._lifted4.clear()
         self.model_version += 1
-        new_scale = self._kv_scale.copy()
-        for e in envs:
-            new_scale[e] = scale[e]
         if np.all(new_scale == new_scale[0]):
             # Every env alike again: back to one shared model per axis.
             self._shared_models = self._axis_models(new_scale[0])
@@ -383,15 +410,7 @@ class ServoPlant:
                                 self._velocity, ref, actual):  # fmt: skip
                 raise ValueError("reference positions must be finite")
             return actual
-        if type(ref) is not np.ndarray or ref.dtype != np.float64:
-            ref = np.asarray(reference, dtype=np.float64)
-        squeeze = ref.ndim == 2
-        if squeeze:
-            if self.n_envs != 1:
-                raise ValueError(f"reference must be (n_envs={self.n_envs}, n_ticks, 3), got {ref.shape}")
-            ref = ref[None]
-        if ref.ndim != 3 or ref.shape[0] != self.n_envs or ref.shape[2] != 3:
-            raise ValueError(f"reference must be (n_envs={self.n_envs}, n_ticks, 3), got {ref.shape}")
+        ref, squeeze = reference_rows(reference, self.n_envs)
         n_ticks = ref.shape[1]
         if n_ticks == 0:
             return ref[0].copy() if squeeze else ref.copy()

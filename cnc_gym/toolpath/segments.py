@@ -59,6 +59,10 @@ class SegmentMode(IntFlag):
     AUTO_CORNER = 4  # G62 automatic corner override
     INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
     TAPPING_MODE = 16  # G63 tapping mode: no deceleration at block end (with OVERRIDE_LOCKED)
+    #: A DIN controller's G36 "rounding of linear blocks": the block may end a little short or long so the
+    #: last interpolation cycle keeps the path speed. Recorded for the controller; the motion stage plans
+    #: continuous-time profiles, so the last-cycle speed dip G36 avoids does not arise there.
+    ROUND_BLOCK_END = 32
 
 
 _FIELDS = (
@@ -227,6 +231,29 @@ class Toolpath:
         return self.files[int(self.file_index[index])], int(self.line[index])
 
     # --------------------------------------------------------------- geometry
+    def extreme_points(self, rows: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The points a range check must see, as (segment indices, points (k, 3)) pairs: the end of each
+        segment of ``rows`` (default all), and for its arcs the axis extremes their sweep passes (0°, 90°,
+        180°, 270° in the plane). Travel and software-limit checks use it."""
+        rows = np.arange(len(self.kind)) if rows is None else rows
+        out = [(rows, self.end[rows])]
+        arcs = rows[self.kind[rows] == SegmentKind.ARC]
+        if not len(arcs):
+            return out
+        axes = _PLANE_AXES_TABLE[self.plane[arcs].astype(np.int64)]
+        k = np.arange(len(arcs))
+        start_angle, sweep = self.start_angle[arcs], self.sweep[arcs]
+        radius, center = self.radius[arcs], self.center[arcs]
+        for theta in (0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi):
+            ccw_turn = (theta - start_angle) % (2 * np.pi)
+            turned = np.where(sweep >= 0, ccw_turn, (2 * np.pi - ccw_turn) % (2 * np.pi))
+            passed = turned <= np.abs(sweep) + 1e-12
+            point = self.start[arcs].copy()
+            point[k, axes[:, 0]] = center[k, axes[:, 0]] + radius * np.cos(theta)
+            point[k, axes[:, 1]] = center[k, axes[:, 1]] + radius * np.sin(theta)
+            out.append((arcs[passed], point[passed]))
+        return out
+
     def segment_at(self, s: np.ndarray | float) -> np.ndarray:
         """Index of the segment containing arc length ``s`` (zero-length segments are never returned).
         An empty tool path has no segment to return: ValueError."""

@@ -82,3 +82,16 @@ def minimal_cases(path: str) -> dict[str, list[tuple[str, int | None]]]:
     for key, value in zip(node.value.keys, node.value.values, strict=True):  # type: ignore[union-attr]
         out[key.value] = [(case.elts[1].value, case.elts[2].value) for case in value.elts]  # type: ignore
     return out
+
+
+#: An error code in backticks in an index's "Our code" cell.
+ERROR_CODE = re.compile(r"`([a-z0-9]+(?:-[a-z0-9]+)*)`")
+#: An empty cell.
+NONE = "—"
+
+
+def raised_codes_missing(codes_cell: str) -> list[str]:
+    """The codes of an "Our code" cell that no module of cnc_gym/gcode raises."""
+    files = sorted((ROOT / "cnc_gym" / "gcode").rglob("*.py"))
+    source = "\n".join(p.read_text(encoding="utf-8") for p in files)
+    return [code for code in ERROR_CODE.findall(codes_cell) if f'"{code}"' not in source]

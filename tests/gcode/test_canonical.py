@@ -23,3 +23,18 @@ def test_offset_stack_composition():
     assert stack.to_machine((0.0, 0.0, 0.0)) == (100.0, 22.0, 32.5)
     stack.select_wcs(0)  # G54 drops the floating system
     assert stack.to_machine((0.0, 0.0, 0.0)) == (1.0, 2.0, 2.5)
+
+
+def test_select_wcs_none_is_no_work_offset_and_a_bad_index_is_refused():
+    # A DIN controller's G53 selects no work offset at all: not a sentinel index into the stack.
+    stack = OffsetStack()
+    stack.wcs[0] = [10.0, 20.0, 30.0]
+    stack.wcs[-1] = [7.0, 7.0, 7.0]  # G54.1 P48: a negative index would silently pick it
+    stack.select_wcs(0)
+    assert stack.origin == (10.0, 20.0, 30.0)
+    stack.select_wcs(None)
+    assert stack.origin == (0.0, 0.0, 0.0) and stack.extra_wcs_number == 0
+    with pytest.raises(ValueError, match="index -1"):
+        stack.select_wcs(-1)
+    with pytest.raises(ValueError):
+        stack.select_wcs(len(stack.wcs))

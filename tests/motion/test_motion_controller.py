@@ -639,3 +639,36 @@ def test_a_near_cusp_refines_only_its_own_nurbs_pieces():
     samples = limits.seg_i[limits.seg_i[:, K.I_TABLE] >= 0, K.I_NSAMP]
     assert len(samples) == 456 and np.count_nonzero(samples > NURBS_SAMPLES) <= 12
     assert len(limits.curve_f) == samples.sum() < NURBS_MAX_EVALUATIONS
+
+
+# ---------------------------------------------------------------------------------- corner step 0
+def test_zero_corner_step_stops_at_every_kink_and_finishes():
+    # P1227 = 0 allows no axis velocity step at a junction: a kink can only be passed at rest. The
+    # controller must treat it as a stop (as exact stop) and go on, not come to rest short of it forever.
+    b = ToolpathBuilder()
+    b.line((0, 0, 0), (10, 0, 0), feed=3000, line=1)
+    b.line((10, 0, 0), (10, 10, 0), feed=3000, line=2)
+    tp = b.build()
+    c = Controller(tp, machine(corner_step_mm_min=0), in_position_check=False)
+    chunk = c.run_to_end()
+    assert c.finished
+    np.testing.assert_allclose(chunk.position[-1], (10, 10, 0), atol=1e-9)
+    # at rest on the kink: the junction is crossed at speed 0
+    speeds, crossed = crossing_speeds(chunk, np.array([10.0]))
+    assert crossed[0] and speeds[0] <= 1e-9
+    # the same time as a G09 on the first block (a stop at the kink), and longer than with a step
+    b2 = ToolpathBuilder()
+    b2.line((0, 0, 0), (10, 0, 0), feed=3000, line=1, modes=SegmentMode.EXACT_STOP)
+    b2.line((10, 0, 0), (10, 10, 0), feed=3000, line=2)
+    exact = Controller(b2.build(), machine(), in_position_check=False).run_to_end()
+    assert len(chunk) == len(exact)
+    check_run(c, chunk)
+    # with the in-position check the env's loop (release when at rest) also finishes
+    c2 = Controller(tp, machine(corner_step_mm_min=0))
+    for _ in range(10_000):
+        c2.advance(5, override=1.0)
+        if c2.waiting_in_position:
+            c2.release_in_position()
+        if c2.finished:
+            break
+    assert c2.finished

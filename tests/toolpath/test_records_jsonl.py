@@ -65,7 +65,6 @@ def test_random_rows_of_every_kind_mode_and_awkward_number():
     assert toolpath_jsonl(tp) == reference_text(tp)
 
 
-@pytest.mark.filterwarnings("ignore::cnc_gym.gcode.dialects.syntec.modes.SmoothingNotHonoured")
 def test_rotary_axes_and_interpreted_programs():
     rotary = interpret("G01 X1 F100\nG91 G01 X1 B45\nG90 G00 B0\n", machine=load_machine("gsk25i"))
     assert toolpath_jsonl(rotary) == reference_text(rotary)

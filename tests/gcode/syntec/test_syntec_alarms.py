@@ -11,8 +11,6 @@ import pytest
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 
-pytestmark = pytest.mark.filterwarnings("ignore::cnc_gym.gcode.dialects.syntec.modes.SmoothingNotHonoured")
-
 #: The simulated tool-length instrument of the G37/G37.1 cases: H1's probe fires at Z-10.
 PROBE = {"signal_at": {1: -10.0}}
 CYCLE = "F100 S500 M03\nG00 Z10.\n"

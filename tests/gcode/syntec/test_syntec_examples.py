@@ -19,8 +19,6 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 from cnc_gym.machine import AxisConfig, MachineConfig
 
-pytestmark = pytest.mark.filterwarnings("ignore::cnc_gym.gcode.dialects.syntec.modes.SmoothingNotHonoured")
-
 
 def run(text: str, **kw):
     return interpret(text, dialect="syntec", **kw)
@@ -173,8 +171,7 @@ def test_e7_g05_high_speed_polyline():
     text = ("G0 X3. Y4. Z0.\nG05 P10000 //Start high speed & high precision\nG01 X3.8 Y6.1 F5000.\nX4.6 Y7.\n"
             "X5.4 Y6.1\nX6.1 Y4.\nX6.9 Y1.9\nX7.7 Y1.\nX8.5 Y1.9\nX9.3 Y4.\nX10. Y6.1\n"
             "G05 P0 // Cancel high speed & high precision interpolation\nM30\n")  # fmt: skip
-    with pytest.warns(UserWarning, match="smoothing tolerance"):
-        tp = run(text)
+    tp = run(text)
     assert [r[1][:2] for r in path(text)[1:]] == G05_POINTS
     chords = [math.dist(a, b) for a, b in zip([(3.0, 4.0), *G05_POINTS], G05_POINTS, strict=False)]
     assert math.isclose(sum(tp.length), sum(chords) + 5.0, abs_tol=1e-9)  # + the rapid (3, 4) from (0, 0)
@@ -213,8 +210,7 @@ def test_e8_g05_1_absolute_and_incremental_examples_are_one_path():
     for k, (dx, dy) in enumerate(G051_EX2_STEPS):
         lines[2 + k] = f"N{3 + k:03d} X{dx:.3f} Y{dy:.3f}"
     incremental = "\n".join(lines) + "\n"
-    with pytest.warns(UserWarning):
-        a, b = run(G051_EX1), run(incremental)
+    a, b = run(G051_EX1), run(incremental)
     x = y = 0.0
     points = []
     for dx, dy in G051_EX2_STEPS:
@@ -231,13 +227,11 @@ def test_e9_g05_1_pauses_after_g43_and_in_g61():
     is not smoothed and the one after it is again ("restart path smoothing"); G61 stops smoothing and
     G64 restarts it. E0.1 then E0.05 (mm)."""
     ex3 = "G5.1 Q1 E0.1\nG91 G01 F2000\nX -0.005\nG43 H3\nY -0.005\nX -0.005\nM30\n"
-    with pytest.warns(UserWarning):
-        tp = run(ex3)
+    tp = run(ex3)
     assert tp.smoothing_tolerance_mm.tolist() == [0.1, 0.0, 0.1]
     ex4 = ("G5.1 Q1 E0.05\nG90 G01 F2000\nX-0.005 Y0.\nX-0.1 Y-0.01\nG61\nX-0.1 Y-0.02\nX0.005 Y0.\nG64\n"
            "X0.005 Y0.01\nM30\n")  # fmt: skip
-    with pytest.warns(UserWarning):
-        tp = run(ex4)
+    tp = run(ex4)
     assert tp.smoothing_tolerance_mm.tolist() == [0.05, 0.05, 0.0, 0.0, 0.05]
 
 
@@ -249,8 +243,7 @@ def test_e10_nurbs_quadratic_bezier():
     text = ("N001 G0 X0.0 Y0.0 Z0.0\nN002 G05 P10000//Start high speed & high precision interpolation\n"
             "N003 G06.2 P3 K0.0 X0.0 Y0.0 Z0.0 R1.0 F5000.\nN004 K0.0 X0.0 Y5.0 Z0.0 R1.0\n"
             "N005 K0.0 X5.0 Y5.0 Z0.0 R1.0\nN006 K1.0\nN007 K1.0\nN008 K1.0\nN009 G05 P0\n")  # fmt: skip
-    with pytest.warns(UserWarning):
-        tp = run(text)
+    tp = run(text)
     assert len(tp) == 1 and tp.kind[0] == 4 and tp.feed[0] == 5000.0
     n = 200000
     u = [(k + 0.5) / n for k in range(n)]

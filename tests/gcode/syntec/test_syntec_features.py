@@ -7,16 +7,15 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import get_dialect, interpret, read_program
-from cnc_gym.gcode.dialects.syntec.modes import SmoothingNotHonoured
 from cnc_gym.gcode.dialects.syntec.options import SyntecOptions
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.toolpath import SegmentMode
 
-pytestmark = pytest.mark.filterwarnings("ignore::cnc_gym.gcode.dialects.syntec.modes.SmoothingNotHonoured")
 SYNTEC = get_dialect("syntec")
 
 
@@ -140,9 +139,18 @@ def test_g05_1_smoothing_rules():
     assert tp.smoothing_tolerance_mm.tolist() == [pytest.approx(0.0254), 0, 0, 0, pytest.approx(0.0254), 0, 0]
 
 
-def test_turning_smoothing_on_warns_that_the_motion_stage_ignores_it():
-    with pytest.warns(SmoothingNotHonoured, match="does not read it"):
-        run("G05.1 Q1 E0.01\nG01 X1. F100\n")
+def test_smoothing_tolerance_reaches_the_controller():
+    # G05.1 Q1 E0.05 on a polyline of short G01 blocks: the controller blends the corners within E.
+    from cnc_gym.machine import load_machine
+    from cnc_gym.motion import Controller
+
+    text = "G05.1 Q1 E0.05\nG01 X1. Y0.2 F600\nX2. Y0.\nX3. Y0.2\nX4. Y0.\nG05.1 Q0\n"
+    tp = run(text)
+    assert tp.smoothing_tolerance_mm.tolist() == [0.05, 0.05, 0.05, 0.05]
+    chunk = Controller(tp, load_machine("vmc-small"), in_position_check=False).run_to_end()
+    corners = [(1, 0.2, 0), (2, 0, 0), (3, 0.2, 0)]
+    gap = [np.min(np.linalg.norm(chunk.position - c, axis=1)) for c in corners]
+    assert min(gap) > 0.01 and max(gap) <= 0.05 + 1e-9
 
 
 def test_nurbs_without_f_takes_the_previous_curve_feed():

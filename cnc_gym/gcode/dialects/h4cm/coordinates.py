@@ -91,6 +91,8 @@ def _work_origin(core: Seam, values: dict) -> None:
         raise core.error("G10 X Y Z with mirror or scaling in force: cancel them first (G68/G69, G50)",
                          "bad-g10")  # fmt: skip
     offsets = st.offsets
+    # H4C-M always has a work system in force (G54..G59 select one; only a DIN G53 selects none).
+    assert offsets.active_wcs is not None
     entry = offsets.wcs[offsets.active_wcs]
     machine = st.out.position
     for axis, letter in enumerate(core.dialect.axes):

@@ -8,14 +8,13 @@ leave the programmed corners by a tolerance. The tool path carries it per row
 (``Toolpath.smoothing_tolerance_mm``): in G05 every motion row gets its parameter set's tolerance
 (``SyntecOptions.hshp_tolerance_mm``), under G05.1 the G01 rows get E. G05.1 pauses under G61/G63 and
 resumes under G62/G64; the first G01 after G43/G44/G49 or a coordinate change (G52, G54-G59.9, G92) is
-not smoothed. The motion stage follows the programmed path exactly: it does not read the tolerance, and
-turning smoothing on says so once (:class:`SmoothingNotHonoured`, a warning).
+not smoothed. The controller blends the corners between consecutive G01 rows that carry a tolerance within it
+(``cnc_gym.toolpath.smoothing``, docs/motion.md §6).
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.dialects.syntec.codes import THREAD
@@ -41,12 +40,6 @@ PATH_MODES = {
 _SUSPENDING = SegmentMode.EXACT_STOP | SegmentMode.TAPPING_MODE  # G61/G63 pause G05.1
 _MOTION_KINDS = (SegmentKind.RAPID, SegmentKind.LINE, SegmentKind.ARC, SegmentKind.NURBS)
 #: G37.1's and every tool-length measurement's override: fixed at 100 % (§G37).
-_NOT_HONOURED = ("the smoothing tolerance is carried on the tool path (Toolpath.smoothing_tolerance_mm); the "
-                 "motion stage follows the programmed corners exactly and does not read it (docs/syntec.md)")
-
-
-class SmoothingNotHonoured(UserWarning):
-    """G05/G05.1 turned smoothing on: the tool path records the tolerance, the motion stage ignores it."""
 
 
 # ---------------------------------------------------------------------- literals
@@ -163,8 +156,6 @@ def apply_smoothing(core: Seam) -> None:
     if d.smoothing_mm is not None and not st.path_mode & _SUSPENDING:
         tolerances[SegmentKind.LINE] = d.smoothing_mm
     st.builder.smoothing(tolerances)
-    if any(tolerances.values()):
-        warnings.warn(_NOT_HONOURED, SmoothingNotHonoured, stacklevel=2)
 
 
 def contour_control(core: Seam, spec: CodeSpec, values: dict) -> None:

@@ -544,12 +544,13 @@ class OffsetStage:
     :meth:`set_position_offset`, :meth:`corner_arc` and :meth:`flush`.
     """
 
-    def __init__(self, machine, *, startup_type: str = "A", alarms=None,
-                 outer_corner_arcs: bool = False) -> None:  # fmt: skip
+    def __init__(self, machine, *, startup_type: str = "A", alarms=None, outer_corner_arcs: bool = False,
+                 correct_interference: bool = True) -> None:  # fmt: skip
         self.machine = machine
         self.alarms = alarms or {}
         self.startup_type = startup_type
         self.outer_corner_arcs = outer_corner_arcs  # CompensationSettings.outer_corner_arcs
+        self.correct_interference = correct_interference  # CompensationSettings.correct_interference
         self._position: Vec = machine.position  # programmed (uncompensated) position
         self.file_index = machine.file_index
         self.modes = machine.modes
@@ -979,7 +980,13 @@ class OffsetStage:
             starts.append(item.start_b)
         as_line = False
         if item.role != "startup":
-            starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors, line)
+            if self.correct_interference:
+                starts, end_vectors, as_line = correct_interference(element, item.d, starts, end_vectors,
+                                                                    line)  # fmt: skip
+            else:
+                reason = block_interference(element, item.d, starts[-1], end_vectors[0], False, line)
+                if reason is not None:
+                    raise CompensationError(f"contour violation: {reason}", "comp-interference", line)
         for q in starts[1:]:
             self._emit_plane_point(q, item)
         end = end_vectors[0]
@@ -1036,8 +1043,10 @@ def install(core: Seam) -> OffsetStage:
     st = core.state
     comp = st.comp
     if comp.stage is None:
-        comp.stage = OffsetStage(st.out, startup_type=comp.settings.startup_type, alarms=core.dialect.alarms,
-                                 outer_corner_arcs=comp.settings.outer_corner_arcs)  # fmt: skip
+        settings = comp.settings
+        comp.stage = OffsetStage(st.out, startup_type=settings.startup_type, alarms=core.dialect.alarms,
+                                 outer_corner_arcs=settings.outer_corner_arcs,
+                                 correct_interference=settings.correct_interference)  # fmt: skip
         st.out = comp.stage
         st.block_listeners.append(before_block)
     return comp.stage
