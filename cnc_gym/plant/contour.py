@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from cnc_gym.toolpath.nearest import helix_nearest, nurbs_distance2, nurbs_table
+from cnc_gym.toolpath.nearest import helix_nearest, nurbs_search, nurbs_table, nurbs_work_size
 from cnc_gym.toolpath.segments import PLANE_AXES, Plane, SegmentKind, Toolpath
 
 _PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
@@ -100,7 +100,7 @@ def _line_or_arc_d2(c, g, iu, iv, iw, px, py, pz, pu, pv, pw) -> float:
 
 
 @njit(cache=True, nogil=True)
-def _curved_d2(c, g, header, nurbs_f, iu, iv, iw, px, py, pz, pu, pv, pw, bound2) -> float:
+def _curved_d2(c, g, header, nurbs_f, iu, iv, iw, px, py, pz, pu, pv, pw, bound2, work) -> float:
     """Squared distance to a helix or NURBS segment, or ``inf`` where a lower bound shows it cannot be
     below ``bound2``."""
     if c == HELIX:
@@ -124,7 +124,7 @@ def _curved_d2(c, g, header, nurbs_f, iu, iv, iw, px, py, pz, pu, pv, pw, bound2
             return math.inf
         d2, _ = helix_nearest(pu, pv, pw, g[0], g[1], g[2], g[13], g[3], g[4], g[14])
         return d2
-    return nurbs_distance2(nurbs_f, header, px, py, pz, bound2)
+    return nurbs_search(nurbs_f, header, px, py, pz, bound2, work)
 
 
 @njit(cache=True, nogil=True)
@@ -156,9 +156,13 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
         return 0, 0
     first = first_back[lo]
     last = min(n_segments, hi + window_ahead + 1)
+    samples = 0  # the most samples of a NURBS table in the window: the size of the search's scratch
     for s in range(first, last):
         if seg_class[s] >= HELIX:
             curved = True
+        if seg_class[s] == NURBS:
+            samples = max(samples, nurbs_i[s, 3])
+    work = np.empty(nurbs_work_size(samples))
     for i in range(m):
         own = hints[i] if per_point else hints[0]
         if per_point and not (0 <= own < n_segments and seg_class[own] != SKIP):
@@ -203,7 +207,7 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
                     continue
                 iu, iv, iw = axes[s, 0], axes[s, 1], axes[s, 2]
                 d2 = _curved_d2(seg_class[s], geometry[s], nurbs_i[s], nurbs_f, iu, iv, iw, px, py, pz,
-                                points[i, iu], points[i, iv], points[i, iw], best)  # fmt: skip
+                                points[i, iu], points[i, iv], points[i, iw], best, work)  # fmt: skip
                 if d2 < best:
                     best = d2
         out[i] = math.sqrt(best)

@@ -6,8 +6,10 @@ circle, clamped to the swept range, compared with both end points. Helices use :
 (compiled): the distance along a helix has at most one local minimum in each stretch where it is convex
 (one per turn, around the point's own angle), found there by safeguarded Newton, and the best of those
 and the two ends is the global minimum. NURBS segments use their curve's own exact search
-(:meth:`cnc_gym.toolpath.nurbs.NurbsCurve.nearest`); :func:`nurbs_table` and :func:`nurbs_distance2` are
-the same search compiled, for the contour meter's hot loop.
+(:meth:`cnc_gym.toolpath.nurbs.NurbsCurve.nearest`); :func:`nurbs_table` and :func:`nurbs_distance2` search
+the same sample table compiled, for the contour meter's hot loop, refining every bracket that a bounding
+sphere of the curve between two neighbouring samples cannot rule out (and allocating nothing in the loop:
+:func:`nurbs_search`).
 
 Numba is imported with this module, which :meth:`~cnc_gym.toolpath.Toolpath.nearest` imports on first use
 (the interpreter and ``cnc-gym trace`` never need it).
@@ -245,34 +247,67 @@ def helix_nearest(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep) -> tuple[
 
 
 # ------------------------------------------------------------------------------- NURBS, compiled
-# A curve's table for nurbs_distance2: ints [order k, spans, samples n, samples per span], and floats
+# A curve's table for nurbs_distance2: ints [offset, order k, spans, samples n, samples per span], and floats
 # [origin (3), Newton step tolerance, bounding-sphere centre (3) and radius, then the blocks below].
 _NURBS_HEADER_F = 8
-_NURBS_PRUNE_ABOVE_SAMPLES = 160  # as NurbsCurve.nearest: smaller tables are scanned whole
-_NURBS_STARTS = 3  # Newton runs from the best-ranked brackets, plus one frozen at the best sample
 _NURBS_NEWTON_STEPS = 8
+_SPHERE_MARGIN = 1e-9  # relative and absolute (mm): the pruning tests leave this much for rounding
+
+
+def _interval_spheres(curve) -> tuple[np.ndarray, np.ndarray]:
+    """A sphere (centre (n - 1, 3), radius (n - 1,)) holding the curve between each two neighbouring
+    samples of its table. On each such interval the homogeneous polynomial is rewritten in Bernstein form:
+    with positive weights the curve there is a convex combination of the projected Bernstein points, so
+    the sphere around them holds it. A radius is ``inf`` where a Bernstein weight is not positive (the
+    bound then prunes nothing)."""
+    k = int(curve.order)
+    t = np.asarray(curve._sample_t, dtype=np.float64)
+    span = np.minimum(np.arange(len(t) - 1) // int(curve._per_span), len(curve._mid) - 1)
+    a = (t[:-1] - curve._mid[span]) * curve._inv_half[span]
+    width = (t[1:] - t[:-1]) * curve._inv_half[span]
+    coef = curve._poly[span, :, :4]  # (intervals, k, 4): powers of u of the homogeneous coordinates
+    # In s ∈ [0, 1] with u = a + width·s: q_j = Σ_r c_r C(r, j) a^(r-j) width^j.
+    q = np.zeros_like(coef)
+    for r in range(k):
+        for j in range(r + 1):
+            q[:, j] += coef[:, r] * (math.comb(r, j) * a ** (r - j) * width**j)[:, None]
+    # Bernstein coefficients: b_j = Σ_{i ≤ j} C(j, i) / C(k - 1, i) q_i.
+    bern = np.zeros_like(q)
+    for j in range(k):
+        for i in range(j + 1):
+            bern[:, j] += q[:, i] * (math.comb(j, i) / math.comb(k - 1, i))
+    weight = bern[:, :, 3]
+    positive = np.all(weight > 0, axis=1)
+    points = bern[:, :, :3] / np.where(weight > 0, weight, 1.0)[:, :, None]
+    centre = points.mean(axis=1)
+    radius = np.sqrt(np.max(np.sum((points - centre[:, None, :]) ** 2, axis=2), axis=1))
+    return centre, np.where(positive, radius, np.inf)
 
 
 def nurbs_table(curve, offset: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The arrays :func:`nurbs_distance2` searches: ``curve``'s span polynomials and coarse sample table
     (those of :meth:`~cnc_gym.toolpath.nurbs.NurbsCurve.nearest`) flattened into floats, with a bounding
-    sphere of all control points (a NURBS curve with positive weights lies in their convex hull), and the
-    header ``[offset, order, spans, samples, samples per span]`` (``offset``: where the floats will start
-    in a table holding several curves)."""
+    sphere of all control points (a NURBS curve with positive weights lies in their convex hull) and one of
+    the curve between each two neighbouring samples (:func:`_interval_spheres`), and the header
+    ``[offset, order, spans, samples, samples per span]`` (``offset``: where the floats will start in a
+    table holding several curves)."""
     k = int(curve.order)
     spans = len(curve._mid)
     n = len(curve._sample_t)
     hull = curve.control_points
     centre = hull.mean(axis=0)
     radius = float(np.sqrt(np.max(np.sum((hull - centre) ** 2, axis=1))))
+    interval_centre, interval_radius = _interval_spheres(curve)
+    interval_centre = interval_centre - curve._origin  # relative, as the sample table
     blocks = [
         curve._origin, [curve._nearest_step_tolerance], centre, [radius],
         curve._poly.reshape(-1),  # (spans, k, 12)
         curve._interior_breaks, curve._mid, curve._inv_half,  # spans - 1, spans, spans
-        curve._sample_t, curve._sample_rel_t.T.reshape(-1), curve._sample_rel_sq,  # n, n × 3, n
+        curve._sample_t, curve._sample_rel_t.reshape(-1), curve._sample_rel_sq,  # n, 3 × n (x, y, z), n
         curve._sample_d1_t[0].T.reshape(-1), curve._sample_d1_t[1].T.reshape(-1),  # n × 3 right, left
         curve._sample_rel_d1[0], curve._sample_rel_d1[1],  # n, n
-        curve._span_center_t.T.reshape(-1), curve._span_center_sq, curve._span_radius,  # spans × (3, 1, 1)
+        interval_centre.T.reshape(-1), np.sum(interval_centre**2, axis=1),  # 3 × (n - 1) (blocks), n - 1
+        interval_radius,  # n - 1
     ]  # fmt: skip
     tab_f = np.concatenate([np.asarray(b, dtype=np.float64).ravel() for b in blocks])
     tab_i = np.array([offset, k, spans, n, int(curve._per_span)], dtype=np.int64)
@@ -291,7 +326,7 @@ def _dot3(a, i, x0, x1, x2) -> float:
     return a[3 * i] * x0 + a[3 * i + 1] * x1 + a[3 * i + 2] * x2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h) -> None:
     """Homogeneous coordinates (x, y, z, w) and their first two t-derivatives at t into h (12,)."""
     span = np.searchsorted(breaks, t, side="right")
@@ -308,17 +343,69 @@ def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h) -> None:
 
 
 @njit(cache=True, nogil=True)
+def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h) -> float:
+    """Squared distance at the root of the slope in [lo, hi] (one sample where lo = hi), from t:
+    safeguarded Newton on g = (E·E') W − (E·E) W' (E = A − W p in homogeneous form; g has the slope's sign
+    and root) until a step is below the step tolerance; then the quadratic model's drop finishes it."""
+    t_at, ee, w, g, g_prime, accepted = t, 0.0, 1.0, 0.0, 0.0, False
+    for _ in range(_NURBS_NEWTON_STEPS):
+        t_at = t
+        _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h)
+        e0, e1, e2 = h[0] - h[3] * p0, h[1] - h[3] * p1, h[2] - h[3] * p2
+        f0, f1, f2 = h[4] - h[7] * p0, h[5] - h[7] * p1, h[6] - h[7] * p2
+        s0, s1, s2 = h[8] - h[11] * p0, h[9] - h[11] * p1, h[10] - h[11] * p2
+        ee = e0 * e0 + e1 * e1 + e2 * e2
+        ee1 = e0 * f0 + e1 * f1 + e2 * f2
+        e1e1 = f0 * f0 + f1 * f1 + f2 * f2
+        ee2 = e0 * s0 + e1 * s1 + e2 * s2
+        w = h[3]
+        g = ee1 * w - ee * h[7]
+        g_prime = (e1e1 + ee2) * w - ee1 * h[7] - ee * h[11]
+        if lo == hi:
+            return max(ee / (w * w), 0.0)  # a one-sample bracket: this point
+        if g > 0.0:
+            hi = t
+        if g < 0.0:
+            lo = t
+        newton = t - g / g_prime if g_prime > 0.0 else math.nan
+        accepted = lo <= newton <= hi  # False for NaN: a concave model bisects
+        t = newton if accepted else 0.5 * (lo + hi)
+        if abs(t - t_at) <= step_tolerance:
+            break
+    d2 = ee / (w * w)
+    # A last Newton step below the tolerance: the quadratic model's drop g²/(g' W³) finishes it.
+    if accepted and g_prime > 0.0 and abs(t - t_at) <= step_tolerance:
+        d2 = d2 - g * g / (g_prime * w**3)
+    return max(d2, 0.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def nurbs_work_size(samples: int) -> int:
+    """Size of the float scratch array of :func:`nurbs_search` on curves of at most ``samples`` samples
+    (one array serves every call of a loop: the search itself allocates nothing)."""
+    return samples + 12
+
+
+@njit(cache=True, nogil=True)
 def nurbs_distance2(tab_f, header, p0, p1, p2, bound2) -> float:
     """Squared distance from (p0, p1, p2) to a NURBS curve (``header`` and floats from :func:`nurbs_table`)
     where it is below ``bound2``; otherwise some value at or above ``bound2`` (``inf`` where the curve's
     bounding sphere is already that far): the caller keeps the least distance, ``bound2`` its best so far.
+    :func:`nurbs_search` with its own scratch array."""
+    return nurbs_search(tab_f, header, p0, p1, p2, bound2, np.empty(nurbs_work_size(header[3])))
+
+
+@njit(cache=True, nogil=True)
+def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
+    """:func:`nurbs_distance2` in a scratch array of :func:`nurbs_work_size` (for this curve or more).
 
     The search of :meth:`~cnc_gym.toolpath.nurbs.NurbsCurve.nearest`, for one point: the sample table
-    brackets every local minimum of the distance (spans whose bounding sphere is farther than some span's
-    start point, or than the bound, are skipped), the three best brackets and the best sample are refined
-    by safeguarded Newton on the slope of the homogeneous form, and the closest wins.
+    brackets every local minimum of the distance; the nearest sample bounds the distance from above, and
+    the brackets whose interval sphere (:func:`_interval_spheres`) comes closer than that bound (and than
+    ``bound2``) are refined by safeguarded Newton on the slope of the homogeneous form, as is the nearest
+    sample itself (never worse than the sampling); the closest wins.
     """
-    o, k, spans, n, per_span = header[0], header[1], header[2], header[3], header[4]
+    o, k, spans, n = header[0], header[1], header[2], header[3]
     r0, r1, r2 = p0 - tab_f[o], p1 - tab_f[o + 1], p2 - tab_f[o + 2]
     step_tolerance = tab_f[o + 3]
     c0, c1, c2 = p0 - tab_f[o + 4], p1 - tab_f[o + 5], p2 - tab_f[o + 6]
@@ -337,135 +424,53 @@ def nurbs_distance2(tab_f, header, p0, p1, p2, bound2) -> float:
     d1_left, o = _take(tab_f, o, 3 * n)
     rel_d1_right, o = _take(tab_f, o, n)
     rel_d1_left, o = _take(tab_f, o, n)
-    span_centre, o = _take(tab_f, o, 3 * spans)
-    span_centre_sq, o = _take(tab_f, o, spans)
-    span_radius, o = _take(tab_f, o, spans)
+    interval_centre, o = _take(tab_f, o, 3 * (n - 1))
+    interval_centre_sq, o = _take(tab_f, o, n - 1)
+    interval_radius, o = _take(tab_f, o, n - 1)
     rel_sq_p = r0 * r0 + r1 * r1 + r2 * r2
+    x_c, y_c, z_c = interval_centre[: n - 1], interval_centre[n - 1 : 2 * n - 2], interval_centre[2 * n - 2 :]
+    d2_sample = work[:n]
+    h = work[n : n + 12]
+    if bound2 < math.inf:
+        # Under a bound (the caller's best so far, often from a neighbouring segment): nothing to search
+        # unless some interval's sphere comes within it.
+        reach0 = math.sqrt(bound2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
+        for i in range(n - 1):
+            reach = reach0 + interval_radius[i]
+            centre2 = interval_centre_sq[i] - 2.0 * (x_c[i] * r0 + y_c[i] * r1 + z_c[i] * r2) + rel_sq_p
+            if centre2 <= reach * reach:
+                break
+        else:
+            return math.inf
 
-    # The samples searched (all, or those of the spans not pruned) and whether neighbours are adjacent.
-    index = np.empty(n, dtype=np.int64)
-    if n > _NURBS_PRUNE_ABOVE_SAMPLES or bound2 < math.inf:
-        # Keep the spans whose bounding sphere comes closer than some span's start point (or than the
-        # caller's bound): the nearest point lies in one of them.
-        upper2 = math.inf
-        for j in range(0, n, per_span):
-            upper2 = min(upper2, rel_sq[j] - 2.0 * _dot3(rel_t, j, r0, r1, r2))
-        upper = min(math.sqrt(max(upper2 + rel_sq_p, 0.0)), math.sqrt(bound2))
-        m = 0
-        for j in range(spans):
-            centre2 = span_centre_sq[j] - 2.0 * _dot3(span_centre, j, r0, r1, r2) + rel_sq_p
-            if math.sqrt(max(centre2, 0.0)) - span_radius[j] <= upper * (1 + 1e-9) + 1e-9:
-                first = j * per_span
-                if m > 0 and index[m - 1] == first:
-                    first += 1
-                for i in range(first, (j + 1) * per_span + 1):
-                    index[m] = i
-                    m += 1
-    else:
-        m = n
-        for i in range(n):
-            index[i] = i
-    if m == 0:
-        return math.inf
-    half_d2 = np.empty(m)
-    slope_right = np.empty(m)
-    slope_left = np.empty(m)
-    for i in range(m):
-        s = index[i]
-        half_d2[i] = 0.5 * (rel_sq[s] - 2.0 * _dot3(rel_t, s, r0, r1, r2) + rel_sq_p)
-        slope_right[i] = rel_d1_right[s] - _dot3(d1_right, s, r0, r1, r2)
-        slope_left[i] = rel_d1_left[s] - _dot3(d1_left, s, r0, r1, r2)
-    # Ranked brackets: slot i < m a minimum at sample i (an end, or a kink at a knot), slot m + i one inside
-    # the interval (i, i + 1); the best _NURBS_STARTS are refined (lowest slot first among equals).
-    n_starts = min(_NURBS_STARTS, 2 * m - 1)
-    best_rank = np.full(_NURBS_STARTS, math.inf)
-    best_slot = np.full(_NURBS_STARTS, -1, dtype=np.int64)
-    best_sample = 0
-    for slot in range(2 * m - 1):
-        if slot < m:
-            i = slot
-            if half_d2[i] < half_d2[best_sample]:
-                best_sample = i
-            ok = (i == 0 or slope_left[i] <= 0.0) and (i == m - 1 or slope_right[i] >= 0.0)
-            rank = half_d2[i] if ok else math.inf
-        else:
-            i = slot - m
-            ok = slope_right[i] < 0.0 and slope_left[i + 1] > 0.0 and index[i + 1] - index[i] == 1
-            rank = min(half_d2[i], half_d2[i + 1]) if ok else math.inf
-        q = n_starts
-        while q > 0 and (rank < best_rank[q - 1] or best_slot[q - 1] < 0):
-            q -= 1
-        if q < n_starts:
-            for z in range(n_starts - 1, q, -1):
-                best_rank[z] = best_rank[z - 1]
-                best_slot[z] = best_slot[z - 1]
-            best_rank[q] = rank
-            best_slot[q] = slot
-    # Runs: the brackets, and one frozen at the best sample (never worse than the sampling). A run whose
-    # bracket is one sample stays there: it is evaluated once.
-    n_runs = n_starts + 1
-    lo = np.empty(n_runs)
-    hi = np.empty(n_runs)
-    t = np.empty(n_runs)
-    valid = np.empty(n_runs, dtype=np.bool_)
-    for r in range(n_runs):
-        if r < n_starts:
-            slot = best_slot[r]
-            valid[r] = math.isfinite(best_rank[r])
-            first = slot if slot < m else slot - m
-            last = first if (slot < m or not valid[r]) else slot - m + 1
-            g_lo, g_hi = slope_right[first], slope_left[last]
-        else:
-            first = last = best_sample
-            g_lo = g_hi = 0.0
-            valid[r] = True
-        lo[r], hi[r] = sample_t[index[first]], sample_t[index[last]]
-        denom = g_hi - g_lo
-        t[r] = lo[r] + (hi[r] - lo[r]) * (-g_lo / denom if denom > 0.0 else 0.5)
-    # Safeguarded Newton on g = (E·E') W − (E·E) W' (E = A − W p in homogeneous form; g has the slope's
-    # sign and root), all runs together until none moves more than the step tolerance.
-    h = np.empty(12)
-    t_at = np.empty(n_runs)
-    g = np.empty(n_runs)
-    g_prime = np.empty(n_runs)
-    ee = np.empty(n_runs)
-    w = np.empty(n_runs)
-    accepted = np.empty(n_runs, dtype=np.bool_)
-    for step in range(_NURBS_NEWTON_STEPS):
-        moved = 0.0
-        for r in range(n_runs):
-            if step > 0 and lo[r] == hi[r]:
-                continue  # a one-sample bracket: the same point, the same numbers
-            t_at[r] = t[r]
-            _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t[r], h)
-            e0, e1, e2 = h[0] - h[3] * p0, h[1] - h[3] * p1, h[2] - h[3] * p2
-            f0, f1, f2 = h[4] - h[7] * p0, h[5] - h[7] * p1, h[6] - h[7] * p2
-            s0, s1, s2 = h[8] - h[11] * p0, h[9] - h[11] * p1, h[10] - h[11] * p2
-            ee_r = e0 * e0 + e1 * e1 + e2 * e2
-            ee1 = e0 * f0 + e1 * f1 + e2 * f2
-            e1e1 = f0 * f0 + f1 * f1 + f2 * f2
-            ee2 = e0 * s0 + e1 * s1 + e2 * s2
-            g[r] = ee1 * h[3] - ee_r * h[7]
-            g_prime[r] = (e1e1 + ee2) * h[3] - ee1 * h[7] - ee_r * h[11]
-            ee[r] = ee_r
-            w[r] = h[3]
-            if g[r] > 0.0:
-                hi[r] = t[r]
-            if g[r] < 0.0:
-                lo[r] = t[r]
-            newton = t[r] - g[r] / g_prime[r] if g_prime[r] > 0.0 else math.nan
-            accepted[r] = lo[r] <= newton <= hi[r]  # False for NaN: a concave model bisects
-            t[r] = newton if accepted[r] else 0.5 * (lo[r] + hi[r])
-            moved = max(moved, abs(t[r] - t_at[r]))
-        if moved <= step_tolerance:
-            break
-    best = math.inf
-    for r in range(n_runs):
-        if not valid[r]:
+    # The nearest sample: an upper bound of the distance. (Coordinates in x, y, z blocks: the loops
+    # vectorise.)
+    x_t, y_t, z_t = rel_t[:n], rel_t[n : 2 * n], rel_t[2 * n :]
+    for i in range(n):
+        d2_sample[i] = rel_sq[i] - 2.0 * (x_t[i] * r0 + y_t[i] * r1 + z_t[i] * r2) + rel_sq_p
+    best_sample = np.argmin(d2_sample)
+    upper = math.sqrt(max(min(d2_sample[best_sample], bound2), 0.0)) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
+    # The nearest sample, refined in place (a one-sample bracket).
+    t = sample_t[best_sample]
+    best = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, t, t, t, step_tolerance, h)
+    # Brackets of a minimum inside an interval (the slope negative right of its first sample, positive left
+    # of its second) whose sphere comes within the bound. (A minimum at a sample, an end or a kink at a
+    # knot, other than the nearest sample is farther than it.)
+    for i in range(n - 1):
+        reach = upper + interval_radius[i]
+        centre2 = interval_centre_sq[i] - 2.0 * (x_c[i] * r0 + y_c[i] * r1 + z_c[i] * r2) + rel_sq_p
+        if centre2 > reach * reach:
             continue
-        d2 = ee[r] / (w[r] * w[r])
-        # A last Newton step below the tolerance: the quadratic model's drop g²/(g' W³) finishes it.
-        if accepted[r] and g_prime[r] > 0.0 and abs(t[r] - t_at[r]) <= step_tolerance:
-            d2 = d2 - g[r] * g[r] / (g_prime[r] * w[r] ** 3)
-        best = min(best, max(d2, 0.0))
+        g_lo = rel_d1_right[i] - _dot3(d1_right, i, r0, r1, r2)
+        if not g_lo < 0.0:
+            continue
+        g_hi = rel_d1_left[i + 1] - _dot3(d1_left, i + 1, r0, r1, r2)
+        if not g_hi > 0.0:
+            continue
+        lo, hi = sample_t[i], sample_t[i + 1]
+        t = lo + (hi - lo) * (-g_lo / (g_hi - g_lo))
+        d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h)
+        if d2 < best:
+            best = d2
+            upper = min(upper, math.sqrt(d2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN)
     return best

@@ -200,9 +200,13 @@ def check_run(controller: Controller, chunk: MotionChunk, overrides: np.ndarray 
         tol_path = tol_path + np.where(reported, np.maximum(chunk.path_s - seg_end, 0.0), 0.0)
     assert np.all(off_path[on_path] <= tol_path[on_path]), "reference off the path"
     assert np.all(np.diff(chunk.path_s) >= -1e-12), "path position went backwards"
-    # no jumps: a chord is never longer than the arc travelled (dropped sub-nm blocks aside)
+    # no jumps: a chord is never longer than the arc travelled (dropped sub-nm blocks aside), give or take how
+    # far each of its two ends may be off the path (the triangle inequality: a capped NURBS table, above,
+    # allows 2.3 h at each end; hypothesis found a 0.12 mm near-cusp piece 2.009 µm over a flat 2 µm)
     step = np.linalg.norm(np.diff(chunk.position, axis=0), axis=1)
-    assert np.all(step <= np.diff(chunk.path_s) + 2e-6), "the reference jumped"
+    off_allowed = np.where(on_path, tol_path, 0.0)
+    chord_slack = 2e-6 + off_allowed[1:] + off_allowed[:-1]
+    assert np.all(step <= np.diff(chunk.path_s) + chord_slack), "the reference jumped"
     # --- speed through each junction (exact crossing speed) against the corner limit, and stops
     s_pts = junctions["s"][1:-1]
     if len(s_pts):

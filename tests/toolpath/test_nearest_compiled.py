@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from cnc_gym.toolpath.nearest import helix_nearest, nurbs_distance2, nurbs_table
+from cnc_gym.toolpath.nearest import _interval_spheres, helix_nearest, nurbs_distance2, nurbs_table
 from cnc_gym.toolpath.nurbs import NurbsCurve
 
 
@@ -87,3 +87,18 @@ def test_nurbs_tables_of_two_curves_share_one_array():
     both = np.concatenate((fa, fb))
     p = b.evaluate([0.3])[0] + 0.01
     assert nurbs_distance2(both, hb, *p, math.inf) == nurbs_distance2(fb, nurbs_table(b)[1], *p, math.inf)
+
+
+@pytest.mark.parametrize("order", [2, 3, 4])
+def test_interval_spheres_hold_the_curve_between_neighbouring_samples(order):
+    # The pruning bound of the compiled search: every point of the curve between two neighbouring samples
+    # of its table lies in that interval's sphere (Bernstein points of the rational curve, positive weights).
+    rng = np.random.default_rng(order)
+    curve = random_curve(rng, 12, order)
+    centre, radius = _interval_spheres(curve)
+    t = curve._sample_t
+    assert np.all(np.isfinite(radius))
+    assert np.all(radius <= np.linalg.norm(np.diff(curve.evaluate(t), axis=0), axis=1) * 10 + 1e-9)  # tight
+    for i in range(len(t) - 1):
+        inside = curve.evaluate(np.linspace(t[i], t[i + 1], 41))
+        assert np.all(np.linalg.norm(inside - centre[i], axis=1) <= radius[i] * (1 + 1e-12) + 1e-12)
