@@ -225,7 +225,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Version History
 
-    - v0: first version.
+    - v0: first version. Its dynamics, reward and observation are unchanged on every preset. Programs
+      that ask for corner smoothing (Syntec G05.1 Q1) now get it, because the controller honours that
+      program feature (docs/motion.md §6); before, it was carried on the tool path with a warning.
+      The benchmark still runs in v0; v1 (:mod:`cnc_gym.envs.feedrate_v1`) is the version to train on.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}
