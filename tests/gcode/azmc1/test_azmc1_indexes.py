@@ -1,9 +1,9 @@
-"""The two AZ-MC1 indexes stay complete and true: docs/azmc1_examples.md (the manual's worked examples,
-E1-E30) and docs/azmc1_alarms.md (its error conditions, A1-A22). These tests fail when a row is missing,
-doubled or out of order, when a test a row names disappears or is renamed, when a golden test is not
-indexed, when a code in "Our code" is raised nowhere in cnc_gym/gcode, when a row's codes differ from its
-minimal programs (``CASES`` of test_azmc1_alarms.py), or when the counts under a table no longer add up.
-Test nodes are found by parsing the test files (no pytest subprocess).
+"""The AZ-MC1 alarm index stays complete and true: docs/azmc1_alarms.md (the manual's error conditions,
+A1-A22). These tests fail when a row is missing, doubled or out of order, when a test a row names disappears
+or is renamed, when a code in "Our code" is raised nowhere in cnc_gym/gcode, when a row's codes and alarms
+differ from its minimal programs (``CASES`` of test_azmc1_alarms.py), or when the counts under the table no
+longer add up. The examples index (docs/azmc1_examples.md) is checked with every dialect's in
+tests/gcode/test_dialect_example_indexes.py.
 """
 
 from __future__ import annotations
@@ -20,25 +20,13 @@ from doc_tables import (
     check_ids,
     check_nodes,
     minimal_cases,
-    module_tests,
-    only_nodes,
     parse_table,
     raised_codes_missing,
 )
 
-EXAMPLES_DOC = ROOT / "docs" / "azmc1_examples.md"
 ALARMS_DOC = ROOT / "docs" / "azmc1_alarms.md"
-EXAMPLES_TESTS = "tests/gcode/azmc1/test_azmc1_examples.py"
 ALARMS_TESTS = "tests/gcode/azmc1/test_azmc1_alarms.py"
-EXAMPLES = [f"E{n}" for n in range(1, 31)]
 ALARMS = [f"A{n}" for n in range(1, 23)]
-
-
-@functools.cache
-def example_rows() -> list[dict[str, str]]:
-    header, table = parse_table(EXAMPLES_DOC.read_text(encoding="utf-8"))
-    assert header == ["#", "Manual section", "What it tests", "Quality", "Status", "Reading"]
-    return table
 
 
 @functools.cache
@@ -47,31 +35,6 @@ def alarm_rows() -> list[dict[str, str]]:
     assert header == ["#", "Condition", "Manual section", "AZ-MC1 alarm", "Our code", "Our alarm", "Status",
                       "Note"]  # fmt: skip
     return table
-
-
-# ---------------------------------------------------------------------- the examples index
-def test_every_example_has_exactly_one_row_in_order():
-    check_ids([row["#"] for row in example_rows()], EXAMPLES)
-
-
-def test_example_rows_are_well_formed_and_name_existing_tests():
-    for row in example_rows():
-        assert row["Quality"] in {"A", "B", "C"} and row["Manual section"].startswith("§"), row
-        assert row["What it tests"] and row["Reading"], row
-        assert only_nodes(row["Status"]), row["#"]
-        check_nodes(row["Status"], row["#"])
-
-
-def test_every_golden_test_is_indexed():
-    named = {name for row in example_rows() for path, name in NODE.findall(row["Status"])
-             if path == EXAMPLES_TESTS}  # fmt: skip
-    assert set(module_tests(EXAMPLES_TESTS)) == named
-
-
-def test_example_counts_add_up():
-    counts = [sum(row["Quality"] == q for row in example_rows()) for q in "ABC"]
-    line = "| tested | " + " | ".join(map(str, counts)) + f" | {sum(counts)} |"
-    assert line in EXAMPLES_DOC.read_text(encoding="utf-8"), line
 
 
 # ---------------------------------------------------------------------- the alarms index

@@ -1,9 +1,9 @@
-"""The two H4C-M indexes stay complete and true: docs/h4cm_examples.md (the manual's worked examples, E1-E44)
-and docs/h4cm_alarms.md (its error conditions, A1-A33). These tests fail when a row is missing, doubled or
-out of order, when a test a row names disappears or is renamed, when a golden test is not indexed, when a
-code in "Our code" is raised nowhere in cnc_gym/gcode, when a row's codes and numbers differ from its minimal
-programs (``CASES`` of test_h4cm_alarms.py), or when the counts under a table no longer add up. Test nodes
-are found by parsing the test files (no pytest subprocess).
+"""The H4C-M alarm index stays complete and true: docs/h4cm_alarms.md (the manual's error conditions,
+A1-A33). These tests fail when a row is missing, doubled or out of order, when a test a row names disappears
+or is renamed, when a code in "Our code" is raised nowhere in cnc_gym/gcode, when a row's codes and alarms
+differ from its minimal programs (``CASES`` of test_h4cm_alarms.py), or when the counts under the table no
+longer add up. The examples index (docs/h4cm_examples.md) is checked with every dialect's in
+tests/gcode/test_dialect_example_indexes.py.
 """
 
 from __future__ import annotations
@@ -19,26 +19,14 @@ from doc_tables import (
     check_ids,
     check_nodes,
     minimal_cases,
-    module_tests,
-    only_nodes,
     parse_table,
 )
 
-EXAMPLES_DOC = ROOT / "docs" / "h4cm_examples.md"
 ALARMS_DOC = ROOT / "docs" / "h4cm_alarms.md"
-EXAMPLES_TESTS = "tests/gcode/h4cm/test_h4cm_examples.py"
 ALARMS_TESTS = "tests/gcode/h4cm/test_h4cm_alarms.py"
-EXAMPLES = [f"E{n}" for n in range(1, 45)]
 ALARMS = [f"A{n}" for n in range(1, 34)]
 ERROR_CODE = re.compile(r"`([a-z0-9]+(?:-[a-z0-9]+)*)`")
 NONE = "—"
-
-
-@functools.cache
-def example_rows() -> list[dict[str, str]]:
-    header, table = parse_table(EXAMPLES_DOC.read_text(encoding="utf-8"))
-    assert header == ["#", "Manual section", "What it tests", "Quality", "Status", "Reading"]
-    return table
 
 
 @functools.cache
@@ -64,31 +52,6 @@ def numbers(cell: str) -> set[int]:
 def cases() -> dict[str, list[tuple[str, int | None]]]:
     """``CASES`` of the alarms tests, parsed: row → [(code, alarm)]."""
     return minimal_cases(ALARMS_TESTS)
-
-
-# ---------------------------------------------------------------------- the examples index
-def test_every_example_has_exactly_one_row_in_order():
-    check_ids([row["#"] for row in example_rows()], EXAMPLES)
-
-
-def test_example_rows_are_well_formed_and_name_existing_tests():
-    for row in example_rows():
-        assert row["Quality"] in {"A", "B", "C"} and row["Manual section"].startswith("§"), row
-        assert row["What it tests"] and row["Reading"], row
-        assert only_nodes(row["Status"]), row["#"]
-        check_nodes(row["Status"], row["#"])
-
-
-def test_every_golden_test_is_indexed():
-    named = {name for row in example_rows() for path, name in NODE.findall(row["Status"])
-             if path == EXAMPLES_TESTS}  # fmt: skip
-    assert set(module_tests(EXAMPLES_TESTS)) == named
-
-
-def test_example_counts_add_up():
-    counts = [sum(row["Quality"] == q for row in example_rows()) for q in "ABC"]
-    line = "| tested | " + " | ".join(map(str, counts)) + f" | {sum(counts)} |"
-    assert line in EXAMPLES_DOC.read_text(encoding="utf-8"), line
 
 
 # ---------------------------------------------------------------------- the alarms index
