@@ -11,8 +11,10 @@ Sections (§n) are those of the GSK 25i programming manual.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from cnc_gym.errors import ConfigError
 from cnc_gym.gcode.offsets import ToolOffsets
@@ -218,3 +220,19 @@ class FlowOptions:
     program_dir: str | None = None
     macro_calls: MacroCalls | None = None
     main_m99: str = "end"
+
+    def program_files(self, main_file: str) -> dict[str, Path]:
+        """Lower-case file name → path of every file in the folder called programs are looked up in:
+        ``program_dir``, else the main program's own folder (none when the main program is not a file).
+        The first of two names that differ only in case wins (sorted order)."""
+        folder = self.program_dir
+        if folder is None:
+            main = Path(main_file)
+            folder = str(main.parent) if main.is_file() else None
+        files: dict[str, Path] = {}
+        if folder is not None and os.path.isdir(folder):
+            for entry in sorted(os.listdir(folder)):
+                path = Path(folder) / entry
+                if path.is_file():
+                    files.setdefault(entry.lower(), path)
+        return files

@@ -287,18 +287,13 @@ class DinRunner:
         st.file = unit.file
 
     def _directory_files(self) -> dict[int, Path]:
+        """Program number → file: the folder's files named by a number with a program suffix."""
         if self._directory is None:
-            folder = self.options.program_dir
-            if folder is None:
-                main = Path(self.main.file)
-                folder = str(main.parent) if main.is_file() else None
             found: dict[int, Path] = {}
-            if folder is not None and os.path.isdir(folder):
-                for entry in sorted(os.listdir(folder)):
-                    path = Path(folder) / entry
-                    stem, suffix = os.path.splitext(entry)
-                    if suffix.lower() in PROGRAM_SUFFIXES and stem.isdigit() and path.is_file():
-                        found.setdefault(int(stem), path)
+            for name, path in self.options.program_files(self.main.file).items():
+                stem, suffix = os.path.splitext(name)
+                if suffix in PROGRAM_SUFFIXES and stem.isdigit():
+                    found.setdefault(int(stem), path)
             self._directory = found
         return self._directory
 

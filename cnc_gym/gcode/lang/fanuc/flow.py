@@ -19,7 +19,6 @@ Sections (§n) are those of the GSK 25i programming manual.
 
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
@@ -306,17 +305,7 @@ class FlowRunner(CallConvention):
 
     def _directory_files(self) -> dict[str, Path]:
         if self._directory is None:
-            folder = self.options.program_dir
-            if folder is None:
-                main = Path(self.main_program.file)
-                folder = str(main.parent) if main.is_file() else None
-            files: dict[str, Path] = {}
-            if folder is not None and os.path.isdir(folder):
-                for entry in sorted(os.listdir(folder)):
-                    path = Path(folder) / entry
-                    if path.is_file():
-                        files.setdefault(entry.lower(), path)
-            self._directory = files
+            self._directory = self.options.program_files(self.main_program.file)
         return self._directory
 
     def _load(self, number: int) -> Unit:
