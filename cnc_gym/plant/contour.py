@@ -22,7 +22,7 @@ sample, on cutting moves only, against the programmed path after compensation (t
   sample whose reference is on a rapid. The flag ``rapids_behind=False`` keeps the earlier rule
   (cutting segments only), with which ``cnc_gym/Feedrate-v0`` and ``-v1`` are registered so that their
   numbers reproduce; it charged the in-position residual at every rapid → cut junction as contour
-  error (docs/plant.md, "Contour error at the start of a cut").
+  error (docs/plant.md, "Contour error at a rapid → cut junction").
 - **Exactness.** Lines: clamped projection. Flat arcs: the radial distance where the point's angle lies
   inside the swept range, else the nearer end point. Helices: :func:`~cnc_gym.toolpath.nearest.helix_nearest`
   (the exact global minimum over the sweep). NURBS: :func:`~cnc_gym.toolpath.nearest.nurbs_distance2` (the
