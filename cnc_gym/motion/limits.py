@@ -583,7 +583,9 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         rates, rotary_limits = _rotary_rates(tp, machine)
         rotary_rate = rates[idx]
 
-    def kinematic_limits(jerk_scale: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    Limits = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+    def kinematic_limits(jerk_scale: np.ndarray | None) -> Limits:
         """(cap, base, acc, jerk) per piece; ``jerk_scale`` (per piece, ≤ 1) scales every jerk limit there
         (the jerk-limited corner rule's share, :func:`_junction_jerk_rule`; None = 1)."""
         j_n, path_j = j_n_axes, path_j_machine
@@ -605,7 +607,8 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         jerk = np.minimum(jerk, path_j_t)
         if math.isfinite(path_j_machine):  # the cross term 3κ·v·a_t ≤ J/3 at every speed up to the cap
             with np.errstate(divide="ignore"):
-                acc = np.minimum(acc, np.where(curved, path_j / np.maximum(9.0 * kappa * cap, 1e-300), np.inf))
+                cross = np.where(curved, path_j / np.maximum(9.0 * kappa * cap, 1e-300), np.inf)
+            acc = np.minimum(acc, cross)
         if tp.rotary_axes:
             # A rotary axis moving with the XYZ path turns at rate·v (deg per mm of path × mm/s): its speed,
             # acceleration and jerk limits cap the path's like a linear axis's projected ones.
