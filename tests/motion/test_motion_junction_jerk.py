@@ -5,7 +5,9 @@ presets that keep GSK's per-axis step (``corner_rule: step``) deliberately allow
 
 from __future__ import annotations
 
+import importlib.util
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,73 +25,19 @@ T = 0.002
 #: braking manoeuvre's end, which the third difference divides by T³.
 POSITION_NOISE_MM = 1e-9
 
-AXIS_JERK = np.array([50000.0, 20000.0, 8000.0])
-PER_AXIS = machine_from_dict({
-    "name": "jerk-axes", "controller": {"corner_rule": "jerk", "lookahead_blocks": 16},
-    "axes": {"x": {"max_jerk_mm_s3": AXIS_JERK[0]},
-             "y": {"max_jerk_mm_s3": AXIS_JERK[1], "max_accel_mm_s2": 2000},
-             "z": {"max_jerk_mm_s3": AXIS_JERK[2], "max_accel_mm_s2": 1000}},
-})  # fmt: skip
-PATH_JERK = 9000.0
+SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "bench_junction_jerk.py"
+_spec = importlib.util.spec_from_file_location("bench_junction_jerk", SCRIPT)
+bench = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(bench)  # the random programs and machines the docs' figures come from
 
-
-def path_norm_machine(rule: str = "jerk"):
-    # per-axis limits well above the path-norm ones, so that the norms bind (as in test_motion_path_norm.py)
-    return machine_from_dict({
-        "name": "jerk-norm",
-        "controller": {"max_centripetal_accel_mm_s2": 50000, "path_max_accel_mm_s2": 800,
-                       "path_max_jerk_mm_s3": PATH_JERK, "corner_rule": rule},
-        "axis_defaults": {"max_accel_mm_s2": 20000, "max_jerk_mm_s3": 500000, "rapid_accel_mm_s2": 20000,
-                          "rapid_jerk_mm_s3": 500000, "corner_step_mm_min": 300},
-    })  # fmt: skip
+AXIS_JERK, PATH_JERK = bench.AXIS_JERK, bench.PATH_JERK
+PER_AXIS = bench.axis_machine("jerk")
+path_norm_machine = bench.path_norm_machine
+random_polyline, random_chain = bench.random_polyline, bench.random_chain
 
 
 def finite_difference_jerk(tp: Toolpath, chunk: MotionChunk) -> np.ndarray:
-    """Third differences of the reference positions over the whole run (at rest at the start before it and at
-    the end after it), / T³: (n + 3, 3)."""
-    start = tp.start[:1]
-    pos = np.vstack((np.repeat(start, 3, axis=0), chunk.position, np.repeat(chunk.position[-1:], 3, axis=0)))
-    return np.diff(pos, 3, axis=0) / T**3
-
-
-def random_polyline(rng: np.random.Generator, n: int) -> Toolpath:
-    """3-D G01 chains: turns from float noise to reversals, segments from 3 µm to 20 mm."""
-    b = ToolpathBuilder()
-    p = np.zeros(3)
-    d = np.array([1.0, 0.0, 0.0])
-    for line in range(1, n + 1):
-        turn = float(rng.choice([0.0, 1e-13, 1e-3, 1e-2, 0.05, 0.2, 1.0, 3.0])) * rng.random()
-        d = d + rng.normal(size=3) * turn
-        d /= np.linalg.norm(d)
-        q = p + d * 10 ** rng.uniform(-2.5, 1.3)
-        b.line(tuple(p), tuple(q), feed=float(rng.uniform(300.0, 12000.0)), line=line)
-        p = q
-    return b.build()
-
-
-def random_chain(rng: np.random.Generator, n: int) -> Toolpath:
-    """XY chains of lines and arcs: tangent joins (curvature jumps only), gentle and sharp kinks."""
-    b = ToolpathBuilder()
-    p = np.zeros(3)
-    heading = 0.0
-    for line in range(1, n + 1):
-        if rng.random() < 0.5:
-            heading += float(rng.choice([0.0, 0.0, 1e-3, 0.05, 0.5, 2.0]) * rng.normal())
-        feed = float(rng.uniform(300.0, 12000.0))
-        if rng.random() < 0.5:
-            q = p + 10 ** rng.uniform(-2.0, 1.3) * np.array([math.cos(heading), math.sin(heading), 0.0])
-            b.line(tuple(p), tuple(q), feed=feed, line=line)
-        else:
-            radius = 10 ** rng.uniform(-1.0, 1.3)
-            side = float(rng.choice([-1.0, 1.0]))
-            sweep = side * float(rng.uniform(0.05, 3.0))
-            center = p + radius * side * np.array([-math.sin(heading), math.cos(heading), 0.0])
-            phi = math.atan2(p[1] - center[1], p[0] - center[0]) + sweep
-            q = center + radius * np.array([math.cos(phi), math.sin(phi), 0.0])
-            b.arc(tuple(p), tuple(q), tuple(center), Plane.XY, sweep, feed=feed, line=line)
-            heading += sweep
-        p = q
-    return b.build()
+    return bench.finite_difference_jerk(tp, chunk, T)
 
 
 def run(tp: Toolpath, machine, knobs: list[float]) -> tuple[Controller, MotionChunk]:
@@ -119,7 +67,7 @@ def test_finite_difference_jerk_of_every_axis_holds_through_kinks(seed, n_blocks
 @given(seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(2, 20), knobs=knob_lists)
 def test_finite_difference_jerk_norm_holds_through_line_arc_junctions(seed, n_blocks, knobs):
     tp = random_chain(np.random.default_rng(seed), n_blocks)
-    _, chunk = run(tp, path_norm_machine(), knobs)
+    _, chunk = run(tp, path_norm_machine("jerk"), knobs)
     jerk = np.linalg.norm(finite_difference_jerk(tp, chunk), axis=1)
     assert np.all(jerk <= PATH_JERK * (1 + 1e-9) + POSITION_NOISE_MM / T**3)
 
