@@ -19,7 +19,9 @@ Per motion segment (mm, s):
   max|u_k| is the largest direction component over the segment, exact for arcs).
 
 Per point: the hard junction limit (corner step P1227: v ≤ min_k step_k/|Δu_k|, Δu the change of unit
-tangent; both neighbours' caps), 0 at mandatory stops (exact stop G09/G61, dwell, rapid ↔ cutting,
+tangent; both neighbours' caps; with ``controller.corner_rule: jerk`` also the jerk-limited corner rule of
+:func:`_junction_jerk_rule`, which may make a kink a stop and scales the jerk of the pieces around the
+junctions it passes), 0 at mandatory stops (exact stop G09/G61, dwell, rapid ↔ cutting,
 after every rapid, tool or spindle change, program end, or every junction when look-ahead is off), and
 the acceleration bound on arrival ``a_in`` (a backward pass so that a lower acceleration limit ahead can
 always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k), restarted at every mandatory stop), and the
