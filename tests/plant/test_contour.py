@@ -417,7 +417,7 @@ def test_rapids_behind_only_within_the_window():
     meter = ContourErrorMeter(tp, window_back=2)
     on_rapid = np.array([[0.0, 0.0, 1.0]])
     np.testing.assert_allclose(meter.measure(on_rapid, 2), [0.0], atol=1e-12)  # window [0, ...]
-    np.testing.assert_allclose(meter.measure(on_rapid, 4), [math.sqrt(2.0)], atol=1e-12)  # [2, ...): (1, 0, 0)
+    np.testing.assert_allclose(meter.measure(on_rapid, 4), [math.sqrt(2.0)], atol=1e-12)  # from (1, 0, 0)
 
 
 def test_the_env_meter_rule_removes_the_rapid_to_cut_spike_and_nothing_else():
