@@ -53,7 +53,7 @@ from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
 
 #: The env versions a training config may name.
-ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1")
+ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
 #: A program entry naming a whole split of a benchmark suite.
 SUITE_PREFIX = "suite:"
 #: Keyword arguments a trained model records (plain JSON in its zip), so that ``cnc-gym bench`` and

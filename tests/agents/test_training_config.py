@@ -48,7 +48,7 @@ V1 = "env: {id: cnc_gym/Feedrate-v1, programs: [circle]"
         (V1 + ", reward_v1: {finish: 0}}\n", r"env.reward_v1.finish must be in \(0, 1e6\]"),
         (V1 + ", randomize: {kv_scale: [2, 1]}}\n", "env.randomize.kv_scale must be"),
         (V1 + ", randomize: {feed_scale: [0.5, 20]}}\n", r"env.randomize.feed_scale ends must be in"),
-        ("env: {id: cnc_gym/Feedrate-v2}\n", "env.id must be one of"),
+        ("env: {id: cnc_gym/Feedrate-v9}\n", "env.id must be one of"),
         ("env: {programs: ['suite:cnc-bench-v1/test']}\n", "the test split is for the reported result"),
         ("env: {programs: ['suite:nope/train']}\n", "unknown suite 'nope'"),
         ("env: {programs: ['suite:cnc-bench-v1']}\n", "suite:<name>/<split>"),
