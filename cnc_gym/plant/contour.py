@@ -190,7 +190,8 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
             curved = True
         if seg_class[s] == NURBS:
             samples = max(samples, nurbs_i[s, 3])
-    work = np.empty(nurbs_work_size(samples))
+    # (No window without a NURBS row allocates: an empty view of ``out`` stands for the scratch there.)
+    work = np.empty(nurbs_work_size(samples)) if samples > 0 else out[:0]
     for i in range(m):
         own = hints[i] if per_point else hints[0]
         if per_point and not (0 <= own < n_segments and is_cutting(seg_class[own])):

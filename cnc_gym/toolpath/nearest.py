@@ -392,40 +392,44 @@ def _dot3(a, i, x0, x1, x2) -> float:
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h) -> None:
-    """Homogeneous coordinates (x, y, z, w) and their first two t-derivatives at t into h (12,)."""
+def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t):
+    """Homogeneous coordinates (x, y, z, w) and their first two t-derivatives at t (12 values), by Horner's
+    rule in registers."""
     span = np.searchsorted(breaks, t, side="right")
     u = (t - mid[span]) * inv_half[span]
-    base = span * k * 12
-    for c in range(12):
-        h[c] = 0.0
-    power = 1.0
-    for r in range(k):
-        row = base + r * 12
-        for c in range(12):
-            h[c] += power * poly[row + c]
-        power *= u
+    row = (span * k + k - 1) * 12
+    h0, h1, h2, h3 = poly[row], poly[row + 1], poly[row + 2], poly[row + 3]
+    h4, h5, h6, h7 = poly[row + 4], poly[row + 5], poly[row + 6], poly[row + 7]
+    h8, h9, h10, h11 = poly[row + 8], poly[row + 9], poly[row + 10], poly[row + 11]
+    for r in range(k - 2, -1, -1):
+        row = (span * k + r) * 12
+        h0, h1, h2, h3 = (h0 * u + poly[row], h1 * u + poly[row + 1], h2 * u + poly[row + 2],
+                          h3 * u + poly[row + 3])  # fmt: skip
+        h4, h5, h6, h7 = (h4 * u + poly[row + 4], h5 * u + poly[row + 5], h6 * u + poly[row + 6],
+                          h7 * u + poly[row + 7])  # fmt: skip
+        h8, h9, h10, h11 = (h8 * u + poly[row + 8], h9 * u + poly[row + 9], h10 * u + poly[row + 10],
+                            h11 * u + poly[row + 11])  # fmt: skip
+    return h0, h1, h2, h3, h4, h5, h6, h7, h8, h9, h10, h11
 
 
 @njit(cache=True, nogil=True)
-def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h) -> float:
+def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance) -> float:
     """Squared distance at the root of the slope in [lo, hi] (one sample where lo = hi), from t:
     safeguarded Newton on g = (E·E') W − (E·E) W' (E = A − W p in homogeneous form; g has the slope's sign
     and root) until a step is below the step tolerance; then the quadratic model's drop finishes it."""
     t_at, ee, w, g, g_prime, accepted = t, 0.0, 1.0, 0.0, 0.0, False
     for _ in range(_NURBS_NEWTON_STEPS):
         t_at = t
-        _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h)
-        e0, e1, e2 = h[0] - h[3] * p0, h[1] - h[3] * p1, h[2] - h[3] * p2
-        f0, f1, f2 = h[4] - h[7] * p0, h[5] - h[7] * p1, h[6] - h[7] * p2
-        s0, s1, s2 = h[8] - h[11] * p0, h[9] - h[11] * p1, h[10] - h[11] * p2
+        x, y, z, w, x1, y1, z1, w1, x2, y2, z2, w2 = _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t)
+        e0, e1, e2 = x - w * p0, y - w * p1, z - w * p2
+        f0, f1, f2 = x1 - w1 * p0, y1 - w1 * p1, z1 - w1 * p2
+        s0, s1, s2 = x2 - w2 * p0, y2 - w2 * p1, z2 - w2 * p2
         ee = e0 * e0 + e1 * e1 + e2 * e2
         ee1 = e0 * f0 + e1 * f1 + e2 * f2
         e1e1 = f0 * f0 + f1 * f1 + f2 * f2
         ee2 = e0 * s0 + e1 * s1 + e2 * s2
-        w = h[3]
-        g = ee1 * w - ee * h[7]
-        g_prime = (e1e1 + ee2) * w - ee1 * h[7] - ee * h[11]
+        g = ee1 * w - ee * w1
+        g_prime = (e1e1 + ee2) * w - ee1 * w1 - ee * w2
         if lo == hi:
             return max(ee / (w * w), 0.0)  # a one-sample bracket: this point
         if g > 0.0:
@@ -448,7 +452,7 @@ def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_to
 def nurbs_work_size(samples: int) -> int:
     """Size of the float scratch array of :func:`nurbs_search` on curves of at most ``samples`` samples
     (one array serves every call of a loop: the search itself allocates nothing)."""
-    return samples + 12
+    return samples
 
 
 @njit(cache=True, nogil=True)
@@ -501,7 +505,6 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     x_g, y_g = group_centre[:n_groups], group_centre[n_groups : 2 * n_groups]
     z_g = group_centre[2 * n_groups :]
     d2_sample = work[:n]
-    h = work[n : n + 12]
     if bound2 < math.inf:
         # Under a bound (the caller's best so far, often from a neighbouring segment): nothing to search
         # unless some interval's sphere comes within it (tested group by group).
@@ -530,7 +533,7 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     upper = math.sqrt(max(min(d2_sample[best_sample], bound2), 0.0)) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
     # The nearest sample, refined in place (a one-sample bracket).
     t = sample_t[best_sample]
-    best = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, t, t, t, step_tolerance, h)
+    best = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, t, t, t, step_tolerance)
     # Brackets of a minimum inside an interval (the slope negative right of its first sample, positive left
     # of its second) whose sphere comes within the bound. (A minimum at a sample, an end or a kink at a
     # knot, other than the nearest sample is farther than it.)
@@ -551,7 +554,7 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
                 continue
             lo, hi = sample_t[i], sample_t[i + 1]
             t = lo + (hi - lo) * (-g_lo / (g_hi - g_lo))
-            d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h)
+            d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance)
             if d2 < best:
                 best = d2
                 upper = min(upper, math.sqrt(d2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN)
