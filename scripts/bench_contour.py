@@ -12,6 +12,8 @@ Usage::
 
     .venv/bin/python scripts/bench_contour.py                        # flat, helix, nurbs; 4000 steps each
     .venv/bin/python scripts/bench_contour.py --steps 2000 --repeats 5
+    PYTHONPATH=<checkout of a commit> .venv/bin/python scripts/bench_contour.py --save /tmp/before
+    .venv/bin/python scripts/bench_contour.py --against /tmp/before   # how far the contour errors moved
 """
 
 from __future__ import annotations
@@ -70,7 +72,7 @@ def record(family: str, steps: int) -> list[tuple[ContourErrorMeter, np.ndarray,
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(nogil=True)  # (no disk cache: it would keep the kernel of whichever checkout compiled it first)
 def _replay(points, hints, offsets, seg_class, axes, geometry, first_back, nurbs_f, nurbs_i, ahead, out):
     points, hints, out, seg_class, axes = lent(points), lent(hints), lent(out), lent(seg_class), lent(axes)
     geometry, first_back, nurbs_f, nurbs_i = lent(geometry), lent(first_back), lent(nurbs_f), lent(nurbs_i)
@@ -80,8 +82,8 @@ def _replay(points, hints, offsets, seg_class, axes, geometry, first_back, nurbs
                        ahead, out[p0:p1])  # fmt: skip
 
 
-def replay_us(recorded, repeats: int) -> tuple[float, int]:
-    """(best µs per call over ``repeats`` replays, calls)."""
+def replay_us(recorded, repeats: int) -> tuple[float, int, list[np.ndarray]]:
+    """(best µs per call over ``repeats`` replays, calls, the contour errors of each meter's calls)."""
     n_calls = sum(len(offsets) - 1 for _, _, _, offsets in recorded)
     outs = [np.empty(len(points)) for _, points, _, _ in recorded]
 
@@ -95,7 +97,7 @@ def replay_us(recorded, repeats: int) -> tuple[float, int]:
         start = time.perf_counter()
         replay()
         best = min(best, time.perf_counter() - start)
-    return 1e6 * best / n_calls, n_calls
+    return 1e6 * best / n_calls, n_calls, outs
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -103,12 +105,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--families", nargs="+", default=list(FAMILIES), choices=list(FAMILIES))
     parser.add_argument("--steps", type=int, default=4000, help="env steps recorded per family")
     parser.add_argument("--repeats", type=int, default=9, help="replays; the best one counts (default 9)")
+    parser.add_argument("--save", metavar="DIR", type=Path, help="write each family's points and errors")
+    parser.add_argument("--against", metavar="DIR", type=Path,
+                        help="compare the errors with those --save wrote in DIR")  # fmt: skip
     args = parser.parse_args(argv)
     recorded = {family: record(family, args.steps) for family in args.families}
-    times = {family: replay_us(calls, args.repeats) for family, calls in recorded.items()}
+    times = {}
+    for family, calls in recorded.items():
+        times[family] = replay_us(calls, args.repeats)
+        points = np.concatenate([p for _, p, _, _ in calls])
+        errors = np.concatenate(times[family][2])
+        if args.save:
+            args.save.mkdir(parents=True, exist_ok=True)
+            np.savez(args.save / f"{family}.npz", points=points, errors=errors)
+        if args.against:
+            saved = np.load(args.against / f"{family}.npz")
+            if saved["points"].shape != points.shape or not np.array_equal(saved["points"], points):
+                print(f"{family}: the recorded points differ from those in {args.against}")
+            else:
+                moved = np.abs(errors - saved["errors"])
+                print(f"{family}: contour errors moved by at most {moved.max():.2e} mm "
+                      f"({int(np.count_nonzero(moved))} of {moved.size} samples moved)")  # fmt: skip
     flat = times["flat"][0] if "flat" in times else None
     print(f"{'family':8s} {'calls':>7s} {'µs/call':>9s} {'over flat':>10s}")
-    for family, (us, n_calls) in times.items():
+    for family, (us, n_calls, _) in times.items():
         over = f"{us - flat:+10.3f}" if flat is not None else f"{'-':>10s}"
         print(f"{family:8s} {n_calls:7d} {us:9.3f} {over}")
     return 0
