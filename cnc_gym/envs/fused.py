@@ -8,10 +8,13 @@ at every servo sample, the statistics, the reward, the end of the episode and th
 flagged for a reset are reset in the same call instead (Gymnasium's next-step autoreset).
 
 The observation and the reward are declared, not coded: the kernel computes a vector of named per-step
-*signals* (:data:`SIGNALS`) and assembles the observation from an :class:`ObservationSpec` (signals and
-blocks of look-ahead values, each with a transform, a scale and bounds) and the reward from a
-:class:`RewardSpec` (a weighted sum of transformed signals). A new env version defines its own specs (and,
-if it needs one, adds a signal here) without copying the kernel.
+*signals* (:data:`SIGNALS`) and assembles the observation from an :class:`ObservationSpec` (signals,
+blocks of look-ahead values, and signals after the blocks, each with a transform, a scale and bounds) and
+the reward from a :class:`RewardSpec` (a weighted sum of transformed signals, optionally with a finish bonus
+per program, its terms shown in the info). A batch given a :class:`Planner` also evaluates the planner's
+override every step, from a schedule table packed with each program. A new env version defines its own
+specs (and, if it needs one, adds a signal here) without copying the kernel: Feedrate-v1 and v2 are the
+same call as v0 with their specs, the planner and their info keys (:attr:`FeedrateBatch.info_keys`).
 
 Each program is packed once (:class:`PackedProgram`: the controller's limit tables, the contour meter's
 tables, the per-program constants) and all programs of a batch are concatenated into one float and one
@@ -851,7 +854,9 @@ class FeedrateBatch:
     optionally ``contour_rapids_behind`` (bool, default True: the meter's rule, :class:`ContourErrorMeter`).
     ``parallel``: step the envs in numba's threads (None: from :data:`PARALLEL_MIN_ENVS` envs on, when
     numba has at least :data:`PARALLEL_MIN_THREADS` threads). ``plant``: the plant backend (default: the
-    LTI :class:`ServoPlant`; one whose ``compiled_step`` is False runs the modular step).
+    LTI :class:`ServoPlant`; one whose ``compiled_step`` is False runs the modular step). ``planner``: a
+    :class:`Planner` whose override is the signal ``planner_override`` and the info's ``planner_override``
+    (default: none, the signal 0).
     """
 
     def __init__(self, n_envs: int, machine: MachineConfig, config: dict[str, Any], obs_spec: ObservationSpec,
