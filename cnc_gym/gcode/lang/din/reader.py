@@ -47,9 +47,10 @@ if TYPE_CHECKING:
 _NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 #: A block of literal words only, none of them a parameter or call address (R, P, L): the hot path.
 _PLAIN_BLOCK = re.compile(rf"(?:[ \t]*[A-KMNOQS-Z][ \t]*{_NUMBER})*[ \t]*")
-#: The words of a line that matched _PLAIN_BLOCK (whose numbers are then well formed: the loose [0-9.]+ splits
-#: them the same way, and faster).
-_PLAIN_WORD = re.compile(r"([A-Z])[ \t]*([-+]?[0-9.]+)")
+#: The words of a line that matched _PLAIN_BLOCK, as text (its numbers are well formed: the loose [0-9.]+
+#: splits them the same way, and faster).
+_PLAIN_WORD = re.compile(r"[A-Z][ \t]*[-+]?[0-9.]+")
+_BLANKS = " \t"
 _HEADER = re.compile(r"%[ \t]*(L?)[ \t]*([0-9]*)[ \t]*")
 #: Most digits of a program number (``%nnnnnnnn``, §2.2).
 PROGRAM_DIGITS = 8
@@ -116,8 +117,9 @@ class DinReader:
         # Each address's (number kind, low, high), for the hot path (N is the block number, not a word).
         self._kinds = {letter: (self._number_kind(letter, rule), rule.low, rule.high)
                        for letter, rule in self._rules.items() if letter != "N"}  # fmt: skip
-        # Literal words already read in this file: (letter, digits) → (letter, value, digits).
-        self._seen: dict[tuple[str, str], tuple[str, float, str]] = {}
+        # Literal words already read in this file: text → (letter, value, digits); block numbers: text → n.
+        self._seen: dict[str, tuple[str, float, str]] = {}
+        self._numbers: dict[str, int] = {}
 
     # ------------------------------------------------------------------ the file
     def read(self, text: str, file: str = "<program>") -> DinProgram:
@@ -132,7 +134,7 @@ class DinReader:
         lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         upper = text.upper().replace("\r\n", "\n").replace("\r", "\n").split("\n") if ascii_text else lines
         comments = "(" in text or ")" in text
-        self._seen = {}
+        self._seen, self._numbers = {}, {}
         for lineno, raw in enumerate(lines, 1):
             try:
                 if not ascii_text and not raw.isascii():
@@ -157,7 +159,7 @@ class DinReader:
                     blocks.append(block)
             except ProgramError as err:
                 raise self._hinted(err, raw).located(file, lineno) from None
-        self._seen = {}
+        self._seen, self._numbers = {}, {}
         main_start = next((start for kind, _, start, _ in headers if kind == "main"), None)
         program_number = next((number for kind, number, _, _ in headers if kind == "main"), None)
         # Units: each %L runs to the next header; the main program from its header (or the file's start)
@@ -233,23 +235,23 @@ class DinReader:
     def _plain(self, body: str, lineno: int, skip: int) -> Block | None:
         """A block of literal words (the hot path; ``body`` matched ``_PLAIN_BLOCK``): each checked by its
         address's precomputed rule, and split for the core (``gs``, ``ms``, ``values``) in the same pass.
-        A word seen before in the file (G01, F1200, a repeated coordinate) is taken checked from
-        ``self._seen``."""
+        A word seen before in the file (G01, F1200, a repeated coordinate, a block number) is taken checked
+        from ``self._seen`` (``self._numbers``)."""
+        found = _PLAIN_WORD.findall(body)
+        number = None
+        if found and found[0][0] == "N":  # the block number, off the words (one N, at the head)
+            head = found.pop(0)
+            number = self._numbers.get(head)
+            if number is None:
+                number = self._numbers[head] = self._block_number(head[1:].lstrip(_BLANKS))
         words: list[tuple] = []
         values: dict[str, float] = {}
         gs = ms = None
-        number = None
         seen = self._seen
-        for pair in _PLAIN_WORD.findall(body):
-            word = seen.get(pair)
+        for text in found:
+            word = seen.get(text)
             if word is None:
-                word = self._plain_word(pair)
-                if word is None:  # the block number
-                    if number is not None or words:
-                        raise ProgramError("N (the block number) begins the block, once", code="syntax")
-                    number = self._block_number(pair[1])
-                    continue
-                seen[pair] = word
+                word = seen[text] = self._plain_word(text)
             words.append(word)
             letter, value, _ = word
             if letter == "G":
@@ -264,14 +266,15 @@ class DinReader:
             return None
         return literal_block(lineno, tuple(words), gs, ms, values, number, skip)
 
-    def _plain_word(self, pair: tuple[str, str]) -> tuple[str, float, str] | None:
-        """A literal word ``(letter, value, digits)`` after its address's rule (None: the block number N)."""
-        letter, digits = pair
+    def _plain_word(self, text: str) -> tuple[str, float, str]:
+        """A literal word ``(letter, value, digits)`` from its text, after its address's rule."""
+        letter = text[0]
+        digits = text[1:].lstrip(_BLANKS)
         kind = self._kinds.get(letter)
         if kind is None:
-            if letter != "N":
-                raise self._unknown_address(letter)
-            return None
+            if letter == "N":
+                raise ProgramError("N (the block number) begins the block, once", code="syntax")
+            raise self._unknown_address(letter)
         unit, low, high = kind
         value = float(digits)
         if unit is _LENGTH:
