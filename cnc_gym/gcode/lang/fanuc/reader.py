@@ -173,6 +173,8 @@ class Reader:
         seen_percent = False
         colon = ":" in self.dialect.program_number_marks
         lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
+        simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
         for line_no, raw in enumerate(lines, start=1):
             stripped = raw.strip(_BLANKS)
             if not stripped:
@@ -190,7 +192,8 @@ class Reader:
                 continue
             try:
                 # Hot path inline: a plain line (no comment, ';', expression) is one regex match.
-                if stripped.isascii() and "(" not in stripped and ")" not in stripped and ";" not in stripped:
+                if simple or (stripped.isascii() and "(" not in stripped and ")" not in stripped
+                              and ";" not in stripped):  # fmt: skip
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
                         text_block = text_block.translate(_NO_BLANKS)
