@@ -70,7 +70,8 @@ class Interpreter:
             skip_signal=skip_signal_surfaces(skip_signal, dialect.axes),
             skip_mask=sum(1 << n for n in block_skip),
             builder=builder,
-            out=CanonicalMachine(builder, start, rotary=builder.rotary_origin, error=self.error),
+            # (the dialect's error, not this object's: no reference cycle through the output stage)
+            out=CanonicalMachine(builder, start, rotary=builder.rotary_origin, error=dialect.error),
             variables=language.variables(dialect),
             comp=CompensationState(settings, settings.new_offsets(tool_offsets)),
         )
