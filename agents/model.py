@@ -154,7 +154,7 @@ def _json(data_bytes: bytes) -> dict[str, Any]:
 
 
 #: Env ids a model may name, and the keyword arguments it may record with their types.
-_ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1")
+_ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
 _ENV_KEYS: dict[str, tuple[type, ...]] = {"action_mode": (str,), "control_period_s": (int, float),
                                           "residual_range": (int, float), "lookahead_mm": (int, float),
                                           "lookahead_points": (int,)}  # fmt: skip

@@ -53,7 +53,7 @@ from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
 
 #: The env versions a training config may name.
-ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1")
+ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
 #: A program entry naming a whole split of a benchmark suite.
 SUITE_PREFIX = "suite:"
 #: Keyword arguments a trained model records (plain JSON in its zip), so that ``cnc-gym bench`` and
@@ -92,12 +92,12 @@ class EnvSettings:
         """Rules across keys: ``(key, problem)``."""
         if self.id == "cnc_gym/Feedrate-v0":
             if self.action_mode == "residual":
-                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v1"
+                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v2 or -v1"
             for key in ("reward_v1", "randomize"):
                 if getattr(self, key) is not None:
-                    yield key, "belongs to cnc_gym/Feedrate-v1 (set id: cnc_gym/Feedrate-v1)"
+                    yield key, "belongs to cnc_gym/Feedrate-v1 and -v2 (set id: cnc_gym/Feedrate-v2)"
         elif self.reward is not None:
-            yield "reward", "holds Feedrate-v0's weights; Feedrate-v1's are reward_v1"
+            yield "reward", "holds Feedrate-v0's weights; those of Feedrate-v1 and -v2 are reward_v1"
         for program in self.programs:
             if program.startswith(SUITE_PREFIX):
                 problem = _suite_problem(program)
@@ -231,7 +231,7 @@ class TrainConfig:
             yield "ppo.batch_size", (f"must not exceed the rollout n_steps × n_envs = {rollout}, "
                                      f"got {self.ppo.batch_size}")  # fmt: skip
         if self.algorithm == "ppo_lagrangian" and self.env.id == "cnc_gym/Feedrate-v0":
-            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v1 (its cost is per mm)"
+            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v2 or -v1 (cost per mm)"
 
 
 def load_config(path: str | Path) -> TrainConfig:

@@ -1,6 +1,6 @@
 """cnc-gym: Gymnasium environments for CNC feed-rate control on real G-code.
 
-Importing the package registers ``cnc_gym/Feedrate-v0`` and ``cnc_gym/Feedrate-v1`` with Gymnasium: at once
+Importing the package registers ``cnc_gym/Feedrate-v0``, ``-v1`` and ``-v2`` with Gymnasium: at once
 when Gymnasium is already imported, otherwise the moment it is (a post-import hook on
 ``gymnasium.envs.registration``). So ``import cnc_gym`` stays cheap for interpreter-only users:
 ``cnc-gym trace`` never loads Gymnasium, numba or scipy. The env module itself is imported by
@@ -22,14 +22,23 @@ _REGISTRATION = "gymnasium.envs.registration"
 def _register() -> None:
     from gymnasium.envs.registration import register, registry
 
+    # v0 and v1 keep the contour meter they were published with (cutting moves only), so their numbers
+    # reproduce; v2 is v1 with the programmed-path meter (docs/plant.md, "Contour error at a rapid → cut
+    # junction").
     if "cnc_gym/Feedrate-v0" not in registry:
-        register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv")
+        register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv",
+                 kwargs={"contour_rule": "cuts"})  # fmt: skip
     if "cnc_gym/Feedrate-v1" not in registry:
-        register(id="cnc_gym/Feedrate-v1", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1")
+        register(id="cnc_gym/Feedrate-v1", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
+                 kwargs={"contour_rule": "cuts"})  # fmt: skip
+    if "cnc_gym/Feedrate-v2" not in registry:
+        register(id="cnc_gym/Feedrate-v2", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
+                 kwargs={"contour_rule": "path"})  # fmt: skip
     import warnings
 
-    # v0 stays supported beside v1 (the benchmark runs its baselines in it): no "out of date" warning.
-    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v0 is out of date",
+    # v0 and v1 stay supported beside v2 (the benchmark runs its baselines in v0, with the path meter; the
+    # published models act in v1): no "out of date" warning.
+    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[01] is out of date",
                             category=DeprecationWarning)  # fmt: skip
 
 

@@ -214,6 +214,14 @@ class ControllerConfig:
     corner_smoothing_max_segment_mm: float = number(
         0.0, 1e-3, 1e6, off=0, unit="mm", doc="smooth only junctions of lines at most this long (the "
         "\"small segment\" condition); 0 = any length", why="1 µm to the travel range.")  # fmt: skip
+    corner_rule: str = choice(
+        "step", ("step", "jerk"), doc="how fast a junction where the tangent or the curvature changes may be "
+        "passed: `step`: GSK's per-axis velocity step (P1227, the axes' `corner_step_mm_min`) only, which "
+        "deliberately allows a step of the axis velocities within one interpolation period (its finite-"
+        "difference jerk is far above the axes' jerk); `jerk`: also the jerk-limited corner rule, so that "
+        "the 2 ms finite-difference jerk of the reference stays within the axes' jerk (and the path-norm "
+        "jerk) at junctions too: a speed limit per junction, a stop where the acceleration alone would "
+        "exceed it, and a lower jerk around the junctions passed (docs/motion.md §7)")  # fmt: skip
     path_max_accel_mm_s2: float = number(
         0.0, 1, 1e6, off=0, unit="mm/s²", doc="limit on the norm of the path acceleration vector "
         "(tangential and centripetal together); 0 = only the per-axis limits", why=_ACCEL_WHY)  # fmt: skip

@@ -1,7 +1,9 @@
 """``cnc-gym run``: simulate a whole program through controller and plant under a policy.
 
 The run goes through the Gymnasium env (``cnc_gym/Feedrate-v0``), the same code path an RL agent uses, so
-a baseline's numbers and a trained agent's numbers are comparable. :func:`simulate` returns a
+a baseline's numbers and a trained agent's numbers are comparable. Its contour error is the programmed-path
+meter's (``contour_rule="path"``, as ``cnc-gym bench`` and Feedrate-v2 measure it), whatever env version
+the policy acts in. :func:`simulate` returns a
 :class:`RunResult`; :func:`run_cli` is what the ``cnc-gym run`` command calls.
 
 Bounded resources: the summary numbers are the env's streaming totals (exact over every servo sample);
@@ -125,6 +127,7 @@ def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
         options["max_blocks"] = max_blocks
     # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
     loaded = load_program(program, dialect, load_machine(machine), **options)
+    kwargs.setdefault("contour_rule", "path")  # the meter's rule (module docstring)
     return gymnasium.make(env_id, programs=[loaded], dialect=dialect, machine=machine, units=units,
                           plant=plant, **kwargs)  # fmt: skip
 

@@ -19,11 +19,13 @@ Usage::
 
     .venv/bin/python scripts/bench_kirl.py                 # the test split
     .venv/bin/python scripts/bench_kirl.py --split all --json
+    .venv/bin/python scripts/bench_kirl.py --no-smoothing     # kinks unblended (the jerk rule stops at them)
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -129,9 +131,19 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--split", default="test", choices=("train", "val", "test", "all"))
     parser.add_argument("--json", action="store_true", help="one JSON object per program")
+    parser.add_argument("--no-smoothing", action="store_true",
+                        help="the controller without corner smoothing (the rest of kirl-planar as it is)")
+    parser.add_argument("--corner-rule", choices=("step", "jerk"),
+                        help="override kirl-planar's controller.corner_rule (jerk)")
     args = parser.parse_args(argv)
     suite = load_suite("kirl-planar-v1")
     machine = load_machine(suite.machine)
+    if args.no_smoothing:
+        machine = dataclasses.replace(machine, controller=dataclasses.replace(
+            machine.controller, corner_smoothing_tolerance_mm=0.0))  # fmt: skip
+    if args.corner_rule:
+        machine = dataclasses.replace(machine, controller=dataclasses.replace(
+            machine.controller, corner_rule=args.corner_rule))  # fmt: skip
     entries = suite.programs(None if args.split == "all" else args.split)
     ratios = []
     if not args.json:

@@ -108,7 +108,8 @@ def test_cli_run_errors_are_one_line(capsys, argv):
 
 # ------------------------------------------------------------------------------------- bounded series
 def test_long_runs_keep_a_bounded_series_with_exact_summary_numbers(star_run):
-    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"])
+    # simulate() measures with the programmed-path meter (contour_rule "path"), whatever the env id.
+    env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"], contour_rule="path")
     binned = run_episode(env, make_policy("constant:1.0"), max_bins=32)
     env.close()
     assert binned.steps == star_run.steps == 540

@@ -1,9 +1,10 @@
 """The leaderboard: a Markdown table generated from ``cnc-gym bench`` JSON Lines records, never typed.
 
-Records from several people and runs merge as long as they share suite (name and hash), split and
-machine; each policy gets one row (its suite score over every program and seed it ran). Of several
-``constant:<x>`` policies only the best-scoring one is shown, labelled as such. Any other policy (a
-trained model, ``module:callable``) is a row of its own, next to the baselines.
+Records from several people and runs merge as long as they share suite (name and hash), split,
+machine, record version and bound version; each policy gets one row (its suite score over every
+program and seed it ran). Of several ``constant:<x>`` policies only the best-scoring one is shown,
+labelled as such. Any other policy (a trained model, ``module:callable``) is a row of its own, next to
+the baselines.
 
 ``scripts/leaderboard.py`` writes the table into docs/benchmark.md between the markers
 :data:`BEGIN` and :data:`END`, and checks that it is up to date (``--check``).
@@ -34,7 +35,8 @@ def _common(records: list[dict[str, Any]], key: str) -> Any:
     values = {str(r.get(key)) for r in records}
     if len(values) != 1:
         raise CncGymError(f"records mix several values of {key!r} ({', '.join(sorted(values))}): one "
-                          "leaderboard table needs one suite, split and machine")  # fmt: skip
+                          "leaderboard table needs one suite, split, machine, record version and bound "
+                          "version (regenerate the older records with cnc-gym bench)")  # fmt: skip
     return records[0].get(key)
 
 
@@ -42,7 +44,7 @@ def leaderboard_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """One row per policy (the best constant only), best score first; the bound last."""
     if not records:
         raise CncGymError("no records to make a leaderboard from")
-    for key in ("suite", "suite_sha256", "split", "machine"):
+    for key in ("suite", "suite_sha256", "split", "machine", "record_version", "bound_version"):
         _common(records, key)
     rows = [r for r in summarize(records, by_family=False) if r["family"] == "all"]
     constants = [r for r in rows if r["policy"].startswith("constant:")]

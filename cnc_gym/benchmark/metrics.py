@@ -24,8 +24,16 @@ from collections import defaultdict
 from collections.abc import Iterable, Sequence
 from typing import Any
 
+#: Version of what a record's metrics mean; records of different versions never share a leaderboard.
+#: 1 (records without the key): contour error on cutting moves only. 2: the programmed-path contour meter
+#: (``contour_rule`` "path": rapids the reference has left are part of the path) and bound version 2.
+RECORD_VERSION = 2
+#: The contour meter's rule every episode of the benchmark is measured with, whatever env it runs in.
+CONTOUR_RULE = "path"
+
 #: Record keys every ``cnc-gym bench`` JSON Lines record carries (more may follow).
 RECORD_KEYS = (
+    "record_version", "contour_rule",
     "suite", "suite_version", "suite_sha256", "split", "program", "program_sha256", "family", "tier",
     "machine", "machine_sha256", "plant", "dialect", "units", "policy", "seed", "commit", "cnc_gym_version",
     "bound_s", "bound_version", "cycle_time_s", "time_ratio", "violation_length_mm", "violation_time_s",

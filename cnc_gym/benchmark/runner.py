@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cnc_gym.benchmark.metrics import episode_score, is_feasible
+from cnc_gym.benchmark.metrics import CONTOUR_RULE, RECORD_VERSION, episode_score, is_feasible
 from cnc_gym.errors import CncGymError
 
 #: The baselines ``cnc-gym bench`` runs when no ``--policy`` is given.
@@ -154,7 +154,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
     # A spec with "{seed}" names one policy per seed (e.g. a model per training seed): each seed's episode
     # runs its own; every other policy is built once. A policy runs in the env it names (env_id,
     # env_kwargs: a trained model's), else in Feedrate-v0; with randomisation off, every version has the
-    # same dynamics and the same metrics.
+    # same dynamics, and every episode is measured with the benchmark's contour rule (CONTOUR_RULE).
     policy = env = None
     try:
         for seed in seeds:
@@ -195,7 +195,7 @@ def _policy_env(spec: str, program: BenchProgram, dialect: str, machine: str, un
     env_id = getattr(policy, "env_id", "cnc_gym/Feedrate-v0")
     kwargs = dict(getattr(policy, "env_kwargs", {}))
     env = gymnasium.make(env_id, **kwargs, programs=[program.text], dialect=dialect, machine=machine,
-                         units=units, plant=plant)  # fmt: skip
+                         units=units, plant=plant, contour_rule=CONTOUR_RULE)  # fmt: skip
     return policy, env
 
 
@@ -286,7 +286,8 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
             for seed in config.seeds if "{seed}" in spec else [None]:
                 make_policy(spec.replace("{seed}", str(seed)), progress=False)
     mach = with_plant_backend(load_machine(config.machine), config.plant)
-    common = {"suite": config.suite or "user", "suite_version": config.suite_version,
+    common = {"record_version": RECORD_VERSION, "contour_rule": CONTOUR_RULE,
+              "suite": config.suite or "user", "suite_version": config.suite_version,
               "suite_sha256": config.suite_sha256, "machine": mach.name,
               "machine_sha256": machine_digest(mach), "plant": mach.plant.backend,
               "dialect": config.dialect, "units": config.units, "commit": current_commit(),

@@ -202,7 +202,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     ``control_period_s`` (a multiple of the interpolation period), ``reward`` (None, a task YAML path or a
     dict of weights), ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
     ``lookahead_points``, ``plant`` (``"lti"`` or ``"mujoco"``: the servo plant, overriding the machine
-    preset's ``plant.backend``; see docs/plant.md). ``reset(seed=..., options={"program":
+    preset's ``plant.backend``; see docs/plant.md), ``contour_rule`` (``"cuts"``, v0's meter: contour
+    error against the cutting moves only; ``"path"``: against the programmed path, with the rapids the
+    reference has left, so the in-position residual of a rapid → cut junction is not counted as error;
+    :class:`~cnc_gym.plant.ContourErrorMeter`). ``reset(seed=..., options={"program":
     name_or_index})``: with several programs the episode's program is drawn with ``self.np_random``; the
     option picks one (a name not in the set is loaded for that episode).
 
@@ -228,7 +231,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     - v0: first version. Its dynamics, reward and observation are unchanged on every preset. Programs
       that ask for corner smoothing (Syntec G05.1 Q1) now get it, because the controller honours that
       program feature (docs/motion.md §6); before, it was carried on the tool path with a warning.
-      The benchmark still runs in v0; v1 (:mod:`cnc_gym.envs.feedrate_v1`) is the version to train on.
+      v0 is registered with ``contour_rule="cuts"`` (the meter it was published with), so its numbers
+      reproduce; the benchmark runs its baselines in v0 with ``contour_rule="path"``. Feedrate-v2
+      (:mod:`cnc_gym.envs.feedrate_v1`) is the version to train on.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 50}
@@ -247,13 +252,14 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         lookahead_points: int = 8,
         units: str | None = None,
         plant: str | None = None,
+        contour_rule: str = "cuts",
     ) -> None:
         # Every argument checked once, against one schema (cnc_gym/envs/options.py).
         args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
                              lookahead_mm=lookahead_mm, lookahead_points=lookahead_points,
-                             units=units, plant=plant)  # fmt: skip
+                             units=units, plant=plant, contour_rule=contour_rule)  # fmt: skip
         self._configure(args)
         self.reward_weights = resolve_reward(args.reward)
         # Observation and reward: declared once (observation_spec_v0, reward_spec_v0), assembled by the
@@ -272,6 +278,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self.render_mode = args.render_mode
         self.dialect = args.dialect
         self.units = args.units
+        self.contour_rule = args.contour_rule
         ctrl = self.machine.controller
         self.interpolation_period_s = ctrl.interpolation_period_s
         self.ticks_per_step = control_ticks(args.control_period_s, self.machine)
@@ -326,7 +333,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             "max_feed_mm_min": self.max_feed_mm_min, "lookahead_mm": self.lookahead_mm,
             "lookahead_points": self.lookahead_points, "feed_mode": self.action_mode == "feed",
             # The contour window reaches back over the largest possible lag (max feed / Kv).
-            "window_back_mm": self._max_lag_mm,
+            "window_back_mm": self._max_lag_mm, "contour_rapids_behind": self.contour_rule == "path",
         }  # fmt: skip
         if plant is None and self.machine.plant.backend != "lti":
             plant = make_plant(self.machine, n_envs)

@@ -1,4 +1,5 @@
-"""``cnc_gym/Feedrate-v1``: the feed-rate task with a return that ranks like the benchmark's score."""
+"""``cnc_gym/Feedrate-v1`` and ``-v2``: the feed-rate task with a return that ranks like the benchmark's score
+(v2: with the programmed-path contour meter)."""
 
 from __future__ import annotations
 
@@ -93,6 +94,7 @@ class EnvArgumentsV1:
     lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
     units: str | None = declared(spec_of(EnvArguments, "units"))
     plant: str | None = declared(spec_of(EnvArguments, "plant"))
+    contour_rule: str = declared(spec_of(EnvArguments, "contour_rule"), "cuts")
 
 
 def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
@@ -198,7 +200,8 @@ class FeedrateEnvV1(FeedrateEnv):
     ## Arguments
 
     v0's (``programs``, ``dialect``, ``machine``, ``control_period_s``, ``max_episode_steps``,
-    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``, ``plant``), and ``action_mode``
+    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``, ``plant``, ``contour_rule``:
+    ``"cuts"`` for v1, ``"path"`` for v2), and ``action_mode``
     (with ``residual``),
     ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
     (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
@@ -211,9 +214,17 @@ class FeedrateEnvV1(FeedrateEnv):
 
     ## Version History
 
+    - v2: v1 with the programmed-path contour meter (``contour_rule="path"``): the rapids the reference
+      has left are part of the path the tool is measured against, so the in-position residual at a
+      rapid → cut junction (about 4 µm on vmc-small, at every cut that follows a rapid) is no longer
+      contour error; everywhere else the error, and so the reward, cost and observation, are v1's.
+      Dynamics unchanged. The version to train on (docs/plant.md, "Contour error at a rapid → cut
+      junction").
     - v1: reward that ranks like the benchmark's score (violations per path length, finish bonus, no
       penalty inside the tolerance); observation without program position, with the machine's parameters
-      and the deployable planner's override; ``residual`` action mode; domain randomisation.
+      and the deployable planner's override; ``residual`` action mode; domain randomisation. Registered
+      with ``contour_rule="cuts"`` (the meter it was published with). The models in docs/results/models
+      were trained on v1.
     - v0: first version (kept as it was; docs/env.md).
     """
 
@@ -233,12 +244,14 @@ class FeedrateEnvV1(FeedrateEnv):
         lookahead_points: int = 8,
         units: str | None = None,
         plant: str | None = None,
+        contour_rule: str = "cuts",
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                                 control_period_s=control_period_s, reward=reward, randomize=randomize,
                                 residual_range=residual_range, max_episode_steps=max_episode_steps,
                                 render_mode=render_mode, lookahead_mm=lookahead_mm,
-                                lookahead_points=lookahead_points, units=units, plant=plant)  # fmt: skip
+                                lookahead_points=lookahead_points, units=units, plant=plant,
+                                contour_rule=contour_rule)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
         self.reward_weights = args.reward or RankingReward()

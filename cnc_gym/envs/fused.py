@@ -186,11 +186,12 @@ class PackedProgram:
 
     @classmethod
     def build(cls, name: str, toolpath: Toolpath, machine: MachineConfig, window_back_mm: float,
-              time_fraction: float, max_episode_steps: int) -> PackedProgram:  # fmt: skip
+              time_fraction: float, max_episode_steps: int,
+              rapids_behind: bool = True) -> PackedProgram:  # fmt: skip
         limits = build_limits(toolpath, machine)
         # The window reaches back over the largest possible lag (max feed / Kv) so that on short-segment
         # programs the actual point is never measured against the wrong segment.
-        meter = ContourErrorMeter(toolpath, window_back_mm=window_back_mm)
+        meter = ContourErrorMeter(toolpath, window_back_mm=window_back_mm, rapids_behind=rapids_behind)
         start = toolpath.start[0].astype(np.float64) if len(toolpath) else np.zeros(3)
         length = max(toolpath.total_length, 1e-9)
         constants = [1.0 / length, length, time_fraction]
@@ -479,7 +480,7 @@ def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, h
         h = hints[t]
         # The meter gives 0 where the reference is on a rapid or dwell, so the sum of squares over all
         # samples is the sum over cutting samples; only the count needs the cutting test.
-        if 0 <= h < n_rows and seg_class[h] != C.SKIP:
+        if 0 <= h < n_rows and C.is_cutting(seg_class[h]):
             n_cut += 1
         if x > tolerance:  # per servo sample: the reference's path advance and time while over tolerance
             violation_length += out[t, K.O_S] - s_prev
@@ -641,7 +642,8 @@ class FeedrateBatch:
     """N episodes of the feed-rate task, stepped by one compiled call (see the module docstring).
 
     ``config`` keys: ``ticks_per_step``, ``tolerance_mm``, ``in_position_mm``, ``max_override``,
-    ``max_feed_mm_min``, ``lookahead_mm``, ``lookahead_points``, ``feed_mode`` (bool), ``window_back_mm``.
+    ``max_feed_mm_min``, ``lookahead_mm``, ``lookahead_points``, ``feed_mode`` (bool), ``window_back_mm``,
+    optionally ``contour_rapids_behind`` (bool, default True: the meter's rule, :class:`ContourErrorMeter`).
     ``parallel``: step the envs in numba's threads (None: from :data:`PARALLEL_MIN_ENVS` envs on, when
     numba has at least :data:`PARALLEL_MIN_THREADS` threads). ``plant``: the plant backend (default: the
     LTI :class:`ServoPlant`; one whose ``compiled_step`` is False runs the modular step).
@@ -658,6 +660,7 @@ class FeedrateBatch:
         self.ticks = int(config["ticks_per_step"])
         self.period_s = float(machine.controller.interpolation_period_s)
         self.window_back_mm = float(config["window_back_mm"])
+        self.rapids_behind = bool(config.get("contour_rapids_behind", True))
         window = max(int(machine.controller.lookahead_blocks), 2)
         points = int(config["lookahead_points"])
         config_f = np.array([config["tolerance_mm"], config["in_position_mm"], config["max_override"],
@@ -717,7 +720,7 @@ class FeedrateBatch:
     def add_program(self, name: str, toolpath: Toolpath, time_fraction: float, max_episode_steps: int) -> int:
         """Pack a program into the bank; returns its index."""
         program = PackedProgram.build(name, toolpath, self.machine, self.window_back_mm, time_fraction,
-                                      max_episode_steps)  # fmt: skip
+                                      max_episode_steps, self.rapids_behind)  # fmt: skip
         index = self.bank.add(program)
         self._names = np.array([p.name for p in self.bank.programs] + [None], dtype=object)[:-1]
         return index

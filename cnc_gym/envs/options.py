@@ -45,6 +45,12 @@ if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
 
 ACTION_MODES = ("override", "feed")
+#: The contour meter's rules (cnc_gym/plant/contour.py): ``path``, the programmed path with the rapids the
+#: reference has left; ``cuts``, cutting moves only (Feedrate-v0 and -v1 as registered).
+CONTOUR_RULES = ("path", "cuts")
+CONTOUR_RULE = Choice(choices=CONTOUR_RULES, doc="contour error against the programmed path with the rapids "
+                      "the reference has left (`path`), or against cutting moves only (`cuts`, the rule "
+                      "Feedrate-v0 and -v1 are registered with)")
 RENDER_MODES = (None, "rgb_array")
 #: Where argument errors come from, in their messages.
 SOURCE = "FeedrateEnv"
@@ -170,6 +176,7 @@ class EnvArguments:
     lookahead_points: int = number(
         8, 1, 256, integer=True, doc="look-ahead points in the observation (4 entries each)",
         why="the observation has 9 + 4 × this entries.")  # fmt: skip
+    contour_rule: str = declared(CONTOUR_RULE, "cuts")
 
 
 def env_arguments(**kwargs: Any) -> EnvArguments:

@@ -1,8 +1,9 @@
 """The time-optimal reference: a lower bound on the cycle time of a program, computed with TOPP-RA.
 
-No policy can run a program faster than :func:`time_optimal_bound` says (to within the grid resolution,
-see below), whatever it does with the override knob. The bound is the minimum time of the programmed
-path under every *static* limit the controller enforces, with jerk and contour tolerance dropped:
+No policy can run a program faster than :func:`time_optimal_bound` says (to within TOPP-RA's
+numerical tolerance, see below), whatever it does with the override knob. The bound is the minimum time
+of the programmed path under every *static* limit the controller enforces, with jerk and contour
+tolerance dropped:
 
 =========================  ========================================================================
 cutting moves              time-optimal path parameterization (TOPP-RA, Pham & Pham, IEEE T-RO 2018,
@@ -24,9 +25,10 @@ rapids                     rest to rest at the rapid rate, rapid acceleration an
 dwells                     as programmed (rotary-only moves: their closed-form jerk-limited time)
 =========================  ========================================================================
 
-What the bound leaves out, each of which only makes the real controller slower: jerk on cutting
-moves, the look-ahead window, the override's slew rate, in-position waits, the servo's settling at the
-program end, the interpolation period's sampling, and the contour tolerance itself. It is therefore a
+What the bound leaves out, each of which only makes the real controller slower (dropping a limit can
+only shorten the least time): jerk on cutting moves, the look-ahead window, the override's slew rate,
+in-position waits, the servo's settling at the program end, the interpolation period's sampling, and the
+contour tolerance itself. It is therefore a
 *lower bound*, not a feasible plan: a policy's ``time_ratio`` (cycle ÷ bound) is at least 1, and how far
 above 1 it lies says how much time is left on the table.
 
@@ -34,9 +36,14 @@ With the override mode of the env the path-speed cap is the programmed feed × t
 ``max_override``; in ``feed`` mode (the agent commands the feed) it is the controller's clamp P1224.
 
 Discretization: TOPP-RA solves on a grid of path positions (every junction plus subdivisions of at
-most ``grid_mm``, ``max_gridpoints`` in all); constraints hold at grid points and the time is integrated
-exactly for constant acceleration between them. On a line the result matches the closed form to better
-than 0.1 % (tests/motion/test_bound.py).
+most ``grid_mm`` and 5° of turn, ``max_gridpoints`` in all), with each interval's tangent relaxed to the
+most favourable one over the interval (so the grid problem is a relaxation of the continuous one, and its
+speeds at the grid points are at least the true optimum's). Between grid points the time is that of the
+fastest motion between the two grid speeds under the interval's acceleration and speed cap (ramp up,
+cruise, ramp down: :func:`interval_times`), never a constant acceleration over the whole interval, which
+over-counts every ramp shorter than an interval: a short cut between two stops (a drilling peck) would
+ramp over a whole grid interval at each end and the "bound" would be slower than the controller. On a
+line the result is the closed-form trapezoid, on any grid (tests/motion/test_bound.py).
 
 Results are cached in memory and on disk (``$CNC_GYM_CACHE_DIR/bound`` or ``~/.cache/cnc-gym/bound``),
 keyed by a hash of the tool path, the machine's parameters, the action mode and :data:`BOUND_VERSION`.
@@ -61,7 +68,7 @@ from cnc_gym.motion.limits import build_limits, rest_to_rest_time
 from cnc_gym.toolpath import Toolpath
 
 #: Bump when the bound's definition or numerics change: it is part of every cache key and record.
-BOUND_VERSION = 1
+BOUND_VERSION = 2
 
 _DEFAULT_GRID_MM = 0.5
 _DEFAULT_MAX_GRIDPOINTS = 40_000
@@ -121,12 +128,28 @@ def speed_cap_constraint(cap: np.ndarray):
     return PathSpeedCap()
 
 
+@dataclass(frozen=True)
+class _CuttingProblem:
+    """The cutting moves on TOPP-RA's grid (coordinate: cutting length, rapids removed)."""
+
+    grid: np.ndarray  # (m + 1,) path positions
+    speed: np.ndarray  # (m + 1,) speed cap at each grid point (junction limits, 0 at stops)
+    tangent: np.ndarray  # (m, 3) the relaxed tangent of each interval (see _cutting_problem)
+    interval_cap: np.ndarray  # (m,) the speed cap inside each interval: its move's cap
+
+
 def _cutting_problem(tp: Toolpath, limits, machine: MachineConfig, action_mode: str, grid_mm: float,
-                     max_gridpoints: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:  # fmt: skip
-    """``(grid, speed cap per grid point, unit tangent per interval)`` over the cutting pieces.
+                     max_gridpoints: int) -> _CuttingProblem | None:  # fmt: skip
+    """The grid, caps and tangents of the cutting pieces.
 
     The coordinate is cutting length (rapids removed). A rapid's ends are mandatory stops, so the cutting
     pieces on either side of it meet at one grid point whose cap is 0.
+
+    Each interval carries one tangent, that of its middle, *relaxed* so that the problem stays a
+    relaxation of the true one: on a curved move the tangent turns by ``θ`` (at most 5°) over an interval,
+    so every component of the true tangent in it is at least ``|u_k(mid)| − θ/2`` in size; the interval's
+    tangent has those components, and each axis's acceleration limit then allows at least as much path
+    acceleration as anywhere in the interval. On lines the tangent is exact.
     """
     seg_f, seg_i, pt_f, pt_i = limits.seg_f, limits.seg_i, limits.pt_f, limits.pt_i
     n = len(seg_f)
@@ -167,32 +190,63 @@ def _cutting_problem(tp: Toolpath, limits, machine: MachineConfig, action_mode: 
     # Tangent of each interval at its middle (toolpath arc length).
     s_mid = seg_f[rows[row_of], K.F_S0] + (j + 0.5) / pieces[row_of] * length[row_of]
     _, tangent, _ = (tp if limits.path is None else limits.path).evaluate(s_mid)  # the path followed
+    half_turn = 0.5 * (turn / pieces)[row_of]
+    tangent = np.sign(tangent) * np.maximum(np.abs(tangent) - half_turn[:, None], 0.0)
+    interval_cap = cap[rows][row_of]
     keep = np.concatenate(([True], np.diff(grid) > 0))  # zero-length pieces add nothing
     if not np.all(keep):
         grid, speed = grid[keep], speed[keep]
-        tangent = tangent[keep[1:]]
-    return grid, speed, tangent
+        tangent, interval_cap = tangent[keep[1:]], interval_cap[keep[1:]]
+    return _CuttingProblem(grid, speed, tangent, interval_cap)
 
 
-def _cutting_time(grid: np.ndarray, speed: np.ndarray, tangent: np.ndarray, accel: np.ndarray) -> float:
+def _cutting_time(problem: _CuttingProblem, accel: np.ndarray) -> float:
     import logging
 
     import toppra
     from toppra.constraint import DiscretizationType, JointAccelerationConstraint
 
     logging.getLogger("toppra").setLevel(logging.ERROR)
+    grid, tangent = problem.grid, problem.tangent
     acceleration = JointAccelerationConstraint(np.asarray(accel, dtype=float),
                                                discretization_scheme=DiscretizationType.Collocation)
-    problem = toppra.algorithm.TOPPRA([acceleration, speed_cap_constraint(speed)], _ChainPath(grid, tangent),
-                                      gridpoints=grid, solver_wrapper="seidel")  # fmt: skip
-    _, sd, _, _ = problem.compute_parameterization(0.0, 0.0, return_data=True)
+    problem_ = toppra.algorithm.TOPPRA([acceleration, speed_cap_constraint(problem.speed)],
+                                       _ChainPath(grid, tangent), gridpoints=grid,
+                                       solver_wrapper="seidel")  # fmt: skip
+    _, sd, _, _ = problem_.compute_parameterization(0.0, 0.0, return_data=True)
     if sd is None or not np.all(np.isfinite(sd)):
         raise CncGymError("time-optimal bound: TOPP-RA found no parameterization of the cutting moves")
-    pair = sd[:-1] + sd[1:]
-    if np.any(pair <= 0):
-        raise CncGymError("time-optimal bound: a grid interval with zero speed at both ends")
-    # Constant acceleration between grid points: Δt = 2·Δs / (ṡ_i + ṡ_{i+1}), exact.
-    return float(np.sum(2.0 * np.diff(grid) / pair))
+    # The path acceleration each interval allows: every axis's share |u_k|·|s̈| within its limit.
+    with np.errstate(divide="ignore"):
+        path_accel = np.min(np.asarray(accel, dtype=float) / np.abs(tangent), axis=1)
+    return float(np.sum(interval_times(np.diff(grid), sd[:-1], sd[1:], path_accel, problem.interval_cap)))
+
+
+def interval_times(length: np.ndarray, v0: np.ndarray, v1: np.ndarray, accel: np.ndarray,
+                   cap: np.ndarray) -> np.ndarray:  # fmt: skip
+    """The least time over intervals of ``length`` entered at ``v0`` and left at ``v1`` with path
+    acceleration and deceleration at most ``accel`` and speed at most ``cap`` (all per interval).
+
+    The fastest motion accelerates from ``v0``, cruises at the cap if it reaches it and decelerates to
+    ``v1`` (``ṡ²`` is the lower envelope of ``v0² + 2·a·s``, ``v1² + 2·a·(L − s)`` and ``cap²``), so any
+    motion through the interval that meets these limits and does not exceed ``v0``, ``v1`` at its ends
+    takes at least this long. (Integrating constant acceleration from ``v0`` to ``v1`` instead, as the
+    TOPP-RA grid suggests, over-counts a ramp that ends inside the interval: a cut between two stops
+    would ramp over whole grid intervals.) A cap below an end speed (a junction may allow the faster
+    neighbour's cap) is raised to it.
+    """
+    v0 = np.maximum(v0, 0.0)
+    v1 = np.maximum(v1, 0.0)
+    x0, x1 = v0 * v0, v1 * v1
+    top = np.maximum(cap, np.maximum(v0, v1))
+    finite = np.isfinite(accel)
+    a = np.where(finite, accel, 1.0)
+    # The peak of the two ramps, where v0² + 2·a·s = v1² + 2·a·(L − s); at least both end speeds (a grid
+    # step that TOPP-RA's tolerance left a hair steeper than the ramp allows).
+    peak = np.sqrt(np.maximum(0.5 * (x0 + x1) + a * length, np.maximum(x0, x1)))
+    ramps = np.where(peak <= top, (2.0 * peak - v0 - v1) / a,
+                     (2.0 * top - v0 - v1) / a + (length - (2.0 * top * top - x0 - x1) / (2.0 * a)) / top)
+    return np.where(finite, ramps, length / np.maximum(top, 1e-300))
 
 
 def _rapid_and_dwell_time(limits) -> tuple[float, float]:
@@ -217,9 +271,8 @@ def compute_bound(tp: Toolpath, machine: MachineConfig, *, action_mode: str = "o
     problem = _cutting_problem(tp, limits, machine, action_mode, grid_mm, max_gridpoints)
     cutting_s, gridpoints = 0.0, 0
     if problem is not None:
-        grid, speed, tangent = problem
         accel = np.array(machine.axis_array("max_accel_mm_s2"))
-        cutting_s, gridpoints = _cutting_time(grid, speed, tangent, accel), len(grid)
+        cutting_s, gridpoints = _cutting_time(problem, accel), len(problem.grid)
     return BoundResult(total_s=cutting_s + rapid_s + dwell_s, cutting_s=cutting_s, rapid_s=rapid_s,
                        dwell_s=dwell_s, gridpoints=gridpoints)  # fmt: skip
 

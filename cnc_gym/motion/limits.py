@@ -19,7 +19,9 @@ Per motion segment (mm, s):
   max|u_k| is the largest direction component over the segment, exact for arcs).
 
 Per point: the hard junction limit (corner step P1227: v ≤ min_k step_k/|Δu_k|, Δu the change of unit
-tangent; both neighbours' caps), 0 at mandatory stops (exact stop G09/G61, dwell, rapid ↔ cutting,
+tangent; both neighbours' caps; with ``controller.corner_rule: jerk`` also the jerk-limited corner rule of
+:func:`_junction_jerk_rule`, which may make a kink a stop and scales the jerk of the pieces around the
+junctions it passes), 0 at mandatory stops (exact stop G09/G61, dwell, rapid ↔ cutting,
 after every rapid, tool or spindle change, program end, or every junction when look-ahead is off), and
 the acceleration bound on arrival ``a_in`` (a backward pass so that a lower acceleration limit ahead can
 always be met: a_in[k] = min(A_k, a_in[k+1] + J_k·L_k/cap_k), restarted at every mandatory stop), and the
@@ -262,6 +264,128 @@ def _backward_bounds(acc: np.ndarray, jerk: np.ndarray, length: np.ndarray, cap:
     return a_in, span_a, span_j
 
 
+#: The share of an axis's jerk limit (and of the path-norm jerk) that the jerk-limited corner rule gives the
+#: velocity and curvature steps of the junctions within reach of one 3-period difference; the rest stays
+#: with the tangential motion around them (docs/motion.md §7).
+JUNCTION_JERK_SHARE = 0.5
+#: Tangent and curvature changes at or below this are float noise (as for the P1227 corner step).
+JUNCTION_NOISE = 1e-12
+
+
+@dataclass(frozen=True)
+class JunctionJerkInput:
+    """The junctions that the jerk-limited corner rule limits (m of them, none a mandatory stop) and the
+    pieces (n) around them."""
+
+    s: np.ndarray  # (m,) arc length of each junction, mm
+    du: np.ndarray  # (m, 3) unit tangent out − in
+    dc: np.ndarray  # (m, 3) curvature vector out − in, 1/mm (lines and arcs; 0 on NURBS pieces)
+    d_rate: np.ndarray  # (m, r) rotary axes' rate out − in, deg/mm
+    v_limit: np.ndarray  # (m,) the junction's other speed limits (P1227, both caps), mm/s
+    a_near: np.ndarray  # (m,) largest tangential acceleration bound on either side, mm/s²
+    axis_jerk: np.ndarray  # (3,) cutting jerk per linear axis, mm/s³
+    rotary_jerk: np.ndarray  # (r,) cutting jerk per rotary axis, deg/s³
+    path_jerk: float  # path-norm jerk, mm/s³ (inf = off)
+    period_s: float  # interpolation period T
+    acc_max: float  # largest tangential acceleration bound anywhere, mm/s²
+    s0: np.ndarray  # (n,) piece starts, mm
+    length: np.ndarray  # (n,) piece lengths, mm
+
+
+@dataclass(frozen=True)
+class JunctionJerkRule:
+    """What the jerk-limited corner rule decides."""
+
+    limit: np.ndarray  # (m,) speed limit at each junction (0 where it is a stop), mm/s
+    stop: np.ndarray  # (m,) passed at rest: the acceleration term alone exceeds the junction's share
+    jerk_scale: np.ndarray  # (n,) factor on every jerk limit of each piece (1 − the junctions' shares)
+
+
+def _junction_jerk_rule(inp: JunctionJerkInput) -> JunctionJerkRule:
+    """Speed limits per junction and jerk factors per piece such that the finite difference
+    (p(t+T) − 3p(t) + 3p(t−T) − p(t−2T))/T³ of every axis (and its norm) stays within the jerk limit.
+
+    The third difference is the path's third derivative averaged with the quadratic B-spline N (support
+    3T, ∫N = 1, N ≤ ¾, |N′| ≤ 1/T) plus, per junction crossed at speed v and tangential acceleration a
+    inside the window, Δu·(−v·N′ + a·N) + Δc·v²·N. So junction q adds at most
+    ``|Δu_k|·(v/T² + ¾|a|/T) + ¾|Δc_k|·v²/T`` to axis k: its need β_q as a share of J_k. With |a| ≤ a_near
+    and v ≤ the limit solved from β_q ≤ share (a stop where the acceleration term alone is above it), and
+    every jerk limit of the pieces within reach (3 periods at up to v + 3T·acc_max) scaled by 1 − Σβ, the
+    sum stays within J_k. Where Σβ over some piece exceeds the share, the junctions around it get
+    proportionally smaller shares (one pass makes every sum fit)."""
+    T = inp.period_s
+    du = np.where(np.abs(inp.du) > JUNCTION_NOISE, np.abs(inp.du), 0.0)
+    dc = np.where(np.abs(inp.dc) > JUNCTION_NOISE, np.abs(inp.dc), 0.0)
+    dr = np.where(np.abs(inp.d_rate) > JUNCTION_NOISE, np.abs(inp.d_rate), 0.0)
+    steps = [du / inp.axis_jerk, dr / inp.rotary_jerk]  # velocity steps per unit speed, share of J
+    bends = [dc / inp.axis_jerk, np.zeros_like(dr)]  # acceleration steps per unit speed², share of J
+    if math.isfinite(inp.path_jerk):
+        steps.append(np.linalg.norm(du, axis=1, keepdims=True) / inp.path_jerk)
+        bends.append(np.linalg.norm(dc, axis=1, keepdims=True) / inp.path_jerk)
+    step = np.hstack(steps)
+    c1 = step / T**2
+    c0 = 0.75 * step * inp.a_near[:, None] / T
+    c2 = 0.75 * np.hstack(bends) / T
+
+    def need(v: np.ndarray) -> np.ndarray:
+        return np.max(c2 * (v * v)[:, None] + c1 * v[:, None] + c0, axis=1, initial=0.0)
+
+    def solve(budget: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        rest = budget[:, None] - c0
+        stop = np.any(rest < 0.0, axis=1)
+        rest = np.maximum(rest, 0.0)
+        den = c1 + np.sqrt(c1 * c1 + 4.0 * c2 * rest)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            v = np.min(np.where(den > 0.0, 2.0 * rest / den, np.inf), axis=1, initial=np.inf)
+        v = np.where(stop, 0.0, np.minimum(v, inp.v_limit))
+        return v, stop, np.where(stop, 0.0, need(v))
+
+    n = len(inp.s0)
+    share = np.full(len(inp.s), JUNCTION_JERK_SHARE)
+    v, stop, beta = solve(share)
+    # Pieces within reach of a 3-period difference straddling junction q: the speed there is at most
+    # v_q + 3T·acc_max, so they lie within 3T of it at that speed.
+    reach = 3.0 * T * (v + 3.0 * T * inp.acc_max) * (1.0 + 1e-9) + 1e-12
+    ends = inp.s0 + inp.length
+    lo = np.searchsorted(ends, inp.s - reach, side="left")
+    hi = np.maximum(np.searchsorted(inp.s0, inp.s + reach, side="right") - 1, lo)
+    pairs = np.column_stack((lo, hi + 1)).ravel()
+
+    def per_piece(b: np.ndarray) -> np.ndarray:
+        total = np.zeros(n + 1)
+        np.add.at(total, lo, b)
+        np.add.at(total, hi + 1, -b)
+        return np.maximum(np.cumsum(total), 0.0)  # (n + 1,): the last entry is a sentinel (0)
+
+    summed = per_piece(beta)
+    if len(pairs):
+        worst = np.maximum.reduceat(summed, pairs)[::2]
+        crowded = worst > JUNCTION_JERK_SHARE
+        if np.any(crowded):
+            v, stop, beta = solve(np.where(crowded, beta * JUNCTION_JERK_SHARE / np.maximum(worst, 1e-300),
+                                           share))  # fmt: skip
+            summed = per_piece(beta)
+    return JunctionJerkRule(limit=v, stop=stop, jerk_scale=1.0 - np.minimum(summed[:n], 1.0))
+
+
+def _curvature_vectors(tp: Toolpath, idx: np.ndarray, kappa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Curvature vectors κ·n (towards the centre, 1/mm) at the start and the end of each piece: arcs and
+    helices (the normal lies in the plane); 0 on lines and NURBS pieces."""
+    c_start = np.zeros((len(idx), 3))
+    c_end = np.zeros((len(idx), 3))
+    arcs = np.flatnonzero(tp.kind[idx] == SegmentKind.ARC)
+    if len(arcs):
+        i = idx[arcs]
+        axes = _PLANE_TABLE[tp.plane[i].astype(np.int64)]
+        rows = np.arange(len(arcs))
+        for theta, out in ((tp.start_angle[i], c_start), (tp.start_angle[i] + tp.sweep[i], c_end)):
+            vec = np.zeros((len(arcs), 3))
+            vec[rows, axes[:, 0]] = -np.cos(theta) * kappa[arcs]
+            vec[rows, axes[:, 1]] = -np.sin(theta) * kappa[arcs]
+            out[arcs] = vec
+    return c_start, c_end
+
+
 #: NURBS curves are cut into pieces of at most this arc length (and at least NURBS_MIN_PIECES), mm.
 NURBS_PIECE_MM = 0.5
 NURBS_MIN_PIECES = 4
@@ -437,60 +561,81 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
     jerk_ax = axis["max_jerk_mm_s3"]
     a_n = np.minimum(ctl.max_centripetal_accel_mm_s2,
                      np.minimum(acc_ax[plane_axes[:, 0]], acc_ax[plane_axes[:, 1]]))  # fmt: skip
-    j_n = np.minimum(jerk_ax[plane_axes[:, 0]], jerk_ax[plane_axes[:, 1]])
+    j_n_axes = np.minimum(jerk_ax[plane_axes[:, 0]], jerk_ax[plane_axes[:, 1]])
     # A NURBS curve bends in any direction: all three axes count.
     a_n = np.where(is_nurbs, min(ctl.max_centripetal_accel_mm_s2, acc_ax.min()), a_n)
-    j_n = np.where(is_nurbs, jerk_ax.min(), j_n)
+    j_n_axes = np.where(is_nurbs, jerk_ax.min(), j_n_axes)
     # Path-norm limits (controller.path_max_accel_mm_s2 / path_max_jerk_mm_s3; 0 = off). On a curve the
     # acceleration vector is a_t·t + v²κ·n and the jerk vector (j_t − κ²v³)·t + 3κv·a_t·n (+ κ'v³·n): each
     # term gets its share of the norm (√½ each for the acceleration, ⅓ each for the jerk), so the norms hold
     # on lines and arcs; on a line the tangential term is all there is.
     curved = kappa > 0
     path_a = ctl.path_max_accel_mm_s2 if ctl.path_max_accel_mm_s2 > 0 else np.inf
-    path_j = ctl.path_max_jerk_mm_s3 if ctl.path_max_jerk_mm_s3 > 0 else np.inf
+    path_j_machine = ctl.path_max_jerk_mm_s3 if ctl.path_max_jerk_mm_s3 > 0 else np.inf
     path_a_t = np.where(curved, path_a * math.sqrt(0.5), path_a)
-    path_j_t = np.where(curved, path_j / 3.0, path_j)
     a_n = np.minimum(a_n, path_a * math.sqrt(0.5))
-    j_n = np.minimum(j_n, path_j / 3.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = np.where(kappa > 0, 1.0 / np.maximum(kappa, 1e-300), np.inf)
         v_centripetal = np.sqrt(a_n / kappa)
-        v_cjerk = np.cbrt(j_n / kappa**2)
         delta = np.minimum(ctl.chord_tolerance_mm, rho)
         v_chord = (2.0 / dt) * np.sqrt(np.maximum(2.0 * rho * delta - delta * delta, 0.0))
-    v_curv = np.where(kappa > 0, np.minimum(np.minimum(v_centripetal, v_cjerk), v_chord), np.inf)
-    v_curv = np.maximum(v_curv, ctl.min_arc_feed_mm_min / 60.0)  # P1505 floor (F itself may be lower)
-    cap = np.where(cutting, np.minimum(cut_axis_cap, v_curv), rapid_rate)
-    base = np.where(cutting, feed, rapid_rate)
-    acc = np.where(cutting, projected(acc_ax), projected(axis["rapid_accel_mm_s2"]))
-    jerk = np.where(cutting, projected(jerk_ax), projected(axis["rapid_jerk_mm_s3"]))
-    acc = np.minimum(acc, path_a_t)
-    jerk = np.minimum(jerk, path_j_t)
-    if math.isfinite(path_j):  # the cross term 3κ·v·a_t ≤ J/3 at every speed up to the cap
-        with np.errstate(divide="ignore"):
-            acc = np.minimum(acc, np.where(curved, path_j / np.maximum(9.0 * kappa * cap, 1e-300), np.inf))
     rotary_rate = np.zeros((n, 0))
+    rotary_limits: dict[str, np.ndarray] = {}
     if tp.rotary_axes:
-        # A rotary axis moving with the XYZ path turns at rate·v (deg per mm of path × mm/s): its speed,
-        # acceleration and jerk limits cap the path's like a linear axis's projected ones.
         rates, rotary_limits = _rotary_rates(tp, machine)
         rotary_rate = rates[idx]
-        with np.errstate(divide="ignore"):
-            inv_rate = np.where(rotary_rate > 1e-12, 1.0 / np.maximum(rotary_rate, 1e-300), np.inf)
 
-        def rotary_projected(name: str) -> np.ndarray:
-            return np.min(rotary_limits[name][None, :] * inv_rate, axis=1, initial=np.inf)
+    Limits = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
-        cap = np.minimum(cap, np.where(cutting, rotary_projected("max_feed_deg_min"),
-                                       rotary_projected("rapid_deg_min")) / 60.0)  # fmt: skip
-        # P1224 clamps the composite rate (degrees counted as mm), so the XYZ share of it.
-        xyz_share = tp.length[idx] / np.hypot(tp.length[idx], tp.rotary_length[idx])
-        cap = np.minimum(cap, np.where(cutting, ctl.max_feed_mm_min / 60.0 * xyz_share, np.inf))
-        base = np.minimum(base, cap)
-        acc = np.minimum(acc, np.where(cutting, rotary_projected("max_accel_deg_s2"),
-                                       rotary_projected("rapid_accel_deg_s2")))  # fmt: skip
-        jerk = np.minimum(jerk, np.where(cutting, rotary_projected("max_jerk_deg_s3"),
-                                         rotary_projected("rapid_jerk_deg_s3")))  # fmt: skip
+    def kinematic_limits(jerk_scale: np.ndarray | None) -> Limits:
+        """(cap, base, acc, jerk) per piece; ``jerk_scale`` (per piece, ≤ 1) scales every jerk limit there
+        (the jerk-limited corner rule's share, :func:`_junction_jerk_rule`; None = 1)."""
+        j_n, path_j = j_n_axes, path_j_machine
+        if jerk_scale is not None:
+            j_n, path_j = j_n * jerk_scale, path_j * jerk_scale
+        path_j_t = np.where(curved, path_j / 3.0, path_j)
+        j_n = np.minimum(j_n, path_j / 3.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            v_cjerk = np.cbrt(j_n / kappa**2)
+        v_curv = np.where(kappa > 0, np.minimum(np.minimum(v_centripetal, v_cjerk), v_chord), np.inf)
+        v_curv = np.maximum(v_curv, ctl.min_arc_feed_mm_min / 60.0)  # P1505 floor (F itself may be lower)
+        cap = np.where(cutting, np.minimum(cut_axis_cap, v_curv), rapid_rate)
+        base = np.where(cutting, feed, rapid_rate)
+        acc = np.where(cutting, projected(acc_ax), projected(axis["rapid_accel_mm_s2"]))
+        jerk = np.where(cutting, projected(jerk_ax), projected(axis["rapid_jerk_mm_s3"]))
+        if jerk_scale is not None:
+            jerk = jerk * jerk_scale
+        acc = np.minimum(acc, path_a_t)
+        jerk = np.minimum(jerk, path_j_t)
+        if math.isfinite(path_j_machine):  # the cross term 3κ·v·a_t ≤ J/3 at every speed up to the cap
+            with np.errstate(divide="ignore"):
+                cross = np.where(curved, path_j / np.maximum(9.0 * kappa * cap, 1e-300), np.inf)
+            acc = np.minimum(acc, cross)
+        if tp.rotary_axes:
+            # A rotary axis moving with the XYZ path turns at rate·v (deg per mm of path × mm/s): its speed,
+            # acceleration and jerk limits cap the path's like a linear axis's projected ones.
+            with np.errstate(divide="ignore"):
+                inv_rate = np.where(rotary_rate > 1e-12, 1.0 / np.maximum(rotary_rate, 1e-300), np.inf)
+
+            def rotary_projected(name: str) -> np.ndarray:
+                return np.min(rotary_limits[name][None, :] * inv_rate, axis=1, initial=np.inf)
+
+            cap = np.minimum(cap, np.where(cutting, rotary_projected("max_feed_deg_min"),
+                                           rotary_projected("rapid_deg_min")) / 60.0)  # fmt: skip
+            # P1224 clamps the composite rate (degrees counted as mm), so the XYZ share of it.
+            xyz_share = tp.length[idx] / np.hypot(tp.length[idx], tp.rotary_length[idx])
+            cap = np.minimum(cap, np.where(cutting, ctl.max_feed_mm_min / 60.0 * xyz_share, np.inf))
+            base = np.minimum(base, cap)
+            acc = np.minimum(acc, np.where(cutting, rotary_projected("max_accel_deg_s2"),
+                                           rotary_projected("rapid_accel_deg_s2")))  # fmt: skip
+            rotary_jerk = np.where(cutting, rotary_projected("max_jerk_deg_s3"),
+                                   rotary_projected("rapid_jerk_deg_s3"))  # fmt: skip
+            if jerk_scale is not None:
+                rotary_jerk = rotary_jerk * jerk_scale
+            jerk = np.minimum(jerk, rotary_jerk)
+        return cap, base, acc, jerk
+
+    cap, base, acc, jerk = kinematic_limits(None)
 
     # ------------------------------------------------------------------ junctions
     hard = np.zeros(n + 1)
@@ -543,6 +688,27 @@ def build_limits(tp: Toolpath, machine: MachineConfig) -> PathLimits:
         kink_stop = hard[1:n] <= 0.0
         stop[1:n] = has_exact | has_dwell | mode_change | aux_change | no_lookahead | kink_stop
         wait[1:n] = has_exact | mode_change | aux_change | kink_stop
+        if ctl.corner_rule == "jerk":
+            # The jerk-limited corner rule (docs/motion.md §7): a speed limit per junction, a stop where even
+            # crossing at rest-speed would not fit, and a lower jerk around the junctions that are passed.
+            free = ~stop[1:n]
+            c_start, c_end = _curvature_vectors(tp, idx, kappa)
+            d_rate = rotary_rate[1:] - rotary_rate[:-1]
+            rule = _junction_jerk_rule(JunctionJerkInput(
+                s=s0[1:][free], du=(u_out - u_in)[free], dc=(c_start[1:] - c_end[:-1])[free],
+                d_rate=d_rate[free], v_limit=hard[1:n][free], a_near=np.maximum(acc[:-1], acc[1:])[free],
+                axis_jerk=jerk_ax, rotary_jerk=rotary_limits.get("max_jerk_deg_s3", np.zeros(0)),
+                path_jerk=path_j_machine, period_s=dt, acc_max=float(np.max(acc)), s0=s0,
+                length=length))  # fmt: skip
+            cap, base, acc, jerk = kinematic_limits(rule.jerk_scale)
+            limit = np.full(n - 1, np.inf)
+            limit[free] = rule.limit
+            jerk_stop = np.zeros(n - 1, dtype=bool)
+            jerk_stop[free] = rule.stop
+            hard[0] = cap[0]
+            hard[1:n] = np.minimum(np.minimum(corner, limit), np.minimum(cap[:-1], cap[1:]))
+            # Passed at rest, as with look-ahead off: deceleration only, no in-position check.
+            stop[1:n] |= jerk_stop
     hard[stop] = 0.0
 
     # ------------------------------------------------------------------ dwells per point

@@ -6,13 +6,23 @@ sample, on cutting moves only, against the programmed path after compensation (t
 - **Which samples count.** A sample counts when the *reference* is on a cutting segment (line, arc,
   helix, NURBS). Where the reference segment is a rapid or a dwell the error is 0 by definition: rapids
   do not cut, and during a dwell the axes stand still on the path's end point.
-- **Against what.** The nearest point on the *cutting* segments (rapids left out, dwells have no length)
-  in a window that moves with the reference: segments ``[hint − window_back, hint + window_ahead]``,
-  stretched backwards until it covers at least ``window_back_mm`` of path (the actual position lags the
-  reference by about v/Kv, which on short segments spans many of them). A window keeps a neighbouring
-  pass of a pocket, which can be closer than the segment being cut, from hiding the error. Consequence:
-  just after a rapid → cut junction that the controller did not stop at, the lag left on the rapid is
-  measured against the cutting segments (the rapid is not a candidate).
+- **Against what.** The nearest point on the programmed path in a window that moves with the reference:
+  segments ``[hint − window_back, hint + window_ahead]``, stretched backwards until it covers at least
+  ``window_back_mm`` of path (the actual position lags the reference by about v/Kv, which on short
+  segments spans many of them). Candidates are the window's cutting segments and the rapids in it that
+  the reference has already left (those before its own segment); dwells have no length. A window keeps
+  a neighbouring pass of a pocket, which can be closer than the segment being cut, from hiding the error.
+- **Rapids behind the reference** (the programmed-path rule). Contour error is the geometric deviation
+  from the programmed path, and the rapid that brought the tool to a cut is part of it: a tool still on
+  that rapid (released within the in-position width, or lagging along it) is late, not off the path. So
+  at a rapid → cut junction the tool is measured against the rapid and the cut alike; at a junction
+  that turns (a rapid in X, then a cut in Y) a tool short of the corner is on the rapid's line (error
+  ≈ 0), and one beside the cut, past the corner, is measured against the cut. Rapids *ahead* of the
+  reference never count (the tool cannot be there legitimately: the reference leads it), nor does a
+  sample whose reference is on a rapid. The flag ``rapids_behind=False`` keeps the earlier rule
+  (cutting segments only), with which ``cnc_gym/Feedrate-v0`` and ``-v1`` are registered so that their
+  numbers reproduce; it charged the in-position residual at every rapid → cut junction as contour
+  error (docs/plant.md, "Contour error at a rapid → cut junction").
 - **Exactness.** Lines: clamped projection. Flat arcs: the radial distance where the point's angle lies
   inside the swept range, else the nearer end point. Helices: :func:`~cnc_gym.toolpath.nearest.helix_nearest`
   (the exact global minimum over the sweep). NURBS: :func:`~cnc_gym.toolpath.nearest.nurbs_distance2` (the
@@ -41,8 +51,9 @@ from cnc_gym.toolpath.segments import PLANE_AXES, Plane, SegmentKind, Toolpath
 _PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
 
 
-# Segment classes of the kernel.
-SKIP, LINE, FLAT_ARC, HELIX, NURBS = 0, 1, 2, 3, 4
+# Segment classes of the kernel: dwells (and rapids under the cuts-only rule) are SKIP; the cutting classes
+# are LINE..NURBS; RAPID is a rapid line, a candidate only behind the point's own segment.
+SKIP, LINE, FLAT_ARC, HELIX, NURBS, RAPID = 0, 1, 2, 3, 4, 5
 # Columns of the packed per-segment float table ``geometry`` (n, 15).
 #   lines: a (0..2), d = end − a (3..5), 1/|d|² or 0 for a zero-length line (6)
 #   flat arcs and helices: centre u, v (0, 1), w at the start (2), radius (3), start angle (4), |sweep| (5),
@@ -55,7 +66,8 @@ _TWO_PI = 2.0 * math.pi
 class ContourTables(NamedTuple):
     """A tool path packed for :func:`measure_kernel` (built once per tool path by :func:`pack_contour`)."""
 
-    seg_class: np.ndarray  # (n,) int64: SKIP (rapid, dwell), LINE, FLAT_ARC, HELIX, NURBS
+    seg_class: np.ndarray  # (n,) int64: SKIP (dwell; rapid under the cuts-only rule), LINE, FLAT_ARC, HELIX,
+    #                        NURBS, RAPID (a rapid under the programmed-path rule)
     axes: np.ndarray  # (n, 3) int64: plane axes (u, v, w)
     geometry: np.ndarray  # (n, N_GEOMETRY) float64, see the column list above
     first_back: np.ndarray  # (n,) int64: first segment of the window for each lowest hint
@@ -64,9 +76,15 @@ class ContourTables(NamedTuple):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def is_cutting(seg_class: int) -> bool:
+    """Whether a segment of this kernel class is a cutting move (a sample whose reference is on it counts)."""
+    return LINE <= seg_class <= NURBS
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _line_or_arc_d2(c, g, iu, iv, iw, px, py, pz, pu, pv, pw) -> float:
-    """Squared distance to a line (c = LINE) or flat arc (c = FLAT_ARC) from its geometry row g."""
-    if c == LINE:
+    """Squared distance to a line (c = LINE or RAPID) or flat arc (c = FLAT_ARC) from its geometry row g."""
+    if c != FLAT_ARC:
         rx = px - g[0]
         ry = py - g[1]
         rz = pz - g[2]
@@ -135,7 +153,9 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
     ``hints``: one hint for all points (length 1) or one per point. A point counts where its own hint
     (or the common hint) is an in-range cutting segment (lines, flat arcs, helices, NURBS); the window is
     ``[first_back[lo], min(n, hi + window_ahead + 1))`` over the counted hints' range ``[lo, hi]``.
-    Points that do not count get 0; if no point counts the window is (0, 0).
+    Candidates are the window's cutting segments and its RAPID segments before the point's own segment
+    (the path the reference has left). Points that do not count get 0; if no point counts the window is
+    (0, 0).
     """
     n_segments = seg_class.shape[0]
     m = points.shape[0]
@@ -145,7 +165,7 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
     curved = False
     for i in range(hints.shape[0]):
         h = hints[i]
-        if 0 <= h < n_segments and seg_class[h] != SKIP:
+        if 0 <= h < n_segments and is_cutting(seg_class[h]):
             if h < lo:
                 lo = h
             if h > hi:
@@ -158,14 +178,14 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
     last = min(n_segments, hi + window_ahead + 1)
     samples = 0  # the most samples of a NURBS table in the window: the size of the search's scratch
     for s in range(first, last):
-        if seg_class[s] >= HELIX:
+        if seg_class[s] == HELIX or seg_class[s] == NURBS:
             curved = True
         if seg_class[s] == NURBS:
             samples = max(samples, nurbs_i[s, 3])
     work = np.empty(nurbs_work_size(samples))
     for i in range(m):
         own = hints[i] if per_point else hints[0]
-        if per_point and not (0 <= own < n_segments and seg_class[own] != SKIP):
+        if per_point and not (0 <= own < n_segments and is_cutting(seg_class[own])):
             out[i] = 0.0
             continue
         px = points[i, 0]
@@ -180,7 +200,7 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
                                    points[i, iv], points[i, iw])  # fmt: skip
         for s in range(first, last):
             c = seg_class[s]
-            if c == LINE:
+            if c == LINE or (c == RAPID and s < own):
                 d2 = _line_or_arc_d2(c, geometry[s], 0, 1, 2, px, py, pz, px, py, pz)
             elif c == FLAT_ARC:
                 g = geometry[s]
@@ -203,7 +223,7 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
             # their lower bound).
             for step in range(last - first + 1):
                 s = own if step == 0 else first + step - 1
-                if (step > 0 and s == own) or not first <= s < last or seg_class[s] < HELIX:
+                if (step > 0 and s == own) or not first <= s < last or not HELIX <= seg_class[s] <= NURBS:
                     continue
                 iu, iv, iw = axes[s, 0], axes[s, 1], axes[s, 2]
                 d2 = _curved_d2(seg_class[s], geometry[s], nurbs_i[s], nurbs_f, iu, iv, iw, px, py, pz,
@@ -220,7 +240,9 @@ class ContourErrorMeter:
     ``window_back`` / ``window_ahead``: segments searched before / after the reference segment;
     ``window_back_mm``: the window also reaches back at least this far along the path (set it to a
     bound on the following error, e.g. max feed / Kv, for programs of very short segments).
-    See the module docstring for the rule.
+    ``rapids_behind``: the rapids the reference has left (within the window) are part of the path the
+    tool is measured against (the programmed-path rule, the default); False: cutting moves only (the
+    rule of ``cnc_gym/Feedrate-v0`` and ``-v1``). See the module docstring for the rule.
     """
 
     def __init__(
@@ -229,6 +251,7 @@ class ContourErrorMeter:
         window_back: int = 2,
         window_ahead: int = 8,
         window_back_mm: float = 0.0,
+        rapids_behind: bool = True,
     ) -> None:
         if window_back < 0 or window_ahead < 0 or window_back_mm < 0:
             raise ValueError("contour window sizes must not be negative")
@@ -236,8 +259,9 @@ class ContourErrorMeter:
         self.window_back = int(window_back)
         self.window_ahead = int(window_ahead)
         self.window_back_mm = float(window_back_mm)
+        self.rapids_behind = bool(rapids_behind)
         self._n = len(toolpath)
-        self.tables = pack_contour(toolpath, self.window_back, self.window_back_mm)
+        self.tables = pack_contour(toolpath, self.window_back, self.window_back_mm, self.rapids_behind)
         self._hint1 = np.zeros(1, dtype=np.int64)
         self.reset()
 
@@ -288,8 +312,12 @@ class ContourErrorMeter:
         return out
 
 
-def pack_contour(tp: Toolpath, window_back: int, window_back_mm: float) -> ContourTables:
-    """Per-segment kernel class, plane axes, geometry, window start and NURBS tables of ``tp``."""
+def pack_contour(tp: Toolpath, window_back: int, window_back_mm: float,
+                 rapids_behind: bool = True) -> ContourTables:  # fmt: skip
+    """Per-segment kernel class, plane axes, geometry, window start and NURBS tables of ``tp``.
+
+    ``rapids_behind``: rapids are RAPID lines (candidates behind the reference), else SKIP (never).
+    """
     n = len(tp)
     kind = np.asarray(tp.kind)
     axes = np.ascontiguousarray(_PLANE_AXES_TABLE[np.asarray(tp.plane).astype(np.int64)], dtype=np.int64)
@@ -305,8 +333,10 @@ def pack_contour(tp: Toolpath, window_back: int, window_back_mm: float) -> Conto
     seg_class[is_arc & (rise == 0)] = FLAT_ARC
     seg_class[is_arc & (rise != 0)] = HELIX
     seg_class[kind == SegmentKind.NURBS] = NURBS
+    if rapids_behind:
+        seg_class[kind == SegmentKind.RAPID] = RAPID
 
-    lines = kind == SegmentKind.LINE
+    lines = (kind == SegmentKind.LINE) | (kind == SegmentKind.RAPID)
     delta = tp.end - tp.start
     len2 = np.einsum("ij,ij->i", delta, delta)
     geometry[lines, 0:3] = tp.start[lines]

@@ -62,8 +62,20 @@ def test_only_the_best_constant_is_shown_and_new_policies_join():
 
 
 def test_records_of_different_suites_do_not_mix():
-    with pytest.raises(CncGymError, match="one suite, split and machine"):
+    with pytest.raises(CncGymError, match="one suite, split, machine"):
         leaderboard_rows([_rec("classical", 0.4), _rec("oracle", 0.5, split="val")])
+
+
+@pytest.mark.parametrize("key", ["record_version", "bound_version"])
+def test_records_of_different_metric_or_bound_versions_do_not_mix(key):
+    # Records made before the programmed-path meter and bound version 2 carry no record_version (or 1):
+    # their numbers mean something else, so they never share a table with today's.
+    new = _rec("classical", 0.4, record_version=2, bound_version=2)
+    old = _rec("oracle", 0.5, record_version=2, bound_version=2)
+    old.pop(key)
+    with pytest.raises(CncGymError, match=f"several values of '{key}'.*record version and bound version"):
+        leaderboard_rows([new, old])
+    assert leaderboard_rows([new, {**old, key: 2}])
 
 
 def test_markers_are_required():

@@ -430,20 +430,22 @@ def test_no_render_mode_builds_nothing(circle_env):
     assert circle_env._renderer is None
 
 
-def test_env_contour_error_is_the_meter_on_the_reference_segments():
+@pytest.mark.parametrize("rule", ["cuts", "path"])
+def test_env_contour_error_is_the_meter_on_the_reference_segments(rule):
     # The env passes the meter one scalar hint when a step stays on one segment (a shortcut). On the
     # freeform program (0.5 mm segments, several per step) and at 200 %, its per-step error must be the
-    # largest per-sample error of a separate meter fed the same actual points with per-sample hints.
+    # largest per-sample error of a separate meter fed the same actual points with per-sample hints,
+    # under either rule of the meter.
     from cnc_gym.motion import Controller
     from cnc_gym.plant import ContourErrorMeter, ServoPlant
 
-    env = FeedrateEnv(programs=["freeform"])
+    env = FeedrateEnv(programs=["freeform"], contour_rule=rule)
     env.reset(seed=0)
     tp = env.toolpath
     controller, plant = Controller(tp, env.machine), ServoPlant(env.machine)
     controller.reset()
     plant.reset(tp.start[0])
-    meter = ContourErrorMeter(tp, window_back_mm=env._max_lag_mm)
+    meter = ContourErrorMeter(tp, window_back_mm=env._max_lag_mm, rapids_behind=rule == "path")
     action = np.ones(1, dtype=np.float32)
     for _ in range(300):
         *_, info = env.step(action)

@@ -113,3 +113,61 @@ def test_a_broken_cache_file_is_recomputed(tmp_path, monkeypatch):
     monkeypatch.setattr(bound, "_MEMORY", {})
     assert time_optimal_bound(tp, VMC).total_s == pytest.approx(first.total_s)
     assert np.isfinite(first.total_s)
+
+
+def test_short_cuts_between_stops_are_the_closed_form():
+    # Pecks of 0.3-1.2 mm at F100 × 2 = 3.33 mm/s, each from rest to rest (a rapid on either side): the
+    # ramps take v/A ≈ 1 ms over about 2 µm, so T = Σ (L/v + v/A). A grid interval (up to 0.5 mm) ramped
+    # at constant acceleration would take twice L/v on a 0.5 mm peck.
+    depths = [0.3, 0.5, 0.8, 1.2]
+    lines, z = ["G90 G21", "G00 X0 Y0 Z1"], 0.0
+    for depth in depths:
+        lines += [f"G00 Z{z:.3f}", f"G01 Z{z - depth:.3f} F100", "G00 Z1"]
+        z -= depth
+    b = _bound("\n".join([*lines, "M30"]) + "\n")
+    v = 100 * 2 / 60
+    closed = sum(d / v + v / A for d in depths)
+    assert b.cutting_s <= closed * (1 + 1e-9)
+    assert b.cutting_s == pytest.approx(closed, rel=1e-3)
+
+
+def test_a_cut_between_stops_on_a_coarse_grid_stays_below_the_closed_form():
+    # One grid interval per 5 mm: the ramps lie inside the first and last interval, and the bound is still
+    # the trapezoid (the time inside an interval is the fastest motion between its end speeds, not a ramp
+    # over the whole interval).
+    b = _bound("G90 G21\nG01 X20 F600\nG04 X0.1\nG01 X21 F600\nM30\n", grid_mm=5.0)
+    v = 600 * 2 / 60
+    closed = 20 / v + v / A + 1 / v + v / A
+    assert b.cutting_s <= closed * (1 + 1e-9)
+    assert b.cutting_s == pytest.approx(closed, rel=1e-3)
+
+
+def test_an_arc_interval_allows_at_least_the_acceleration_of_its_best_point():
+    # On a coarse grid an interval of an arc turns by up to 5°: its tangent is relaxed so that each axis's
+    # limit allows at least the path acceleration of any point in it, so the bound on a coarse grid is
+    # never above the bound on a fine one by more than rounding.
+    text = "G90 G21\nG92 X10 Y0\nG03 X-10 Y0 I-10 J0 F6000\nM30\n"
+    coarse, fine = _bound(text, grid_mm=2.0), _bound(text, grid_mm=0.05)
+    assert coarse.cutting_s <= fine.cutting_s * (1 + 1e-6)
+    assert coarse.cutting_s == pytest.approx(fine.cutting_s, rel=2e-2)
+
+
+@pytest.mark.parametrize("name", ["holes-val-000", "holes-test-000"])
+def test_no_baseline_beats_the_bound_on_pecking_cycles(name):
+    # Canned drilling cycles (G73 / G83 pecks) are short cuts between stops: the bound must stay below
+    # every policy there too, the oracle included.
+    from cnc_gym.benchmark.runner import BenchConfig, run_bench, suite_programs
+
+    programs, _ = suite_programs("cnc-bench-v1", name.split("-")[1])
+    program = [p for p in programs if p.name == name]
+    policies = ["constant:2.0", "classical", "oracle", "bound"]
+    records = run_bench(BenchConfig(programs=program, policies=policies, seeds=[0], machine="vmc-small",
+                                    dialect="gsk25i", progress=False))  # fmt: skip
+    bound = [r for r in records if r["reference"]]
+    assert len(bound) == 1 and len(records) == 4
+    for r in records:
+        if r["finished"]:
+            assert r["cycle_time_s"] >= r["bound_s"], r["policy"]
+    # ... and stays close to the fastest of them: the bound is not loose by a whole grid interval per peck.
+    fastest = min(r["cycle_time_s"] for r in records if r["finished"] and not r["reference"])
+    assert fastest / bound[0]["bound_s"] < 1.5

@@ -82,26 +82,31 @@ def test_zx_plane_arc_and_full_circle():
     np.testing.assert_allclose(meter.measure(points, 1), [4.0, 4.0, math.sqrt(109.0)], atol=1e-12)
 
 
-def test_rapids_and_dwells_are_excluded():
+@pytest.mark.parametrize("rapids_behind", [False, True])
+def test_samples_on_rapids_and_dwells_do_not_count(rapids_behind):
     tp = build(
         ("rapid", (0, 0, 10), (0, 0, 0)),
         ("line", (0, 0, 0), (10, 0, 0)),
         ("dwell", (10, 0, 0)),
         ("rapid", (10, 0, 0), (10, 0, 10)),
     )
-    meter = ContourErrorMeter(tp)
+    meter = ContourErrorMeter(tp, rapids_behind=rapids_behind)
     far = np.array([[50.0, 50.0, 50.0], [0.0, 0.0, 5.0]])
     # Reference on a rapid or a dwell: no contour error, whatever the actual point.
     np.testing.assert_array_equal(meter.measure(far, 0), [0.0, 0.0])
     np.testing.assert_array_equal(meter.measure(far, 2), [0.0, 0.0])
     np.testing.assert_array_equal(meter.measure(far, 3), [0.0, 0.0])
-    # Reference on the cut: the rapid is no candidate, so a point on the rapid is measured to the line.
-    np.testing.assert_allclose(meter.measure(far[1:], 1), [5.0], atol=1e-12)
+    # Reference on the cut: a point on the approach rapid (behind the reference) is on the programmed path
+    # under the path rule; under the cuts rule it is measured to the line's start.
+    on_rapid = 0.0 if rapids_behind else 5.0
+    np.testing.assert_allclose(meter.measure(far[1:], 1), [on_rapid], atol=1e-12)
+    # The retract rapid after the cut is ahead of the reference: never a candidate.
+    np.testing.assert_allclose(meter.measure(np.array([[10.0, 0.0, 4.0]]), 1), [4.0], atol=1e-12)
     # Per-point hints: only the points whose own reference is cutting count.
-    np.testing.assert_allclose(meter.measure(far, np.array([0, 1])), [0.0, 5.0], atol=1e-12)
+    np.testing.assert_allclose(meter.measure(far, np.array([0, 1])), [0.0, on_rapid], atol=1e-12)
     # Out-of-range hints count as not cutting (no exception, no NaN).
     np.testing.assert_array_equal(meter.measure(far, 99), [0.0, 0.0])
-    np.testing.assert_allclose(meter.measure(far, np.array([-1, 1])), [0.0, 5.0], atol=1e-12)
+    np.testing.assert_allclose(meter.measure(far, np.array([-1, 1])), [0.0, on_rapid], atol=1e-12)
     np.testing.assert_array_equal(meter.measure(far, np.array([3, 99])), [0.0, 0.0])
     # All points on the cut: the same as one int hint.
     np.testing.assert_allclose(meter.measure(far, np.array([1, 1])), meter.measure(far, 1), atol=0)
@@ -152,7 +157,7 @@ def test_agrees_with_the_toolpath_nearest_service():
         ("arc", (10, -10, -6), (10, -6, -6), (10, -8, -6), Plane.YZ, -math.pi),
         ("line", (10, -6, -6), (0, 0, 0)),
     )
-    meter = ContourErrorMeter(tp, window_back=2, window_ahead=3)
+    meter = ContourErrorMeter(tp, window_back=2, window_ahead=3, rapids_behind=False)
     rng = np.random.default_rng(3)
     checked = 0
     for _ in range(300):
@@ -304,27 +309,42 @@ def test_compiled_meter_equals_toolpath_nearest_on_random_paths_and_hints():
                             line=number + 1)  # fmt: skip
             here = there
         tp = builder.build()
-        meter = ContourErrorMeter(tp, window_back=back, window_ahead=ahead)
+        cuts = ContourErrorMeter(tp, window_back=back, window_ahead=ahead, rapids_behind=False)
+        path = ContourErrorMeter(tp, window_back=back, window_ahead=ahead)
         cutting = np.isin(tp.kind, [1, 2, 4])  # line, arc, NURBS (rapid 0 and dwell 3 are not)
         _, on_path = tp.sample(0.5)
+
+        def behind(points, first, own, tp=tp):
+            """Per point: the nearest of every segment, rapids included, in [first, own[i])."""
+            return np.array([tp.nearest(p, first, o, cutting_only=False)[0][0] if o > first else np.inf
+                             for p, o in zip(points, own, strict=True)])  # fmt: skip
+
         for _ in range(40):
             start = int(rng.integers(0, len(tp)))
             hints = np.sort(np.minimum(start + rng.integers(0, 3, 5), len(tp) - 1))
             points = on_path[rng.integers(0, len(on_path), 5)] + rng.normal(0, 0.3, (5, 3))
             counted = cutting[hints]
-            expected = np.zeros(5)
+            expected = expected_path = np.zeros(5)
             if counted.any():
                 lo, hi = hints[counted].min(), hints[counted].max()
-                reference, _, _ = tp.nearest(points, max(0, lo - back), min(len(tp), hi + ahead + 1))
+                first = max(0, lo - back)
+                reference, _, _ = tp.nearest(points, first, min(len(tp), hi + ahead + 1))
                 expected = np.where(counted, reference, 0.0)
-            np.testing.assert_allclose(meter.measure(points, hints), expected, rtol=1e-9, atol=1e-9)
+                expected_path = np.where(counted, np.minimum(reference, behind(points, first, hints)), 0.0)
+            np.testing.assert_allclose(cuts.measure(points, hints), expected, rtol=1e-9, atol=1e-9)
+            np.testing.assert_allclose(path.measure(points, hints), expected_path, rtol=1e-9, atol=1e-9)
             # One common hint: every point counts where that segment cuts.
-            single = meter.measure(points, int(hints[0]))
-            if cutting[hints[0]]:
-                first, last = max(0, hints[0] - back), min(len(tp), hints[0] + ahead + 1)
-                np.testing.assert_allclose(single, tp.nearest(points, first, last)[0], rtol=1e-9, atol=1e-9)
+            own = int(hints[0])
+            single, single_path = cuts.measure(points, own), path.measure(points, own)
+            if cutting[own]:
+                first, last = max(0, own - back), min(len(tp), own + ahead + 1)
+                reference = tp.nearest(points, first, last)[0]
+                np.testing.assert_allclose(single, reference, rtol=1e-9, atol=1e-9)
+                expected_path = np.minimum(reference, behind(points, first, np.full(5, own)))
+                np.testing.assert_allclose(single_path, expected_path, rtol=1e-9, atol=1e-9)
             else:
                 np.testing.assert_array_equal(single, 0.0)
+                np.testing.assert_array_equal(single_path, 0.0)
 
 
 def test_nurbs_and_helices_agree_with_toolpath_nearest():
@@ -366,3 +386,60 @@ def test_nurbs_and_helices_agree_with_toolpath_nearest():
         first, last = meter.window(hint)
         expected, _, _ = tp.nearest(points, first, last)
         np.testing.assert_allclose(meter.measure(points, hint), expected, rtol=0, atol=1e-9)
+
+
+def test_turning_junction_lateness_is_not_error_offset_is():
+    # A rapid along X to the corner (10, 0), then a cut along Y (the reference is on the cut, hint 1).
+    tp = build(("rapid", (0, 0, 0), (10, 0, 0)), ("line", (10, 0, 0), (10, 5, 0)))
+    path, cuts = ContourErrorMeter(tp), ContourErrorMeter(tp, rapids_behind=False)
+    late = np.array([[9.996, 0.0, 0.0]])  # 4 µm short of the corner, on the rapid's line
+    np.testing.assert_allclose(path.measure(late, 1), [0.0], atol=1e-12)
+    np.testing.assert_allclose(cuts.measure(late, 1), [0.004], atol=1e-12)  # the old rule's spike
+    # Past the corner and 3 µm beside the cut: a genuine offset, the same under both rules.
+    beside = np.array([[10.003, 1.0, 0.0], [9.997, 2.0, 0.0]])
+    np.testing.assert_allclose(path.measure(beside, 1), [0.003, 0.003], atol=1e-12)
+    np.testing.assert_allclose(cuts.measure(beside, 1), [0.003, 0.003], atol=1e-12)
+    # Inside the corner, short of it: the nearer of the two lines (closed form min(dy, dx)).
+    inside = np.array([[9.995, 0.002, 0.0]])
+    np.testing.assert_allclose(path.measure(inside, 1), [0.002], atol=1e-12)
+    np.testing.assert_allclose(cuts.measure(inside, 1), [0.005], atol=1e-12)
+    # Outside the corner (overshoot in X): the corner is the nearest point under both rules.
+    over = np.array([[10.003, -0.004, 0.0]])
+    np.testing.assert_allclose(path.measure(over, 1), [0.005], atol=1e-12)
+    np.testing.assert_allclose(cuts.measure(over, 1), [0.005], atol=1e-12)
+
+
+def test_rapids_behind_only_within_the_window():
+    # A rapid, then many 1 mm cuts: once the window (2 segments back) has left the rapid it is no candidate.
+    segments = [("rapid", (0, 0, 5), (0, 0, 0))]
+    segments += [("line", (k, 0, 0), (k + 1, 0, 0)) for k in range(6)]
+    tp = build(*segments)
+    meter = ContourErrorMeter(tp, window_back=2)
+    on_rapid = np.array([[0.0, 0.0, 1.0]])
+    np.testing.assert_allclose(meter.measure(on_rapid, 2), [0.0], atol=1e-12)  # window [0, ...]
+    np.testing.assert_allclose(meter.measure(on_rapid, 4), [math.sqrt(2.0)], atol=1e-12)  # from (1, 0, 0)
+
+
+def test_the_env_meter_rule_removes_the_rapid_to_cut_spike_and_nothing_else():
+    # circle: a rapid to Z4, then a plunge; the controller releases the plunge with the tool still 4.6 µm
+    # above Z4 on the rapid (in-position width 10 µm). The cuts rule measured ~4.1 µm there.
+    from cnc_gym.envs.feedrate import FeedrateEnv
+
+    errors = {}
+    for rule in ("cuts", "path"):
+        env = FeedrateEnv(programs=["circle"], contour_rule=rule)
+        env.reset(seed=0)
+        steps = []
+        while True:
+            *_, terminated, truncated, info = env.step(np.zeros(1, dtype=np.float32))
+            steps.append((info["cycle_time_s"], info["contour_error_mm"]))
+            if terminated or truncated:
+                break
+        errors[rule] = np.array(steps)
+    cuts, path = errors["cuts"], errors["path"]
+    np.testing.assert_array_equal(cuts[:, 0], path[:, 0])  # the same motion
+    spike = int(np.argmax(np.abs(cuts[:, 1] - path[:, 1])))
+    assert cuts[spike, 0] == pytest.approx(0.59) and cuts[spike, 1] == pytest.approx(0.0041, abs=2e-4)
+    assert path[spike, 1] < 1e-4
+    others = np.arange(len(cuts)) != spike
+    np.testing.assert_allclose(path[others, 1], cuts[others, 1], atol=1e-6)
