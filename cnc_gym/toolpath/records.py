@@ -117,8 +117,8 @@ def toolpath_jsonl(tp: Toolpath) -> str:
     if n == 0:
         return ""
     kind = tp.kind
-    points = np.column_stack((tp.start, tp.end))
-    general = (tp.file_index != 0) | (kind == SegmentKind.NURBS) | ~np.all(np.isfinite(points), axis=1)
+    coordinates = np.column_stack((tp.start, tp.end))
+    general = (tp.file_index != 0) | (kind == SegmentKind.NURBS) | ~np.all(np.isfinite(coordinates), axis=1)
     general |= tp.smoothing_tolerance_mm != 0
     general |= (kind == SegmentKind.ARC) & ~np.all(np.isfinite(tp.center), axis=1)
     cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC)
