@@ -9,8 +9,11 @@ seconds, all threads; steadier than wall time on a shared machine, larger than i
 - **single**: every registered ``cnc_gym/Feedrate-*`` id through ``gymnasium.make`` (its wrappers
   included), steps/s; resets at episode ends are part of the run, as in training;
 - **vector**: :class:`~cnc_gym.envs.vector.FeedrateVectorEnv` at N ∈ ``--envs`` (default 1, 8, 64, 256),
-  env-steps/s (N × steps/s) against Pendulum-v1's single-env steps/s; ``--parallel`` picks numba's
-  threads (``auto``: the env's default rule; ``both``: each N serial and in threads);
+  env-steps/s (N × steps/s) against Pendulum-v1's single-env steps/s; each repeat runs from a reset for
+  at least ``--vector-steps`` steps (default 1500), so that every env runs whole episodes (500 to 1400
+  steps with random actions on the three families), not only the rapid and the plunge they start with;
+  ``--parallel`` picks numba's threads (``auto``: the env's default rule; ``both``: each N serial and in
+  threads);
 - program families (``--families``): ``flat`` (the built-in set: lines and flat arcs), ``helix`` (a
   helical bore, one G03 block per half turn), ``nurbs`` (a chain of cubic G06.2 curves);
 - **plants** (``--plants``): ``cnc_gym/Feedrate-v0`` on ``vmc-small-mujoco`` with ``plant="lti"`` and
@@ -261,6 +264,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=5, help="interleaved repeats (default 5)")
     parser.add_argument("--families", nargs="+", default=list(FAMILIES), choices=list(FAMILIES))
     parser.add_argument("--envs", type=int, nargs="*", default=[1, 8, 64, 256], help="vector env sizes")
+    parser.add_argument("--vector-steps", type=int, default=1500,
+                        help="at least this many vector steps per timed repeat (default 1500: every env runs "
+                             "a whole episode of each family, not only the rapid and plunge it starts with)")
     parser.add_argument("--parallel", choices=["auto", "on", "off", "both"], default="auto")
     parser.add_argument("--profile", action="store_true", help="profile a Feedrate-v0 step (see above)")
     parser.add_argument("--quick", action="store_true", help="1000 steps, 3 repeats, N ∈ {1, 64}")
@@ -270,7 +276,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.quick:
         args.steps, args.repeats, args.envs = 1000, 3, [1, 64]
-    result: dict = {"steps": args.steps, "repeats": args.repeats, "single": [], "vector": []}
+    result: dict = {"steps": args.steps, "vector_steps": args.vector_steps, "repeats": args.repeats,
+                    "single": [], "vector": []}
     print(f"ratios against {PENDULUM_ID} in this process (median of {args.repeats}; wall | CPU time)")
     print(f"{'what':46s} {'steps/s':>11s} {'Pendulum':>10s} {'ratio':>7s} {'CPU ratio':>9s}")
 
@@ -292,7 +299,7 @@ def main(argv: list[str] | None = None) -> int:
             for parallel in modes:
                 # (parallel=None is the env's default rule: not passed, so that older versions run too)
                 venv = FeedrateVectorEnv(n, **kwargs, **({} if parallel is None else {"parallel": parallel}))
-                steps = max(50, args.steps // n)
+                steps = max(args.vector_steps, args.steps // n)
                 r = against_pendulum(venv, run_vector, steps, n, args.repeats)
                 threads = bool(getattr(getattr(venv, "batch", None), "parallel", False))
                 venv.close()

@@ -252,6 +252,12 @@ def helix_nearest(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep) -> tuple[
 _NURBS_HEADER_F = 8
 _NURBS_NEWTON_STEPS = 8
 _SPHERE_MARGIN = 1e-9  # relative and absolute (mm): the pruning tests leave this much for rounding
+#: Neighbouring intervals per group: one sphere holds a group's interval spheres, so that a point far from
+#: the group skips its intervals with one test (a neighbouring curve, or the far side of the own one).
+NURBS_GROUP = 8
+# The group sphere's slack over its intervals' spheres: 1e-6 mm plus 1e-7 of the curve's extent, far above
+# the rounding of the tests (about 1e-16 of the extent squared), far below any distance that matters.
+_GROUP_MARGIN = 1e-6
 
 
 def _interval_spheres(curve) -> tuple[np.ndarray, np.ndarray]:
@@ -284,11 +290,29 @@ def _interval_spheres(curve) -> tuple[np.ndarray, np.ndarray]:
     return centre, np.where(positive, radius, np.inf)
 
 
+def _group_spheres(centre: np.ndarray, radius: np.ndarray, extent: float) -> tuple[np.ndarray, np.ndarray]:
+    """A sphere (centre (g, 3), radius (g,)) around each :data:`NURBS_GROUP` neighbouring interval spheres
+    (``centre`` (n - 1, 3), ``radius`` (n - 1,)), with a slack of :data:`_GROUP_MARGIN` so that a point
+    its test (in floating point) puts outside a group also fails each interval's own test there: the
+    group's test then stands for its intervals' tests, and the search's result is the same."""
+    n_groups = -(-len(radius) // NURBS_GROUP)
+    group_centre = np.empty((n_groups, 3))
+    group_radius = np.empty(n_groups)
+    for g in range(n_groups):
+        members = slice(g * NURBS_GROUP, (g + 1) * NURBS_GROUP)
+        c, r = centre[members], radius[members]
+        group_centre[g] = 0.5 * (c.min(axis=0) + c.max(axis=0))
+        reach = np.sqrt(np.sum((c - group_centre[g]) ** 2, axis=1)) + r
+        group_radius[g] = reach.max() + _GROUP_MARGIN * (1.0 + 0.1 * extent)
+    return group_centre, group_radius
+
+
 def nurbs_table(curve, offset: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The arrays :func:`nurbs_distance2` searches: ``curve``'s span polynomials and coarse sample table
     (those of :meth:`~cnc_gym.toolpath.nurbs.NurbsCurve.nearest`) flattened into floats, with a bounding
-    sphere of all control points (a NURBS curve with positive weights lies in their convex hull) and one of
-    the curve between each two neighbouring samples (:func:`_interval_spheres`), and the header
+    sphere of all control points (a NURBS curve with positive weights lies in their convex hull), one of
+    the curve between each two neighbouring samples (:func:`_interval_spheres`) and one around each group of
+    those (:func:`_group_spheres`), and the header
     ``[offset, order, spans, samples, samples per span]`` (``offset``: where the floats will start in a
     table holding several curves)."""
     k = int(curve.order)
@@ -299,6 +323,8 @@ def nurbs_table(curve, offset: int = 0) -> tuple[np.ndarray, np.ndarray]:
     radius = float(np.sqrt(np.max(np.sum((hull - centre) ** 2, axis=1))))
     interval_centre, interval_radius = _interval_spheres(curve)
     interval_centre = interval_centre - curve._origin  # relative, as the sample table
+    extent = float(np.max(np.abs(np.concatenate((interval_centre.ravel(), [0.0]))))) + radius
+    group_centre, group_radius = _group_spheres(interval_centre, interval_radius, extent)
     blocks = [
         curve._origin, [curve._nearest_step_tolerance], centre, [radius],
         curve._poly.reshape(-1),  # (spans, k, 12)
@@ -308,6 +334,7 @@ def nurbs_table(curve, offset: int = 0) -> tuple[np.ndarray, np.ndarray]:
         curve._sample_rel_d1[0], curve._sample_rel_d1[1],  # n, n
         interval_centre.T.reshape(-1), np.sum(interval_centre**2, axis=1),  # 3 × (n - 1) (blocks), n - 1
         interval_radius,  # n - 1
+        group_centre.T.reshape(-1), np.sum(group_centre**2, axis=1), group_radius,  # 3 × g (blocks), g, g
     ]  # fmt: skip
     tab_f = np.concatenate([np.asarray(b, dtype=np.float64).ravel() for b in blocks])
     tab_i = np.array([offset, k, spans, n, int(curve._per_span)], dtype=np.int64)
@@ -427,20 +454,33 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     interval_centre, o = _take(tab_f, o, 3 * (n - 1))
     interval_centre_sq, o = _take(tab_f, o, n - 1)
     interval_radius, o = _take(tab_f, o, n - 1)
+    n_groups = (n - 2) // NURBS_GROUP + 1
+    group_centre, o = _take(tab_f, o, 3 * n_groups)
+    group_centre_sq, o = _take(tab_f, o, n_groups)
+    group_radius, o = _take(tab_f, o, n_groups)
     rel_sq_p = r0 * r0 + r1 * r1 + r2 * r2
     x_c, y_c, z_c = interval_centre[: n - 1], interval_centre[n - 1 : 2 * n - 2], interval_centre[2 * n - 2 :]
+    x_g, y_g = group_centre[:n_groups], group_centre[n_groups : 2 * n_groups]
+    z_g = group_centre[2 * n_groups :]
     d2_sample = work[:n]
     h = work[n : n + 12]
     if bound2 < math.inf:
         # Under a bound (the caller's best so far, often from a neighbouring segment): nothing to search
-        # unless some interval's sphere comes within it.
+        # unless some interval's sphere comes within it (tested group by group).
         reach0 = math.sqrt(bound2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
-        for i in range(n - 1):
-            reach = reach0 + interval_radius[i]
-            centre2 = interval_centre_sq[i] - 2.0 * (x_c[i] * r0 + y_c[i] * r1 + z_c[i] * r2) + rel_sq_p
-            if centre2 <= reach * reach:
+        near = False
+        for g in range(n_groups):
+            if not _within(group_centre_sq[g], x_g[g], y_g[g], z_g[g], r0, r1, r2, rel_sq_p,
+                           reach0 + group_radius[g]):  # fmt: skip
+                continue
+            for i in range(g * NURBS_GROUP, min((g + 1) * NURBS_GROUP, n - 1)):
+                if _within(interval_centre_sq[i], x_c[i], y_c[i], z_c[i], r0, r1, r2, rel_sq_p,
+                           reach0 + interval_radius[i]):  # fmt: skip
+                    near = True
+                    break
+            if near:
                 break
-        else:
+        if not near:
             return math.inf
 
     # The nearest sample: an upper bound of the distance. (Coordinates in x, y, z blocks: the loops
@@ -456,21 +496,33 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     # Brackets of a minimum inside an interval (the slope negative right of its first sample, positive left
     # of its second) whose sphere comes within the bound. (A minimum at a sample, an end or a kink at a
     # knot, other than the nearest sample is farther than it.)
-    for i in range(n - 1):
-        reach = upper + interval_radius[i]
-        centre2 = interval_centre_sq[i] - 2.0 * (x_c[i] * r0 + y_c[i] * r1 + z_c[i] * r2) + rel_sq_p
-        if centre2 > reach * reach:
+    for g in range(n_groups):
+        # (A group out of reach holds no interval within reach: the bound only shrinks along the loop.)
+        if not _within(group_centre_sq[g], x_g[g], y_g[g], z_g[g], r0, r1, r2, rel_sq_p,
+                       upper + group_radius[g]):  # fmt: skip
             continue
-        g_lo = rel_d1_right[i] - _dot3(d1_right, i, r0, r1, r2)
-        if not g_lo < 0.0:
-            continue
-        g_hi = rel_d1_left[i + 1] - _dot3(d1_left, i + 1, r0, r1, r2)
-        if not g_hi > 0.0:
-            continue
-        lo, hi = sample_t[i], sample_t[i + 1]
-        t = lo + (hi - lo) * (-g_lo / (g_hi - g_lo))
-        d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h)
-        if d2 < best:
-            best = d2
-            upper = min(upper, math.sqrt(d2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN)
+        for i in range(g * NURBS_GROUP, min((g + 1) * NURBS_GROUP, n - 1)):
+            if not _within(interval_centre_sq[i], x_c[i], y_c[i], z_c[i], r0, r1, r2, rel_sq_p,
+                           upper + interval_radius[i]):  # fmt: skip
+                continue
+            g_lo = rel_d1_right[i] - _dot3(d1_right, i, r0, r1, r2)
+            if not g_lo < 0.0:
+                continue
+            g_hi = rel_d1_left[i + 1] - _dot3(d1_left, i + 1, r0, r1, r2)
+            if not g_hi > 0.0:
+                continue
+            lo, hi = sample_t[i], sample_t[i + 1]
+            t = lo + (hi - lo) * (-g_lo / (g_hi - g_lo))
+            d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h)
+            if d2 < best:
+                best = d2
+                upper = min(upper, math.sqrt(d2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN)
     return best
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _within(centre_sq, x, y, z, r0, r1, r2, rel_sq_p, reach) -> bool:
+    """Whether the point (r0, r1, r2) is within ``reach`` of the centre (x, y, z) (``centre_sq`` its
+    squared norm, ``rel_sq_p`` the point's), by the expanded square (one form for every sphere test)."""
+    centre2 = centre_sq - 2.0 * (x * r0 + y * r1 + z * r2) + rel_sq_p
+    return centre2 <= reach * reach

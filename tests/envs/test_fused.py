@@ -226,3 +226,26 @@ def test_a_copied_or_pickled_env_steps_like_the_env(env_class):
             for other in copies:
                 assert other.reset()[1] == first[1]
     assert ends >= 1
+
+
+def test_borrowed_and_matrix_views_are_the_arrays_own_memory():
+    # The batch call's two view helpers: a borrowed array (no reference count) and a direct (rows, cols)
+    # view of a stretch of a flat table are the same memory as the array they come from, read and written.
+    from numba import njit
+
+    from cnc_gym.envs.fused import _borrowed, _matrix
+
+    @njit
+    def fill(flat, start, rows, cols):
+        view = _matrix(_borrowed(flat), start, rows, cols)
+        for i in range(rows):
+            for j in range(cols):
+                view[i, j] += 100.0 * i + j
+        return _matrix(flat, start, rows, cols).sum()
+
+    flat = np.arange(40, dtype=np.float64)
+    expected = flat.copy()
+    expected[7:19] += (100.0 * np.arange(3)[:, None] + np.arange(4)).ravel()
+    total = fill(flat, 7, 3, 4)
+    np.testing.assert_array_equal(flat, expected)
+    assert total == expected[7:19].sum()

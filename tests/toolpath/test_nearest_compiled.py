@@ -7,7 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from cnc_gym.toolpath.nearest import _interval_spheres, helix_nearest, nurbs_distance2, nurbs_table
+from cnc_gym.toolpath.nearest import (
+    _GROUP_MARGIN,
+    NURBS_GROUP,
+    _group_spheres,
+    _interval_spheres,
+    helix_nearest,
+    nurbs_distance2,
+    nurbs_table,
+)
 from cnc_gym.toolpath.nurbs import NurbsCurve
 
 
@@ -102,3 +110,26 @@ def test_interval_spheres_hold_the_curve_between_neighbouring_samples(order):
     for i in range(len(t) - 1):
         inside = curve.evaluate(np.linspace(t[i], t[i + 1], 41))
         assert np.all(np.linalg.norm(inside - centre[i], axis=1) <= radius[i] * (1 + 1e-12) + 1e-12)
+
+
+@pytest.mark.parametrize("n_ctrl", [5, 40])
+def test_group_spheres_hold_their_intervals_spheres_with_slack(n_ctrl):
+    # A group's sphere stands for its intervals' tests: each interval sphere lies inside it with the slack
+    # that absorbs the rounding of the tests, so skipping a group skips no interval that could pass.
+    rng = np.random.default_rng(n_ctrl)
+    curve = random_curve(rng, n_ctrl, 4)
+    centre, radius = _interval_spheres(curve)
+    extent = float(np.abs(centre).max()) + 10.0
+    group_centre, group_radius = _group_spheres(centre, radius, extent)
+    assert len(group_radius) == -(-len(radius) // NURBS_GROUP)
+    for i in range(len(radius)):
+        g = i // NURBS_GROUP
+        reach = np.linalg.norm(centre[i] - group_centre[g]) + radius[i]
+        assert reach <= group_radius[g] - 0.99 * _GROUP_MARGIN * (1.0 + 0.1 * extent)
+    # and the search, which skips groups out of reach, still finds the distance a point in every group has
+    t = rng.uniform(0, 1, 60)
+    points = curve.evaluate(t) + rng.normal(size=(60, 3)) * 1e-3
+    floats, header = nurbs_table(curve)
+    expected, _, _ = curve.nearest(points)
+    got = np.array([math.sqrt(nurbs_distance2(floats, header, *p, math.inf)) for p in points])
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9)
