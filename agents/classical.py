@@ -87,7 +87,7 @@ class ServoErrorModel:
         n = self.filter_samples
         if n > 1:  # moving average of n samples, common to all axes
             k = np.arange(n)[:, None]
-            m = np.exp(-1j * s[0][None, :] * k * self.period_s).mean(axis=0)
+            m = np.exp(-s[0][None, :] * k * self.period_s).mean(axis=0)  # delays e^(-s·kT), s = jω
             g = g * m[None, :]
         return g
 

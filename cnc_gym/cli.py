@@ -23,8 +23,15 @@ false`` and a line on stderr says why; 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
+
+# Before numpy loads (the imports below): the commands' linear algebra is on small matrices (3-vectors, the
+# servo models' 5×5), where OpenBLAS's thread pool only costs. Started with a thread per core, it spins at
+# load: 0.1 s of CPU, a third of `cnc-gym trace`'s start on two cores (scripts/bench_trace.py). A value the
+# user set wins.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
@@ -162,8 +169,6 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _silence_stdout() -> None:
-    import os
-
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, sys.stdout.fileno())
 

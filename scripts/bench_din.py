@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_interpreter import baseline as tokenise
-from bench_interpreter import median_seconds
+from bench_interpreter import median_seconds, split_seconds
 
 from cnc_gym.gcode import interpret
 
@@ -93,6 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  gsk25i      : {n_lines / gsk_cpu:13,.0f}  {n_lines / gsk_wall:15,.0f}   (the Fanuc family)")
     print(f"  ratio       : the interpreter takes {cpu / base_cpu:.1f}x the tokeniser's CPU time, "
           f"{cpu / gsk_cpu:.2f}x the gsk25i interpreter's")
+    read_s, run_s = split_seconds(text, "azmc1")
+    print(f"  split       : read {read_s * 1e3:.0f} ms, execute and build the tool path {run_s * 1e3:.0f} ms "
+          "(CPU, best of 3)")
 
     loop = while_program(args.passes)
     toolpath = interpret(loop, dialect="azmc1", file="loop.din")

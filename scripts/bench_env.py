@@ -20,8 +20,9 @@ seconds, all threads; steadier than wall time on a shared machine, larger than i
   ``plant="mujoco"`` (the same machine, loops and programs; docs/plant.md), single env and
   ``FeedrateVectorEnv(8)``, each against Pendulum-v1 and the MuJoCo figure against the LTI one;
 - **build**: the time to construct ``FeedrateVectorEnv(64)`` (compiled code loaded from the disk cache);
-- ``--profile``: where a Feedrate-v0 step spends its time: cProfile of the Python layers around the one
-  compiled call (actions sampled beforehand, not counted), and the compiled work split into its parts
+- ``--profile``: where a step spends its time: cProfile of the Python layers around the one compiled call
+  of ``--profile-env`` (default Feedrate-v0; actions sampled beforehand, not counted), and the compiled
+  work of a Feedrate-v0 step split into its parts
   (controller periods, servo plant, contour error, the rest), timed by running the same episode through
   the modular step, whose parts are separate calls.
 
@@ -268,7 +269,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="at least this many vector steps per timed repeat (default 1500: every env runs "
                              "a whole episode of each family, not only the rapid and plunge it starts with)")
     parser.add_argument("--parallel", choices=["auto", "on", "off", "both"], default="auto")
-    parser.add_argument("--profile", action="store_true", help="profile a Feedrate-v0 step (see above)")
+    parser.add_argument("--profile", action="store_true", help="profile a step (see above)")
+    parser.add_argument("--profile-env", default="cnc_gym/Feedrate-v0", choices=feedrate_ids(),
+                        help="the id whose Python layers --profile times (default cnc_gym/Feedrate-v0)")
     parser.add_argument("--quick", action="store_true", help="1000 steps, 3 repeats, N ∈ {1, 64}")
     parser.add_argument("--plants", action="store_true",
                         help="also the MuJoCo plant against the LTI plant on vmc-small-mujoco (see above)")
@@ -313,8 +316,9 @@ def main(argv: list[str] | None = None) -> int:
         for family in args.families:
             programs = FAMILIES[family]()
             kwargs = {} if programs is None else {"programs": programs}
-            print(f"\nprofile [{family}]: Python layers of a Feedrate-v0 step, own time per step (cProfile)")
-            layers = profile_layers("cnc_gym/Feedrate-v0", kwargs, args.steps)
+            print(f"\nprofile [{family}]: Python layers of a {args.profile_env} step, own time per step "
+                  "(cProfile)")
+            layers = profile_layers(args.profile_env, kwargs, args.steps)
             for name, us in layers[:12]:
                 print(f"  {us:7.2f} µs  {name}")
             parts = profile_compiled_parts(kwargs, args.steps)

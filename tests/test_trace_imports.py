@@ -3,6 +3,7 @@ env still registers when Gymnasium is imported after cnc_gym (or before)."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 
@@ -24,3 +25,15 @@ def test_env_registers_whichever_is_imported_first():
     for order in ("import cnc_gym, gymnasium as gym", "import gymnasium as gym, cnc_gym"):
         out = run(f"{order}; print('cnc_gym/Feedrate-v0' in gym.registry)")
         assert out.strip() == "True", order
+
+
+def test_the_command_keeps_openblas_to_one_thread_unless_the_user_chose():
+    # OpenBLAS reads the variable when numpy loads: the command sets it before its imports (its thread pool
+    # spins at load, a third of trace's start-up CPU on two cores); a user's own value stays.
+    code = "import os, cnc_gym.cli, numpy; print(os.environ['OPENBLAS_NUM_THREADS'])"
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    assert subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True,
+                          text=True).stdout.strip() == "1"  # fmt: skip
+    env["OPENBLAS_NUM_THREADS"] = "3"
+    assert subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True,
+                          text=True).stdout.strip() == "3"  # fmt: skip

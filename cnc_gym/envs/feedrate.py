@@ -338,7 +338,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         if plant is None and self.machine.plant.backend != "lti":
             plant = make_plant(self.machine, n_envs)
         return FeedrateBatch(n_envs, self.machine, config, self._obs_spec, self._reward_spec,
-                             parallel=parallel, plant=plant)
+                             parallel=parallel, plant=plant, planner=self._planner)  # fmt: skip
 
     def resolve_program(self, choice: int | ProgramLike) -> tuple[str, Toolpath]:
         """A program of the set by index or name, or any other program (name, path, text…) loaded."""
@@ -363,7 +363,19 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         budget = self._max_episode_steps_arg or (
             math.ceil(5.0 * t_nominal / self.control_period_s) + math.ceil(1.0 / self.control_period_s)
         )
-        return batch.add_program(name, toolpath, self.control_period_s / t_nominal, int(budget))
+        return batch.add_program(name, toolpath, self.control_period_s / t_nominal, int(budget),
+                                 self.finish_bonus(t_nominal, int(budget)))  # fmt: skip
+
+    #: The planner whose override the compiled step evaluates (none in v0).
+    _planner: Any = None
+
+    def finish_bonus(self, t_nominal: float, budget: int) -> float:
+        """What a violation-free finish of a program pays (nothing in v0; see ``RewardSpec.finish_key``)."""
+        return 0.0
+
+    def episode_slot(self, choice: int | ProgramLike) -> int:
+        """The bank index of the episode's program (v0: the program, packed on first use)."""
+        return self.program_slot(self._batch, choice)
 
     def draw_program(self, rng: np.random.Generator) -> int:
         """The episode's program index in the set: drawn with ``rng`` when there are several."""
@@ -395,7 +407,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         super().reset(seed=seed)
         if choice is None:
             choice = self.draw_program(self.np_random)
-        self._batch.reset([0], [self.program_slot(self._batch, choice)])
+        slot = self.episode_slot(choice)  # (first: it may make the episode a batch of its own)
+        self._batch.reset([0], [slot])
         self._needs_reset = False
         self._sync()
         if self._renderer is not None:

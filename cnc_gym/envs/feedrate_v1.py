@@ -14,13 +14,7 @@ from gymnasium import spaces
 
 from cnc_gym.config import Choice, Number, declared, number, parse_value, schema, section, spec_of
 from cnc_gym.envs.feedrate import FeedrateEnv
-from cnc_gym.envs.fused import (
-    F_SIGNAL,
-    SIG_PROGRESS_DELTA,
-    SIG_TIME_FRACTION,
-    SIG_VIOLATION_LENGTH,
-    RewardSpec,
-)
+from cnc_gym.envs.fused import F_SIGNAL, SIG_PLANNER_OVERRIDE, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V1, ObservationLayout, markdown_table
 from cnc_gym.envs.options import (
     CONTROL_PERIOD,
@@ -29,7 +23,6 @@ from cnc_gym.envs.options import (
     RENDER_MODES,
     EnvArguments,
     MachineRef,
-    reset_choice,
 )
 from cnc_gym.envs.planner_prior import PlannerPrior
 from cnc_gym.envs.randomization import DomainRandomization, MachineDraw, draw_machine
@@ -108,12 +101,14 @@ def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
 
 
 def reward_spec_v1(weights: RankingReward) -> RewardSpec:
-    """The per-step part of Feedrate-v1's reward, term by term (the finish bonus is added by the env)."""
+    """Feedrate-v1's reward, term by term, with the finish bonus (:meth:`FeedrateEnvV1.finish_bonus`); the
+    terms and the bonus are in the info, and the cost is the step's violation length."""
     return RewardSpec((
         ("time_fraction", "linear", 0.0, -weights.time),
         ("progress_delta", "linear", 0.0, weights.progress),
         ("violation_length", "linear", 0.0, -weights.violation),
-    ))  # fmt: skip
+    ), term_keys=("reward_time", "reward_progress", "reward_violation"), finish_key="reward_finish",
+        cost="violation_length")  # fmt: skip
 
 
 def scaled_feed(toolpath: Toolpath, factor: float) -> Toolpath:
@@ -273,25 +268,27 @@ class FeedrateEnvV1(FeedrateEnv):
         self.observation_space = spaces.Box(self.layout.low, self.layout.high, dtype=np.float32)
         #: Entry name → indices in the observation (as Gymnasium's MuJoCo envs' observation_structure).
         self.observation_structure = {name: idx.tolist() for name, idx in self.layout.structure.items()}
-        self.prior = PlannerPrior(self.control_period_s, self.max_override)
+        self._planner = PlannerPrior(self.control_period_s, self.max_override)
         #: The current episode's machine draw and feed scale (None and 1 without randomisation).
         self.episode_draw: MachineDraw | None = None
         self.feed_scale = 1.0
         self._pool: list[tuple[MachineDraw, Any] | None] = [None] * self.randomize.machines
-        self._observation = np.zeros(self.layout.size, dtype=np.float32)
-        self._machine_values = self.layout.machine_values(self.machine)
-        self._planner_override = 1.0
         self._start()
-        self._begin_episode()
+
+    def finish_bonus(self, t_nominal: float, budget: int) -> float:
+        """The finish bonus of a program: ``w_time · N_max · τ + w_finish`` (the class docstring)."""
+        w = self.reward_weights
+        return w.time * budget * self.control_period_s / max(t_nominal, 1e-12) + w.finish
+
+    @property
+    def planner_override(self) -> float:
+        """The deployable planner's override for the next step (``info["planner_override"]``)."""
+        return float(self._batch.state_f[0, F_SIGNAL + SIG_PLANNER_OVERRIDE])
 
     # ------------------------------------------------------------------------------------------ episode
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        choice = reset_choice(options)
-        super(FeedrateEnv, self).reset(seed=seed)
-        if choice is None:
-            choice = self.draw_program(self.np_random)
+    def episode_slot(self, choice: int | ProgramLike) -> int:
+        """The bank index of the episode's program; with randomisation, the episode's machine is drawn
+        and the program packed on it with a feed scale of its own."""
         if self.randomize.enabled:
             name, toolpath = self.resolve_program(choice)
             k = int(self.np_random.integers(len(self._pool)))
@@ -304,64 +301,16 @@ class FeedrateEnvV1(FeedrateEnv):
             # The episode's engine: the machine's plant, the program packed with its controller tables.
             self._batch = self.make_batch(1, plant=plant)
             self.plant = plant
-            slot = self.pack_program(self._batch, name, scaled_feed(toolpath, self.feed_scale))
-            self._machine_values = self.layout.machine_values(self.machine)
-        else:
-            slot = self.program_slot(self._batch, choice)
-        self._batch.reset([0], [slot])
-        self._needs_reset = False
-        self._sync()
-        if self._renderer is not None:
-            self._renderer.start(self)
-        info = self._begin_episode()
-        return self._observation.copy(), info
-
-    def _begin_episode(self) -> dict[str, Any]:
-        program = self._batch.program(0)
-        self.prior.start(program.toolpath, self.machine, program.limits)
-        self._bonus = self.reward_weights.time * program.max_episode_steps * self.control_period_s / max(
-            self.nominal_time_s, 1e-12) + self.reward_weights.finish  # fmt: skip
-        info = self._batch.info(0)
-        return self._finish_info(info, 0.0, 0.0, 0.0, 0.0)
+            return self.pack_program(self._batch, name, scaled_feed(toolpath, self.feed_scale))
+        return self.program_slot(self._batch, choice)
 
     # --------------------------------------------------------------------------------------------- step
-    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        a = self._parse_action(action)
-        batch = self._batch
-        if self.action_mode == "residual":
-            override = min(max(self._planner_override * self.residual_range**a, 0.0), self.max_override)
-            a = self.prior.knob(override)
-        batch.actions[0] = a
-        batch.step()
-        reward, terminated, truncated, info = batch.outcome(0)
-        signals = batch.state_f[0, F_SIGNAL:]
-        w = self.reward_weights
-        time_term = -w.time * signals[SIG_TIME_FRACTION]
-        progress_term = w.progress * signals[SIG_PROGRESS_DELTA]
-        violation_term = -w.violation * signals[SIG_VIOLATION_LENGTH]
-        finish = self._bonus if terminated and info["violation_length_mm"] <= 0.0 else 0.0
-        reward += finish
-        info = self._finish_info(info, float(time_term), float(progress_term), float(violation_term), finish)
-        info["cost"] = float(signals[SIG_VIOLATION_LENGTH])
-        if self._renderer is not None:
-            self._renderer.record(*batch.last_samples(0)[:2])
-        return self._observation.copy(), float(reward), terminated, truncated, info
-
-    def _finish_info(self, info: dict[str, Any], time_term: float, progress_term: float,
-                     violation_term: float, finish: float) -> dict[str, Any]:  # fmt: skip
-        """The observation's extra entries and the info's v1 keys, from the step's outputs."""
-        self._planner_override = self.prior.override(info["path_s"], info["feed_mm_min"])
-        observation = self._observation
-        observation[: self.layout.kernel_size] = self._batch.observations[0]
-        self.layout.fill_extras(observation, self._machine_values, info["violation_length_mm"] <= 0.0,
-                                self._planner_override)
-        info["cost"] = 0.0
-        info["reward_time"] = time_term
-        info["reward_progress"] = progress_term
-        info["reward_violation"] = violation_term
-        info["reward_finish"] = finish
-        info["planner_override"] = self._planner_override
-        return info
+    def _parse_action(self, action: Any) -> float:
+        a = super()._parse_action(action)
+        if self.action_mode != "residual":
+            return a
+        override = min(max(self.planner_override * self.residual_range**a, 0.0), self.max_override)
+        return self._planner.knob(override)
 
 
 FeedrateEnvV1.__doc__ = (FeedrateEnvV1.__doc__ or "").replace(

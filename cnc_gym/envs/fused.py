@@ -8,10 +8,13 @@ at every servo sample, the statistics, the reward, the end of the episode and th
 flagged for a reset are reset in the same call instead (Gymnasium's next-step autoreset).
 
 The observation and the reward are declared, not coded: the kernel computes a vector of named per-step
-*signals* (:data:`SIGNALS`) and assembles the observation from an :class:`ObservationSpec` (signals and
-blocks of look-ahead values, each with a transform, a scale and bounds) and the reward from a
-:class:`RewardSpec` (a weighted sum of transformed signals). A new env version defines its own specs (and,
-if it needs one, adds a signal here) without copying the kernel.
+*signals* (:data:`SIGNALS`) and assembles the observation from an :class:`ObservationSpec` (signals,
+blocks of look-ahead values, and signals after the blocks, each with a transform, a scale and bounds) and
+the reward from a :class:`RewardSpec` (a weighted sum of transformed signals, optionally with a finish bonus
+per program, its terms shown in the info). A batch given a :class:`Planner` also evaluates the planner's
+override every step, from a schedule table packed with each program. A new env version defines its own
+specs (and, if it needs one, adds a signal here) without copying the kernel: Feedrate-v1 and v2 are the
+same call as v0 with their specs, the planner and their info keys (:attr:`FeedrateBatch.info_keys`).
 
 Each program is packed once (:class:`PackedProgram`: the controller's limit tables, the contour meter's
 tables, the per-program constants) and all programs of a batch are concatenated into one float and one
@@ -30,7 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numba import njit, prange
@@ -68,10 +71,28 @@ SIGNALS = (
     "violated",  # 1 where contour_error_step > tolerance, else 0
     "violation_length",  # reference path advance over the step's samples with error > tolerance, mm
     "violation_time",  # time of the step's samples with error > tolerance, s
+    "violation_free",  # 1 while the episode's violation length is 0, else 0
+    "planner_override",  # the deployable planner's override here (the batch's Planner; 0 without one)
+    "kv_min",  # the machine's lowest position gain, 1/s (constant: MACHINE_QUANTITIES)
+    "kv_mismatch",  # (max Kv − min Kv) / mean Kv of the axes
+    "feedforward",  # mean velocity feed-forward fraction of the axes
+    "accel_min",  # the lowest axis acceleration, mm/s²
 )
 (SIG_SPEED, SIG_ACCEL, SIG_OVERRIDE, SIG_KNOB, SIG_FOLLOWING, SIG_ERROR_STEP, SIG_ERROR_NOW,
  SIG_PATH_FRACTION, SIG_DISTANCE_TO_STOP, SIG_PROGRESS, SIG_PROGRESS_DELTA, SIG_TIME_FRACTION,
- SIG_ERROR_RATIO, SIG_VIOLATED, SIG_VIOLATION_LENGTH, SIG_VIOLATION_TIME) = range(len(SIGNALS))  # fmt: skip
+ SIG_ERROR_RATIO, SIG_VIOLATED, SIG_VIOLATION_LENGTH, SIG_VIOLATION_TIME, SIG_VIOLATION_FREE,
+ SIG_PLANNER_OVERRIDE, SIG_KV_MIN, SIG_KV_MISMATCH, SIG_FEEDFORWARD,
+ SIG_ACCEL_MIN) = range(len(SIGNALS))  # fmt: skip
+#: The machine's own quantities, signals that hold still over an episode (set from the batch's machine).
+MACHINE_QUANTITIES = ("kv_min", "kv_mismatch", "feedforward", "accel_min")
+
+
+def machine_quantities(machine: MachineConfig) -> dict[str, float]:
+    """The machine quantities of :data:`MACHINE_QUANTITIES` (Kv in 1/s, accelerations in mm/s²)."""
+    kv = np.array(machine.axis_array("kv_1_s"))
+    return {"kv_min": float(kv.min()), "kv_mismatch": float((kv.max() - kv.min()) / kv.mean()),
+            "feedforward": float(np.mean(machine.axis_array("feedforward"))),
+            "accel_min": float(min(machine.axis_array("max_accel_mm_s2")))}  # fmt: skip
 #: Rows of the look-ahead block (Controller.lookahead_rows), for observation entries.
 LOOKAHEAD_ROWS = ("speed_limit", "curvature", "turn_angle", "programmed_feed")
 
@@ -91,6 +112,9 @@ OUTPUT_INFO_KEYS = ("cycle_time_s", "contour_error_mm", "contour_error_max_mm", 
                     "override", "feed_mm_min", "path_s", "progress", "steps")  # fmt: skip
 _OUT_INT = tuple(3 + i for i, key in enumerate(OUTPUT_INFO_KEYS) if key in ("violations", "line", "steps"))
 N_STATE_F = F_OUT + 3 + len(OUTPUT_INFO_KEYS)
+# After them, each batch's own outputs (FeedrateBatch.info_keys): a placeholder for the program's name, then
+# where the specs ask for them, the reward terms' values, the finish bonus paid and the planner's override.
+F_PROGRAM_NAME = N_STATE_F
 # Int state, one row per env: the controller's state vector, then the episode's counters and flags.
 I_CTRL = 0  # kernel.N_STATE_I columns
 (I_PROGRAM, I_STEPS, I_TICKS, I_VIOLATIONS, I_SAMPLES, I_LAST_SEGMENT, I_LINE, I_TERMINATED, I_TRUNCATED,
@@ -99,19 +123,23 @@ N_STATE_I = I_RESET + 1
 
 # --------------------------------------------------------------------------------------- the bank
 # Float tables of a program, in bank order, with their column counts; then the int tables.
-_FLOAT_TABLES = ("seg_f", "pt_f", "dwell_f", "curve_f", "geometry", "nurbs_f", "scalars")
+_FLOAT_TABLES = ("seg_f", "pt_f", "dwell_f", "curve_f", "geometry", "nurbs_f", "scalars", "schedule")
+_T_SCHEDULE = 7  # the planner's schedule: (n, 2) rows of path position (mm) and override
 _INT_TABLES = ("seg_i", "pt_i", "seg_class", "axes", "first_back", "nurbs_i", "lines", "counts")
-# Per-program float scalars: the controller's cfg (6), start point (3), 1 / length, control period / T.
-_S_CFG, _S_START, _S_INV_LENGTH, _S_LENGTH, _S_TIME_FRACTION = 0, 6, 9, 10, 11
+# Per-program float scalars: the controller's cfg (6), start point (3), 1 / length, length,
+# control period / T, the finish bonus.
+_S_CFG, _S_START, _S_INV_LENGTH, _S_LENGTH, _S_TIME_FRACTION, _S_FINISH_BONUS = 0, 6, 9, 10, 11, 12
 # Per-program int counts: motion segments, tool path rows, step budget.
 _N_MOTION, _N_ROWS, _MAX_STEPS = 0, 1, 2
 _DIR_STRIDE = 2 * (len(_FLOAT_TABLES) + len(_INT_TABLES))
 # Config (shared by every env), at the start of the bank: floats then ints.
-(CF_TOLERANCE, CF_IN_POSITION, CF_MAX_OVERRIDE, CF_MAX_FEED, CF_HORIZON, CF_PERIOD) = range(6)
-N_CONFIG_F = 6
+(CF_TOLERANCE, CF_IN_POSITION, CF_MAX_OVERRIDE, CF_MAX_FEED, CF_HORIZON, CF_PERIOD, CF_PLANNER_LEAD,
+ CF_MACHINE) = range(8)  # fmt: skip
+N_CONFIG_F = CF_MACHINE + len(MACHINE_QUANTITIES)
 (CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_OBS_BLOCKS, CI_REWARD, CI_PROGRAMS,
- CI_OBS_AT, CI_BLOCKS_AT, CI_REWARD_AT) = range(12)  # fmt: skip
-N_CONFIG_I = 12
+ CI_OBS_AT, CI_BLOCKS_AT, CI_REWARD_AT, CI_OBS_TAIL, CI_TAIL_AT, CI_COST, CI_TERMS_OUT, CI_FINISH_OUT,
+ CI_PLANNER_OUT) = range(18)  # fmt: skip
+N_CONFIG_I = 18  # the *_OUT entries: columns of the state row, or -1 where the batch does not output it
 # Observation spec rows (floats): per signal entry: signal, scale, low, high; per look-ahead block: row,
 # transform, parameter, scale, low, high. Reward spec rows: signal, transform, parameter, weight.
 T_NONE, T_SATURATE, T_CAPPED_SQUARE = 0, 1, 2  # transforms: x, xp/(1 + xp), min(x, p)²
@@ -120,35 +148,41 @@ _OBS_COLS, _BLOCK_COLS, _REWARD_COLS = 4, 6, 4
 
 @dataclass(frozen=True)
 class ObservationSpec:
-    """The observation: ``signals`` entries then ``lookahead`` blocks, in order.
+    """The observation: ``signals`` entries, then ``lookahead`` blocks, then ``tail`` entries, in order.
 
-    A signal entry ``(name, scale, low, high)`` is one of :data:`SIGNALS`; a look-ahead block ``(row,
-    transform, parameter, scale, low, high)`` is ``points`` entries, a row of :data:`LOOKAHEAD_ROWS` at
-    each point ahead, ``transform`` ``"none"`` or ``"saturate"`` (x·p / (1 + x·p)). Each entry is
-    ``clip(transform(x) · scale, low, high)`` as float32, 0 where NaN.
+    A signal entry ``(name, scale, low, high)`` is one of :data:`SIGNALS` (``tail`` entries are signal
+    entries too, placed after the blocks); a look-ahead block ``(row, transform, parameter, scale, low,
+    high)`` is ``points`` entries, a row of :data:`LOOKAHEAD_ROWS` at each point ahead, ``transform``
+    ``"none"`` or ``"saturate"`` (x·p / (1 + x·p)). Each entry is ``clip(transform(x) · scale, low, high)``
+    as float32, 0 where NaN.
     """
 
     signals: tuple[tuple[str, float, float, float], ...]
     lookahead: tuple[tuple[str, str, float, float, float, float], ...]
     points: int
+    tail: tuple[tuple[str, float, float, float], ...] = ()
 
-    def tables(self) -> tuple[np.ndarray, np.ndarray]:
-        """The signal rows (n, 4) and the block rows (m, 6) of the kernel."""
-        rows = [(SIGNALS.index(name), scale, low, high) for name, scale, low, high in self.signals]
+    def tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The signal rows (n, 4), the block rows (m, 6) and the tail rows (k, 4) of the kernel."""
+        def signal_rows(entries: tuple[tuple[str, float, float, float], ...]) -> np.ndarray:
+            rows = [(SIGNALS.index(name), scale, low, high) for name, scale, low, high in entries]
+            return np.array(rows, dtype=np.float64).reshape(-1, _OBS_COLS)
+
         codes = {"none": T_NONE, "saturate": T_SATURATE}
         blocks = [(LOOKAHEAD_ROWS.index(row), codes[transform], param, scale, low, high)
                   for row, transform, param, scale, low, high in self.lookahead]  # fmt: skip
-        return (np.array(rows, dtype=np.float64).reshape(-1, _OBS_COLS),
-                np.array(blocks, dtype=np.float64).reshape(-1, _BLOCK_COLS))  # fmt: skip
+        return (signal_rows(self.signals), np.array(blocks, dtype=np.float64).reshape(-1, _BLOCK_COLS),
+                signal_rows(self.tail))  # fmt: skip
 
     @property
     def size(self) -> int:
-        return len(self.signals) + len(self.lookahead) * self.points
+        return len(self.signals) + len(self.lookahead) * self.points + len(self.tail)
 
     def _bounds(self, column: int) -> np.ndarray:
         values = [entry[column] for entry in self.signals]
         for block in self.lookahead:
             values += [block[column + 2]] * self.points
+        values += [entry[column] for entry in self.tail]
         return np.array(values, dtype=np.float32)
 
     @property
@@ -163,9 +197,22 @@ class ObservationSpec:
 @dataclass(frozen=True)
 class RewardSpec:
     """The reward: ``Σ weight · transform(signal)`` over ``terms`` of ``(signal name, transform,
-    parameter, weight)`` (transforms ``"linear"``: x; ``"capped_square"``: min(x, p)²), summed in order."""
+    parameter, weight)`` (transforms ``"linear"``: x; ``"capped_square"``: min(x, p)²), summed in order.
+
+    ``term_keys``: the info key of each term's value (empty: the terms are not in the info). ``finish_key``:
+    when set, the step that ends the episode by termination with a violation length of 0 also pays the
+    program's finish bonus (:meth:`FeedrateBatch.add_program`), shown in the info under this key. ``cost``:
+    the signal that is ``info["cost"]``.
+    """
 
     terms: tuple[tuple[str, str, float, float], ...]
+    term_keys: tuple[str, ...] = ()
+    finish_key: str | None = None
+    cost: str = "violated"
+
+    def __post_init__(self) -> None:
+        if self.term_keys and len(self.term_keys) != len(self.terms):
+            raise ValueError("RewardSpec: one term key per term")
 
     def table(self) -> np.ndarray:
         codes = {"linear": T_NONE, "capped_square": T_CAPPED_SQUARE}
@@ -190,33 +237,48 @@ class PackedProgram:
 
     @classmethod
     def build(cls, name: str, toolpath: Toolpath, machine: MachineConfig, window_back_mm: float,
-              time_fraction: float, max_episode_steps: int,
-              rapids_behind: bool = True) -> PackedProgram:  # fmt: skip
+              time_fraction: float, max_episode_steps: int, rapids_behind: bool = True,
+              finish_bonus: float = 0.0, planner: Planner | None = None) -> PackedProgram:  # fmt: skip
         limits = build_limits(toolpath, machine)
         # The window reaches back over the largest possible lag (max feed / Kv) so that on short-segment
         # programs the actual point is never measured against the wrong segment.
         meter = ContourErrorMeter(toolpath, window_back_mm=window_back_mm, rapids_behind=rapids_behind)
         start = toolpath.start[0].astype(np.float64) if len(toolpath) else np.zeros(3)
         length = max(toolpath.total_length, 1e-9)
-        constants = [1.0 / length, length, time_fraction]
+        constants = [1.0 / length, length, time_fraction, finish_bonus]
         scalars = np.concatenate((kernel_config(machine, limits), start, constants))
         t = meter.tables
         n_rows = len(toolpath)
-        floats = (limits.seg_f, limits.pt_f, limits.dwell_f, limits.curve_f, t.geometry, t.nurbs_f, scalars)
+        schedule = np.zeros((0, 2)) if planner is None else planner.schedule_table(toolpath, machine, limits)
+        floats = (limits.seg_f, limits.pt_f, limits.dwell_f, limits.curve_f, t.geometry, t.nurbs_f, scalars,
+                  schedule)  # fmt: skip
         counts = np.array([limits.seg_f.shape[0], n_rows, max_episode_steps])
         ints = (limits.seg_i, limits.pt_i, t.seg_class, t.axes, t.first_back, t.nurbs_i,
                 np.asarray(toolpath.line, dtype=np.int64), counts)  # fmt: skip
         return cls(name, toolpath, limits, meter, floats, ints, start, length, int(max_episode_steps))
 
 
+class Planner(Protocol):
+    """What the compiled step needs of a planner whose override it evaluates every step (the signal
+    ``planner_override``): a schedule per program, and how far ahead it looks."""
+
+    #: Reaction lead, s: the override is the schedule's smallest over the stretch covered in this time.
+    lead_s: float
+
+    def schedule_table(self, toolpath: Toolpath, machine: MachineConfig, limits: PathLimits) -> np.ndarray:
+        """(n, 2) rows of path position (mm, ascending) and the override scheduled from there on."""
+        ...
+
+
 class ProgramBank:
     """The config, the observation and reward tables and every program's tables in one float and one int
     array (see :func:`_program`); rebuilt when a program is added."""
 
-    def __init__(self, config_f: np.ndarray, config_i: np.ndarray, obs_tables: tuple[np.ndarray, np.ndarray],
+    def __init__(self, config_f: np.ndarray, config_i: np.ndarray,
+                 obs_tables: tuple[np.ndarray, np.ndarray, np.ndarray],
                  reward_table: np.ndarray) -> None:  # fmt: skip
         self.config_f, self.config_i = config_f, config_i
-        self.obs_table, self.block_table = obs_tables
+        self.obs_table, self.block_table, self.tail_table = obs_tables
         self.reward_table = reward_table
         self.programs: list[PackedProgram] = []
         self.floats = np.zeros(0)
@@ -228,7 +290,8 @@ class ProgramBank:
         return len(self.programs) - 1
 
     def _pack(self) -> None:
-        head_f = [self.config_f, self.obs_table.ravel(), self.block_table.ravel(), self.reward_table.ravel()]
+        head_f = [self.config_f, self.obs_table.ravel(), self.block_table.ravel(), self.reward_table.ravel(),
+                  self.tail_table.ravel()]  # fmt: skip
         n_head_f = sum(len(x) for x in head_f)
         n_head_i = N_CONFIG_I + _DIR_STRIDE * len(self.programs)
         floats, ints = list(head_f), []
@@ -249,6 +312,7 @@ class ProgramBank:
         config_i[CI_OBS_AT] = len(self.config_f)
         config_i[CI_BLOCKS_AT] = config_i[CI_OBS_AT] + self.obs_table.size
         config_i[CI_REWARD_AT] = config_i[CI_BLOCKS_AT] + self.block_table.size
+        config_i[CI_TAIL_AT] = config_i[CI_REWARD_AT] + self.reward_table.size
         self.floats = np.concatenate(floats)
         self.ints = np.concatenate([config_i, directory.ravel(), *ints])
 
@@ -390,6 +454,11 @@ def _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs) 
     sig[SIG_OVERRIDE] = 1.0 if st_f[K.S_OV] < 0.0 else st_f[K.S_OV]
     sig[SIG_PATH_FRACTION] = st_f[K.S_S] * scalars[_S_INV_LENGTH]
     sig[SIG_DISTANCE_TO_STOP] = ahead[4, 0]
+    sig[SIG_VIOLATION_FREE] = 1.0 if sf[e, F_VIOLATION_LENGTH] <= 0.0 else 0.0
+    schedule = _float_table(bank_f, bank_i, si[e, I_PROGRAM], _T_SCHEDULE, 2)
+    if schedule.shape[0]:
+        sig[SIG_PLANNER_OVERRIDE] = planner_override(schedule, st_f[K.S_S], sig[SIG_SPEED] * 60.0,
+                                                     cfg_f[CF_PLANNER_LEAD])  # fmt: skip
     row = bank_f[bank_i[CI_OBS_AT] :]
     n_signals = bank_i[CI_OBS]
     for i in range(n_signals):
@@ -409,7 +478,44 @@ def _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs) 
                 x = kl / (kl + 1.0)
             obs[e, at + j] = _clip(x * scale, low, high)
         at += n_points
-    _write_outputs(e, bank_f, sf, si)
+    row = bank_f[bank_i[CI_TAIL_AT] :]
+    for i in range(bank_i[CI_OBS_TAIL]):
+        x = sig[int(row[4 * i])] * row[4 * i + 1]
+        obs[e, at + i] = _clip(x, row[4 * i + 2], row[4 * i + 3])
+    _write_outputs(e, bank_f, bank_i, sf, si)
+
+
+@njit(cache=True, nogil=True)
+def planner_override(schedule, path_s, feed_mm_min, lead_s):
+    """A schedule's override at path position ``path_s`` moving at ``feed_mm_min``: the smallest scheduled
+    override over the stretch covered in ``lead_s`` at the current speed (and 0.5 mm more), the rule of
+    :func:`agents.classical.override_at` (``schedule``: its (n, 2) table, see :class:`Planner`)."""
+    speed = max(feed_mm_min / 60.0, 1.0)
+    n = schedule.shape[0]
+    lo = _count_at_most(schedule, path_s) - 1
+    hi = _count_at_most(schedule, path_s + speed * lead_s + 0.5)
+    lo = min(max(lo, 0), n - 1)
+    lowest = schedule[lo, 1]
+    for i in range(lo + 1, max(hi, lo + 1)):
+        x = schedule[i, 1]
+        if x < lowest or x != x:  # (NaN wins, as in np.min)
+            lowest = x
+            if x != x:
+                break
+    return lowest
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _count_at_most(schedule, x):
+    """How many positions of ``schedule`` are ≤ x (``np.searchsorted(s, x, side="right")``; NaN: all)."""
+    lo, hi = 0, schedule.shape[0]
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if x < schedule[mid, 0]:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -421,7 +527,7 @@ def _clip(x, low, high):
 
 
 @njit(cache=True, nogil=True)
-def _write_outputs(e, bank_f, sf, si) -> None:
+def _write_outputs(e, bank_f, bank_i, sf, si) -> None:
     """The step's outputs block of env e (see F_OUT), from its state."""
     out = sf[e, F_OUT:]
     samples = si[e, I_SAMPLES]
@@ -436,13 +542,15 @@ def _write_outputs(e, bank_f, sf, si) -> None:
     out[8] = si[e, I_VIOLATIONS]
     out[9] = sf[e, F_VIOLATION_LENGTH]
     out[10] = sf[e, F_VIOLATION_TIME]
-    out[11] = sf[e, F_SIGNAL + SIG_VIOLATED]
+    out[11] = sf[e, F_SIGNAL + bank_i[CI_COST]]
     out[12] = si[e, I_LINE]
     out[13] = sf[e, F_SIGNAL + SIG_OVERRIDE]
     out[14] = sf[e, F_SIGNAL + SIG_SPEED] * 60.0
     out[15] = sf[e, F_CTRL + K.S_S]
     out[16] = sf[e, F_SIGNAL + SIG_PROGRESS]
     out[17] = si[e, I_STEPS]
+    if bank_i[CI_PLANNER_OUT] >= 0:
+        sf[e, bank_i[CI_PLANNER_OUT]] = sf[e, F_SIGNAL + SIG_PLANNER_OVERRIDE]
 
 
 @njit(cache=True, nogil=True)
@@ -471,6 +579,8 @@ def _reset_episode(e, bank_f, bank_i, sf, si, obs, ahead) -> None:
     progress = 1.0 if finished else min(sf[e, F_CTRL + K.S_S] / scalars[_S_LENGTH], 1.0)
     sf[e, F_SIGNAL + SIG_PROGRESS] = progress
     sf[e, F_SIGNAL + SIG_TIME_FRACTION] = scalars[_S_TIME_FRACTION]
+    for k in range(len(MACHINE_QUANTITIES)):
+        sf[e, F_SIGNAL + SIG_KV_MIN + k] = bank_f[CF_MACHINE + k]
     _line_of(si, e, seg_i, dwell_f, lines)
     _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs)
 
@@ -578,7 +688,20 @@ def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, h
     sig[SIG_PROGRESS_DELTA] = progress - sig[SIG_PROGRESS]
     sig[SIG_PROGRESS] = progress
     sig[SIG_TIME_FRACTION] = scalars[_S_TIME_FRACTION]
-    # The reward: Σ weight · transform(signal), in the spec's order.
+    terminated = finished and settled
+    sf[e, F_REWARD] = _finish_bonus(e, bank_i, sf, scalars, terminated, _reward_terms(e, bank_f, bank_i, sf))
+    si[e, I_TERMINATED] = terminated
+    si[e, I_TRUNCATED] = (not terminated) and si[e, I_STEPS] >= counts[_MAX_STEPS]
+    _line_of(si, e, seg_i, dwell_f, lines)
+    _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _reward_terms(e, bank_f, bank_i, sf):
+    """The reward's terms, ``weight · transform(signal)`` in the spec's order: their sum, each written to
+    the outputs where the batch shows them."""
+    sig = sf[e, F_SIGNAL : F_SIGNAL + len(SIGNALS)]
+    terms_out = bank_i[CI_TERMS_OUT]
     reward = 0.0
     at = bank_i[CI_REWARD_AT]
     for j in range(bank_i[CI_REWARD]):
@@ -586,24 +709,36 @@ def _finish_step(e, bank_f, bank_i, sf, si, settled, reference, actual, error, h
         x = sig[int(bank_f[row])]
         if int(bank_f[row + 1]) == T_CAPPED_SQUARE:
             x = min(x, bank_f[row + 2])
-            reward += bank_f[row + 3] * x * x
+            term = bank_f[row + 3] * x * x
         else:
-            reward += bank_f[row + 3] * x
-    sf[e, F_REWARD] = reward
-    terminated = finished and settled
-    si[e, I_TERMINATED] = terminated
-    si[e, I_TRUNCATED] = (not terminated) and si[e, I_STEPS] >= counts[_MAX_STEPS]
-    _line_of(si, e, seg_i, dwell_f, lines)
-    _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs)
+            term = bank_f[row + 3] * x
+        reward += term
+        if terms_out >= 0:
+            sf[e, terms_out + j] = term
+    return reward
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _finish_bonus(e, bank_i, sf, scalars, terminated, reward):
+    """``reward`` with the program's finish bonus where the spec pays one and the episode has just
+    terminated with a violation length of 0 (the bonus paid, or 0, written to the outputs)."""
+    at = bank_i[CI_FINISH_OUT]
+    if at < 0:
+        return reward
+    bonus = scalars[_S_FINISH_BONUS] if terminated and sf[e, F_VIOLATION_LENGTH] <= 0.0 else 0.0
+    sf[e, at] = bonus
+    return reward + bonus
 
 
 @njit(cache=True, nogil=True)
 def _no_motion_step(e, bank_f, bank_i, sf, si, obs, ahead) -> None:
     """The step of a program without motion (only modal codes, M30, or nothing): done at once, in 0 s,
-    with reward 0."""
+    with reward 0 (and the finish bonus where the spec pays one). The terms shown in the info are those
+    of the signals as they stand."""
     (seg_f, pt_f, _, _, _, _, scalars, _, pt_i, _, _, _, _, _, _) = _program(bank_f, bank_i, si[e, I_PROGRAM])
     si[e, I_STEPS] += 1
-    sf[e, F_REWARD] = 0.0
+    _reward_terms(e, bank_f, bank_i, sf)
+    sf[e, F_REWARD] = _finish_bonus(e, bank_i, sf, scalars, True, 0.0)
     si[e, I_TERMINATED] = 1
     si[e, I_TRUNCATED] = 0
     _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs)
@@ -719,30 +854,53 @@ class FeedrateBatch:
     optionally ``contour_rapids_behind`` (bool, default True: the meter's rule, :class:`ContourErrorMeter`).
     ``parallel``: step the envs in numba's threads (None: from :data:`PARALLEL_MIN_ENVS` envs on, when
     numba has at least :data:`PARALLEL_MIN_THREADS` threads). ``plant``: the plant backend (default: the
-    LTI :class:`ServoPlant`; one whose ``compiled_step`` is False runs the modular step).
+    LTI :class:`ServoPlant`; one whose ``compiled_step`` is False runs the modular step). ``planner``: a
+    :class:`Planner` whose override is the signal ``planner_override`` and the info's ``planner_override``
+    (default: none, the signal 0).
     """
 
     def __init__(self, n_envs: int, machine: MachineConfig, config: dict[str, Any], obs_spec: ObservationSpec,
-                 reward_spec: RewardSpec, *, parallel: bool | None = None,
-                 plant: Any | None = None) -> None:  # fmt: skip
+                 reward_spec: RewardSpec, *, parallel: bool | None = None, plant: Any | None = None,
+                 planner: Planner | None = None) -> None:  # fmt: skip
         import numba
 
         self.n_envs = int(n_envs)
         self.machine = machine
         self.config = dict(config)
+        self.planner = planner
         self.ticks = int(config["ticks_per_step"])
         self.period_s = float(machine.controller.interpolation_period_s)
         self.window_back_mm = float(config["window_back_mm"])
         self.rapids_behind = bool(config.get("contour_rapids_behind", True))
         window = max(int(machine.controller.lookahead_blocks), 2)
         points = int(config["lookahead_points"])
+        quantities = machine_quantities(machine)
         config_f = np.array([config["tolerance_mm"], config["in_position_mm"], config["max_override"],
-                             config["max_feed_mm_min"], config["lookahead_mm"], self.period_s])  # fmt: skip
+                             config["max_feed_mm_min"], config["lookahead_mm"], self.period_s,
+                             0.0 if planner is None else planner.lead_s,
+                             *(quantities[q] for q in MACHINE_QUANTITIES)])  # fmt: skip
+        # The info: v0's keys and the program, then what the specs add (see F_PROGRAM_NAME).
+        keys = [*OUTPUT_INFO_KEYS, "program"]
+        column = F_PROGRAM_NAME + 1
+        outputs = {"terms": -1, "finish": -1, "planner": -1}
+        if reward_spec.term_keys:
+            outputs["terms"], column = column, column + len(reward_spec.terms)
+            keys += reward_spec.term_keys
+        if reward_spec.finish_key is not None:
+            outputs["finish"], column = column, column + 1
+            keys.append(reward_spec.finish_key)
+        if planner is not None:
+            outputs["planner"], column = column, column + 1
+            keys.append("planner_override")
+        #: The keys of :meth:`info`, in order.
+        self.info_keys = tuple(keys)
         config_i = np.zeros(N_CONFIG_I, dtype=np.int64)
         config_i[[CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_OBS_BLOCKS,
-                  CI_REWARD]] = (
+                  CI_REWARD, CI_OBS_TAIL, CI_COST, CI_TERMS_OUT, CI_FINISH_OUT, CI_PLANNER_OUT]] = (
             self.ticks, points, int(bool(config["feed_mode"])), 8, window, len(obs_spec.signals),
-            len(obs_spec.lookahead), len(reward_spec.terms))  # fmt: skip
+            len(obs_spec.lookahead), len(reward_spec.terms), len(obs_spec.tail),
+            SIGNALS.index(reward_spec.cost), outputs["terms"], outputs["finish"],
+            outputs["planner"])  # fmt: skip
         self.bank = ProgramBank(config_f, config_i, obs_spec.tables(), reward_spec.table())
         self.plant = ServoPlant(machine, n_envs=self.n_envs) if plant is None else plant
         self.fused = bool(getattr(self.plant, "compiled_step", False))
@@ -751,7 +909,7 @@ class FeedrateBatch:
             parallel = self.n_envs >= PARALLEL_MIN_ENVS and threads >= PARALLEL_MIN_THREADS
         self.parallel = bool(parallel)
         # State (see the layout constants) and scratch.
-        self.state_f = np.zeros((self.n_envs, N_STATE_F))
+        self.state_f = np.zeros((self.n_envs, column))
         self.state_i = np.zeros((self.n_envs, N_STATE_I), dtype=np.int64)
         self._plant_version = -1  # the plant's gains are read into the state before the first call
         self.observations = np.zeros((self.n_envs, obs_spec.size), dtype=np.float32)
@@ -790,10 +948,13 @@ class FeedrateBatch:
                 controller.use_state(self._controller_state(env))
 
     # ------------------------------------------------------------------------------ programs
-    def add_program(self, name: str, toolpath: Toolpath, time_fraction: float, max_episode_steps: int) -> int:
-        """Pack a program into the bank; returns its index."""
+    def add_program(self, name: str, toolpath: Toolpath, time_fraction: float, max_episode_steps: int,
+                    finish_bonus: float = 0.0) -> int:  # fmt: skip
+        """Pack a program into the bank (``finish_bonus``: what a violation-free finish pays where the
+        reward spec has a ``finish_key``; the batch's planner plans it); returns its index."""
         program = PackedProgram.build(name, toolpath, self.machine, self.window_back_mm, time_fraction,
-                                      max_episode_steps, self.rapids_behind)  # fmt: skip
+                                      max_episode_steps, self.rapids_behind, finish_bonus,
+                                      self.planner)  # fmt: skip
         index = self.bank.add(program)
         self._names = np.array([p.name for p in self.bank.programs] + [None], dtype=object)[:-1]
         return index
@@ -933,8 +1094,8 @@ class FeedrateBatch:
         out = self._out_rows[env].tolist()
         for i in _OUT_INT:
             out[i] = int(out[i])
-        info = dict(zip(OUTPUT_INFO_KEYS, out[3:], strict=False))  # (the lengths match by construction)
-        info["program"] = self._names[int(self.state_i[env, I_PROGRAM])]
+        out[F_PROGRAM_NAME - F_OUT] = self._names[int(self.state_i[env, I_PROGRAM])]
+        info = dict(zip(self.info_keys, out[3:], strict=False))  # (the lengths match by construction)
         return out[0], out[1] != 0.0, out[2] != 0.0, info
 
     def info(self, env: int) -> dict[str, Any]:
@@ -984,7 +1145,8 @@ def _gather(sf, observations):
     return obs, rewards, terminated, truncated, info_f, info_i, ended
 
 
-#: Info keys, in the order of :meth:`FeedrateBatch.info`.
+#: Info keys of a batch without reward terms, finish bonus or planner (v0's), in the order of
+#: :meth:`FeedrateBatch.info`.
 INFO_KEYS = (*OUTPUT_INFO_KEYS, "program")
 
 

@@ -3,9 +3,10 @@
 :data:`OBSERVATION_V1` is the one declaration. From it come
 
 - the Box bounds (:meth:`ObservationLayout.low`, :meth:`ObservationLayout.high`);
-- the scaling: the compiled step's :class:`~cnc_gym.envs.fused.ObservationSpec` for the entries the kernel
-  computes (per-step signals and the look-ahead blocks) and :meth:`ObservationLayout.fill_extras` for the
-  entries of the episode (the machine drawn for it) and of the deployable planner;
+- the compiled step's :class:`~cnc_gym.envs.fused.ObservationSpec` (:attr:`ObservationLayout.kernel_spec`),
+  which scales and clips every entry inside the step: the per-step signals, the look-ahead blocks, and
+  after them the entries of the episode's machine, of the episode and of the deployable planner (signals
+  of the kernel too, :func:`kernel_signal`);
 - the table of the env's docstring and of docs/env.md (:func:`markdown_table`; a test keeps docs/env.md
   equal to it);
 - ``observation_structure``: entry name → the indices it occupies, as Gymnasium's MuJoCo envs expose it.
@@ -30,8 +31,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cnc_gym.envs.fused import LOOKAHEAD_ROWS, SIGNALS, ObservationSpec
-from cnc_gym.machine import MachineConfig
+from cnc_gym.envs.fused import (
+    LOOKAHEAD_ROWS,
+    MACHINE_QUANTITIES,
+    SIGNALS,
+    ObservationSpec,
+    machine_quantities,
+)
 
 #: Where an entry's value comes from.
 SOURCES = ("signal", "lookahead", "machine", "episode", "planner")
@@ -62,9 +68,6 @@ class Entry:
     divide_by: str = "1"
     saturate: float = 0.0
 
-
-#: Machine quantities an observation may hold (computed by :func:`machine_quantities`).
-MACHINE_QUANTITIES = ("kv_min", "kv_mismatch", "feedforward", "accel_min")
 
 OBSERVATION_V1: tuple[Entry, ...] = (
     Entry("speed", "signal", "speed", "v / v_ref", "path speed of the reference", 0, 2, "v_ref"),
@@ -100,12 +103,14 @@ OBSERVATION_V1: tuple[Entry, ...] = (
 )  # fmt: skip
 
 
-def machine_quantities(machine: MachineConfig) -> dict[str, float]:
-    """The machine quantities of :data:`MACHINE_QUANTITIES` (Kv in 1/s, accelerations in mm/s²)."""
-    kv = np.array(machine.axis_array("kv_1_s"))
-    return {"kv_min": float(kv.min()), "kv_mismatch": float((kv.max() - kv.min()) / kv.mean()),
-            "feedforward": float(np.mean(machine.axis_array("feedforward"))),
-            "accel_min": float(min(machine.axis_array("max_accel_mm_s2")))}  # fmt: skip
+__all__ = ["MACHINE_QUANTITIES", "OBSERVATION_V1", "Entry", "ObservationLayout", "kernel_signal",
+           "machine_quantities", "markdown_table"]  # fmt: skip
+
+
+def kernel_signal(entry: Entry) -> str:
+    """The kernel signal (:data:`~cnc_gym.envs.fused.SIGNALS`) an entry of a source other than the
+    look-ahead reads: a signal itself, a machine quantity, ``violation_free``, or ``planner_override``."""
+    return f"planner_{entry.quantity}" if entry.source == "planner" else entry.quantity
 
 
 class ObservationLayout:
@@ -130,6 +135,8 @@ class ObservationLayout:
             tuple((e.quantity, "saturate" if e.saturate else "none", e.saturate, self.scale(e), e.low, e.high)
                   for e in entries if e.source == "lookahead"),
             self.points,
+            tuple((kernel_signal(e), self.scale(e), e.low, e.high) for e in entries
+                  if e.source in ("machine", "episode", "planner")),
         )  # fmt: skip
         self.structure: dict[str, np.ndarray] = {}
         at = 0
@@ -138,8 +145,6 @@ class ObservationLayout:
             self.structure[e.name] = np.arange(at, at + width)
             at += width
         self.size = at
-        self.kernel_size = self.kernel_spec.size
-        self._extras = [e for e in entries if e.source in ("machine", "episode", "planner")]
 
     def scale(self, entry: Entry) -> float:
         return 1.0 / self.references[entry.divide_by]
@@ -155,24 +160,6 @@ class ObservationLayout:
     @property
     def high(self) -> np.ndarray:
         return self._bounds("high")
-
-    def machine_values(self, machine: MachineConfig) -> np.ndarray:
-        """The machine entries of ``machine``, scaled and clipped (in entry order)."""
-        quantities = machine_quantities(machine)
-        return np.array([min(max(quantities[e.quantity] * self.scale(e), e.low), e.high)
-                         for e in self._extras if e.source == "machine"], dtype=np.float32)  # fmt: skip
-
-    def fill_extras(self, observation: np.ndarray, machine_values: np.ndarray, violation_free: bool,
-                    planner_override: float) -> None:  # fmt: skip
-        """Write the machine, episode and planner entries into ``observation`` (after the kernel's)."""
-        at = self.kernel_size
-        n_machine = len(machine_values)
-        observation[at : at + n_machine] = machine_values
-        at += n_machine
-        for e in self._extras[n_machine:]:
-            value = float(violation_free) if e.source == "episode" else planner_override
-            observation[at] = min(max(value * self.scale(e), e.low), e.high)
-            at += 1
 
 
 def markdown_table(entries: tuple[Entry, ...] = OBSERVATION_V1) -> str:

@@ -383,8 +383,8 @@ class CanonicalMachine:
         if self.rotary_next is not None:
             return self._rotary_move(target, None)
         if target != self.position:
-            self.builder.rapid(self.position, target, line=self.line, file_index=self.file_index,
-                               modes=self.modes, tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
+            self.builder.rapid(self.position, target, self.line, self.file_index, self.modes, self.tool,
+                               self.spindle_rpm)  # fmt: skip
             self.position = target
 
     def straight_feed(self, target: Vec, feed: float) -> None:
@@ -393,8 +393,8 @@ class CanonicalMachine:
         if self.rotary_next is not None:
             return self._rotary_move(target, feed)
         if target != self.position:
-            self.builder.line(self.position, target, feed, line=self.line, file_index=self.file_index,
-                              modes=self.modes, tool=self.tool, spindle_rpm=self.spindle_rpm)  # fmt: skip
+            self.builder.line(self.position, target, feed, self.line, self.file_index, self.modes, self.tool,
+                              self.spindle_rpm)  # fmt: skip
             self.position = target
 
     def _rotary_move(self, target: Vec, feed: float | None) -> None:
@@ -417,9 +417,8 @@ class CanonicalMachine:
         """Arc or helix (signed sweep in rad, + = CCW about the plane normal) to ``end``."""
         self._check(end)
         self._check(center)
-        self.builder.arc(self.position, end, center, plane, sweep, feed, line=self.line,
-                         file_index=self.file_index, modes=self.modes, tool=self.tool,
-                         spindle_rpm=self.spindle_rpm)  # fmt: skip
+        self.builder.arc(self.position, end, center, plane, sweep, feed, self.line, self.file_index,
+                         self.modes, self.tool, self.spindle_rpm)  # fmt: skip
         self.position = end
 
     def nurbs_feed(self, curve, feed: float) -> None:

@@ -70,7 +70,8 @@ class Interpreter:
             skip_signal=skip_signal_surfaces(skip_signal, dialect.axes),
             skip_mask=sum(1 << n for n in block_skip),
             builder=builder,
-            out=CanonicalMachine(builder, start, rotary=builder.rotary_origin, error=self.error),
+            # (the dialect's error, not this object's: no reference cycle through the output stage)
+            out=CanonicalMachine(builder, start, rotary=builder.rotary_origin, error=dialect.error),
             variables=language.variables(dialect),
             comp=CompensationState(settings, settings.new_offsets(tool_offsets)),
         )
@@ -114,8 +115,10 @@ class Interpreter:
         for key, spec in dialect.gcodes.items():  # rotary words belong to G00/G01 blocks only
             if spec.action == "motion" and spec.value in (0, 1):
                 self._allowed_with_motion[key] = self._allowed_with_motion[key] | self._rotary_letters
-        self._motion_specs = {key: spec for key, spec in dialect.gcodes.items()
-                              if spec.action == "motion" and spec.implemented}  # fmt: skip
+        # The hot path's motion codes by their number as read (G01 → 1.0; another spelling of a code, such as
+        # G1.04, takes the general path, which reads it the same way).
+        self._motion_by_number = {key / 10: (key, spec) for key, spec in dialect.gcodes.items()
+                                  if spec.action == "motion" and spec.implemented}  # fmt: skip
         for key in dialect.power_on:
             spec = dialect.gcodes[key]
             st.modal[spec.group] = key
@@ -194,14 +197,16 @@ class Interpreter:
         if st.block_listeners:  # active features that count blocks (compensation's look-ahead)
             for listener in st.block_listeners:
                 listener(self, values)
-        if ms is None and not st.general_path and (
-                gs is None or (len(gs) == 1 and round(gs[0] * 10) in self._motion_specs)):  # fmt: skip
+        if ms is None and not st.general_path:
             # Hot path: no code, or one group-01 motion code; the other words are axis words, arc words and
             # the words with actions (F, S, T, D, H). Same checks and order as the general path, without
             # building a plan.
             if gs is not None:
-                key = round(gs[0] * 10)
-                spec = self._motion_specs[key]
+                motion = self._motion_by_number.get(gs[0]) if len(gs) == 1 else None
+                if motion is None:
+                    self._execute_general(gs, (), values, block)
+                    return
+                key, spec = motion
                 st.motion = spec.value  # type: ignore[assignment]
                 st.motion_key = key
                 st.modal[spec.group] = key

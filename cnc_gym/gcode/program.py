@@ -83,6 +83,22 @@ class SpecialBlock(Block):
         self.message = None
 
 
+def literal_block(line: int, words: Sequence, gs: list | None, ms: list | None, values: dict[str, float],
+                  number: int | None = None, skip: int = 0) -> Block:  # fmt: skip
+    """A block of literal words already split (a reader's hot path): no ``__init__``, no second split."""
+    block = Block.__new__(Block)
+    block.line = line
+    block.words = words
+    block.skip = skip
+    block.has_expr = False
+    block.assign = None
+    block.number = number
+    block.gs = gs
+    block.ms = ms
+    block.values = values
+    return block
+
+
 def split_words(words) -> tuple[list | None, list | None, dict[str, float]]:
     """(G numbers or None, M numbers or None, {address: value}); a repeated address is an error."""
     values: dict[str, float] = {}

@@ -20,9 +20,6 @@ if TYPE_CHECKING:
 
 _KIND_NAMES = {k: k.name.lower() for k in SegmentKind}
 _PLANE_NAMES = {p: p.name for p in Plane}
-_KIND_TEXT = {int(k): name for k, name in _KIND_NAMES.items()}
-_KIND_TEXT_FAST = frozenset(int(k) for k in (SegmentKind.RAPID, SegmentKind.LINE, SegmentKind.ARC,
-                                             SegmentKind.DWELL))  # fmt: skip
 _PLANE_TEXT = {int(p): name for p, name in _PLANE_NAMES.items()}
 _DIGITS = 6  # 1 nm: far below any machine's resolution, keeps the output stable across platforms
 
@@ -84,67 +81,112 @@ def _record(tp: Toolpath, i: int) -> dict:
 
 
 class _NumberTexts(dict):
-    """A number's text as json.dumps prints it after rounding (:func:`_r`), made on first use."""
+    """A rounded number's text as json.dumps prints it, made on first use (coordinates repeat: a row
+    starts where the last one ended)."""
 
     def __missing__(self, x: float) -> str:
-        text = self[x] = repr(_r(x))
+        text = self[x] = repr(x)
         return text
+
+
+#: Largest ``|x| * 10**_DIGITS`` rounded in numpy: below 2**52 the scaled value's fraction is exact.
+_EXACT_SCALED = 2.0**52
+
+
+def rounded(values: np.ndarray) -> list[float]:
+    """:func:`_r` of every (finite) value, vectorised: ``rint(x * 1e6) / 1e6`` is the double ``round(x, 6)``
+    gives whenever the scaled product cannot straddle a rounding boundary (a half-integer) through its own
+    rounding error (at most ``|x| * 1e6 * 2**-53``); the few values near one, ties included, and huge ones
+    go through :func:`_r`. ``+ 0.0`` turns ``-0.0`` into ``0.0``."""
+    with np.errstate(over="ignore", invalid="ignore"):  # huge and non-finite values are unsure
+        scaled = values * 10.0**_DIGITS
+        fraction = scaled - np.floor(scaled)
+        unsure = (np.abs(fraction - 0.5) <= np.abs(scaled) * 2.0**-51) | ~(np.abs(scaled) < _EXACT_SCALED)
+        out = (np.rint(scaled) / 10.0**_DIGITS + 0.0).tolist()
+    for i in np.flatnonzero(unsure).tolist():
+        out[i] = _r(values[i])
+    return out
 
 
 def toolpath_jsonl(tp: Toolpath) -> str:
     """The records as JSON Lines: ``"".join(json.dumps(r) + "\\n" for r in toolpath_records(tp))``, built
     without the dicts for rapids, lines, arcs and dwells (the bulk of a program; ``cnc-gym trace``'s hot
-    path). Rows with a file, rotary axes, NURBS data, a smoothing tolerance or a number that is not finite
-    go through ``json.dumps``."""
+    path): each kind's rows are filled into one text template, column by column. Rows with a file, rotary
+    axes, NURBS data, a smoothing tolerance or a number that is not finite go through ``json.dumps``."""
     n = len(tp)
-    points = np.column_stack((tp.start, tp.end))
-    general = (tp.file_index != 0) | (tp.kind == SegmentKind.NURBS) | ~np.all(np.isfinite(points), axis=1)
+    if n == 0:
+        return ""
+    kind = tp.kind
+    coordinates = np.column_stack((tp.start, tp.end))
+    general = (tp.file_index != 0) | (kind == SegmentKind.NURBS) | ~np.all(np.isfinite(coordinates), axis=1)
     general |= tp.smoothing_tolerance_mm != 0
-    general |= (tp.kind == SegmentKind.ARC) & ~np.all(np.isfinite(tp.center), axis=1)
-    cutting = np.isin(tp.kind, (SegmentKind.LINE, SegmentKind.ARC))
+    general |= (kind == SegmentKind.ARC) & ~np.all(np.isfinite(tp.center), axis=1)
+    cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC)
     general |= cutting & ~np.isfinite(tp.feed)
-    general |= (tp.kind == SegmentKind.ARC) & ~(np.isfinite(tp.radius) & np.isfinite(tp.sweep))
-    general |= (tp.kind == SegmentKind.DWELL) & ~np.isfinite(tp.dwell_s)
+    general |= (kind == SegmentKind.ARC) & ~(np.isfinite(tp.radius) & np.isfinite(tp.sweep))
+    general |= (kind == SegmentKind.DWELL) & ~np.isfinite(tp.dwell_s)
     if tp.rotary_axes:
-        general |= (tp.kind == SegmentKind.LINE) | (tp.kind == SegmentKind.RAPID)
-    general_rows = general.tolist()
-    # Each number as json.dumps prints it after rounding, formatted once per distinct value (coordinates
-    # repeat: a row starts where the last one ended).
-    sweep_deg = [math.degrees(x) for x in tp.sweep.tolist()]
-    columns = np.column_stack((tp.start, tp.end, tp.center, tp.feed, sweep_deg, tp.radius, tp.dwell_s)) if n \
-        else np.zeros((0, 13))  # fmt: skip
-    columns = np.where(np.isfinite(columns), columns, 0.0)  # (rows using a value that is not are general)
+        general |= (kind == SegmentKind.LINE) | (kind == SegmentKind.RAPID)
+    fast = ~general
     memo = _NumberTexts()
-    (sx, sy, sz, ex, ey, ez, cx, cy, cz, feed_t, sweep_t, radius_t,
-     dwell_t) = ([memo[x] for x in column] for column in columns.T.tolist())  # fmt: skip
-    kinds, lines, modes, plane = tp.kind.tolist(), tp.line.tolist(), tp.modes.tolist(), tp.plane.tolist()
-    mode_text: dict[int, str] = {}
-    out = []
-    line, arc, dwell = (int(k) for k in (SegmentKind.LINE, SegmentKind.ARC,
-                                                  SegmentKind.DWELL))  # fmt: skip
-    for i in range(n):
-        k = kinds[i]
-        if general_rows[i] or k not in _KIND_TEXT_FAST:
-            out.append(json.dumps(_record(tp, i)))
+    text = memo.__getitem__
+
+    def texts(column: np.ndarray) -> list[str]:
+        return list(map(text, rounded(column)))
+
+    def points(xyz: np.ndarray) -> list[str]:
+        return list(map(_POINT.__mod__, zip(*(texts(c) for c in xyz.T), strict=True)))
+
+    # Point texts "x, y, z": one per row's end; a start is its row's previous end, or made on its own.
+    ends = np.empty(n, dtype=object)
+    ends[:] = points(tp.end)
+    starts = np.empty(n, dtype=object)
+    starts[1:] = ends[:-1]
+    own = np.flatnonzero(np.any(tp.start[1:] != tp.end[:-1], axis=1)) + 1
+    own = np.concatenate(([0], own))
+    starts[own] = points(tp.start[own])
+    out = np.empty(n, dtype=object)  # each row's text without its closing brace
+    for segment_kind, template in _TEMPLATES.items():
+        rows = np.flatnonzero((kind == segment_kind) & fast)
+        if not rows.size:
             continue
-        if k == dwell:
-            text = f'{{"kind": "dwell", "line": {lines[i]}, "seconds": {dwell_t[i]}'
+        fields: list[list] = [tp.line[rows].tolist()]
+        if segment_kind == SegmentKind.DWELL:
+            fields.append(texts(tp.dwell_s[rows]))
         else:
-            text = (f'{{"kind": "{_KIND_TEXT[k]}", "line": {lines[i]}, "start": [{sx[i]}, {sy[i]}, {sz[i]}], '
-                    f'"end": [{ex[i]}, {ey[i]}, {ez[i]}]')  # fmt: skip
-            if k == line:
-                text += f', "feed": {feed_t[i]}'
-            elif k == arc:
-                text += (f', "feed": {feed_t[i]}, "center": [{cx[i]}, {cy[i]}, {cz[i]}], "plane": '
-                         f'"{_PLANE_TEXT[plane[i]]}", "sweep_deg": {sweep_t[i]}, "radius": {radius_t[i]}')
-        m = modes[i]
-        if m:
+            fields += [starts[rows].tolist(), ends[rows].tolist()]
+        if segment_kind in (SegmentKind.LINE, SegmentKind.ARC):
+            fields.append(texts(tp.feed[rows]))
+        if segment_kind == SegmentKind.ARC:
+            fields.append(points(tp.center[rows]))
+            fields.append([_PLANE_TEXT[p] for p in tp.plane[rows].tolist()])
+            fields.append(texts(np.degrees(tp.sweep[rows])))
+            fields.append(texts(tp.radius[rows]))
+        out[rows] = list(map(template.__mod__, zip(*fields, strict=True)))
+    for i in np.flatnonzero(general).tolist():
+        out[i] = json.dumps(_record(tp, i))[:-1]
+    fast_modes = np.flatnonzero((tp.modes != 0) & ~general)
+    if fast_modes.size:
+        mode_text: dict[int, str] = {}
+        for i, m in zip(fast_modes.tolist(), tp.modes[fast_modes].tolist(), strict=True):
             if m not in mode_text:
                 mode_text[m] = ', "modes": ' + json.dumps([x.name.lower() for x in type_modes(m)])
-            text += mode_text[m]
-        out.append(text + "}")
-    out.append("")
-    return "\n".join(out)
+            out[i] += mode_text[m]
+    return "}\n".join(out.tolist()) + "}\n"
+
+
+_POINT = "%s, %s, %s"
+_POINTS = '"start": [%s], "end": [%s]'
+#: The fast rows' text up to the closing brace (the key order of :func:`_record`).
+_TEMPLATES = {
+    SegmentKind.RAPID: '{"kind": "rapid", "line": %d, ' + _POINTS,
+    SegmentKind.LINE: '{"kind": "line", "line": %d, ' + _POINTS + ', "feed": %s',
+    SegmentKind.ARC: (
+        '{"kind": "arc", "line": %d, ' + _POINTS + ', "feed": %s, "center": [%s], "plane": "%s", '
+        '"sweep_deg": %s, "radius": %s'
+    ),
+    SegmentKind.DWELL: '{"kind": "dwell", "line": %d, "seconds": %s',
+}
 
 
 def type_modes(value: int):

@@ -18,6 +18,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import IntEnum, IntFlag
+from itertools import chain
+from operator import itemgetter
 
 import numpy as np
 
@@ -378,13 +380,25 @@ class Toolpath:
         return toolpath_records(self)
 
 
+#: Row fields of :class:`ToolpathBuilder`'s tuples, by position (the order of ``_FIELDS``).
+_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S = (_FIELDS.index(name) for name in (
+    "kind", "start", "end", "radius", "sweep", "feed", "dwell_s"))  # fmt: skip
+_NAN3 = (float("nan"),) * 3
+_RAPID, _LINE_KIND, _ARC, _DWELL, _NURBS = (int(k) for k in SegmentKind)
+_NO_MODES = SegmentMode.NONE
+_DTYPES = {"kind": np.int8, "plane": np.int8, "line": np.int32, "file_index": np.int16, "modes": np.uint8,
+           "tool": np.int32}  # fmt: skip
+_POINT_FIELDS = ("start", "end", "center")
+
+
 class ToolpathBuilder:
-    """Appends segments row by row (plain Python lists: cheap appends) and freezes them into a Toolpath."""
+    """Appends segments row by row (one plain tuple per row, fields in the order of ``_FIELDS``: one list
+    append per segment on the interpreter's hot path) and freezes them into a Toolpath."""
 
     def __init__(self, files: tuple[str, ...] = ("<program>",), rotary_axes: str = "",
                  rotary_position: tuple[float, ...] | None = None) -> None:  # fmt: skip
         self.files = list(files)
-        self._rows: dict[str, list] = {name: [] for name in _FIELDS}
+        self._rows: list[tuple] = []
         self.nurbs_curves: dict[int, NurbsCurve] = {}
         # Rotary axes: the start position, then (row, start, end) for every row that moves them (the rows
         # in between hold the position: filled in by build()).
@@ -396,65 +410,59 @@ class ToolpathBuilder:
         self._smoothing: list[tuple[int, dict[int, float]]] = []
 
     def __len__(self) -> int:
-        return len(self._rows["kind"])
+        return len(self._rows)
+
+    def kinds_since(self, first: int) -> list[int]:
+        """The :class:`SegmentKind` values of the rows from ``first`` on."""
+        return [row[_KIND] for row in self._rows[first:]]
+
+    def nominal_seconds_since(self, first: int, rapid_mm_min: float, total: float = 0.0) -> float:
+        """``total`` plus the seconds of the rows from ``first`` on at their programmed feeds (rapids at
+        ``rapid_mm_min``, dwells their time; no acceleration): the clock of a controller without a motion
+        model."""
+        for row in self._rows[first:]:
+            kind = row[_KIND]
+            if kind == _DWELL:
+                total += row[_DWELL_S]
+                continue
+            start, end = row[_START], row[_END]
+            if kind == _ARC:
+                plane_length = abs(row[_SWEEP]) * row[_RADIUS]
+                chord = math.dist(start, end)
+                length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
+            else:
+                length = math.dist(start, end)
+            speed = rapid_mm_min if kind == _RAPID else row[_FEED]
+            if speed and math.isfinite(speed):
+                total += 60.0 * length / speed
+        return total
 
     def file_index(self, file: str) -> int:
         if file not in self.files:
             self.files.append(file)
         return self.files.index(file)
 
-    def _append(
-        self,
-        kind: SegmentKind,
-        start: tuple[float, float, float],
-        end: tuple[float, float, float],
-        *,
-        line: int,
-        file_index: int = 0,
-        feed: float = float("nan"),
-        center: tuple[float, float, float] = (float("nan"),) * 3,
-        plane: Plane = Plane.XY,
-        radius: float = 0.0,
-        start_angle: float = 0.0,
-        sweep: float = 0.0,
-        dwell_s: float = 0.0,
-        modes: SegmentMode = SegmentMode.NONE,
-        tool: int = 0,
-        spindle_rpm: float = 0.0,
-    ) -> None:
-        r = self._rows
-        r["kind"].append(int(kind))
-        r["start"].append(start)
-        r["end"].append(end)
-        r["center"].append(center)
-        r["plane"].append(int(plane))
-        r["radius"].append(radius)
-        r["start_angle"].append(start_angle)
-        r["sweep"].append(sweep)
-        r["feed"].append(feed)
-        r["dwell_s"].append(dwell_s)
-        r["line"].append(line)
-        r["file_index"].append(file_index)
-        r["modes"].append(int(modes))
-        r["tool"].append(tool)
-        r["spindle_rpm"].append(spindle_rpm)
+    def rapid(self, start, end, line: int, file_index: int = 0, modes: SegmentMode = _NO_MODES, tool: int = 0,
+              spindle_rpm: float = 0.0) -> None:  # fmt: skip
+        self._rows.append((_RAPID, tuple(start), tuple(end), _NAN3, 0, 0.0, 0.0, 0.0, math.nan, 0.0, line,
+                           file_index, modes, tool, spindle_rpm))  # fmt: skip
 
-    def rapid(self, start, end, **kw) -> None:
-        self._append(SegmentKind.RAPID, tuple(start), tuple(end), **kw)
+    def line(self, start, end, feed: float, line: int, file_index: int = 0, modes: SegmentMode = _NO_MODES,
+             tool: int = 0, spindle_rpm: float = 0.0) -> None:  # fmt: skip
+        self._rows.append((_LINE_KIND, tuple(start), tuple(end), _NAN3, 0, 0.0, 0.0, 0.0, feed, 0.0, line,
+                           file_index, modes, tool, spindle_rpm))  # fmt: skip
 
-    def line(self, start, end, feed: float, **kw) -> None:
-        self._append(SegmentKind.LINE, tuple(start), tuple(end), feed=feed, **kw)
-
-    def arc(self, start, end, center, plane: Plane, sweep: float, feed: float, **kw) -> None:
+    def arc(self, start, end, center, plane: Plane, sweep: float, feed: float, line: int, file_index: int = 0,
+            modes: SegmentMode = _NO_MODES, tool: int = 0, spindle_rpm: float = 0.0) -> None:  # fmt: skip
         """Append an arc/helix. ``center``'s normal coordinate is replaced by the start's."""
-        u, v, w = PLANE_AXES[Plane(plane)]
+        u, v, w = PLANE_AXES[plane]
         c = list(center)
         c[w] = start[w]
         du, dv = float(start[u] - c[u]), float(start[v] - c[v])
         # Scalar math, not numpy scalars: this runs once per arc block on the interpreter's hot path.
-        radius, start_angle = math.hypot(du, dv), math.atan2(dv, du)
-        self._append(SegmentKind.ARC, tuple(start), tuple(end), feed=feed, center=tuple(c), plane=plane,
-                     radius=radius, start_angle=start_angle, sweep=sweep, **kw)  # fmt: skip
+        self._rows.append((_ARC, tuple(start), tuple(end), tuple(c), int(plane), math.hypot(du, dv),
+                           math.atan2(dv, du), sweep, feed, 0.0, line, file_index, modes, tool,
+                           spindle_rpm))  # fmt: skip
 
     def nurbs(self, curve: NurbsCurve, feed: float, **kw) -> None:
         """Append an exact NURBS segment from the curve's first to its last control point."""
@@ -463,10 +471,17 @@ class ToolpathBuilder:
         self.nurbs_curves[len(self)] = curve
         start = tuple(float(x) for x in curve.control_points[0])
         end = tuple(float(x) for x in curve.control_points[-1])
-        self._append(SegmentKind.NURBS, start, end, feed=feed, **kw)
+        self._append(_NURBS, start, end, feed=feed, **kw)
 
     def dwell(self, position, seconds: float, **kw) -> None:
-        self._append(SegmentKind.DWELL, tuple(position), tuple(position), dwell_s=seconds, **kw)
+        self._append(_DWELL, tuple(position), tuple(position), dwell_s=seconds, **kw)
+
+    def _append(self, kind: int, start: tuple, end: tuple, *, line: int, file_index: int = 0,
+                feed: float = math.nan, dwell_s: float = 0.0, modes: SegmentMode = _NO_MODES, tool: int = 0,
+                spindle_rpm: float = 0.0) -> None:  # fmt: skip
+        """A row without arc data (NURBS, dwell)."""
+        self._rows.append((kind, start, end, _NAN3, 0, 0.0, 0.0, 0.0, feed, dwell_s, line, file_index, modes,
+                           tool, spindle_rpm))  # fmt: skip
 
     def move_rotary(self, start: tuple[float, ...], end: tuple[float, ...]) -> None:
         """The row just appended (a rapid or a line) also moves the rotary axes from ``start`` to ``end``."""
@@ -501,18 +516,16 @@ class ToolpathBuilder:
         return start, end
 
     def build(self) -> Toolpath:
-        r = self._rows
-        dtypes = {
-            "kind": np.int8, "plane": np.int8, "line": np.int32, "file_index": np.int16,
-            "modes": np.uint8, "tool": np.int32,
-        }  # fmt: skip
+        rows, n = self._rows, len(self._rows)
         arrays = {}
-        for name in _FIELDS:
-            dtype = dtypes.get(name, np.float64)
-            arr = np.array(r[name], dtype=dtype)
-            if name in ("start", "end", "center"):
-                arr = arr.reshape(-1, 3)
-            arrays[name] = arr
+        # Column by column, straight from the row tuples (np.fromiter: no intermediate lists).
+        for index, name in enumerate(_FIELDS):
+            dtype = _DTYPES.get(name, np.float64)
+            if name in _POINT_FIELDS:
+                points = chain.from_iterable(map(itemgetter(index), rows))
+                arrays[name] = np.fromiter(points, dtype, count=3 * n).reshape(n, 3)
+            else:
+                arrays[name] = np.fromiter(map(itemgetter(index), rows), dtype, count=n)
         rotary_start, rotary_end = self._rotary_arrays(len(self))
         smoothing = self._smoothing_array(arrays["kind"]) if self._smoothing else None
         return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves),

@@ -35,7 +35,7 @@ def test_p_loop_circle_matches_textbook_closed_form():
     assert exact == pytest.approx(speed**2 / (2 * radius * 30.0**2), rel=0.01)  # 77 µm
 
 
-@pytest.mark.parametrize("machine_name", ["p-loop-30", "vmc-small", "gsk25i"])
+@pytest.mark.parametrize("machine_name", ["p-loop-30", "vmc-small", "gsk25i", "h4cm"])
 @pytest.mark.parametrize(("radius", "speed"), [(25.0, 4000.0 / 60.0), (10.0, 100.0)])
 def test_arc_error_model_matches_the_plant(machine_name, radius, speed):
     # vmc-small has feed-forward 0.7, a 60 Hz velocity loop and Kv 40/38 (mismatch): no textbook form,

@@ -201,7 +201,7 @@ def test_residual_scales_the_planner_override():
     env.reset(seed=0)
     for _ in range(20):
         env.step(np.zeros(1, dtype=np.float32))
-    planned = env._planner_override
+    planned = env.planner_override
     _, _, _, _, info = env.step(np.array([-1.0], dtype=np.float32))  # × 1/2
     assert env.unwrapped._batch.actions[0] == pytest.approx(2 * (planned / 2) / 2.0 - 1, abs=1e-6)
     assert info["planner_override"] > 0

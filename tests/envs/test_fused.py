@@ -2,7 +2,10 @@
 
 The reference path is the modular step: the same state arrays driven through the Controller objects,
 the plant object's ``step``/``settled`` and the ContourErrorMeter, one env at a time (the path a plant
-backend without compiled kernels takes). Every observation, reward, termination, truncation and info
+backend without compiled kernels takes). For Feedrate-v1 and v2 the reference also computes in Python
+what the compiled step computes for them: the machine, episode and planner entries of the observation,
+the planner's override (with the ``classical`` policy's own ``override_at``), the reward terms, the finish
+bonus, the cost and the info keys. Every observation, reward, termination, truncation and info
 value must be equal — exactly, not to a tolerance — on the built-in programs and on random programs
 (lines, polylines, arcs and helices in three planes, NURBS, dwells, exact stops, rapids), in both action
 modes, through truncations and next-step autoresets, serial and in threads.
@@ -18,6 +21,15 @@ from hypothesis import strategies as st
 from random_gcode import bench_program, random_gcode
 
 from cnc_gym.envs.feedrate import FeedrateEnv
+from cnc_gym.envs.feedrate_v1 import FeedrateEnvV1
+from cnc_gym.envs.fused import (
+    F_SIGNAL,
+    INFO_KEYS,
+    SIG_PROGRESS_DELTA,
+    SIG_TIME_FRACTION,
+    SIG_VIOLATION_LENGTH,
+)
+from cnc_gym.envs.observation import machine_quantities
 from cnc_gym.envs.vector import FeedrateVectorEnv
 from cnc_gym.plant import ServoPlant
 from cnc_gym.programs import BUILTIN_PROGRAMS
@@ -249,3 +261,141 @@ def test_borrowed_and_matrix_views_are_the_arrays_own_memory():
     total = fill(flat, 7, 3, 4)
     np.testing.assert_array_equal(flat, expected)
     assert total == expected[7:19].sum()
+
+
+# ------------------------------------------------------------------------------------ Feedrate-v1 and v2
+class ReferenceEnvV1(FeedrateEnvV1):
+    """Feedrate-v1 on the modular step, with its own entries, reward and info computed in Python from the
+    step's v0 outputs (the planner's override with agents.classical.override_at)."""
+
+    def make_batch(self, n_envs, parallel=None, plant=None):
+        return super().make_batch(n_envs, parallel, ReferencePlant(self.machine, n_envs))
+
+    def _parse_action(self, action):
+        a = FeedrateEnv._parse_action(self, action)
+        if self.action_mode != "residual":
+            return a
+        override = min(max(self.reference_override * self.residual_range**a, 0.0), self.max_override)
+        return self._planner.knob(override)
+
+    def reset(self, *, seed=None, options=None):
+        obs, info = super().reset(seed=seed, options=options)
+        return self._v1(obs, info, None)
+
+    def step(self, action):
+        obs, _, terminated, truncated, info = super().step(action)
+        obs, info = self._v1(obs, info, terminated)
+        return obs, self._reward, terminated, truncated, info
+
+    def _v1(self, obs, info, terminated):
+        """The v1 entries of ``obs`` and the v1 info (``terminated`` None: a reset), and the reward."""
+        from agents.classical import override_at
+
+        program = self._batch.program(0)
+        schedule = self._planner.schedule(program.toolpath, self.machine, program.limits)
+        self.reference_override = override_at(schedule, info["path_s"], info["feed_mm_min"],
+                                              self._planner.lead_s)  # fmt: skip
+        quantities = machine_quantities(self.machine)
+        violation_free = info["violation_length_mm"] <= 0.0
+        at = self.layout.kernel_spec.size - len(self.layout.kernel_spec.tail)
+        for e in self.layout.entries:
+            if e.source in ("machine", "episode", "planner"):
+                value = {"machine": quantities.get(e.quantity), "episode": float(violation_free),
+                         "planner": self.reference_override}[e.source]  # fmt: skip
+                obs[at] = min(max(value * self.layout.scale(e), e.low), e.high)
+                at += 1
+        out = {key: info[key] for key in INFO_KEYS}
+        signals = self._batch.state_f[0, F_SIGNAL:]
+        w = self.reward_weights
+        terms, finish, cost, self._reward = (0.0, 0.0, 0.0), 0.0, 0.0, 0.0
+        if terminated is not None:
+            terms = (float(-w.time * signals[SIG_TIME_FRACTION]),
+                     float(w.progress * signals[SIG_PROGRESS_DELTA]),
+                     float(-w.violation * signals[SIG_VIOLATION_LENGTH]))  # fmt: skip
+            if len(program.toolpath):
+                self._reward = 0.0
+                for term in terms:
+                    self._reward += term
+            budget, t_nominal = program.max_episode_steps, max(self.nominal_time_s, 1e-12)
+            finish = w.time * budget * self.control_period_s / t_nominal + w.finish if (
+                terminated and violation_free) else 0.0  # fmt: skip
+            self._reward += finish
+            cost = float(signals[SIG_VIOLATION_LENGTH])
+        out["cost"] = cost
+        out.update(zip(("reward_time", "reward_progress", "reward_violation"), terms, strict=True))
+        out["reward_finish"] = finish
+        out["planner_override"] = self.reference_override
+        return obs, out
+
+
+def assert_same_run_v1(fast: FeedrateEnvV1, reference: ReferenceEnvV1, actions: np.ndarray,
+                       seed: int = 0) -> int:  # fmt: skip
+    """Step both envs with ``actions`` (resetting at episode ends): the same observations (bytes), rewards
+    (sign of zero included), flags and infos (keys in order, values with their types); the episode ends."""
+    def same(out_f, out_r, where):
+        np.testing.assert_array_equal(out_f[0], out_r[0], err_msg=where)
+        assert out_f[0].tobytes() == out_r[0].tobytes(), where
+        assert repr(out_f[1:]) == repr(out_r[1:]), where
+        assert [type(x) for x in out_f[1:]] == [type(x) for x in out_r[1:]], where
+
+    same(fast.reset(seed=seed), reference.reset(seed=seed), "reset")
+    ends = 0
+    for t, a in enumerate(actions):
+        out_f, out_r = fast.step(np.array([a])), reference.step(np.array([a]))
+        same(out_f, out_r, f"step {t}")
+        if out_f[2] or out_f[3]:
+            ends += 1
+            same(fast.reset(), reference.reset(), f"reset after step {t}")
+    return ends
+
+
+V1_CASES = {
+    "v1 built-ins": {"programs": list(BUILTIN_PROGRAMS)},
+    "v2 residual, short budget": {"programs": ["star", "pocket"], "action_mode": "residual",
+                                  "contour_rule": "path", "max_episode_steps": 200, "residual_range": 3.0},
+    "v2 feed, helix and NURBS": {"programs": [bench_program("helix"), bench_program("nurbs")],
+                                 "action_mode": "feed", "contour_rule": "path", "machine": "gsk25i"},
+    "v1 without motion, weights": {"programs": ["G90 G21 G17\nM30\n", "circle"],
+                                   "reward": {"time": 2.0, "violation": 3.0, "finish": 0.5, "progress": 0.0}},
+    "v2 randomised, period, points": {"programs": ["circle", "freeform"], "contour_rule": "path",
+                                      "randomize": {"enabled": True, "machines": 2}, "control_period_s": 0.02,
+                                      "lookahead_points": 5, "max_episode_steps": 300},
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", list(V1_CASES))
+def test_v1_and_v2_same_as_the_reference_path(case):
+    # Whole episodes under a random knob (and its jumps): every entry, reward, flag and info key of the
+    # compiled step equals the Python reference, bit for bit.
+    kwargs = V1_CASES[case]
+    rng = np.random.default_rng(len(case))
+    ends = assert_same_run_v1(FeedrateEnvV1(**kwargs), ReferenceEnvV1(**kwargs), knob_schedule(rng, 2500))
+    assert ends >= 2
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), n_blocks=st.integers(1, 20),
+       mode=st.sampled_from(["override", "feed", "residual"]), rule=st.sampled_from(["cuts", "path"]),
+       budget=st.sampled_from([None, 40, 150]))  # fmt: skip
+def test_v1_random_programs_same_as_the_reference_path(seed, n_blocks, mode, rule, budget):
+    rng = np.random.default_rng(seed)
+    kwargs = {"programs": [random_gcode(rng, n_blocks)], "action_mode": mode, "contour_rule": rule,
+              "max_episode_steps": budget}  # fmt: skip
+    assert_same_run_v1(FeedrateEnvV1(**kwargs), ReferenceEnvV1(**kwargs), knob_schedule(rng, 300),
+                       seed=seed % 1000)  # fmt: skip
+
+
+def test_v1_copied_env_steps_like_the_env():
+    # The planner's tables and the v1 outputs travel with a copy of the env.
+    import copy
+
+    env = FeedrateEnvV1(programs=["star"], action_mode="residual")
+    env.reset(seed=0)
+    for _ in range(30):
+        env.step(np.zeros(1, dtype=np.float32))
+    other = copy.deepcopy(env)
+    for t in range(200):
+        action = np.array([0.3 * np.sin(t / 7)], dtype=np.float32)
+        out, out_c = env.step(action), other.step(action)
+        np.testing.assert_array_equal(out[0], out_c[0])
+        assert repr(out[1:]) == repr(out_c[1:])

@@ -7,13 +7,15 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from cnc_gym.gcode import interpret
 from cnc_gym.machine import load_machine
 from cnc_gym.programs import BUILTIN_PROGRAMS, load_program
 from cnc_gym.toolpath import Plane, SegmentMode, ToolpathBuilder
 from cnc_gym.toolpath.nurbs import NurbsCurve
-from cnc_gym.toolpath.records import toolpath_jsonl
+from cnc_gym.toolpath.records import _r, rounded, toolpath_jsonl
 
 
 def reference_text(tp) -> str:
@@ -77,3 +79,24 @@ def test_rotary_axes_and_interpreted_programs():
     assert toolpath_jsonl(smoothed) == reference_text(smoothed)
     empty = interpret("G90\nM30\n")
     assert toolpath_jsonl(empty) == reference_text(empty)
+
+
+def _same_numbers(values) -> bool:
+    expected = [repr(_r(x)) for x in np.asarray(values, dtype=float).tolist()]
+    return [repr(x) for x in rounded(np.asarray(values, dtype=float))] == expected
+
+
+@given(st.floats(allow_nan=False, allow_infinity=False))
+def test_vectorised_rounding_is_pythons_round(x):
+    assert _same_numbers([x, -x, x * 1e6, x / 1e6])
+
+
+def test_vectorised_rounding_on_ties_near_ties_and_every_scale():
+    # Exact ties at the 6th decimal (k/128: 7812.5e-6), values a hair either side of a tie, and values from
+    # 1e-9 to 1e20 (past 2**52 / 1e6 the scaled product is no longer exact and Python's round decides).
+    rng = np.random.default_rng(7)
+    ties = np.arange(-4000, 4000) / 128.0
+    near = (np.round(rng.normal(0, 100, 4000) * 1e6) + 0.5) / 1e6
+    values = [ties, near, np.nextafter(near, np.inf), np.nextafter(near, -np.inf)]
+    values += [rng.normal(0, scale, 2000) for scale in 10.0 ** np.arange(-9, 21)]
+    assert _same_numbers(np.concatenate(values))

@@ -37,7 +37,7 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.codes import round_to
 from cnc_gym.gcode.lang.din import control
 from cnc_gym.gcode.lang.din.expressions import ExpressionSyntaxError, Parser, literal_number
-from cnc_gym.gcode.program import Block, Program, SpecialBlock, split_words
+from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block, split_words
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import AddressRule
@@ -47,8 +47,10 @@ if TYPE_CHECKING:
 _NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 #: A block of literal words only, none of them a parameter or call address (R, P, L): the hot path.
 _PLAIN_BLOCK = re.compile(rf"(?:[ \t]*[A-KMNOQS-Z][ \t]*{_NUMBER})*[ \t]*")
-_PLAIN_WORD = re.compile(rf"([A-Z])[ \t]*({_NUMBER})")
-_BLOCK_NUMBER = re.compile(r"N[ \t]*([0-9]{1,9})(?![0-9.])")
+#: The words of a line that matched _PLAIN_BLOCK, as text (its numbers are well formed: the loose [0-9.]+
+#: splits them the same way, and faster).
+_PLAIN_WORD = re.compile(r"[A-Z][ \t]*[-+]?[0-9.]+")
+_BLANKS = " \t"
 _HEADER = re.compile(r"%[ \t]*(L?)[ \t]*([0-9]*)[ \t]*")
 #: Most digits of a program number (``%nnnnnnnn``, §2.2).
 PROGRAM_DIGITS = 8
@@ -115,6 +117,9 @@ class DinReader:
         # Each address's (number kind, low, high), for the hot path (N is the block number, not a word).
         self._kinds = {letter: (self._number_kind(letter, rule), rule.low, rule.high)
                        for letter, rule in self._rules.items() if letter != "N"}  # fmt: skip
+        # Literal words already read in this file: text → (letter, value, digits); block numbers: text → n.
+        self._seen: dict[str, tuple[str, float, str]] = {}
+        self._numbers: dict[str, int] = {}
 
     # ------------------------------------------------------------------ the file
     def read(self, text: str, file: str = "<program>") -> DinProgram:
@@ -129,6 +134,7 @@ class DinReader:
         lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         upper = text.upper().replace("\r\n", "\n").replace("\r", "\n").split("\n") if ascii_text else lines
         comments = "(" in text or ")" in text
+        self._seen, self._numbers = {}, {}
         for lineno, raw in enumerate(lines, 1):
             try:
                 if not ascii_text and not raw.isascii():
@@ -153,6 +159,7 @@ class DinReader:
                     blocks.append(block)
             except ProgramError as err:
                 raise self._hinted(err, raw).located(file, lineno) from None
+        self._seen, self._numbers = {}, {}
         main_start = next((start for kind, _, start, _ in headers if kind == "main"), None)
         program_number = next((number for kind, number, _, _ in headers if kind == "main"), None)
         # Units: each %L runs to the next header; the main program from its header (or the file's start)
@@ -226,38 +233,27 @@ class DinReader:
         return self._scan(body, lineno, skip)
 
     def _plain(self, body: str, lineno: int, skip: int) -> Block | None:
-        """A block of literal words (the hot path): each checked by its address's precomputed rule."""
+        """A block of literal words (the hot path; ``body`` matched ``_PLAIN_BLOCK``): each checked by its
+        address's precomputed rule, and split for the core (``gs``, ``ms``, ``values``) in the same pass.
+        A word seen before in the file (G01, F1200, a repeated coordinate, a block number) is taken checked
+        from ``self._seen`` (``self._numbers``)."""
+        found = _PLAIN_WORD.findall(body)
+        number = None
+        if found and found[0][0] == "N":  # the block number, off the words (one N, at the head)
+            head = found.pop(0)
+            number = self._numbers.get(head)
+            if number is None:
+                number = self._numbers[head] = self._block_number(head[1:].lstrip(_BLANKS))
         words: list[tuple] = []
         values: dict[str, float] = {}
         gs = ms = None
-        number = None
-        if body[:1] == "N":  # the block number, off the words
-            head = _BLOCK_NUMBER.match(body)
-            if head is not None:
-                number = int(head.group(1))
-                body = body[head.end():]
-        kinds = self._kinds
-        for letter, digits in _PLAIN_WORD.findall(body):
-            kind = kinds.get(letter)
-            if kind is None:  # N again, or an unknown address
-                if letter != "N":
-                    raise self._unknown_address(letter)
-                if number is not None or words:
-                    raise ProgramError("N (the block number) begins the block, once", code="syntax")
-                number = self._block_number(digits)
-                continue
-            unit, low, high = kind
-            value = float(digits)
-            if unit is _LENGTH:
-                point = digits.find(".")
-                if point >= 0 and len(digits) - point > _DECIMALS + 1:
-                    value = round_to(value, self._increment)  # more places than the resolution keeps
-            elif unit is _WHOLE and "." in digits:
-                value = self._literal(letter, digits)  # raises: a whole number is expected
-            if not low <= value <= high:
-                value = self._literal(letter, digits)  # raises the range error
-            words.append((letter, value, digits))
-            # The split the core reads (Block's own split_words, done here in the same pass).
+        seen = self._seen
+        for text in found:
+            word = seen.get(text)
+            if word is None:
+                word = seen[text] = self._plain_word(text)
+            words.append(word)
+            letter, value, _ = word
             if letter == "G":
                 gs = [value] if gs is None else [*gs, value]
             elif letter == "M":
@@ -268,10 +264,28 @@ class DinReader:
                 values[letter] = value
         if not words:
             return None
-        block = Block(lineno, tuple(words), skip=skip, has_expr=True, number=number)
-        block.has_expr = False
-        block.gs, block.ms, block.values = gs, ms, values
-        return block
+        return literal_block(lineno, tuple(words), gs, ms, values, number, skip)
+
+    def _plain_word(self, text: str) -> tuple[str, float, str]:
+        """A literal word ``(letter, value, digits)`` from its text, after its address's rule."""
+        letter = text[0]
+        digits = text[1:].lstrip(_BLANKS)
+        kind = self._kinds.get(letter)
+        if kind is None:
+            if letter == "N":
+                raise ProgramError("N (the block number) begins the block, once", code="syntax")
+            raise self._unknown_address(letter)
+        unit, low, high = kind
+        value = float(digits)
+        if unit is _LENGTH:
+            point = digits.find(".")
+            if point >= 0 and len(digits) - point > _DECIMALS + 1:
+                value = round_to(value, self._increment)  # more places than the resolution keeps
+        elif unit is _WHOLE and "." in digits:
+            value = self._literal(letter, digits)  # raises: a whole number is expected
+        if not low <= value <= high:
+            value = self._literal(letter, digits)  # raises the range error
+        return letter, value, digits
 
     def _make_block(self, lineno: int, words: list, skip: int, number: int | None, *,
                     has_expr: bool) -> Block:  # fmt: skip

@@ -178,11 +178,12 @@ class FlowRunner(CallConvention):
         segments it produced (a move with no axis word of its own). The segments alone would miss moves
         that cutter compensation's look-ahead emits a block later."""
         core = self.core
-        kinds = core.state.builder._rows["kind"]
-        before = len(kinds)
+        builder = core.state.builder
+        before = len(builder)
         core.execute(block)
-        moved = bool(self.modal_calls) and (self._has_move_command(block)
-                                            or any(k != _DWELL for k in kinds[before:]))  # fmt: skip
+        moved = bool(self.modal_calls) and (
+            self._has_move_command(block) or any(k != _DWELL for k in builder.kinds_since(before))
+        )
         return self._after(block, pc, moved=moved)
 
     def _has_move_command(self, block: Block) -> bool:

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
 from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
-from cnc_gym.gcode.program import Block, Program, SpecialBlock
+from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -78,6 +78,8 @@ class Reader:
         self._call_t = calls.t_sub is not None
         self._last_comment: str | None = None
         self._o_blocks: list[Block] = []
+        # Plain words already checked in this file: (letter, digits) → value.
+        self._seen: dict[tuple[str, str], float] = {}
         rules = dialect.addresses
         self._rules = rules
         self._length_letters = frozenset(a for a, r in rules.items() if r.unit == "length")
@@ -166,10 +168,13 @@ class Reader:
     def read(self, text: str, file: str = "<program>") -> Program:
         blocks: list[Block] = []
         self._o_blocks = []
+        self._seen = {}
         program_number = None
         seen_percent = False
         colon = ":" in self.dialect.program_number_marks
         lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
+        simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
         for line_no, raw in enumerate(lines, start=1):
             stripped = raw.strip(_BLANKS)
             if not stripped:
@@ -187,7 +192,8 @@ class Reader:
                 continue
             try:
                 # Hot path inline: a plain line (no comment, ';', expression) is one regex match.
-                if stripped.isascii() and "(" not in stripped and ")" not in stripped and ";" not in stripped:
+                if simple or (stripped.isascii() and "(" not in stripped and ")" not in stripped
+                              and ";" not in stripped):  # fmt: skip
                     text_block = stripped.replace(" ", "").upper()
                     if "\t" in text_block:
                         text_block = text_block.translate(_NO_BLANKS)
@@ -197,6 +203,7 @@ class Reader:
                 blocks.extend(self.read_line(stripped, line_no))
             except ProgramError as exc:
                 raise self._hinted(exc, raw).located(file, line_no) from None
+        self._seen = {}
         program = Program(blocks, file=file)
         for index, block in enumerate(blocks):
             if block.number is not None:
@@ -288,39 +295,23 @@ class Reader:
 
     def _plain_block(self, text: str, line: int) -> Block:
         """The hot path: letters and literal numbers only. Words are split and checked in one pass;
-        ``Block.words`` keeps the ``(letter, digits)`` pairs for decimal-point checks."""
-        rules = self._fast_rules
+        ``Block.words`` keeps the ``(letter, digits)`` pairs for decimal-point checks. A word seen before in
+        the file (G01, F1200, a repeated coordinate) takes its checked value from ``self._seen``."""
         pairs = _PLAIN_WORD.findall(text)
         if len(pairs) > self._max_words:
             raise self.error(f"{len(pairs)} words in one block (at most {self._max_words})", "too-many-words",
                              line)  # fmt: skip
         values: dict[str, float] = {}
         gs = ms = None
-        for letter, digits in pairs:
-            low, high, point_allowed, is_length = rules[letter]
-            try:
-                if "." in digits:
-                    fraction = len(digits) - digits.index(".") - 1
-                    if not point_allowed or (is_length and fraction > self._decimals):
-                        value = self._literal(letter, digits, rules[letter], line)
-                    else:
-                        value = float(digits)
-                elif is_length and not self.dialect.integer_is_unit:
-                    value = self._literal(letter, digits, rules[letter], line)
-                else:
-                    value = float(digits)
-                if not low <= value <= high:
-                    self._literal(letter, digits, rules[letter], line)  # raises with the right code
-            except ValueError:  # "1.2.3", ".": GSK/Fanuc alarm 7 ILLEGAL USE OF DECIMAL POINT
-                raise self.error(f"bad number {letter}{digits}", "bad-number", line,
-                                 alarm=DECIMAL_POINT) from None  # fmt: skip
-            except ProgramError:
-                if (self._mentions_call(text) or self._code_rules(text) is not None
-                        or letter in self._deferred_letters):  # fmt: skip
-                    # macro arguments have their own rules; so do the words of some codes (L2.5 in G110,
-                    # also in a later block of the modal cycle: checked when it runs)
+        seen = self._seen
+        for pair in pairs:
+            value = seen.get(pair)
+            letter = pair[0]
+            if value is None:
+                value = self._plain_value(pair, text, line)
+                if value is None:
                     return self._rescan(text, line)
-                raise
+                seen[pair] = value
             if letter == "G":
                 if gs is None:
                     gs = [value]
@@ -353,19 +344,41 @@ class Reader:
                 if not (head == "N" or (head == "O" and pairs[1][0] == "N")):
                     raise self.error("N must be at the head of the block", "misplaced-word", line)
                 number = int(values.pop("N"))
-        block = Block.__new__(Block)
-        block.line = line
-        block.words = pairs
-        block.skip = 0
-        block.has_expr = False
-        block.assign = None
-        block.number = number
-        block.gs = gs
-        block.ms = ms
-        block.values = values
+        block = literal_block(line, pairs, gs, ms, values, number)
         if has_o:
             self._o_blocks.append(block)
         return block
+
+    def _plain_value(self, pair: tuple[str, str], text: str, line: int) -> float | None:
+        """A plain word's value after its address's rule; None: the block needs the scanner after all (macro
+        arguments, a code's own number formats)."""
+        letter, digits = pair
+        rule = self._fast_rules[letter]
+        low, high, point_allowed, is_length = rule
+        try:
+            if "." in digits:
+                fraction = len(digits) - digits.index(".") - 1
+                if not point_allowed or (is_length and fraction > self._decimals):
+                    value = self._literal(letter, digits, rule, line)
+                else:
+                    value = float(digits)
+            elif is_length and not self.dialect.integer_is_unit:
+                value = self._literal(letter, digits, rule, line)
+            else:
+                value = float(digits)
+            if not low <= value <= high:
+                self._literal(letter, digits, rule, line)  # raises with the right code
+        except ValueError:  # "1.2.3", ".": GSK/Fanuc alarm 7 ILLEGAL USE OF DECIMAL POINT
+            raise self.error(f"bad number {letter}{digits}", "bad-number", line,
+                             alarm=DECIMAL_POINT) from None  # fmt: skip
+        except ProgramError:
+            if (self._mentions_call(text) or self._code_rules(text) is not None
+                    or letter in self._deferred_letters):  # fmt: skip
+                # macro arguments have their own rules; so do the words of some codes (L2.5 in G110,
+                # also in a later block of the modal cycle: checked when it runs)
+                return None
+            raise
+        return value
 
     def _rescan(self, text: str, line: int) -> Block:
         """A plain line that needs the scanner after all (it is not empty, so it gives a block)."""

@@ -47,7 +47,7 @@ import time
 from typing import TYPE_CHECKING, NoReturn
 
 from cnc_gym.errors import ProgramError
-from cnc_gym.toolpath import SegmentKind, SegmentMode
+from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Seam
@@ -56,10 +56,6 @@ if TYPE_CHECKING:
 #: Rapid rate for the nominal clock (#3001/#3002), mm/min: the manual's example rate (GSK 25i operation manual
 #: §4.1.3).
 NOMINAL_RAPID_MM_MIN = 6000.0
-_RAPID = int(SegmentKind.RAPID)
-_LINE = int(SegmentKind.LINE)
-_ARC = int(SegmentKind.ARC)
-_DWELL = int(SegmentKind.DWELL)
 _MS_WRAP = 2147483648.0
 _HOURS_WRAP = 9544.371767
 #: (first, last, table letter, wear?, number offset)
@@ -174,27 +170,10 @@ class SystemVariables:
         return axis, k
 
     def _nominal_seconds(self) -> float:
-        rows = self.core.state.builder._rows
-        kinds = rows["kind"]
-        total = self._clock_s
-        for i in range(self._clock_rows, len(kinds)):
-            kind = kinds[i]
-            if kind == _DWELL:
-                total += rows["dwell_s"][i]
-                continue
-            start, end = rows["start"][i], rows["end"][i]
-            if kind == _ARC:
-                plane_length = abs(rows["sweep"][i]) * rows["radius"][i]
-                chord = math.dist(start, end)
-                length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
-            else:
-                length = math.dist(start, end)
-            speed = NOMINAL_RAPID_MM_MIN if kind == _RAPID else rows["feed"][i]
-            if speed and math.isfinite(speed):
-                total += 60.0 * length / speed
-        self._clock_rows = len(kinds)
-        self._clock_s = total
-        return total
+        builder = self.core.state.builder
+        self._clock_s = builder.nominal_seconds_since(self._clock_rows, NOMINAL_RAPID_MM_MIN, self._clock_s)
+        self._clock_rows = len(builder)
+        return self._clock_s
 
     def _last_value(self, letter: str) -> float | None:
         core = self.core
