@@ -31,9 +31,10 @@ sample, on cutting moves only, against the programmed path after compensation (t
 - **Speed.** One numba-compiled loop over points × window segments (:func:`measure_kernel`) on
   per-segment constants packed once per tool path (:class:`ContourTables`), with no per-call allocation
   beyond the result. Lines and flat arcs are measured first; a helix or NURBS segment is searched only
-  where a lower bound on its distance (the projected arc and the height range of a helix, the bounding
-  sphere of a curve) is below the best distance so far, and each point's own segment first, so the
-  searches that cannot win are skipped. One ``measure`` call of 5 points on a window of ~10 segments
+  where a lower bound on its distance is below the best distance so far (for a helix, cheapest first: its
+  height range, its cylinder, its projected arc; for a curve, its bounding sphere), and each point's own
+  segment first, so the searches that cannot win are skipped (on a helical bore most neighbouring turns
+  fail on the height alone). One ``measure`` call of 5 points on a window of ~10 segments
   costs ~1–2 µs on lines and arcs. The env's fused step calls the same kernel.
 """
 
@@ -117,32 +118,39 @@ def _line_or_arc_d2(c, g, iu, iv, iw, px, py, pz, pu, pv, pw) -> float:
     return min(d2, ex * ex + ey * ey + ez * ez)
 
 
-@njit(cache=True, nogil=True)
-def _curved_d2(c, g, header, nurbs_f, iu, iv, iw, px, py, pz, pu, pv, pw, bound2, work) -> float:
-    """Squared distance to a helix or NURBS segment, or ``inf`` where a lower bound shows it cannot be
-    below ``bound2``."""
+@njit(cache=True, nogil=True, inline="always")
+def _curved_d2(c, geometry, s, nurbs_i, nurbs_f, iu, iv, iw, px, py, pz, pu, pv, pw, bound2, work) -> float:
+    """Squared distance to the helix or NURBS segment ``s``, or ``inf`` where a lower bound shows it cannot
+    be below ``bound2``. (Reads the tables by index: a row view would cost a reference count per call.)"""
     if c == HELIX:
-        # Lower bound: the distance to the projected arc in the plane, and to the height range along w.
-        du = pu - g[0]
-        dv = pv - g[1]
-        if g[5] >= _TWO_PI:
-            planar = abs(math.hypot(du, dv) - g[3])
-        else:
-            phi = (math.atan2(dv, du) - g[4]) * g[6]
-            phi = phi - _TWO_PI * math.floor(phi / _TWO_PI)
-            if phi <= g[5]:
-                planar = abs(math.hypot(du, dv) - g[3])
-            else:
-                planar = min(math.hypot(pu - g[7 + iu], pv - g[7 + iv]),
-                             math.hypot(pu - g[10 + iu], pv - g[10 + iv]))  # fmt: skip
-        w_lo = min(g[2], g[2] + g[13])
-        w_hi = max(g[2], g[2] + g[13])
-        gap = max(w_lo - pw, pw - w_hi, 0.0)
-        if planar * planar + gap * gap >= bound2:
+        # Lower bounds, cheapest first: the distance to the helix's height range along w, then to its
+        # cylinder (the planar circle) and that range, then to the projected arc (an angle) and that range.
+        w0 = geometry[s, 2]
+        rise = geometry[s, 13]
+        gap = max(min(w0, w0 + rise) - pw, pw - max(w0, w0 + rise), 0.0)
+        gap2 = gap * gap
+        if gap2 >= bound2:
             return math.inf
-        d2, _ = helix_nearest(pu, pv, pw, g[0], g[1], g[2], g[13], g[3], g[4], g[14])
+        cu = geometry[s, 0]
+        cv = geometry[s, 1]
+        radius = geometry[s, 3]
+        du = pu - cu
+        dv = pv - cv
+        planar = abs(math.sqrt(du * du + dv * dv) - radius)
+        if planar * planar + gap2 >= bound2:
+            return math.inf
+        theta0 = geometry[s, 4]
+        if geometry[s, 5] < _TWO_PI:
+            phi = (math.atan2(dv, du) - theta0) * geometry[s, 6]
+            phi = phi - _TWO_PI * math.floor(phi / _TWO_PI)
+            if phi > geometry[s, 5]:  # outside the swept angle: the nearer end, in the plane
+                planar = min(math.hypot(pu - geometry[s, 7 + iu], pv - geometry[s, 7 + iv]),
+                             math.hypot(pu - geometry[s, 10 + iu], pv - geometry[s, 10 + iv]))  # fmt: skip
+                if planar * planar + gap2 >= bound2:
+                    return math.inf
+        d2, _ = helix_nearest(pu, pv, pw, cu, cv, w0, rise, radius, theta0, geometry[s, 14])
         return d2
-    return nurbs_search(nurbs_f, header, px, py, pz, bound2, work)
+    return nurbs_search(nurbs_f, nurbs_i[s], px, py, pz, bound2, work)
 
 
 @njit(cache=True, nogil=True)
@@ -182,7 +190,8 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
             curved = True
         if seg_class[s] == NURBS:
             samples = max(samples, nurbs_i[s, 3])
-    work = np.empty(nurbs_work_size(samples))
+    # (No window without a NURBS row allocates: an empty view of ``out`` stands for the scratch there.)
+    work = np.empty(nurbs_work_size(samples)) if samples > 0 else out[:0]
     for i in range(m):
         own = hints[i] if per_point else hints[0]
         if per_point and not (0 <= own < n_segments and is_cutting(seg_class[own])):
@@ -226,7 +235,7 @@ def measure_kernel(points, hints, seg_class, axes, geometry, first_back, nurbs_f
                 if (step > 0 and s == own) or not first <= s < last or not HELIX <= seg_class[s] <= NURBS:
                     continue
                 iu, iv, iw = axes[s, 0], axes[s, 1], axes[s, 2]
-                d2 = _curved_d2(seg_class[s], geometry[s], nurbs_i[s], nurbs_f, iu, iv, iw, px, py, pz,
+                d2 = _curved_d2(seg_class[s], geometry, s, nurbs_i, nurbs_f, iu, iv, iw, px, py, pz,
                                 points[i, iu], points[i, iv], points[i, iw], best, work)  # fmt: skip
                 if d2 < best:
                     best = d2

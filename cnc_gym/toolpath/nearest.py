@@ -29,6 +29,9 @@ if TYPE_CHECKING:
     from cnc_gym.toolpath.segments import Toolpath
 
 _TWO_PI = 2.0 * np.pi
+#: The helix search's Newton iteration ends on a step of at most this much sweep fraction (a few units in
+#: the last place of a fraction near 1; the distance is stationary there, so its error is far smaller).
+_HELIX_STEP_TOLERANCE = 1e-15
 
 
 def nearest_on_segments(
@@ -155,9 +158,10 @@ def _helix_d2(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f) -> float:
     return du * du + dv * dv + dw * dw
 
 
-@njit(cache=True, nogil=True)
-def _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f) -> tuple[float, float]:
-    """Half the first and second f-derivatives of the squared distance at sweep fraction f."""
+@njit(cache=True, nogil=True, inline="always")
+def _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f) -> tuple[float, float, float]:
+    """Half the first and second f-derivatives of the squared distance at sweep fraction f, and the squared
+    distance itself."""
     ang = theta0 + sweep * f
     cos_a, sin_a = math.cos(ang), math.sin(ang)
     eu = cu + radius * cos_a - pu
@@ -166,29 +170,53 @@ def _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f) -> tupl
     du, dv = -radius * sin_a * sweep, radius * cos_a * sweep
     grad = eu * du + ev * dv + ew * rise
     hess = du * du + dv * dv + rise * rise - (eu * cos_a + ev * sin_a) * radius * sweep * sweep
-    return grad, hess
+    return grad, hess, eu * eu + ev * ev + ew * ew
 
 
 @njit(cache=True, nogil=True)
-def _helix_root(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, lo, hi, f) -> float:
-    """The root of the slope in [lo, hi] (slope < 0 at lo, > 0 at hi, convex in between) from f:
-    Newton, bisection where a step leaves the bracket; to full precision."""
-    for _ in range(100):
-        grad, hess = _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f)
+def _helix_root(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, lo, hi,
+                f) -> tuple[bool, float, float, int]:  # fmt: skip
+    """(found, fraction, squared distance there, slope evaluations): the root of the slope in a stretch
+    [lo, hi] where the squared distance is convex (so the slope rises: at most one root, the stretch's
+    minimum), from f in it, to full precision.
+
+    Newton, bracketed by its own iterates; the slope's signs at the stretch's ends are evaluated only where
+    a step leaves the bracket (near the root Newton never does, so a search usually costs two or three
+    evaluations): a negative slope at lo and a positive one at hi hold the root, and bisection takes over;
+    otherwise there is no root (found False: the stretch's minimum is at one of its ends). A Newton step
+    below :data:`_HELIX_STEP_TOLERANCE` ends the search before the bracket is tested, because at the root
+    ``f − step`` rounds to ``f``, an end of the bracket, and bisecting from there would walk the whole
+    bracket down again (tens of steps)."""
+    lo_known = False  # whether the slope is known to be negative at lo (positive at hi): an iterate was there
+    hi_known = False
+    for n in range(1, 101):
+        grad, hess, d2 = _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f)
         if grad == 0.0:
-            return f
+            return True, f, d2, n
         if grad > 0.0:
-            hi = f
+            hi, hi_known = f, True
         else:
-            lo = f
+            lo, lo_known = f, True
         step = grad / hess if hess > 0.0 else math.inf
+        if abs(step) <= _HELIX_STEP_TOLERANCE:
+            return True, f, d2, n
         f_new = f - step
-        if not lo < f_new < hi:
+        if not lo < f_new < hi or hi - lo <= _HELIX_STEP_TOLERANCE:
+            if not lo_known:
+                g_lo, _, _ = _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, lo)
+                if not g_lo < 0.0:
+                    return False, f, d2, n
+                lo_known = True
+            if not hi_known:
+                g_hi, _, _ = _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, hi)
+                if not g_hi > 0.0:
+                    return False, f, d2, n
+                hi_known = True
+            if hi - lo <= _HELIX_STEP_TOLERANCE:
+                return True, f, d2, n
             f_new = 0.5 * (lo + hi)
-        if abs(f_new - f) <= 1e-15 or hi - lo <= 1e-15:
-            return f_new
         f = f_new
-    return f
+    return True, f, d2, 100
 
 
 @njit(cache=True, nogil=True)
@@ -201,23 +229,21 @@ def helix_nearest(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep) -> tuple[
     ``−Rρ·cos ψ + (Δw)²/2``: its second derivative is positive wherever cos ψ > −rise²/(Rρ·sweep²), one
     stretch around every ψ = 2πk (all of it where rise² ≥ Rρ·sweep²). Each such stretch holds at most one
     local minimum, and no minimum lies outside them except at the ends; so the exact global minimum is the
-    best of the roots of the slope in the stretches (safeguarded Newton) and of the two ends.
+    best of the roots of the slope in the stretches (:func:`_helix_root`, from the stretch's planar
+    nearest angle ψ = 2πk) and of the two ends. An end that lies in a stretch with a root is not
+    evaluated: the distance falls from it to that root.
     """
     rho = math.hypot(pu - cu, pv - cv)
     phi_p = math.atan2(pv - cv, pu - cu)
     best_f = 0.0
-    best = _helix_d2(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, 0.0)
-    d2 = _helix_d2(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, 1.0)
-    if d2 < best:
-        best, best_f = d2, 1.0
-    if sweep == 0.0:
-        return best, best_f
+    best = math.inf
+    need_start = need_end = True  # whether an end of the sweep can still be the nearest point
     curve = radius * rho * sweep * sweep
     lift = rise * rise
-    if lift >= curve:  # convex everywhere: one stretch, the whole sweep
-        lo_f, hi_f, n_stretch = 0.0, 1.0, 1
-        half = 0.0
-        k0 = 0
+    if sweep == 0.0:
+        n_stretch, k0, half = 0, 0, 0.0
+    elif lift >= curve:  # convex everywhere: one stretch, the whole sweep
+        n_stretch, k0, half = 1, 0, 0.0
     else:
         half = math.acos(-lift / curve)  # the stretches: |ψ − 2πk| < half, half in (π/2, π]
         psi0 = theta0 - phi_p
@@ -226,23 +252,35 @@ def helix_nearest(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep) -> tuple[
         n_stretch = math.floor((max(psi0, psi1) + half) / _TWO_PI) - k0 + 1
     for k in range(k0, k0 + n_stretch):
         if lift < curve:
-            # ψ(f) = psi0 + sweep·f: the stretch's fractions, clipped to [0, 1].
+            # ψ(f) = psi0 + sweep·f: the stretch's fractions, clipped to [0, 1]; start where the planar
+            # distance is least (ψ = 2πk).
             a = (_TWO_PI * k - half - (theta0 - phi_p)) / sweep
             b = (_TWO_PI * k + half - (theta0 - phi_p)) / sweep
             lo_f, hi_f = max(min(a, b), 0.0), min(max(a, b), 1.0)
             if lo_f >= hi_f:
                 continue
-        g_lo, _ = _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, lo_f)
-        g_hi, _ = _helix_slope(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, hi_f)
-        if not (g_lo < 0.0 < g_hi):
-            continue  # the minimum over this stretch is at one of its ends: a range end or not a minimum
-        # Start where the planar distance is least (ψ = 2πk), clipped into the stretch.
-        start = (_TWO_PI * k - (theta0 - phi_p)) / sweep if lift < curve else 0.5
+            start = (_TWO_PI * k - (theta0 - phi_p)) / sweep
+        else:
+            lo_f, hi_f = 0.0, 1.0
+            start = (pw - w0) / rise if rise != 0.0 else 0.5  # steep: where the height matches
         start = min(max(start, lo_f), hi_f)
-        f = _helix_root(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, lo_f, hi_f, start)
-        d2 = _helix_d2(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, f)
+        found, f, d2, _ = _helix_root(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, lo_f, hi_f, start)
+        if not found:
+            continue  # the minimum over this stretch is at one of its ends: a range end or not a minimum
         if d2 < best:
             best, best_f = d2, f
+        if lo_f == 0.0:
+            need_start = False
+        if hi_f == 1.0:
+            need_end = False
+    if need_start:
+        d2 = _helix_d2(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, 0.0)
+        if d2 <= best:
+            best, best_f = d2, 0.0
+    if need_end:
+        d2 = _helix_d2(pu, pv, pw, cu, cv, w0, rise, radius, theta0, sweep, 1.0)
+        if d2 < best:
+            best, best_f = d2, 1.0
     return best, best_f
 
 
@@ -354,40 +392,44 @@ def _dot3(a, i, x0, x1, x2) -> float:
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h) -> None:
-    """Homogeneous coordinates (x, y, z, w) and their first two t-derivatives at t into h (12,)."""
+def _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t):
+    """Homogeneous coordinates (x, y, z, w) and their first two t-derivatives at t (12 values), by Horner's
+    rule in registers."""
     span = np.searchsorted(breaks, t, side="right")
     u = (t - mid[span]) * inv_half[span]
-    base = span * k * 12
-    for c in range(12):
-        h[c] = 0.0
-    power = 1.0
-    for r in range(k):
-        row = base + r * 12
-        for c in range(12):
-            h[c] += power * poly[row + c]
-        power *= u
+    row = (span * k + k - 1) * 12
+    h0, h1, h2, h3 = poly[row], poly[row + 1], poly[row + 2], poly[row + 3]
+    h4, h5, h6, h7 = poly[row + 4], poly[row + 5], poly[row + 6], poly[row + 7]
+    h8, h9, h10, h11 = poly[row + 8], poly[row + 9], poly[row + 10], poly[row + 11]
+    for r in range(k - 2, -1, -1):
+        row = (span * k + r) * 12
+        h0, h1, h2, h3 = (h0 * u + poly[row], h1 * u + poly[row + 1], h2 * u + poly[row + 2],
+                          h3 * u + poly[row + 3])  # fmt: skip
+        h4, h5, h6, h7 = (h4 * u + poly[row + 4], h5 * u + poly[row + 5], h6 * u + poly[row + 6],
+                          h7 * u + poly[row + 7])  # fmt: skip
+        h8, h9, h10, h11 = (h8 * u + poly[row + 8], h9 * u + poly[row + 9], h10 * u + poly[row + 10],
+                            h11 * u + poly[row + 11])  # fmt: skip
+    return h0, h1, h2, h3, h4, h5, h6, h7, h8, h9, h10, h11
 
 
 @njit(cache=True, nogil=True)
-def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h) -> float:
+def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance) -> float:
     """Squared distance at the root of the slope in [lo, hi] (one sample where lo = hi), from t:
     safeguarded Newton on g = (E·E') W − (E·E) W' (E = A − W p in homogeneous form; g has the slope's sign
     and root) until a step is below the step tolerance; then the quadratic model's drop finishes it."""
     t_at, ee, w, g, g_prime, accepted = t, 0.0, 1.0, 0.0, 0.0, False
     for _ in range(_NURBS_NEWTON_STEPS):
         t_at = t
-        _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t, h)
-        e0, e1, e2 = h[0] - h[3] * p0, h[1] - h[3] * p1, h[2] - h[3] * p2
-        f0, f1, f2 = h[4] - h[7] * p0, h[5] - h[7] * p1, h[6] - h[7] * p2
-        s0, s1, s2 = h[8] - h[11] * p0, h[9] - h[11] * p1, h[10] - h[11] * p2
+        x, y, z, w, x1, y1, z1, w1, x2, y2, z2, w2 = _nurbs_homogeneous(poly, breaks, mid, inv_half, k, t)
+        e0, e1, e2 = x - w * p0, y - w * p1, z - w * p2
+        f0, f1, f2 = x1 - w1 * p0, y1 - w1 * p1, z1 - w1 * p2
+        s0, s1, s2 = x2 - w2 * p0, y2 - w2 * p1, z2 - w2 * p2
         ee = e0 * e0 + e1 * e1 + e2 * e2
         ee1 = e0 * f0 + e1 * f1 + e2 * f2
         e1e1 = f0 * f0 + f1 * f1 + f2 * f2
         ee2 = e0 * s0 + e1 * s1 + e2 * s2
-        w = h[3]
-        g = ee1 * w - ee * h[7]
-        g_prime = (e1e1 + ee2) * w - ee1 * h[7] - ee * h[11]
+        g = ee1 * w - ee * w1
+        g_prime = (e1e1 + ee2) * w - ee1 * w1 - ee * w2
         if lo == hi:
             return max(ee / (w * w), 0.0)  # a one-sample bracket: this point
         if g > 0.0:
@@ -410,7 +452,7 @@ def _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_to
 def nurbs_work_size(samples: int) -> int:
     """Size of the float scratch array of :func:`nurbs_search` on curves of at most ``samples`` samples
     (one array serves every call of a loop: the search itself allocates nothing)."""
-    return samples + 12
+    return samples
 
 
 @njit(cache=True, nogil=True)
@@ -463,7 +505,6 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     x_g, y_g = group_centre[:n_groups], group_centre[n_groups : 2 * n_groups]
     z_g = group_centre[2 * n_groups :]
     d2_sample = work[:n]
-    h = work[n : n + 12]
     if bound2 < math.inf:
         # Under a bound (the caller's best so far, often from a neighbouring segment): nothing to search
         # unless some interval's sphere comes within it (tested group by group).
@@ -492,7 +533,7 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
     upper = math.sqrt(max(min(d2_sample[best_sample], bound2), 0.0)) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN
     # The nearest sample, refined in place (a one-sample bracket).
     t = sample_t[best_sample]
-    best = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, t, t, t, step_tolerance, h)
+    best = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, t, t, t, step_tolerance)
     # Brackets of a minimum inside an interval (the slope negative right of its first sample, positive left
     # of its second) whose sphere comes within the bound. (A minimum at a sample, an end or a kink at a
     # knot, other than the nearest sample is farther than it.)
@@ -513,7 +554,7 @@ def nurbs_search(tab_f, header, p0, p1, p2, bound2, work) -> float:
                 continue
             lo, hi = sample_t[i], sample_t[i + 1]
             t = lo + (hi - lo) * (-g_lo / (g_hi - g_lo))
-            d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance, h)
+            d2 = _nurbs_refine(poly, breaks, mid, inv_half, k, p0, p1, p2, lo, hi, t, step_tolerance)
             if d2 < best:
                 best = d2
                 upper = min(upper, math.sqrt(d2) * (1.0 + _SPHERE_MARGIN) + _SPHERE_MARGIN)

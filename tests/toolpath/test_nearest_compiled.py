@@ -11,6 +11,7 @@ from cnc_gym.toolpath.nearest import (
     _GROUP_MARGIN,
     NURBS_GROUP,
     _group_spheres,
+    _helix_root,
     _interval_spheres,
     helix_nearest,
     nurbs_distance2,
@@ -34,19 +35,24 @@ def helix_brute_d2(p, cu, cv, w0, rise, radius, theta0, sweep) -> float:
     return float(min(values.min(), d2(fine).min()))
 
 
-@pytest.mark.parametrize("case", ["near", "axis", "far", "steep", "flat"])
+HELIX_CASES = ["near", "axis", "far", "steep", "flat", "beyond"]
+
+
+@pytest.mark.parametrize("case", HELIX_CASES)
 def test_helix_nearest_is_the_global_minimum(case):
-    # Random helices and points of five kinds: near the helix (contour error), on and near the axis (many
-    # equal minima), far away, steep helices (rise ≫ radius·sweep: the distance is convex), and flat arcs.
-    # The compiled search must never be worse than brute force, nor better than its resolution.
-    rng = np.random.default_rng(["near", "axis", "far", "steep", "flat"].index(case))
+    # Random helices and points of six kinds: near the helix (contour error), on and near the axis (many
+    # equal minima), far away, steep helices (rise ≫ radius·sweep: the distance is convex), flat arcs, and
+    # near the helix's continuation past either end (the ends are the nearest points, or compete with a
+    # root). The compiled search must never be worse than brute force, nor better than its resolution.
+    rng = np.random.default_rng(HELIX_CASES.index(case))
     for _ in range(150):
         cu, cv, w0 = rng.normal(size=3) * 5
         radius = float(rng.uniform(0.2, 10.0))
         theta0 = float(rng.uniform(-4.0, 4.0))
         sweep = float(rng.uniform(-20.0, 20.0))
         rise = {"steep": 200.0, "flat": 0.0}.get(case, float(rng.normal() * 5))
-        f = rng.uniform(0.0, 1.0)
+        f = rng.uniform(0.0, 1.0) if case != "beyond" else rng.choice([-1.0, 1.0]) * rng.uniform(0.0, 0.3) + (
+            rng.random() < 0.5)  # fmt: skip
         on = np.array([cu + radius * math.cos(theta0 + sweep * f), cv + radius * math.sin(theta0 + sweep * f),
                        w0 + rise * f])  # fmt: skip
         p = {
@@ -59,6 +65,46 @@ def test_helix_nearest_is_the_global_minimum(case):
         assert math.sqrt(d2) <= math.sqrt(brute) + 1e-12
         assert math.sqrt(d2) >= math.sqrt(brute) - 1e-6
         assert 0.0 <= frac <= 1.0
+
+
+def test_helix_root_converges_in_a_few_newton_steps():
+    # Near the helix (a contour error of up to 0.1 mm) Newton from the planar nearest angle converges in
+    # two or three slope evaluations. A converged step rounds to nothing, so the search must stop on the
+    # step's size before it tests the bracket: testing the bracket first bisected it down from the far end
+    # again (20 to 50 evaluations on a third of such points).
+    rng = np.random.default_rng(7)
+    cu, cv, w0, radius, pitch = 1.5, -2.0, 0.3, 8.0, 0.5
+    counts = []
+    for _ in range(2000):
+        theta0 = float(rng.uniform(-4.0, 4.0))
+        sweep = float(rng.choice([-1.0, 1.0]) * math.pi)
+        rise = -pitch * abs(sweep) / (2 * math.pi)
+        f_on = float(rng.uniform(0.2, 0.8))
+        ang = theta0 + sweep * f_on
+        p = np.array([cu + radius * math.cos(ang), cv + radius * math.sin(ang), w0 + rise * f_on])
+        p += rng.normal(size=3) * rng.choice([1e-6, 1e-3, 0.1])
+        # A stretch around the point's own angle where the distance is convex; Newton starts at the planar
+        # nearest angle.
+        lo, hi = f_on - 0.2, f_on + 0.2
+        start = (math.atan2(p[1] - cv, p[0] - cu) - theta0) / sweep
+        start = start + round(f_on - start)  # the planar angle's fraction next to f_on (sweep = ±π)
+        start = min(max(start, lo), hi)
+        found, _, d2, evaluations = _helix_root(*p, cu, cv, w0, rise, radius, theta0, sweep, lo, hi, start)
+        assert found
+        assert math.sqrt(d2) == pytest.approx(math.sqrt(helix_brute_d2(p, cu, cv, w0, rise, radius, theta0,
+                                                                        sweep)), abs=1e-9)  # fmt: skip
+        counts.append(evaluations)
+    assert max(counts) <= 5
+    assert np.mean(counts) <= 3.0
+
+
+def test_helix_root_reports_a_stretch_without_a_root():
+    # The slope is positive across the whole bracket (the point lies before the stretch): no root, and the
+    # caller compares the stretch's ends instead.
+    cu, cv, w0, radius, theta0, sweep, rise = 0.0, 0.0, 0.0, 5.0, 0.0, math.pi, 2.0
+    p = (radius * math.cos(-0.3), radius * math.sin(-0.3), -0.5)
+    found, _, _, _ = _helix_root(*p, cu, cv, w0, rise, radius, theta0, sweep, 0.0, 0.4, 0.2)
+    assert not found
 
 
 def random_curve(rng: np.random.Generator, n_ctrl: int, order: int) -> NurbsCurve:
