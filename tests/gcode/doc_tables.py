@@ -95,3 +95,14 @@ def raised_codes_missing(codes_cell: str) -> list[str]:
     files = sorted((ROOT / "cnc_gym" / "gcode").rglob("*.py"))
     source = "\n".join(p.read_text(encoding="utf-8") for p in files)
     return [code for code in ERROR_CODE.findall(codes_cell) if f'"{code}"' not in source]
+
+
+def alarm_numbers(cell: str) -> set[int]:
+    """An "Our alarm" cell's numbers: "—" → none; "25" → {25}; "500, 501" → {500, 501}; "50-99" → 50..99."""
+    if cell == NONE:
+        return set()
+    out: set[int] = set()
+    for part in cell.split(","):
+        low, _, high = part.strip().partition("-")
+        out.update(range(int(low), int(high or low) + 1))
+    return out

@@ -1,9 +1,8 @@
 """Every dialect's worked-examples index (docs/<dialect>_examples.md) stays complete and true, by one set of
 checks for all: one row per example of the manual's catalogue, in order; well-formed rows that name test
 nodes which exist; every golden test indexed; the counts under the table adding up. Test nodes are found by
-parsing the test files (no pytest subprocess). The alarm indexes differ per manual and keep their own tests
-(``tests/gcode/<dialect>/test_<dialect>_indexes.py``); GSK 25i's index has its own in
-``test_examples_index.py``.
+parsing the test files (no pytest subprocess). The alarm indexes are checked in
+``test_dialect_alarm_indexes.py``; GSK 25i's index has its own tests in ``test_examples_index.py``.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Every error condition of the AMK AZ-MC1 programming manual (docs/azmc1_alarms.md, A1-A22) as a minimal
 program that raises it with our code at the line of the offending block. The manual numbers no alarm, so
-no error carries an alarm number. ``CASES`` is read by tests/gcode/azmc1/test_azmc1_indexes.py to check
+no error carries an alarm number. ``CASES`` is read by tests/gcode/test_dialect_alarm_indexes.py to check
 the index's "Our code" column.
 """
 

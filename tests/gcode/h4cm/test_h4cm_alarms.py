@@ -1,7 +1,7 @@
 """A minimal program per error condition of the HUST H4C-M manual (docs/h4cm_alarms.md lists them, A1-A33):
 each ends in the error code and H4C-M error number (None where the manual numbers none) at the line of the
-offending block. ``CASES`` is read by tests/gcode/h4cm/test_h4cm_indexes.py to check the index's "Our code"
-and "Our alarm" columns.
+offending block. ``CASES`` is read by tests/gcode/test_dialect_alarm_indexes.py to check the index's
+"Our code" and "Our alarm" columns.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """A minimal program per error condition of the Syntec 8.20 mill programming manual (docs/syntec_alarms.md
 lists them, A1-A28): each ends in the error code and Syntec alarm number (only the MAR alarms of G37/G37.1
-have one) at the line of the offending block. ``CASES`` is read by tests/gcode/syntec/test_syntec_indexes.py
+have one) at the line of the offending block. ``CASES`` is read by tests/gcode/test_dialect_alarm_indexes.py
 to check the index's "Our code" and "Our alarm" columns.
 """
 
