@@ -7,7 +7,9 @@
 
 A README command is a line starting with ``$ `` in a fenced code block; the lines after it, up to the next
 command or the end of the block, are its shown output (stdout then stderr). A line ``...`` stands for any
-number of lines, so a long output can be shown in part. ``# exit status N`` at the end of a command is
+number of lines, so a long output can be shown in part. Floats printed at full precision (10 or more
+significant digits) are compared to a relative 1e-9: their last bits differ across CPUs, since numba
+compiles for the host. ``# exit status N`` at the end of a command is
 the status it must end with (0 otherwise). Commands run from the repository root with bash; the Python
 blocks run in a fresh interpreter. ``make test`` is not run (it is what runs this check).
 ``tests/test_readme.py`` runs the quick check on every ``make test`` and the slow one under
@@ -123,11 +125,52 @@ def run(command: Command, timeout: float | None = None) -> tuple[int, list[str]]
 
 
 def matches(shown: list[str], actual: list[str]) -> bool:
-    """Whether ``actual`` fits ``shown``: literal lines in order, ``...`` for any number of lines."""
-    pattern = "".join(r"(?:.*\n)*?" if line.strip() == ELLIPSIS else re.escape(_clean(line)) + r"\n"
-                      for line in shown)  # fmt: skip
-    text = "".join(_clean(line) + "\n" for line in actual)
-    return re.fullmatch(pattern, text) is not None
+    """Whether ``actual`` fits ``shown``: literal lines in order, ``...`` for any number of lines.
+
+    Lines are compared by :func:`line_matches`: text exactly, long floats to a relative 1e-9."""
+    shown = [_clean(line) for line in shown]
+    actual = [_clean(line) for line in actual]
+    # fits[i][j]: shown[i:] fits actual[j:] (a small dynamic programme; "..." takes any run of lines).
+    fits = [[False] * (len(actual) + 1) for _ in range(len(shown) + 1)]
+    fits[len(shown)][len(actual)] = True
+    for i in range(len(shown) - 1, -1, -1):
+        for j in range(len(actual), -1, -1):
+            if shown[i].strip() == ELLIPSIS:
+                fits[i][j] = fits[i + 1][j] or (j < len(actual) and fits[i][j + 1])
+            else:
+                fits[i][j] = j < len(actual) and fits[i + 1][j + 1] and line_matches(shown[i], actual[j])
+    return fits[0][0]
+
+
+#: A float printed with this many significant digits or more is a simulation result at full precision;
+#: its last bits differ across CPUs (numba compiles for the host), so it is compared to a relative 1e-9.
+_LONG_FLOAT_DIGITS = 10
+_LONG_FLOAT_RTOL = 1e-9
+_NUMBER = re.compile(r"-?\d+\.\d+(?:[eE][-+]?\d+)?")
+
+
+def line_matches(shown: str, actual: str) -> bool:
+    """One shown line against one printed line: the same text, except that two long floats (at least
+    :data:`_LONG_FLOAT_DIGITS` significant digits) in the same place may differ by a relative 1e-9."""
+    if shown == actual:
+        return True
+    shown_parts, actual_parts = _NUMBER.split(shown), _NUMBER.split(actual)
+    if shown_parts != actual_parts:
+        return False
+    for a, b in zip(_NUMBER.findall(shown), _NUMBER.findall(actual), strict=True):
+        if a == b:
+            continue
+        if min(_significant_digits(a), _significant_digits(b)) < _LONG_FLOAT_DIGITS:
+            return False
+        x, y = float(a), float(b)
+        if abs(x - y) > _LONG_FLOAT_RTOL * max(abs(x), abs(y)):
+            return False
+    return True
+
+
+def _significant_digits(number: str) -> int:
+    mantissa = re.split(r"[eE]", number)[0].lstrip("-").replace(".", "")
+    return len(mantissa.lstrip("0"))
 
 
 def _clean(line: str) -> str:

@@ -61,6 +61,17 @@ def test_shown_output_matching():
     assert not tour.matches(["...", "x", "..."], actual)
 
 
+def test_long_floats_match_to_a_relative_1e9_and_everything_else_exactly():
+    shown = '{"contour_error_max_mm": 0.02317565598902111, "cycle_time_s": 8.28, "violations": 3}'
+    other_cpu = '{"contour_error_max_mm": 0.02317565598902335, "cycle_time_s": 8.28, "violations": 3}'
+    assert tour.matches([shown], [other_cpu])
+    assert not tour.matches([shown], [other_cpu.replace("0.023175655989", "0.023175755989")])  # 4e-6 relative
+    assert not tour.matches([shown], [other_cpu.replace("8.28", "8.29")])  # short numbers: exactly
+    assert not tour.matches([shown], [other_cpu.replace("violations", "violation")])
+    assert not tour.matches(["x 1.2345678901234"], ["x 1.2345678901234 y"])
+    assert tour.matches(["...", "star 0.1234567890123", "..."], ["a", "star 0.1234567890124", "b"])
+
+
 def test_commands_and_their_output_are_parsed_with_exit_statuses():
     text = ("x\n```\n$ echo hi\nhi\n$ false  # exit status 1\n```\n"
             "```python\nprint(1)\n```\n```\nmake demo\n```\n")
