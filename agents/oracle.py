@@ -54,15 +54,15 @@ from typing import Any
 import numpy as np
 
 from agents.base import override_action
-from agents.classical import (
-    _SPEED_CEILING_MM_S,
+from agents.classical import knob_setup
+from cnc_gym.machine import MachineConfig
+from cnc_gym.motion.planner import (
+    SPEED_CEILING_MM_S,
     Schedule,
     ServoErrorModel,
     bidirectional_scan,
-    knob_setup,
     override_at,
 )
-from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 
@@ -263,12 +263,12 @@ class OraclePlanner:
 
     def _model_cap(self, toolpath: Toolpath, seg: np.ndarray, s: np.ndarray, model: ServoErrorModel,
                    target: float) -> np.ndarray:  # fmt: skip
-        cap = np.full(len(seg), _SPEED_CEILING_MM_S)
+        cap = np.full(len(seg), SPEED_CEILING_MM_S)
         is_arc = toolpath.kind[seg] == SegmentKind.ARC
         if np.any(~is_arc):
             _, tangent, curvature = toolpath.evaluate(s[~is_arc])
             per_speed = model.line_error_per_speed(tangent)
-            line_cap = np.where(per_speed > 1e-12, target / np.maximum(per_speed, 1e-12), _SPEED_CEILING_MM_S)
+            line_cap = np.where(per_speed > 1e-12, target / np.maximum(per_speed, 1e-12), SPEED_CEILING_MM_S)
             # Curved non-arc segments (NURBS): the arc model at the local radius 1/κ, taken in the XY
             # plane, on radii rounded to 2 % steps so the bisection runs once per step.
             curved = curvature > 1e-9
@@ -283,7 +283,7 @@ class OraclePlanner:
         return cap
 
     def _schedule(self, s, cap, cutting, feed_mm_s, accel, jerk) -> Schedule:
-        finite_cap = np.where(np.isfinite(cap), cap, _SPEED_CEILING_MM_S)
+        finite_cap = np.where(np.isfinite(cap), cap, SPEED_CEILING_MM_S)
         speed = bidirectional_scan(s, finite_cap, accel, jerk)
         override = np.full(len(s), self._max_override)
         fed = cutting & (feed_mm_s > 0)

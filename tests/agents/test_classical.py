@@ -1,8 +1,7 @@
-"""The deployable classical planner: built from the machine and its own servo model, never from the env."""
+"""The classical baseline policy: the deployable planner, built from the machine and its own servo model,
+never from the env."""
 
 from __future__ import annotations
-
-import math
 
 import gymnasium
 import numpy as np
@@ -10,9 +9,6 @@ import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
 from agents import ClassicalPlanner, ConstantOverride
-from agents.classical import ServoErrorModel, arc_caps, corner_error_per_speed, plan_schedule, servo_tables
-from cnc_gym.machine import load_machine
-from cnc_gym.programs import load_program
 from cnc_gym.runner import run_episode
 
 
@@ -42,36 +38,6 @@ def test_planning_never_runs_the_env():
     env.close()
 
 
-def test_ramp_error_response_of_a_p_loop_is_the_closed_form():
-    # P loop, no feed-forward, ideal velocity loop: after a unit velocity step the following error is
-    # (1 − e^(−Kv·t))/Kv, which settles at the steady lag 1/Kv.
-    tables = servo_tables(load_machine("p-loop-30"))
-    expected = (1.0 - np.exp(-30.0 * tables.ramp_t)) / 30.0
-    np.testing.assert_allclose(tables.ramp_error[0], expected, atol=1e-9)
-    assert tables.lag_s[0] == pytest.approx(1 / 30)
-
-
-def test_arc_table_matches_the_bisection_of_the_model():
-    machine = load_machine("vmc-small")
-    tables, model = servo_tables(machine), ServoErrorModel(machine)
-    for radius in (0.5, 5.0, 40.0):
-        cap = arc_caps(tables, np.array([radius]), np.array([0]), 0.014)[0]
-        assert cap == pytest.approx(model.arc_speed_cap(radius, 0, 0.014), rel=0.02)
-
-
-def test_corner_error_of_a_p_loop():
-    tables = servo_tables(load_machine("p-loop-30"))  # matched axes: no sideways lag on lines
-    turns = np.radians([0.0, 30.0, 60.0, 90.0, 120.0, 180.0])
-    out = np.column_stack((np.cos(turns), np.sin(turns), np.zeros(len(turns))))
-    c = corner_error_per_speed(tables, np.repeat([[1.0, 0.0, 0.0]], len(turns), axis=0), out)
-    # Straight on, or straight back along the same line: the tool stays on the path.
-    assert c[0] == pytest.approx(0.0, abs=1e-12) and c[-1] == pytest.approx(0.0, abs=1e-12)
-    # Deepest at a right angle, symmetric about it, and less than the lag distance v/Kv.
-    assert np.all(np.diff(c[:4]) > 0)
-    assert c[2] == pytest.approx(c[4], rel=1e-9)
-    assert c[3] < 1 / 30
-
-
 @pytest.mark.parametrize("program", ["circle", "star", "freeform", "pocket"])
 def test_classical_is_fast_and_nearly_within_tolerance_on_the_built_ins(program):
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program])
@@ -81,12 +47,3 @@ def test_classical_is_fast_and_nearly_within_tolerance_on_the_built_ins(program)
     assert result.contour_error_max_mm < 1.5 * result.tolerance_mm
     assert result.cycle_time_s < 0.75 * careful.cycle_time_s
     env.close()
-
-
-def test_schedule_of_a_line_runs_at_the_knobs_top_away_from_its_ends():
-    machine = load_machine("vmc-small")
-    _, toolpath = load_program("G90 G21\nG01 X100 F3000\nM30\n", "gsk25i", machine)
-    schedule = plan_schedule(toolpath, machine)
-    middle = (schedule.s > 20) & (schedule.s < 80)
-    assert np.all(schedule.override[middle] == pytest.approx(2.0))
-    assert math.isclose(schedule.s[-1], 100.0)
