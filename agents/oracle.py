@@ -63,6 +63,7 @@ from cnc_gym.motion.planner import (
     bidirectional_scan,
     override_at,
 )
+from cnc_gym.rollout import play
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 
@@ -306,21 +307,23 @@ class OraclePlanner:
             warnings.warn(f"oracle planner: cannot copy the env to refine the schedule ({exc}); "
                           "using the servo model alone", RuntimeWarning, stacklevel=3)  # fmt: skip
             return None, None, None
-        info: dict[str, Any] = {}
-        observation = None
-        positions, errors, speeds = [], [], []
+        positions: list[float] = []
+        errors: list[float] = []
+        speeds: list[float] = []
         bar = self._bar
         done = bar.n if bar is not None else 0
-        for step in range(10_000_000):
-            _, _, terminated, truncated, info = sim.step(self.act(observation, info))
+
+        def record(steps: int, reward: float, terminated: bool, truncated: bool,
+                   info: dict[str, Any]) -> None:  # fmt: skip
             positions.append(float(info.get("path_s", 0.0)))
             errors.append(float(info.get("contour_error_mm", 0.0)))
             speeds.append(float(info.get("feed_mm_min", 0.0)) / 60.0)
-            if terminated or truncated:
-                break
-            if bar is not None and step % 500 == 0:  # a simulated round moves the bar by up to one unit
-                bar.n = min(done + float(info.get("progress", 0.0)), bar.total)
+            if bar is not None and (steps - 1) % 500 == 0 and not (terminated or truncated):
+                bar.n = min(done + float(info.get("progress", 0.0)), bar.total)  # a round moves it ≤ 1 unit
                 bar.refresh()
+
+        # The copy was just reset: the schedule's episode from its first step (no observation yet).
+        play(sim, self, None, {}, record)
         if bar is not None:
             bar.n = min(int(done) + 1, bar.total)
             bar.refresh()

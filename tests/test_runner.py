@@ -18,7 +18,7 @@ from agents import make_policy
 from cnc_gym.cli import main
 from cnc_gym.errors import CncGymError
 from cnc_gym.programs import ProgramText
-from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, feed_limits, plot_run, run_episode, run_figure, simulate
+from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, feed_limits, plot_run, record_run, run_figure, simulate
 
 CONTRACT_KEYS = ("cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm", "violations",
                  "steps")  # fmt: skip
@@ -110,7 +110,7 @@ def test_cli_run_errors_are_one_line(capsys, argv):
 def test_long_runs_keep_a_bounded_series_with_exact_summary_numbers(star_run):
     # simulate() measures with the programmed-path meter (contour_rule "path"), whatever the env id.
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"], contour_rule="path")
-    binned = run_episode(env, make_policy("constant:1.0"), max_bins=32)
+    binned = record_run(env, make_policy("constant:1.0"), max_bins=32)
     env.close()
     assert binned.steps == star_run.steps == 540
     assert len(binned.time_s) <= 33 and binned.bin_steps == 32  # 540 steps in bins of 32
@@ -127,7 +127,7 @@ def test_long_runs_keep_a_bounded_series_with_exact_summary_numbers(star_run):
 
 def test_record_false_keeps_no_series():
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["circle"])
-    result = run_episode(env, make_policy("constant:1.0"), record=False)
+    result = record_run(env, make_policy("constant:1.0"), record=False)
     env.close()
     assert result.finished and len(result.time_s) == 0 and len(result.path_xyz) == 0
 

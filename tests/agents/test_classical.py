@@ -9,7 +9,7 @@ import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
 from agents import ClassicalPlanner, ConstantOverride
-from cnc_gym.runner import run_episode
+from cnc_gym.runner import record_run
 
 
 class _NoDynamics:
@@ -41,8 +41,8 @@ def test_planning_never_runs_the_env():
 @pytest.mark.parametrize("program", ["circle", "star", "freeform", "pocket"])
 def test_classical_is_fast_and_nearly_within_tolerance_on_the_built_ins(program):
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program])
-    result = run_episode(env, ClassicalPlanner(), record=False)
-    careful = run_episode(env, ConstantOverride(0.2), record=False)
+    result = record_run(env, ClassicalPlanner(), record=False)
+    careful = record_run(env, ConstantOverride(0.2), record=False)
     assert result.finished
     assert result.contour_error_max_mm < 1.5 * result.tolerance_mm
     assert result.cycle_time_s < 0.75 * careful.cycle_time_s

@@ -148,18 +148,18 @@ def test_no_policy_beats_the_bound(pieces):
     import gymnasium
 
     import cnc_gym  # noqa: F401
-    from cnc_gym.benchmark.runner import run_one_episode
     from cnc_gym.machine import load_machine
     from cnc_gym.motion.bound import time_optimal_bound
+    from cnc_gym.rollout import run_episode
 
     programs, _ = _tiny(2)
     machine = load_machine("vmc-small")
     for program in programs:
         env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text])
         bound = time_optimal_bound(env.unwrapped.toolpath, machine).total_s
-        info, _, _, finished = run_one_episode(env, _Knob(pieces), 0)
-        if finished:
-            assert info["cycle_time_s"] >= bound
+        episode = run_episode(env, _Knob(pieces), 0)
+        if episode.finished:
+            assert episode.info["cycle_time_s"] >= bound
         env.close()
 
 
