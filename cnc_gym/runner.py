@@ -281,7 +281,7 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
     and a projection of the wall-clock time once it has run a while. ``units``: the input unit at
     power-on (``"mm"``/``"inch"``; default the machine preset's ``power_on_units``, else the dialect's)."""
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     _check_max_time(max_time_s)
     pol = make_policy(policy, progress=progress) if isinstance(policy, str) else policy

@@ -41,11 +41,11 @@ def main(argv: list[str] | None = None) -> int:
     import gymnasium
 
     import cnc_gym  # noqa: F401
-    from agents.oracle import OraclePlanner
     from cnc_gym.benchmark.suites import load_suite
     from cnc_gym.machine import load_machine
     from cnc_gym.motion.limits import build_limits
     from cnc_gym.motion.planner import plan_schedule
+    from cnc_gym.policies.oracle import OraclePlanner
     from cnc_gym.programs import load_program
 
     machine = load_machine("vmc-small")

@@ -105,6 +105,6 @@ def test_a_step_budget_ends_the_episode_truncated():
 
 @pytest.mark.parametrize("spec", ["constant:1.0", "classical"])
 def test_the_baselines_are_policies(spec):
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     assert isinstance(make_policy(spec), Policy)

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import cnc_gym.runner as runner
-from agents import make_policy
 from cnc_gym.cli import main
 from cnc_gym.errors import CncGymError
+from cnc_gym.policies import make_policy
 from cnc_gym.programs import ProgramText
 from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, feed_limits, plot_run, record_run, run_figure, simulate
 
@@ -306,16 +306,16 @@ def test_drilled_holes_show_as_dots_seen_from_above():
 
 def test_simulate_passes_its_progress_choice_to_the_policy(monkeypatch):
     """``--no-progress`` (progress=False) must also silence a planner's own planning bar."""
-    import agents
+    from cnc_gym import policies
 
     seen = []
-    real = agents.make_policy
+    real = policies.make_policy
 
     def spy(spec, *, progress=None):
         seen.append(progress)
         return real(spec, progress=progress)
 
-    monkeypatch.setattr(agents, "make_policy", spy)
+    monkeypatch.setattr(policies, "make_policy", spy)
     simulate("G91 G01 X5 F600\nM30\n", policy="constant:1.0", progress=False)
     assert seen == [False]
 

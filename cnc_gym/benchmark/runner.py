@@ -157,7 +157,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
     # env_kwargs: a trained model's), else in Feedrate-v0; with randomisation off, every version has the
     # same dynamics, and every episode is measured with the benchmark's contour rule (the rollout's
     # policy_env).
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     policy = env = None
     try:
@@ -192,7 +192,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
 
 
 # --------------------------------------------------------------------------------------- executors
-def _run_tasks(tasks: list[Callable[[], Any]], config: BenchConfig, bar: Any, label: str) -> list[Any]:
+def _run_tasks(tasks: Sequence[Callable[[], Any]], config: BenchConfig, bar: Any, label: str) -> list[Any]:
     """Run zero-argument tasks (``functools.partial`` of module-level functions) serially, on a process
     pool or on Ray; results in task order."""
     if bar is not None:
@@ -222,7 +222,7 @@ def _run_tasks(tasks: list[Callable[[], Any]], config: BenchConfig, bar: Any, la
     return out
 
 
-def _run_ray(tasks: list[Callable[[], Any]], config: BenchConfig, bar: Any) -> list[Any]:
+def _run_ray(tasks: Sequence[Callable[[], Any]], config: BenchConfig, bar: Any) -> list[Any]:
     try:
         import ray
     except ImportError:
@@ -257,7 +257,7 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
         raise CncGymError("nothing to benchmark: no programs")
     if not config.policies:
         raise CncGymError("nothing to benchmark: no policies")
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     for spec in config.policies:  # a bad spec is one clear error before any work
         if spec != "bound":

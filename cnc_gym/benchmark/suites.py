@@ -277,8 +277,8 @@ def tier_of(properties: dict[str, float]) -> str:
 def is_feasible(text: str, machine, dialect: str) -> bool:
     """True when some override of :data:`FEASIBILITY_OVERRIDES` finishes the program with no contour
     error above tolerance (zero violation length), with no step budget to speak of."""
-    from agents import ConstantOverride
     from cnc_gym.envs.feedrate import FeedrateEnv
+    from cnc_gym.policies import ConstantOverride
     from cnc_gym.rollout import run_episode
 
     env = FeedrateEnv(programs=[text], dialect=dialect, machine=machine, max_episode_steps=10_000_000)

@@ -95,11 +95,11 @@ def test_cli_user_programs_plots_and_leaderboard(tmp_path, capsys):
 
 
 def test_module_callable_policies(tmp_path, monkeypatch):
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     (tmp_path / "my_policies.py").write_text(
         "import numpy as np\n"
-        "from agents import ConstantOverride\n"
+        "from cnc_gym.policies import ConstantOverride\n"
         "def factory():\n    return ConstantOverride(0.8)\n"
         "def act(observation, info):\n    return np.array([-0.2], dtype=np.float32)\n"
         "instance = ConstantOverride(0.3)\n"

@@ -4,17 +4,18 @@ It starts from the servo model's schedule, then *runs copies of the env* (the ex
 and corrects the schedule where the simulated contour error exceeds its target. No real controller or CAM
 system can do that (it would need the machine's exact future), so its results are an **oracle**: an
 upper reference for what a feed schedule can reach on this simulator, not a deployable baseline. The
-deployable planner is :class:`agents.classical.ClassicalPlanner`.
+deployable planner is :class:`cnc_gym.policies.classical.ClassicalPlanner`.
 
 Planning runs whole episodes, several times: on a terminal (stderr a TTY) it shows a progress bar while it
 plans, before the episode's own bar, and prints nothing otherwise.
 
 How the schedule is built (once per program, machine and control period, cached):
 
-1. **Servo error model** (:class:`ServoErrorModel`). Each axis is the plant's loop (``cnc_gym.plant``):
-   ``u = Kv·(r − x) + f·ṙ`` into a velocity loop ``H(s)`` (ideal, or 2nd order ωn, ζ), so
-   ``X/R = G(s) = H·(Kv + f·s)/(s + H·Kv)``; the post-interpolation moving average multiplies every axis
-   by the same ``M(jω)``. Two steady states give closed forms:
+1. **Servo error model** (the deployable planner's, :class:`~cnc_gym.motion.planner.ServoErrorModel`).
+   Each axis is the plant's loop (``cnc_gym.plant``): ``u = Kv·(r − x) + f·ṙ`` into a velocity loop
+   ``H(s)`` (ideal, or 2nd order ωn, ζ), so ``X/R = G(s) = H·(Kv + f·s)/(s + H·Kv)``; the
+   post-interpolation moving average multiplies every axis by the same ``M(jω)``. Two steady states give
+   closed forms:
 
    * *straight line at speed v* — each axis lags by ``(1 − f_k)·v_k/Kv_k`` (ramp error of the loop, ``H(0)
      = 1``). Equal lags only move the tool along the line; unequal ones (gain mismatch, unequal
@@ -53,8 +54,6 @@ from typing import Any
 
 import numpy as np
 
-from agents.base import override_action
-from agents.classical import knob_setup
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion.planner import (
     SPEED_CEILING_MM_S,
@@ -63,6 +62,8 @@ from cnc_gym.motion.planner import (
     bidirectional_scan,
     override_at,
 )
+from cnc_gym.policies.base import override_action
+from cnc_gym.policies.classical import knob_setup
 from cnc_gym.rollout import play
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
@@ -170,9 +171,10 @@ class OraclePlanner:
         unresponsive: list[float] = []
         # Every schedule returned has been simulated: the last round only measures.
         for iteration in range(1, self.refine_iterations + 2):
-            path_s, error, speed = self._simulate(env)
-            if path_s is None:  # env could not be copied: model-only schedule
+            run = self._simulate(env)
+            if run is None:  # env could not be copied: model-only schedule
                 return schedule
+            path_s, error, speed = run
             schedule.iterations = iteration
             schedule.predicted_violations = int(np.sum(error > tolerance))
             offending = []
@@ -245,7 +247,10 @@ class OraclePlanner:
             candidate = self._schedule(s, cap, cutting, feed_mm_s, accel, jerk)
             candidate.iterations = schedule.iterations + 1
             self.schedule = candidate
-            new_path_s, new_error, _ = self._simulate(env)
+            new_run = self._simulate(env)
+            if new_run is None:  # (the env was copied before: it can be copied again)
+                break
+            new_path_s, new_error, _ = new_run
             over = new_path_s[new_error > target]
             if any(not any(abs(w - u) < 0.5 for u in unresponsive) for w in over):
                 self.schedule = schedule  # too far: keep the last schedule that passed
@@ -291,10 +296,11 @@ class OraclePlanner:
         override[fed] = np.clip(speed[fed] / feed_mm_s[fed], 0.0, self._max_override)
         return Schedule(s=s, cap_mm_s=cap.copy(), speed_mm_s=speed, override=override)
 
-    def _simulate(self, env: Any) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    def _simulate(self, env: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Run a copy of the (just reset) env with the current schedule.
 
-        Returns per control step: path position (mm), contour error (mm) and path speed (mm/s).
+        Returns per control step: path position (mm), contour error (mm) and path speed (mm/s); None when
+        the env cannot be copied.
         """
         # Tool paths are immutable and may be large: share them instead of copying.
         memo: dict[int, Any] = {}
@@ -306,7 +312,7 @@ class OraclePlanner:
         except Exception as exc:  # an env that cannot be copied: fall back to the model-only schedule
             warnings.warn(f"oracle planner: cannot copy the env to refine the schedule ({exc}); "
                           "using the servo model alone", RuntimeWarning, stacklevel=3)  # fmt: skip
-            return None, None, None
+            return None
         positions: list[float] = []
         errors: list[float] = []
         speeds: list[float] = []

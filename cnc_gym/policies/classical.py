@@ -6,7 +6,7 @@ and turns the knob by the planner's one rule (:func:`~cnc_gym.motion.planner.pla
 the env's planner observation entry and ``residual`` action mode evaluate too.
 
 The simulate-and-correct planner that used to be the baseline refines this kind of schedule by running
-copies of the env: it is the oracle, not deployable.
+copies of the env: it is :class:`cnc_gym.policies.oracle.OraclePlanner`, an oracle, not deployable.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from agents.base import override_action, require_override_mode
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion.planner import MARGIN, Schedule, SchedulePlanner, override_at, reaction_lead_s
+from cnc_gym.policies.base import override_action, require_override_mode
 from cnc_gym.toolpath import Toolpath
 
 

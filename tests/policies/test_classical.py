@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
-from agents import ClassicalPlanner, ConstantOverride
+from cnc_gym.policies import ClassicalPlanner, ConstantOverride
 from cnc_gym.runner import record_run
 
 

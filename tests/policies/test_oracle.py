@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
-from agents import ConstantOverride, OraclePlanner
+from cnc_gym.policies import ConstantOverride, OraclePlanner
 from cnc_gym.runner import record_run
 
 OVERRIDES = np.round(np.arange(1, 21) * 0.1, 1)  # 10 %, 20 %, … 200 %
