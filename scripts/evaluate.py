@@ -118,9 +118,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print rows and totals as one JSON object")
     args = parser.parse_args(argv)
     try:
-        from agents.training import load_config
         from cnc_gym.policies import ClassicalPlanner, ConstantOverride, OraclePlanner
         from cnc_gym.policies.model import ModelPolicy
+        from cnc_gym_agents.training import load_config
 
         config_path = args.config
         if config_path is None and args.model is not None:
