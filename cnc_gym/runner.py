@@ -32,7 +32,7 @@ from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.rollout import play, policy_env
 
-#: Keys of the ``--json`` object (the contract of docs/architecture.md, plus a few extras).
+#: Keys of the ``--json`` object (the contract of docs/cli.md, "What `run` prints").
 JSON_KEYS = (
     "program", "machine", "policy", "cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm",
     "tolerance_mm", "violations", "steps", "total_return", "finished", "stopped_by", "nominal_time_s",
