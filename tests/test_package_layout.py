@@ -1,10 +1,8 @@
 """The layout of the whole package is its architecture: the stage table of docs/architecture.md holds.
 
-Imports are read from the source (``ast``), all of them: module level, inside functions, and under
-``if TYPE_CHECKING:``. ``from package import module`` is an import of that module; ``from package import
-name`` of a name the package's ``__init__`` defines is an import of the package. The repository's
-``agents/`` folder is read under its installed name, ``cnc_gym_agents``. (``tests/gcode/test_layout.py``
-checks the interpreter's inner layout the same way.)
+Imports are read from the source, all of them (``tests/import_graph.py``); the repository's ``agents/``
+folder is read under its installed name, ``cnc_gym_agents``. (``tests/gcode/test_layout.py`` checks the
+interpreter's inner layout from the same graph.)
 """
 
 from __future__ import annotations
@@ -14,6 +12,7 @@ import re
 from pathlib import Path
 
 import pytest
+from import_graph import cycles, graph, imported_names, modules
 
 REPO = Path(__file__).resolve().parents[1]
 #: Folder → the package name it is imported by.
@@ -24,41 +23,9 @@ ARCHITECTURE = REPO / "docs" / "architecture.md"
 KNOWN_CYCLES = [{"cnc_gym.toolpath.segments", "cnc_gym.toolpath.nearest", "cnc_gym.toolpath.records"}]
 
 
-def _modules() -> dict[str, Path]:
-    out = {}
-    for root, name in ROOTS.items():
-        for path in sorted(root.rglob("*.py")):
-            parts = list(path.relative_to(root).with_suffix("").parts)
-            if parts[-1] == "__init__":
-                parts = parts[:-1]
-            out[".".join([name, *parts])] = path
-    return out
-
-
-MODULES = _modules()
-
-
-def _imported_names(name: str, path: Path) -> set[str]:
-    """Every module name the source of ``name`` imports (resolved, not filtered)."""
-    tree = ast.parse(path.read_text(), str(path))
-    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
-    found: set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            found.update(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
-                base = f"{anchor}.{base}" if base else anchor
-            for alias in node.names:
-                candidate = f"{base}.{alias.name}"
-                found.add(candidate if candidate in MODULES else base)
-    return found
-
-
-IMPORTED = {name: _imported_names(name, path) for name, path in MODULES.items()}
-GRAPH = {name: {m for m in found if m in MODULES and m != name} for name, found in IMPORTED.items()}
+MODULES = modules(ROOTS)
+IMPORTED = {name: imported_names(name, path, MODULES) for name, path in MODULES.items()}
+GRAPH = graph(MODULES)
 
 
 # ------------------------------------------------------------------------------------- the stage table
@@ -94,9 +61,9 @@ def stage_of(module: str) -> str | None:
     return best
 
 
-def _violations(graph: dict[str, set[str]]) -> list[str]:
+def _violations(edges: dict[str, set[str]]) -> list[str]:
     out = []
-    for name, imports in sorted(graph.items()):
+    for name, imports in sorted(edges.items()):
         own = stage_of(name)
         for target in sorted(imports):
             if stage_of(target) not in ALLOWED[own]:
@@ -148,41 +115,6 @@ def test_nothing_imports_the_learning_code_by_its_folder_name():
 
 
 # ------------------------------------------------------------------------------------------------ cycles
-def _cycles(graph: dict[str, set[str]]) -> list[set[str]]:
-    """The strongly connected components of more than one node (Tarjan)."""
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    on_stack: set[str] = set()
-    found: list[set[str]] = []
-
-    def visit(node: str) -> None:
-        index[node] = low[node] = len(index)
-        stack.append(node)
-        on_stack.add(node)
-        for nxt in sorted(graph.get(node, ())):
-            if nxt not in index:
-                visit(nxt)
-                low[node] = min(low[node], low[nxt])
-            elif nxt in on_stack:
-                low[node] = min(low[node], index[nxt])
-        if low[node] == index[node]:
-            component = set()
-            while True:
-                member = stack.pop()
-                on_stack.discard(member)
-                component.add(member)
-                if member == node:
-                    break
-            if len(component) > 1:
-                found.append(component)
-
-    for node in sorted(graph):
-        if node not in index:
-            visit(node)
-    return found
-
-
 def unit_of(module: str) -> str:
     """The package a module belongs to (a package is its own unit; so is a module at the top of a root)."""
     if MODULES[module].name == "__init__.py" or module.count(".") == 1:
@@ -190,25 +122,25 @@ def unit_of(module: str) -> str:
     return module.rsplit(".", 1)[0]
 
 
-def _package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+def _package_graph(edges: dict[str, set[str]]) -> dict[str, set[str]]:
     out: dict[str, set[str]] = {}
-    for name, imports in graph.items():
+    for name, imports in edges.items():
         unit = unit_of(name)
         out.setdefault(unit, set()).update(unit_of(m) for m in imports if unit_of(m) != unit)
     return out
 
 
 def test_no_import_cycles_between_modules_type_checking_imports_included():
-    cycles = _cycles(GRAPH)
-    new = [sorted(c) for c in cycles if c not in KNOWN_CYCLES]
+    found = cycles(GRAPH)
+    new = [sorted(c) for c in found if c not in KNOWN_CYCLES]
     assert not new, f"import cycles: {new}"
-    gone = [sorted(c) for c in KNOWN_CYCLES if c not in cycles]
+    gone = [sorted(c) for c in KNOWN_CYCLES if c not in found]
     assert not gone, f"these cycles are gone: remove them from KNOWN_CYCLES: {gone}"
 
 
 def test_no_import_cycles_between_packages():
-    cycles = _cycles(_package_graph(GRAPH))
-    assert not cycles, f"import cycles between packages: {[sorted(c) for c in cycles]}"
+    found = cycles(_package_graph(GRAPH))
+    assert not found, f"import cycles between packages: {[sorted(c) for c in found]}"
 
 
 # ------------------------------------------------------------------------------------ the checks can fail
@@ -218,16 +150,16 @@ def test_no_import_cycles_between_packages():
     ("cnc_gym.rollout", "cnc_gym.runner"),
 ])  # fmt: skip
 def test_the_stage_check_finds_a_planted_import(source, target):
-    graph = {k: set(v) for k, v in GRAPH.items()}
-    graph[source].add(target)
-    assert _violations(graph)
+    edges = {k: set(v) for k, v in GRAPH.items()}
+    edges[source].add(target)
+    assert _violations(edges)
 
 
-def test_the_cycle_checks_find_planted_cycles():
-    graph = {k: set(v) for k, v in GRAPH.items()}
-    graph["cnc_gym.errors"].add("cnc_gym.config")  # config imports errors: a two-module cycle
-    assert any(c == {"cnc_gym.errors", "cnc_gym.config"} for c in _cycles(graph))
-    graph = {k: set(v) for k, v in GRAPH.items()}
-    graph["cnc_gym.benchmark.suites"].add("cnc_gym.runner")
-    graph["cnc_gym.runner"].add("cnc_gym.benchmark.metrics")
-    assert _cycles(_package_graph(graph))
+def test_the_cycle_checks_find_plantedcycles():
+    edges = {k: set(v) for k, v in GRAPH.items()}
+    edges["cnc_gym.errors"].add("cnc_gym.config")  # config imports errors: a two-module cycle
+    assert any(c == {"cnc_gym.errors", "cnc_gym.config"} for c in cycles(edges))
+    edges = {k: set(v) for k, v in GRAPH.items()}
+    edges["cnc_gym.benchmark.suites"].add("cnc_gym.runner")
+    edges["cnc_gym.runner"].add("cnc_gym.benchmark.metrics")
+    assert cycles(_package_graph(edges))
