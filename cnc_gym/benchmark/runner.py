@@ -170,8 +170,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                 env = policy_env(policy, programs=[program.text], dialect=dialect, machine=machine,
                                  units=units, plant=plant)  # fmt: skip
             episode = run_episode(env, policy, int(seed))
-            info, total_return, steps, finished = episode.info, episode.total_return, episode.steps, (
-                episode.finished)
+            info, finished = episode.info, episode.finished
             cycle = float(info["cycle_time_s"])
             ratio = cycle / bound["total_s"] if bound["total_s"] > 0 else float("inf")
             length = float(info["violation_length_mm"])
@@ -181,10 +180,10 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                             "contour_error_max_mm": float(info["contour_error_max_mm"]),
                             "contour_error_rms_mm": float(info["contour_error_rms_mm"]),
                             "tolerance_mm": float(info["tolerance_mm"]),
-                            "violations": int(info["violations"]), "steps": steps, "finished": finished,
-                            "feasible": is_feasible(finished, length),
-                            "score": episode_score(finished, length, ratio), "total_return": total_return,
-                            "reference": False})  # fmt: skip
+                            "violations": int(info["violations"]), "steps": episode.steps,
+                            "finished": finished, "feasible": is_feasible(finished, length),
+                            "score": episode_score(finished, length, ratio),
+                            "total_return": episode.total_return, "reference": False})  # fmt: skip
     finally:
         if env is not None:
             env.close()
