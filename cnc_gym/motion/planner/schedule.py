@@ -44,6 +44,12 @@ def jerk_limited_reach(v0: float, distance_mm: float, accel: float, jerk: float)
     T = 2·√(Δv/J) over L = (v0 + v)·√(Δv/J), i.e. ``(v − v0)(v + v0)² = J·L²`` (solved by Newton in
     w = v + v0 from the right, where the cubic is increasing and convex); a larger change takes
     T = Δv/A + A/J over L = (v0 + v)/2·T, a quadratic in v.
+
+    The controller solves the same reach (:func:`cnc_gym.motion.kernel.reach_speed`, another Newton start
+    and stop); the two agree to the last bit or two. The scan keeps this one because the planner's
+    override is part of Feedrate-v1 and v2's observation and info: solving with the controller's would
+    move those values in their last bits (``scripts/fingerprint_env.py`` changes on every v1 case), an
+    observation change that the project answers with a new env version.
     """
     if distance_mm <= 0:
         return v0
