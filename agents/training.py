@@ -29,6 +29,7 @@ from cnc_gym.config import (
     Choice,
     Number,
     check_object,
+    configs_dir,
     declared,
     flag,
     from_mapping,
@@ -37,6 +38,7 @@ from cnc_gym.config import (
     parse_value,
     read_yaml,
     section,
+    shown,
     spec_of,
     text,
 )
@@ -235,9 +237,23 @@ class TrainConfig:
 
 
 def load_config(path: str | Path) -> TrainConfig:
-    """Read and validate a training config (YAML via the bounded safe loader)."""
+    """Read and validate a training config (YAML via the bounded safe loader): a path, or the name of a
+    shipped one (``ppo`` → ``configs/train/ppo.yaml``, package data in an installed wheel)."""
+    path = config_path(path)
     data = read_yaml(path, "training config")
     return from_mapping(TrainConfig, data, str(path), "", {"source": str(path)})
+
+
+def config_path(name_or_path: str | Path) -> Path:
+    """A training config by path (``.yaml``/``.yml``) or by the name of a shipped one."""
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml") or not str(name_or_path):
+        return path
+    shipped = configs_dir() / "train" / f"{name_or_path}.yaml"
+    if not shipped.is_file():
+        names = sorted(p.stem for p in (configs_dir() / "train").glob("*.yaml"))
+        raise ConfigError(f"unknown training config {shown(str(name_or_path))}; shipped: {', '.join(names)}")
+    return shipped
 
 
 def with_overrides(config: TrainConfig, **values: Any) -> TrainConfig:
@@ -296,7 +312,7 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
                            vec_env_cls=DummyVecEnv)  # fmt: skip
     callback = None
     if config.algorithm == "ppo_lagrangian":
-        from agents.lagrangian import CostPenalty, DualAscent
+        from cnc_gym_agents.lagrangian import CostPenalty, DualAscent
 
         lag = config.lagrangian
         vec_env = penalty = CostPenalty(vec_env, lag.lambda_init)
@@ -313,7 +329,8 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
         policy_kwargs={"net_arch": list(p.net_arch), "log_std_init": p.log_std_init},
         tensorboard_log=str(tensorboard_dir), device="cpu", verbose=0,
     )  # fmt: skip
-    # Plain JSON in the model's zip: the env it acts in (agents/model.py reads it back without unpickling).
+    # Plain JSON in the model's zip: the env it acts in (cnc_gym/policies/model.py reads it back without
+    # unpickling).
     model.cnc_gym_env = config.env.policy_env()  # type: ignore[attr-defined]
     show_bar = config.progress_bar if progress_bar is None else progress_bar
     started = time.perf_counter()

@@ -45,9 +45,17 @@ MAX_TEXT = 4096
 
 
 def configs_dir() -> Path:
-    """The repository's ``configs/`` folder (set ``CNC_GYM_CONFIGS`` to use another)."""
+    """The folder of machine presets, task and training configs (set ``CNC_GYM_CONFIGS`` to use another).
+
+    The repository keeps them at its top (``configs/``); an installed wheel ships the same files as
+    package data, ``cnc_gym/configs`` (setup.py maps the one to the other).
+    """
     env = os.environ.get("CNC_GYM_CONFIGS")
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "configs"
+    if env:
+        return Path(env)
+    package = Path(__file__).resolve().parent
+    installed = package / "configs"
+    return installed if installed.is_dir() else package.parent / "configs"
 
 
 # ------------------------------------------------------------------------------------------- messages

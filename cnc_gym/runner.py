@@ -1,10 +1,12 @@
 """``cnc-gym run``: simulate a whole program through controller and plant under a policy.
 
-The run goes through the Gymnasium env (``cnc_gym/Feedrate-v0``), the same code path an RL agent uses, so
-a baseline's numbers and a trained agent's numbers are comparable. Its contour error is the programmed-path
-meter's (``contour_rule="path"``, as ``cnc-gym bench`` and Feedrate-v2 measure it), whatever env version
-the policy acts in. :func:`simulate` returns a
-:class:`RunResult`; :func:`run_cli` is what the ``cnc-gym run`` command calls.
+The run is the one rollout (:mod:`cnc_gym.rollout`): the policy drives the Gymnasium env
+(``cnc_gym/Feedrate-v0``, or the version a trained model names), the same code path an RL agent and
+``cnc-gym bench`` use, so a baseline's numbers and a trained agent's numbers are comparable. Its contour
+error is the programmed-path meter's (:data:`cnc_gym.rollout.CONTOUR_RULE`, as ``cnc-gym bench`` and
+Feedrate-v2 measure it), whatever env version the policy acts in. :func:`simulate` returns a
+:class:`RunResult` (:func:`record_run` adds the bounded series and the stop rules to the rollout);
+:func:`run_cli` is what the ``cnc-gym run`` command calls.
 
 Bounded resources: the summary numbers are the env's streaming totals (exact over every servo sample);
 the series kept for the plot are at most :data:`~cnc_gym.envs.render.DEFAULT_MAX_BINS` time bins
@@ -28,8 +30,9 @@ import numpy as np
 
 from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries
 from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.rollout import play, policy_env
 
-#: Keys of the ``--json`` object (the contract of docs/architecture.md, plus a few extras).
+#: Keys of the ``--json`` object (the contract of docs/cli.md, "What `run` prints").
 JSON_KEYS = (
     "program", "machine", "policy", "cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm",
     "tolerance_mm", "violations", "steps", "total_return", "finished", "stopped_by", "nominal_time_s",
@@ -111,14 +114,13 @@ class RunResult:
         return min(self.last_path_s / self.path_length_mm, 1.0)
 
 
-def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
-             max_blocks: int | None = None, units: str | None = None, plant: str | None = None,
-             env_id: str = "cnc_gym/Feedrate-v0", **kwargs: Any):  # fmt: skip
-    """The Feedrate env (``env_id``) on one program (interpreted up front, so program errors surface
-    here); ``plant`` (``lti`` or ``mujoco``) overrides the machine preset's plant backend."""
-    import gymnasium
-
-    import cnc_gym  # noqa: F401  (registers the env ids)
+def program_env(program: Any, policy: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
+                max_blocks: int | None = None, units: str | None = None,
+                plant: str | None = None) -> Any:  # fmt: skip
+    """The env ``policy`` runs one program in (:func:`cnc_gym.rollout.policy_env`: the env version and
+    settings the policy names, the programmed-path meter); the program is interpreted up front, so
+    program errors surface here. ``plant`` (``lti`` or ``mujoco``) overrides the machine preset's plant
+    backend."""
     from cnc_gym.machine import load_machine
     from cnc_gym.programs import load_program
 
@@ -127,15 +129,14 @@ def make_env(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
         options["max_blocks"] = max_blocks
     # ProgramError / ConfigError with a clear message; the interpreted program goes to the env as it is.
     loaded = load_program(program, dialect, load_machine(machine), **options)
-    kwargs.setdefault("contour_rule", "path")  # the meter's rule (module docstring)
-    return gymnasium.make(env_id, programs=[loaded], dialect=dialect, machine=machine, units=units,
-                          plant=plant, **kwargs)  # fmt: skip
+    return policy_env(policy, programs=[loaded], dialect=dialect, machine=machine, units=units, plant=plant)
 
 
-def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
-                record: bool = True, max_time_s: float | None = None, log: TextIO | None = None,
-                max_bins: int = DEFAULT_MAX_BINS) -> RunResult:  # fmt: skip
-    """Run one episode of ``env`` under ``policy``; the env decides which program (its reset).
+def record_run(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = False,
+               record: bool = True, max_time_s: float | None = None, log: TextIO | None = None,
+               max_bins: int = DEFAULT_MAX_BINS) -> RunResult:  # fmt: skip
+    """Run one episode of ``env`` under ``policy`` (:func:`cnc_gym.rollout.play`) and record it as a
+    :class:`RunResult`; the env decides which program (its reset).
 
     ``max_time_s`` stops the run at that much simulated time (``stopped_by`` = ``"max_time"``). ``log``
     (e.g. ``sys.stderr``) gets a one-line projection of the wall-clock time when a run looks long.
@@ -149,8 +150,6 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
     tolerance = float(info.get("tolerance_mm", base.machine.controller.contour_tolerance_mm))
     nominal = float(getattr(base, "nominal_time_s", 0.0))
     series = BinnedSeries(_SERIES_COLUMNS, max_bins) if record else None
-    total_return, steps = 0.0, 0
-    terminated = truncated = stopped_at_max_time = False
     bar = None
     if progress:
         from tqdm import tqdm
@@ -161,41 +160,41 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
     started = time.perf_counter()
     projection_due = started + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
     baseline: tuple[float, float] | None = None  # (wall clock, simulated s) at the first projection sample
+
+    def on_step(steps: int, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> bool:
+        nonlocal projection_due, baseline
+        if series is not None:
+            series.add(info["cycle_time_s"], info["path_s"], info["feed_mm_min"], info["override"],
+                       info["contour_error_mm"])  # fmt: skip
+        if steps % 20 == 0:
+            if bar is not None:
+                bar.n = round(100 * float(info.get("progress", 0.0)))
+                bar.refresh()
+            now = time.perf_counter()
+            if log is not None and now >= projection_due:
+                # Two samples, _PROJECTION_AFTER_WALL_S apart, after the first such interval: the rate
+                # between them leaves out start-up (compiling, the first in-position wait), which once
+                # made a 31 s run project hours.
+                simulated = float(info.get("cycle_time_s", 0.0))
+                if baseline is None or now <= baseline[0]:
+                    baseline = (now, simulated)
+                    projection_due = now + _PROJECTION_AFTER_WALL_S
+                else:
+                    projection_due = math.inf
+                    _project_wall_time(log, info, nominal, max_time_s, rate=(simulated - baseline[1])
+                                       / (now - baseline[0]))  # fmt: skip
+        # --max-time: stop at that much simulated time, unless the program has just ended.
+        return max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9
+
     try:
-        while not (terminated or truncated):
-            action = policy.act(observation, info)
-            observation, reward, terminated, truncated, info = env.step(action)
-            total_return += float(reward)
-            steps += 1
-            if series is not None:
-                series.add(info["cycle_time_s"], info["path_s"], info["feed_mm_min"], info["override"],
-                           info["contour_error_mm"])  # fmt: skip
-            if steps % 20 == 0:
-                if bar is not None:
-                    bar.n = round(100 * float(info.get("progress", 0.0)))
-                    bar.refresh()
-                now = time.perf_counter()
-                if log is not None and now >= projection_due:
-                    # Two samples, _PROJECTION_AFTER_WALL_S apart, after the first such interval: the rate
-                    # between them leaves out start-up (compiling, the first in-position wait), which
-                    # once made a 31 s run project hours.
-                    simulated = float(info.get("cycle_time_s", 0.0))
-                    if baseline is None or now <= baseline[0]:
-                        baseline = (now, simulated)
-                        projection_due = now + _PROJECTION_AFTER_WALL_S
-                    else:
-                        projection_due = math.inf
-                        _project_wall_time(log, info, nominal, max_time_s, rate=(simulated - baseline[1])
-                                           / (now - baseline[0]))  # fmt: skip
-            if max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9:
-                stopped_at_max_time = True
-                break
+        episode = play(env, policy, observation, info, on_step)
     finally:
         if bar is not None:
             bar.close()
+    info = episode.info
     rms = float(info.get("contour_error_rms_mm", 0.0))
-    finished = bool(terminated)
-    stopped_by = None if finished else (MAX_TIME if stopped_at_max_time else STEP_BUDGET)
+    finished = episode.finished
+    stopped_by = None if finished else (MAX_TIME if episode.stopped else STEP_BUDGET)
     result = RunResult(
         program=str(info.get("program", getattr(base, "program_name", "program"))),
         machine=str(base.machine.name),
@@ -205,8 +204,8 @@ def run_episode(env: Any, policy: Any, *, seed: int | None = 0, progress: bool =
         contour_error_rms_mm=rms if math.isfinite(rms) else 0.0,
         tolerance_mm=tolerance,
         violations=int(info.get("violations", 0)),
-        steps=steps,
-        total_return=total_return,
+        steps=episode.steps,
+        total_return=episode.total_return,
         finished=finished,
         stopped_by=stopped_by,
         nominal_time_s=nominal,
@@ -282,18 +281,17 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
     under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
     and a projection of the wall-clock time once it has run a while. ``units``: the input unit at
     power-on (``"mm"``/``"inch"``; default the machine preset's ``power_on_units``, else the dialect's)."""
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     _check_max_time(max_time_s)
     pol = make_policy(policy, progress=progress) if isinstance(policy, str) else policy
-    # A trained model runs in the env version and settings it was trained with (agents/model.py).
-    env = make_env(program, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units,
-                   plant=plant, env_id=getattr(pol, "env_id", "cnc_gym/Feedrate-v0"),
-                   **getattr(pol, "env_kwargs", {}))
+    # A trained model runs in the env version and settings it was trained with (policy_env).
+    env = program_env(program, pol, dialect=dialect, machine=machine, max_blocks=max_blocks, units=units,
+                      plant=plant)  # fmt: skip
     try:
         if log is not None:
             _announce_long_program(env.unwrapped, max_time_s, log)
-        return run_episode(env, pol, progress=progress, max_time_s=max_time_s, log=log)
+        return record_run(env, pol, progress=progress, max_time_s=max_time_s, log=log)
     finally:
         env.close()
 

@@ -4,8 +4,8 @@
     .venv/bin/python scripts/bench_planner.py [--repeats 5] [--no-oracle]
 
 Per family of the default suite's test split (all its programs), and on one long CAM-style program
-(20 000 G01 chords), it times ``agents.classical.plan_schedule`` (best of ``--repeats``), once with the
-controller's static tables given (what the policy does: the env's controller already holds them) and once
+(20 000 G01 chords), it times ``cnc_gym.motion.planner.plan_schedule`` (best of ``--repeats``), once with
+the controller's static tables given (what the policy does: the env's controller already holds them) and once
 computing them too, and divides by the number of motion segments. The oracle's planning (simulate and
 correct on copies of the env) is timed once per family on the same programs, as the reference.
 """
@@ -41,11 +41,11 @@ def main(argv: list[str] | None = None) -> int:
     import gymnasium
 
     import cnc_gym  # noqa: F401
-    from agents.classical import plan_schedule
-    from agents.oracle import OraclePlanner
     from cnc_gym.benchmark.suites import load_suite
     from cnc_gym.machine import load_machine
     from cnc_gym.motion.limits import build_limits
+    from cnc_gym.motion.planner import plan_schedule
+    from cnc_gym.policies.oracle import OraclePlanner
     from cnc_gym.programs import load_program
 
     machine = load_machine("vmc-small")

@@ -17,7 +17,6 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from agents.training import EnvSettings, LagrangianSettings, PPOSettings, TrainConfig
 from cnc_gym.config import markdown_table
 from cnc_gym.envs import observation
 from cnc_gym.envs.feedrate_v1 import EnvArgumentsV1, RankingReward
@@ -33,6 +32,7 @@ from cnc_gym.machine import (
     PlantConfig,
     RotaryAxisConfig,
 )
+from cnc_gym_agents.training import EnvSettings, LagrangianSettings, PPOSettings, TrainConfig
 
 REPO = Path(__file__).resolve().parent.parent
 #: Table name → (schema, key prefix shown in the table).

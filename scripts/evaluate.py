@@ -39,8 +39,8 @@ def evaluate(policies: list[Any], env_kwargs: dict[str, Any], programs: list[str
 
     import cnc_gym  # noqa: F401
     from cnc_gym.benchmark.metrics import episode_score, is_feasible
-    from cnc_gym.benchmark.runner import run_one_episode
     from cnc_gym.motion.bound import time_optimal_bound
+    from cnc_gym.rollout import run_episode
 
     common = {k: v for k, v in env_kwargs.items() if k not in ("randomize", "programs")}
     rows = []
@@ -63,15 +63,17 @@ def evaluate(policies: list[Any], env_kwargs: dict[str, Any], programs: list[str
                 if bound is None:
                     mode = "feed" if base.action_mode == "feed" else "override"
                     bound = time_optimal_bound(base.toolpath, base.machine, action_mode=mode).total_s
-                info, total_return, steps, finished = run_one_episode(env, policy, 0)
+                episode = run_episode(env, policy, 0)
             finally:
                 env.close()
+            info, finished = episode.info, episode.finished
             row = {key: info[key] for key in ("program", "cycle_time_s", "contour_error_max_mm",
                                               "contour_error_rms_mm", "tolerance_mm", "violations")}
             length, ratio = float(info["violation_length_mm"]), info["cycle_time_s"] / bound
             row.update(machine=base.machine.name, policy=str(getattr(policy, "name", policy)),
-                       steps=steps, total_return=total_return, finished=finished, bound_s=bound,
-                       time_ratio=ratio, violation_length_mm=length, feasible=is_feasible(finished, length),
+                       steps=episode.steps, total_return=episode.total_return, finished=finished,
+                       bound_s=bound, time_ratio=ratio, violation_length_mm=length,
+                       feasible=is_feasible(finished, length),
                        score=episode_score(finished, length, ratio))  # fmt: skip
             rows.append(row)
     return rows
@@ -116,9 +118,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print rows and totals as one JSON object")
     args = parser.parse_args(argv)
     try:
-        from agents import ClassicalPlanner, ConstantOverride, OraclePlanner
-        from agents.model import ModelPolicy
-        from agents.training import load_config
+        from cnc_gym.policies import ClassicalPlanner, ConstantOverride, OraclePlanner
+        from cnc_gym.policies.model import ModelPolicy
+        from cnc_gym_agents.training import load_config
 
         config_path = args.config
         if config_path is None and args.model is not None:

@@ -21,8 +21,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from agents.training import load_config, train, with_overrides
 from cnc_gym.errors import CncGymError
+from cnc_gym_agents.training import load_config, train, with_overrides
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -202,9 +202,9 @@ def test_task_reproducers_are_one_line(tmp_path, content, fragment):
 
 # ---------------------------------------------------------------------------------------- the schemas
 def _all_schemas() -> list[type]:
-    from agents.training import TrainConfig
     from cnc_gym.envs.options import EnvArguments
     from cnc_gym.envs.task import TaskConfig
+    from cnc_gym_agents.training import TrainConfig
 
     found, todo = [], [MachineConfig, AxisConfig, RotaryAxisConfig, TaskConfig, TrainConfig, EnvArguments]
     while todo:

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 import cnc_gym.runner as runner
-from agents import make_policy
 from cnc_gym.cli import main
 from cnc_gym.errors import CncGymError
+from cnc_gym.policies import make_policy
 from cnc_gym.programs import ProgramText
-from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, feed_limits, plot_run, run_episode, run_figure, simulate
+from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, feed_limits, plot_run, record_run, run_figure, simulate
 
 CONTRACT_KEYS = ("cycle_time_s", "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm", "violations",
                  "steps")  # fmt: skip
@@ -110,7 +110,7 @@ def test_cli_run_errors_are_one_line(capsys, argv):
 def test_long_runs_keep_a_bounded_series_with_exact_summary_numbers(star_run):
     # simulate() measures with the programmed-path meter (contour_rule "path"), whatever the env id.
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"], contour_rule="path")
-    binned = run_episode(env, make_policy("constant:1.0"), max_bins=32)
+    binned = record_run(env, make_policy("constant:1.0"), max_bins=32)
     env.close()
     assert binned.steps == star_run.steps == 540
     assert len(binned.time_s) <= 33 and binned.bin_steps == 32  # 540 steps in bins of 32
@@ -127,7 +127,7 @@ def test_long_runs_keep_a_bounded_series_with_exact_summary_numbers(star_run):
 
 def test_record_false_keeps_no_series():
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["circle"])
-    result = run_episode(env, make_policy("constant:1.0"), record=False)
+    result = record_run(env, make_policy("constant:1.0"), record=False)
     env.close()
     assert result.finished and len(result.time_s) == 0 and len(result.path_xyz) == 0
 
@@ -306,16 +306,16 @@ def test_drilled_holes_show_as_dots_seen_from_above():
 
 def test_simulate_passes_its_progress_choice_to_the_policy(monkeypatch):
     """``--no-progress`` (progress=False) must also silence a planner's own planning bar."""
-    import agents
+    from cnc_gym import policies
 
     seen = []
-    real = agents.make_policy
+    real = policies.make_policy
 
     def spy(spec, *, progress=None):
         seen.append(progress)
         return real(spec, progress=progress)
 
-    monkeypatch.setattr(agents, "make_policy", spy)
+    monkeypatch.setattr(policies, "make_policy", spy)
     simulate("G91 G01 X5 F600\nM30\n", policy="constant:1.0", progress=False)
     assert seen == [False]
 

@@ -116,7 +116,7 @@ def trained_v1(tmp_path_factory):
 def test_v1_lagrangian_run_logs_lambda_and_records_its_env(trained_v1):
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-    from agents.model import load_sb3_model
+    from cnc_gym.policies.model import load_sb3_model
 
     model = load_sb3_model(trained_v1 / "tiny-v1" / "model.zip")
     assert model.env_id == "cnc_gym/Feedrate-v1"

@@ -28,8 +28,6 @@ from typing import Any
 #: 1 (records without the key): contour error on cutting moves only. 2: the programmed-path contour meter
 #: (``contour_rule`` "path": rapids the reference has left are part of the path) and bound version 2.
 RECORD_VERSION = 2
-#: The contour meter's rule every episode of the benchmark is measured with, whatever env it runs in.
-CONTOUR_RULE = "path"
 
 #: Record keys every ``cnc-gym bench`` JSON Lines record carries (more may follow).
 RECORD_KEYS = (

@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cnc_gym.benchmark.metrics import CONTOUR_RULE, RECORD_VERSION, episode_score, is_feasible
+from cnc_gym.benchmark.metrics import RECORD_VERSION, episode_score, is_feasible
 from cnc_gym.errors import CncGymError
+from cnc_gym.rollout import CONTOUR_RULE, policy_env, run_episode
 
 #: The baselines ``cnc-gym bench`` runs when no ``--policy`` is given.
 DEFAULT_POLICIES = ("constant:1.0", "classical", "oracle", "bound")
@@ -154,16 +155,22 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
     # A spec with "{seed}" names one policy per seed (e.g. a model per training seed): each seed's episode
     # runs its own; every other policy is built once. A policy runs in the env it names (env_id,
     # env_kwargs: a trained model's), else in Feedrate-v0; with randomisation off, every version has the
-    # same dynamics, and every episode is measured with the benchmark's contour rule (CONTOUR_RULE).
+    # same dynamics, and every episode is measured with the benchmark's contour rule (the rollout's
+    # policy_env).
+    from cnc_gym.policies import make_policy
+
     policy = env = None
     try:
         for seed in seeds:
             if policy is None or "{seed}" in policy_spec:
                 if env is not None:
                     env.close()
-                policy, env = _policy_env(policy_spec.replace("{seed}", str(seed)), program, dialect, machine,
-                                          units, plant, progress)  # fmt: skip
-            info, total_return, steps, finished = run_one_episode(env, policy, int(seed))
+                policy = make_policy(policy_spec.replace("{seed}", str(seed)),
+                                     progress=None if progress else False)  # fmt: skip
+                env = policy_env(policy, programs=[program.text], dialect=dialect, machine=machine,
+                                 units=units, plant=plant)  # fmt: skip
+            episode = run_episode(env, policy, int(seed))
+            info, finished = episode.info, episode.finished
             cycle = float(info["cycle_time_s"])
             ratio = cycle / bound["total_s"] if bound["total_s"] > 0 else float("inf")
             length = float(info["violation_length_mm"])
@@ -173,48 +180,18 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                             "contour_error_max_mm": float(info["contour_error_max_mm"]),
                             "contour_error_rms_mm": float(info["contour_error_rms_mm"]),
                             "tolerance_mm": float(info["tolerance_mm"]),
-                            "violations": int(info["violations"]), "steps": steps, "finished": finished,
-                            "feasible": is_feasible(finished, length),
-                            "score": episode_score(finished, length, ratio), "total_return": total_return,
-                            "reference": False})  # fmt: skip
+                            "violations": int(info["violations"]), "steps": episode.steps,
+                            "finished": finished, "feasible": is_feasible(finished, length),
+                            "score": episode_score(finished, length, ratio),
+                            "total_return": episode.total_return, "reference": False})  # fmt: skip
     finally:
         if env is not None:
             env.close()
     return records
 
 
-def _policy_env(spec: str, program: BenchProgram, dialect: str, machine: str, units: str | None,
-                plant: str | None, progress: bool) -> tuple[Any, Any]:  # fmt: skip
-    """A policy and the env it runs the program in."""
-    import gymnasium
-
-    import cnc_gym  # noqa: F401  (registers the env ids)
-    from agents import make_policy
-
-    policy = make_policy(spec, progress=None if progress else False)
-    env_id = getattr(policy, "env_id", "cnc_gym/Feedrate-v0")
-    kwargs = dict(getattr(policy, "env_kwargs", {}))
-    env = gymnasium.make(env_id, **kwargs, programs=[program.text], dialect=dialect, machine=machine,
-                         units=units, plant=plant, contour_rule=CONTOUR_RULE)  # fmt: skip
-    return policy, env
-
-
-def run_one_episode(env: Any, policy: Any, seed: int) -> tuple[dict[str, Any], float, int, bool]:
-    """One episode: the last ``info`` (the episode's totals), the return, the steps and whether the
-    program ran to its end (terminated, not truncated)."""
-    observation, info = env.reset(seed=seed)
-    policy.reset(env)
-    total, steps = 0.0, 0
-    terminated = truncated = False
-    while not (terminated or truncated):
-        observation, reward, terminated, truncated, info = env.step(policy.act(observation, info))
-        total += float(reward)
-        steps += 1
-    return info, total, steps, bool(terminated)
-
-
 # --------------------------------------------------------------------------------------- executors
-def _run_tasks(tasks: list[Callable[[], Any]], config: BenchConfig, bar: Any, label: str) -> list[Any]:
+def _run_tasks(tasks: Sequence[Callable[[], Any]], config: BenchConfig, bar: Any, label: str) -> list[Any]:
     """Run zero-argument tasks (``functools.partial`` of module-level functions) serially, on a process
     pool or on Ray; results in task order."""
     if bar is not None:
@@ -244,7 +221,7 @@ def _run_tasks(tasks: list[Callable[[], Any]], config: BenchConfig, bar: Any, la
     return out
 
 
-def _run_ray(tasks: list[Callable[[], Any]], config: BenchConfig, bar: Any) -> list[Any]:
+def _run_ray(tasks: Sequence[Callable[[], Any]], config: BenchConfig, bar: Any) -> list[Any]:
     try:
         import ray
     except ImportError:
@@ -279,10 +256,10 @@ def run_bench(config: BenchConfig) -> list[dict[str, Any]]:
         raise CncGymError("nothing to benchmark: no programs")
     if not config.policies:
         raise CncGymError("nothing to benchmark: no policies")
+    from cnc_gym.policies import make_policy
+
     for spec in config.policies:  # a bad spec is one clear error before any work
         if spec != "bound":
-            from agents import make_policy
-
             for seed in config.seeds if "{seed}" in spec else [None]:
                 make_policy(spec.replace("{seed}", str(seed)), progress=False)
     mach = with_plant_backend(load_machine(config.machine), config.plant)

@@ -277,14 +277,14 @@ def tier_of(properties: dict[str, float]) -> str:
 def is_feasible(text: str, machine, dialect: str) -> bool:
     """True when some override of :data:`FEASIBILITY_OVERRIDES` finishes the program with no contour
     error above tolerance (zero violation length), with no step budget to speak of."""
-    from agents import ConstantOverride
-    from cnc_gym.benchmark.runner import run_one_episode
     from cnc_gym.envs.feedrate import FeedrateEnv
+    from cnc_gym.policies import ConstantOverride
+    from cnc_gym.rollout import run_episode
 
     env = FeedrateEnv(programs=[text], dialect=dialect, machine=machine, max_episode_steps=10_000_000)
     for override in FEASIBILITY_OVERRIDES:
-        info, _, _, finished = run_one_episode(env, ConstantOverride(override), 0)
-        if finished and info["violation_length_mm"] == 0.0:
+        episode = run_episode(env, ConstantOverride(override), 0)
+        if episode.finished and episode.info["violation_length_mm"] == 0.0:
             return True
     return False
 

@@ -47,6 +47,7 @@ from cnc_gym.motion import Controller
 from cnc_gym.motion import kernel as K
 from cnc_gym.motion.controller import kernel_config
 from cnc_gym.motion.limits import PathLimits, build_limits
+from cnc_gym.motion.planner.rule import planner_override  # the one knob rule (the planner's)
 from cnc_gym.plant import ContourErrorMeter, ServoPlant
 from cnc_gym.plant import contour as C
 from cnc_gym.plant.servo import settled_env, step_env
@@ -483,39 +484,6 @@ def _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs) 
         x = sig[int(row[4 * i])] * row[4 * i + 1]
         obs[e, at + i] = _clip(x, row[4 * i + 2], row[4 * i + 3])
     _write_outputs(e, bank_f, bank_i, sf, si)
-
-
-@njit(cache=True, nogil=True)
-def planner_override(schedule, path_s, feed_mm_min, lead_s):
-    """A schedule's override at path position ``path_s`` moving at ``feed_mm_min``: the smallest scheduled
-    override over the stretch covered in ``lead_s`` at the current speed (and 0.5 mm more), the rule of
-    :func:`agents.classical.override_at` (``schedule``: its (n, 2) table, see :class:`Planner`)."""
-    speed = max(feed_mm_min / 60.0, 1.0)
-    n = schedule.shape[0]
-    lo = _count_at_most(schedule, path_s) - 1
-    hi = _count_at_most(schedule, path_s + speed * lead_s + 0.5)
-    lo = min(max(lo, 0), n - 1)
-    lowest = schedule[lo, 1]
-    for i in range(lo + 1, max(hi, lo + 1)):
-        x = schedule[i, 1]
-        if x < lowest or x != x:  # (NaN wins, as in np.min)
-            lowest = x
-            if x != x:
-                break
-    return lowest
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _count_at_most(schedule, x):
-    """How many positions of ``schedule`` are ≤ x (``np.searchsorted(s, x, side="right")``; NaN: all)."""
-    lo, hi = 0, schedule.shape[0]
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if x < schedule[mid, 0]:
-            hi = mid
-        else:
-            lo = mid + 1
-    return lo
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -1151,11 +1119,12 @@ INFO_KEYS = (*OUTPUT_INFO_KEYS, "program")
 
 
 def _dependencies() -> None:
+    from cnc_gym.motion.planner import rule
     from cnc_gym.numba_cache import refresh_on_change
     from cnc_gym.plant import servo
     from cnc_gym.toolpath import nearest
 
-    refresh_on_change(__name__, [K, servo, C, nearest])
+    refresh_on_change(__name__, [K, servo, C, nearest, rule])
 
 
 _dependencies()  # the compiled step links the controller, plant and meter kernels: drop it when they change

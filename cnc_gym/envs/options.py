@@ -223,6 +223,12 @@ class EnvNotReset(CncGymError, gymnasium.error.ResetNeeded):
     """``step()`` before the first ``reset()`` (the same error Gymnasium's order wrapper raises)."""
 
 
+def knob_of_override(override: float, max_override: float) -> float:
+    """The knob value in [-1, 1] that asks for ``override``: the action ``a`` with override
+    ``(a + 1)/2 · max_override``, rounded to the action space's float32 and clipped."""
+    return float(np.float32(min(max(2.0 * override / max_override - 1.0, -1.0), 1.0)))
+
+
 def parse_action(action: Any) -> float:
     """The knob value in [-1, 1] of an action: one real number, as a scalar or an array of shape (1,).
 

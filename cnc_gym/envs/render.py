@@ -12,7 +12,7 @@ on an Agg canvas (no display needed) and reused.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -22,7 +22,21 @@ if TYPE_CHECKING:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from cnc_gym.envs.feedrate import FeedrateEnv
+    from cnc_gym.toolpath import Toolpath
+
+
+class RenderedEnv(Protocol):
+    """What the renderers read of the env they draw (the Feedrate env; the env imports them, not the
+    other way round)."""
+
+    @property
+    def toolpath(self) -> Toolpath: ...
+
+    @property
+    def interpolation_period_s(self) -> float: ...
+
+    @property
+    def program_name(self) -> str: ...
 
 _FIG_SIZE_IN = (8.0, 4.0)
 _DPI = 80  # 640 × 320 pixels
@@ -152,7 +166,7 @@ class EpisodeRenderer:
     def clear(self) -> None:
         self._samples.clear()
 
-    def start(self, env: FeedrateEnv) -> None:
+    def start(self, env: RenderedEnv) -> None:
         self.clear()
         if self._path_key != id(env.toolpath):
             _, points = env.toolpath.sample(0.5)
@@ -162,7 +176,7 @@ class EpisodeRenderer:
     def record(self, actual: np.ndarray, error: np.ndarray) -> None:
         self._samples.extend(np.column_stack((actual, error)).tolist())
 
-    def draw(self, env: FeedrateEnv) -> np.ndarray:
+    def draw(self, env: RenderedEnv) -> np.ndarray:
         """The current episode as an (H, W, 3) uint8 image."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.collections import LineCollection
@@ -232,12 +246,12 @@ class MachineRenderer(EpisodeRenderer):
         self._view: Any = None
         self._path_xyz: np.ndarray | None = None
 
-    def start(self, env: FeedrateEnv) -> None:
+    def start(self, env: RenderedEnv) -> None:
         if self._path_key != id(env.toolpath) or self._path_xyz is None:
             self._path_xyz = env.toolpath.sample(0.5)[1]
         super().start(env)
 
-    def draw(self, env: FeedrateEnv) -> np.ndarray:
+    def draw(self, env: RenderedEnv) -> np.ndarray:
         if self._view is None:
             import gymnasium
 

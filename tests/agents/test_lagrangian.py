@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from agents.lagrangian import CostPenalty, DualAscent
+from cnc_gym_agents.lagrangian import CostPenalty, DualAscent
 
 
 class CostEnv(gym.Env):

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from agents.training import load_config
 from cnc_gym.errors import ConfigError
+from cnc_gym_agents.training import load_config
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -32,6 +32,12 @@ def test_shipped_v1_configs_load_and_name_the_train_split():
         assert config.env.policy_env() == {"id": "cnc_gym/Feedrate-v1", "kwargs": {
             "action_mode": "residual", "control_period_s": 0.01, "residual_range": 2.0}}
     assert load_config(REPO / "configs/train/ppo-lagrangian-residual.yaml").algorithm == "ppo_lagrangian"
+
+
+def test_a_shipped_config_loads_by_name_and_an_unknown_name_is_one_line():
+    assert load_config("ppo") == load_config(REPO / "configs/train/ppo.yaml")
+    with pytest.raises(ConfigError, match=r"unknown training config 'nope'; shipped: .*ppo-residual"):
+        load_config("nope")
 
 
 V1 = "env: {id: cnc_gym/Feedrate-v1, programs: [circle]"
@@ -140,7 +146,7 @@ def test_an_unwritable_output_dir_is_one_line_before_training(tmp_path, capsys):
 
 
 def test_a_config_built_in_python_keeps_the_file_rules(tmp_path):
-    from agents.training import TrainConfig, train
+    from cnc_gym_agents.training import TrainConfig, train
 
     config = TrainConfig(run_name="../outside", output_dir=str(tmp_path))
     with pytest.raises(ConfigError, match="run_name must be a plain name"):
@@ -151,7 +157,7 @@ def test_a_config_built_in_python_keeps_the_file_rules(tmp_path):
 def test_the_saved_config_of_a_run_loads_again(tmp_path):
     import yaml
 
-    from agents.training import config_to_dict
+    from cnc_gym_agents.training import config_to_dict
 
     config = load_config(REPO / "configs/train/ppo.yaml")
     path = tmp_path / "config.yaml"

@@ -95,11 +95,11 @@ def test_cli_user_programs_plots_and_leaderboard(tmp_path, capsys):
 
 
 def test_module_callable_policies(tmp_path, monkeypatch):
-    from agents import make_policy
+    from cnc_gym.policies import make_policy
 
     (tmp_path / "my_policies.py").write_text(
         "import numpy as np\n"
-        "from agents import ConstantOverride\n"
+        "from cnc_gym.policies import ConstantOverride\n"
         "def factory():\n    return ConstantOverride(0.8)\n"
         "def act(observation, info):\n    return np.array([-0.2], dtype=np.float32)\n"
         "instance = ConstantOverride(0.3)\n"
@@ -148,18 +148,18 @@ def test_no_policy_beats_the_bound(pieces):
     import gymnasium
 
     import cnc_gym  # noqa: F401
-    from cnc_gym.benchmark.runner import run_one_episode
     from cnc_gym.machine import load_machine
     from cnc_gym.motion.bound import time_optimal_bound
+    from cnc_gym.rollout import run_episode
 
     programs, _ = _tiny(2)
     machine = load_machine("vmc-small")
     for program in programs:
         env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program.text])
         bound = time_optimal_bound(env.unwrapped.toolpath, machine).total_s
-        info, _, _, finished = run_one_episode(env, _Knob(pieces), 0)
-        if finished:
-            assert info["cycle_time_s"] >= bound
+        episode = run_episode(env, _Knob(pieces), 0)
+        if episode.finished:
+            assert episode.info["cycle_time_s"] >= bound
         env.close()
 
 

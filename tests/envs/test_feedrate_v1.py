@@ -181,7 +181,7 @@ def test_reward_weights_that_would_break_the_ranking_are_refused(kwargs):
 
 # ---------------------------------------------------------------------------------- residual and v0 parity
 def test_residual_zero_is_the_classical_planner():
-    from agents.classical import ClassicalPlanner
+    from cnc_gym.policies.classical import ClassicalPlanner
 
     v0 = FeedrateEnv(programs=["star"])
     planner = ClassicalPlanner()

@@ -4,7 +4,7 @@ The reference path is the modular step: the same state arrays driven through the
 the plant object's ``step``/``settled`` and the ContourErrorMeter, one env at a time (the path a plant
 backend without compiled kernels takes). For Feedrate-v1 and v2 the reference also computes in Python
 what the compiled step computes for them: the machine, episode and planner entries of the observation,
-the planner's override (with the ``classical`` policy's own ``override_at``), the reward terms, the finish
+the planner's override (with the planner's ``override_at``), the reward terms, the finish
 bonus, the cost and the info keys. Every observation, reward, termination, truncation and info
 value must be equal — exactly, not to a tolerance — on the built-in programs and on random programs
 (lines, polylines, arcs and helices in three planes, NURBS, dwells, exact stops, rapids), in both action
@@ -266,7 +266,7 @@ def test_borrowed_and_matrix_views_are_the_arrays_own_memory():
 # ------------------------------------------------------------------------------------ Feedrate-v1 and v2
 class ReferenceEnvV1(FeedrateEnvV1):
     """Feedrate-v1 on the modular step, with its own entries, reward and info computed in Python from the
-    step's v0 outputs (the planner's override with agents.classical.override_at)."""
+    step's v0 outputs (the planner's override with cnc_gym.motion.planner.override_at)."""
 
     def make_batch(self, n_envs, parallel=None, plant=None):
         return super().make_batch(n_envs, parallel, ReferencePlant(self.machine, n_envs))
@@ -289,7 +289,7 @@ class ReferenceEnvV1(FeedrateEnvV1):
 
     def _v1(self, obs, info, terminated):
         """The v1 entries of ``obs`` and the v1 info (``terminated`` None: a reset), and the reward."""
-        from agents.classical import override_at
+        from cnc_gym.motion.planner import override_at
 
         program = self._batch.program(0)
         schedule = self._planner.schedule(program.toolpath, self.machine, program.limits)

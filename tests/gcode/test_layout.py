@@ -1,14 +1,14 @@
 """The layout of ``cnc_gym/gcode`` is its architecture: no import cycles, and the core knows no feature.
 
-Imports are read from the source (``ast``), all of them: module level, inside functions, and under
-``if TYPE_CHECKING:``. ``from package import module`` is an import of that module (as Python resolves it);
-``from package import name`` of a name the package's ``__init__`` defines is an import of the package.
+Imports are read from the source, all of them (``tests/import_graph.py``, the reader of
+``tests/test_package_layout.py``, which checks the whole package's stages).
 """
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
+
+from import_graph import cycles, graph, modules
 
 import cnc_gym.gcode
 
@@ -19,60 +19,8 @@ PREFIX = "cnc_gym.gcode"
 CORE = {"codes", "settings", "program", "offsets", "canonical", "state", "dialect", "interpreter"}
 
 
-def _modules() -> dict[str, Path]:
-    out = {}
-    for path in sorted(ROOT.rglob("*.py")):
-        parts = list(path.relative_to(ROOT).with_suffix("").parts)
-        if parts[-1] == "__init__":
-            parts = parts[:-1]
-        out[".".join([PREFIX, *parts])] = path
-    return out
-
-
-MODULES = _modules()
-
-
-def _imports(name: str, path: Path) -> set[str]:
-    tree = ast.parse(path.read_text(), str(path))
-    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
-    found: set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            found.update(alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
-                base = f"{anchor}.{base}" if base else anchor
-            for alias in node.names:
-                candidate = f"{base}.{alias.name}"
-                found.add(candidate if candidate in MODULES else base)
-    return {m for m in found if m in MODULES and m != name}
-
-
-GRAPH = {name: _imports(name, path) for name, path in MODULES.items()}
-
-
-def _cycle() -> list[str] | None:
-    state: dict[str, int] = {}  # 1 visiting, 2 done
-    stack: list[str] = []
-
-    def visit(node: str) -> list[str] | None:
-        state[node] = 1
-        stack.append(node)
-        for nxt in sorted(GRAPH[node]):
-            if state.get(nxt) == 1:
-                return [*stack[stack.index(nxt):], nxt]
-            if nxt not in state and (found := visit(nxt)):
-                return found
-        stack.pop()
-        state[node] = 2
-        return None
-
-    for node in sorted(GRAPH):
-        if node not in state and (found := visit(node)):
-            return found
-    return None
+MODULES = modules({ROOT: PREFIX})
+GRAPH = graph(MODULES)
 
 
 def test_the_package_has_the_layout_of_the_architecture():
@@ -82,8 +30,8 @@ def test_the_package_has_the_layout_of_the_architecture():
 
 
 def test_no_import_cycles_in_gcode_type_checking_imports_included():
-    cycle = _cycle()
-    assert cycle is None, "import cycle: " + " → ".join(cycle or [])
+    found = cycles(GRAPH)
+    assert not found, f"import cycles: {[sorted(c) for c in found]}"
 
 
 def test_the_core_imports_no_language_family_and_no_dialect():
@@ -111,10 +59,6 @@ def test_dialect_folders_do_not_import_each_other():
 
 def test_the_cycle_check_finds_a_cycle():
     # The check itself can fail: a two-module cycle planted in a copy of the graph is found.
-    saved = {k: set(v) for k, v in GRAPH.items()}
-    try:
-        GRAPH[f"{PREFIX}.codes"].add(f"{PREFIX}.interpreter")
-        assert _cycle() is not None
-    finally:
-        GRAPH.clear()
-        GRAPH.update(saved)
+    edges = {k: set(v) for k, v in GRAPH.items()}
+    edges[f"{PREFIX}.codes"].add(f"{PREFIX}.interpreter")
+    assert cycles(edges)

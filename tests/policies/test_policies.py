@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents import ClassicalPlanner, ConstantOverride, make_policy
-from agents.base import override_action
 from cnc_gym.errors import CncGymError
+from cnc_gym.policies import ClassicalPlanner, ConstantOverride, make_policy
+from cnc_gym.policies.base import override_action
 
 
 @pytest.mark.parametrize(("spec", "override"), [("constant:1.0", 1.0), ("constant:0.5", 0.5),

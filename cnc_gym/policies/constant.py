@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from agents.base import override_action, require_override_mode
 from cnc_gym.errors import CncGymError
+from cnc_gym.policies.base import override_action, require_override_mode
 
 
 class ConstantOverride:

@@ -1,4 +1,4 @@
-"""The classical planner's servo error model and look-ahead scan, against the plant and closed forms."""
+"""The planner's servo error model and its tables, against the plant and closed forms."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from agents.classical import ServoErrorModel, bidirectional_scan, jerk_limited_reach
 from cnc_gym.machine import load_machine
+from cnc_gym.motion.planner import ServoErrorModel, arc_caps, corner_error_per_speed, servo_tables
 from cnc_gym.plant import ServoPlant
 
 
@@ -80,38 +80,31 @@ def test_line_lateral_error_from_gain_mismatch():
     assert lateral == pytest.approx(100.0 * expected_per_speed, rel=0.01)
 
 
-def _s_curve_distance(v0: float, v1: float, accel: float, jerk: float) -> float:
-    """Distance of a jerk-limited ramp v0 → v1, integrated numerically (phases +J, 0, −J)."""
-    dv = v1 - v0
-    t_jerk = min(accel / jerk, math.sqrt(dv / jerk))
-    t_const = max(0.0, dv / accel - accel / jerk) if t_jerk == accel / jerk else 0.0
-    dt = 1e-6
-    t_total = 2 * t_jerk + t_const
-    t = np.arange(0.0, t_total, dt) + dt / 2
-    j = np.where(t < t_jerk, jerk, np.where(t < t_jerk + t_const, 0.0, -jerk))
-    a = np.cumsum(j) * dt
-    v = v0 + np.cumsum(a) * dt
-    return float(np.sum(v) * dt)
+def test_ramp_error_response_of_a_p_loop_is_the_closed_form():
+    # P loop, no feed-forward, ideal velocity loop: after a unit velocity step the following error is
+    # (1 − e^(−Kv·t))/Kv, which settles at the steady lag 1/Kv.
+    tables = servo_tables(load_machine("p-loop-30"))
+    expected = (1.0 - np.exp(-30.0 * tables.ramp_t)) / 30.0
+    np.testing.assert_allclose(tables.ramp_error[0], expected, atol=1e-9)
+    assert tables.lag_s[0] == pytest.approx(1 / 30)
 
 
-@pytest.mark.parametrize(("v0", "v1"), [(0.0, 5.0), (10.0, 40.0), (20.0, 150.0)])
-def test_jerk_limited_reach_inverts_a_simulated_s_curve(v0, v1):
-    accel, jerk = 3000.0, 30000.0  # A²/J = 300 mm/s: the first two cases never reach A, the third does
-    distance = _s_curve_distance(v0, v1, accel, jerk)
-    assert jerk_limited_reach(v0, distance, accel, jerk) == pytest.approx(v1, rel=2e-3)
+def test_arc_table_matches_the_bisection_of_the_model():
+    machine = load_machine("vmc-small")
+    tables, model = servo_tables(machine), ServoErrorModel(machine)
+    for radius in (0.5, 5.0, 40.0):
+        cap = arc_caps(tables, np.array([radius]), np.array([0]), 0.014)[0]
+        assert cap == pytest.approx(model.arc_speed_cap(radius, 0, 0.014), rel=0.02)
 
 
-def test_scan_with_huge_jerk_is_the_constant_acceleration_profile():
-    # With J → ∞ the reach is v = √(v_c² + 2·A·d) on both sides of a single slow point.
-    s = np.linspace(0.0, 100.0, 1001)
-    cap = np.full_like(s, 300.0)
-    cap[500] = 5.0
-    accel = 2000.0
-    out = bidirectional_scan(s, cap, accel, 1e12)
-    expected = np.minimum(cap, np.sqrt(5.0**2 + 2 * accel * np.abs(s - 50.0)))
-    np.testing.assert_allclose(out, expected, rtol=1e-3)
-    # Finite jerk: slower ramps, never above the cap, the cap kept far from the dip.
-    limited = bidirectional_scan(s, cap, accel, 20000.0)
-    assert np.all(limited <= expected + 1e-9)
-    assert limited[500] == 5.0 and limited[0] == 300.0 and limited[-1] == 300.0
-    assert np.all(np.diff(limited[:501]) <= 1e-12) and np.all(np.diff(limited[500:]) >= -1e-12)
+def test_corner_error_of_a_p_loop():
+    tables = servo_tables(load_machine("p-loop-30"))  # matched axes: no sideways lag on lines
+    turns = np.radians([0.0, 30.0, 60.0, 90.0, 120.0, 180.0])
+    out = np.column_stack((np.cos(turns), np.sin(turns), np.zeros(len(turns))))
+    c = corner_error_per_speed(tables, np.repeat([[1.0, 0.0, 0.0]], len(turns), axis=0), out)
+    # Straight on, or straight back along the same line: the tool stays on the path.
+    assert c[0] == pytest.approx(0.0, abs=1e-12) and c[-1] == pytest.approx(0.0, abs=1e-12)
+    # Deepest at a right angle, symmetric about it, and less than the lag distance v/Kv.
+    assert np.all(np.diff(c[:4]) > 0)
+    assert c[2] == pytest.approx(c[4], rel=1e-9)
+    assert c[3] < 1 / 30

@@ -4,17 +4,18 @@ It starts from the servo model's schedule, then *runs copies of the env* (the ex
 and corrects the schedule where the simulated contour error exceeds its target. No real controller or CAM
 system can do that (it would need the machine's exact future), so its results are an **oracle**: an
 upper reference for what a feed schedule can reach on this simulator, not a deployable baseline. The
-deployable planner is :class:`agents.classical.ClassicalPlanner`.
+deployable planner is :class:`cnc_gym.policies.classical.ClassicalPlanner`.
 
 Planning runs whole episodes, several times: on a terminal (stderr a TTY) it shows a progress bar while it
 plans, before the episode's own bar, and prints nothing otherwise.
 
 How the schedule is built (once per program, machine and control period, cached):
 
-1. **Servo error model** (:class:`ServoErrorModel`). Each axis is the plant's loop (``cnc_gym.plant``):
-   ``u = Kv·(r − x) + f·ṙ`` into a velocity loop ``H(s)`` (ideal, or 2nd order ωn, ζ), so
-   ``X/R = G(s) = H·(Kv + f·s)/(s + H·Kv)``; the post-interpolation moving average multiplies every axis
-   by the same ``M(jω)``. Two steady states give closed forms:
+1. **Servo error model** (the deployable planner's, :class:`~cnc_gym.motion.planner.ServoErrorModel`).
+   Each axis is the plant's loop (``cnc_gym.plant``): ``u = Kv·(r − x) + f·ṙ`` into a velocity loop
+   ``H(s)`` (ideal, or 2nd order ωn, ζ), so ``X/R = G(s) = H·(Kv + f·s)/(s + H·Kv)``; the
+   post-interpolation moving average multiplies every axis by the same ``M(jω)``. Two steady states give
+   closed forms:
 
    * *straight line at speed v* — each axis lags by ``(1 − f_k)·v_k/Kv_k`` (ramp error of the loop, ``H(0)
      = 1``). Equal lags only move the tool along the line; unequal ones (gain mismatch, unequal
@@ -53,16 +54,17 @@ from typing import Any
 
 import numpy as np
 
-from agents.base import override_action
-from agents.classical import (
-    _SPEED_CEILING_MM_S,
+from cnc_gym.machine import MachineConfig
+from cnc_gym.motion.planner import (
+    SPEED_CEILING_MM_S,
     Schedule,
     ServoErrorModel,
     bidirectional_scan,
-    knob_setup,
     override_at,
 )
-from cnc_gym.machine import MachineConfig
+from cnc_gym.policies.base import override_action
+from cnc_gym.policies.classical import knob_setup
+from cnc_gym.rollout import play
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 
@@ -169,9 +171,10 @@ class OraclePlanner:
         unresponsive: list[float] = []
         # Every schedule returned has been simulated: the last round only measures.
         for iteration in range(1, self.refine_iterations + 2):
-            path_s, error, speed = self._simulate(env)
-            if path_s is None:  # env could not be copied: model-only schedule
+            run = self._simulate(env)
+            if run is None:  # env could not be copied: model-only schedule
                 return schedule
+            path_s, error, speed = run
             schedule.iterations = iteration
             schedule.predicted_violations = int(np.sum(error > tolerance))
             offending = []
@@ -244,7 +247,10 @@ class OraclePlanner:
             candidate = self._schedule(s, cap, cutting, feed_mm_s, accel, jerk)
             candidate.iterations = schedule.iterations + 1
             self.schedule = candidate
-            new_path_s, new_error, _ = self._simulate(env)
+            new_run = self._simulate(env)
+            if new_run is None:  # (the env was copied before: it can be copied again)
+                break
+            new_path_s, new_error, _ = new_run
             over = new_path_s[new_error > target]
             if any(not any(abs(w - u) < 0.5 for u in unresponsive) for w in over):
                 self.schedule = schedule  # too far: keep the last schedule that passed
@@ -263,12 +269,12 @@ class OraclePlanner:
 
     def _model_cap(self, toolpath: Toolpath, seg: np.ndarray, s: np.ndarray, model: ServoErrorModel,
                    target: float) -> np.ndarray:  # fmt: skip
-        cap = np.full(len(seg), _SPEED_CEILING_MM_S)
+        cap = np.full(len(seg), SPEED_CEILING_MM_S)
         is_arc = toolpath.kind[seg] == SegmentKind.ARC
         if np.any(~is_arc):
             _, tangent, curvature = toolpath.evaluate(s[~is_arc])
             per_speed = model.line_error_per_speed(tangent)
-            line_cap = np.where(per_speed > 1e-12, target / np.maximum(per_speed, 1e-12), _SPEED_CEILING_MM_S)
+            line_cap = np.where(per_speed > 1e-12, target / np.maximum(per_speed, 1e-12), SPEED_CEILING_MM_S)
             # Curved non-arc segments (NURBS): the arc model at the local radius 1/κ, taken in the XY
             # plane, on radii rounded to 2 % steps so the bisection runs once per step.
             curved = curvature > 1e-9
@@ -283,17 +289,18 @@ class OraclePlanner:
         return cap
 
     def _schedule(self, s, cap, cutting, feed_mm_s, accel, jerk) -> Schedule:
-        finite_cap = np.where(np.isfinite(cap), cap, _SPEED_CEILING_MM_S)
+        finite_cap = np.where(np.isfinite(cap), cap, SPEED_CEILING_MM_S)
         speed = bidirectional_scan(s, finite_cap, accel, jerk)
         override = np.full(len(s), self._max_override)
         fed = cutting & (feed_mm_s > 0)
         override[fed] = np.clip(speed[fed] / feed_mm_s[fed], 0.0, self._max_override)
         return Schedule(s=s, cap_mm_s=cap.copy(), speed_mm_s=speed, override=override)
 
-    def _simulate(self, env: Any) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    def _simulate(self, env: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Run a copy of the (just reset) env with the current schedule.
 
-        Returns per control step: path position (mm), contour error (mm) and path speed (mm/s).
+        Returns per control step: path position (mm), contour error (mm) and path speed (mm/s); None when
+        the env cannot be copied.
         """
         # Tool paths are immutable and may be large: share them instead of copying.
         memo: dict[int, Any] = {}
@@ -305,22 +312,24 @@ class OraclePlanner:
         except Exception as exc:  # an env that cannot be copied: fall back to the model-only schedule
             warnings.warn(f"oracle planner: cannot copy the env to refine the schedule ({exc}); "
                           "using the servo model alone", RuntimeWarning, stacklevel=3)  # fmt: skip
-            return None, None, None
-        info: dict[str, Any] = {}
-        observation = None
-        positions, errors, speeds = [], [], []
+            return None
+        positions: list[float] = []
+        errors: list[float] = []
+        speeds: list[float] = []
         bar = self._bar
         done = bar.n if bar is not None else 0
-        for step in range(10_000_000):
-            _, _, terminated, truncated, info = sim.step(self.act(observation, info))
+
+        def record(steps: int, reward: float, terminated: bool, truncated: bool,
+                   info: dict[str, Any]) -> None:  # fmt: skip
             positions.append(float(info.get("path_s", 0.0)))
             errors.append(float(info.get("contour_error_mm", 0.0)))
             speeds.append(float(info.get("feed_mm_min", 0.0)) / 60.0)
-            if terminated or truncated:
-                break
-            if bar is not None and step % 500 == 0:  # a simulated round moves the bar by up to one unit
-                bar.n = min(done + float(info.get("progress", 0.0)), bar.total)
+            if bar is not None and (steps - 1) % 500 == 0 and not (terminated or truncated):
+                bar.n = min(done + float(info.get("progress", 0.0)), bar.total)  # a round moves it ≤ 1 unit
                 bar.refresh()
+
+        # The copy was just reset: the schedule's episode from its first step (no observation yet).
+        play(sim, self, None, {}, record)
         if bar is not None:
             bar.n = min(int(done) + 1, bar.total)
             bar.refresh()

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
-from agents import ConstantOverride, OraclePlanner
-from cnc_gym.runner import run_episode
+from cnc_gym.policies import ConstantOverride, OraclePlanner
+from cnc_gym.runner import record_run
 
 OVERRIDES = np.round(np.arange(1, 21) * 0.1, 1)  # 10 %, 20 %, … 200 %
 
@@ -54,12 +54,12 @@ def _constant_verdict(env, override: float, time_to_beat: float, allowed_violati
 )
 def test_oracle_beats_every_compliant_constant_override(program):
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=[program], machine="vmc-small")
-    classical = run_episode(env, OraclePlanner(), record=False)
+    classical = record_run(env, OraclePlanner(), record=False)
     assert classical.finished
     # Within tolerance: no violation at all. (The controller waits in position at the rapid's end, so the
     # plunge that follows an approach rapid starts from a settled servo; no step is left that no feed avoids.)
     assert classical.violations == 0
-    careful = run_episode(env, ConstantOverride(0.1), record=False)
+    careful = record_run(env, ConstantOverride(0.1), record=False)
     # Faster than every constant override 10 %…200 % that stays as compliant.
     verdicts = {
         float(x): _constant_verdict(env, float(x), classical.cycle_time_s, 0)
@@ -75,7 +75,7 @@ def test_oracle_beats_every_compliant_constant_override(program):
 
 def test_oracle_uses_override_above_100_percent_where_geometry_allows():
     env = gymnasium.make("cnc_gym/Feedrate-v0", programs=["star"], machine="vmc-small")
-    result = run_episode(env, OraclePlanner())
+    result = record_run(env, OraclePlanner())
     assert result.override.max() > 1.2
     assert result.override.min() < 1.0
     env.close()

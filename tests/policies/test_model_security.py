@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents import make_policy
-from agents.model import ModelError, ModelPolicy, load_sb3_model
 from cnc_gym.errors import CncGymError
+from cnc_gym.policies import make_policy
+from cnc_gym.policies.model import ModelError, ModelPolicy, load_sb3_model
 
 REPO = Path(__file__).resolve().parents[2]
 

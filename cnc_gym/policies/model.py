@@ -24,7 +24,7 @@ env it was trained for (models without it run in ``cnc_gym/Feedrate-v0``).
 A model outside this list (a custom policy class, image or dict observations)
 is refused with one line; there is no unsafe fallback. Such a model can still be loaded in your own code
 with SB3's loader, at your own risk, and run as any object with ``reset(env)`` and ``act(obs, info)``
-(:class:`agents.base.Policy`). docs/security.md says what a model file can and cannot do.
+(:class:`cnc_gym.policies.base.Policy`). docs/security.md says what a model file can and cannot do.
 """
 
 from __future__ import annotations

@@ -1,0 +1,192 @@
+"""The planner's model of the servo axes: the contour error they make at a path speed, in closed form.
+
+Each axis is the plant's loop ``u = Kv·(r − x) + f·ṙ`` into a velocity loop ``H(s)`` (ideal, or 2nd order
+ωn, ζ), so ``X/R = G(s) = H·(Kv + f·s)/(s + H·Kv)``; a post-interpolation moving average multiplies every
+axis by the same ``M(jω)``. Three closed forms (the planner's docstring, :mod:`cnc_gym.motion.planner`):
+the straight line's lag, the arc's radial error and the corner's transient, tabulated once per machine
+(:class:`ServoTables`). The model reads machine parameters only, never the plant.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from numba import njit
+
+from cnc_gym.machine import MachineConfig
+from cnc_gym.toolpath import PLANE_AXES, Plane
+
+#: Speeds are searched in mm/s up to this bound (far above any cutting feed).
+SPEED_CEILING_MM_S = 2000.0
+
+
+class ServoErrorModel:
+    """Steady-state contour error of the machine's servo axes as a function of path speed."""
+
+    def __init__(self, machine: MachineConfig) -> None:
+        self.machine = machine
+        self.period_s = float(machine.controller.interpolation_period_s)
+        self.filter_samples = max(1, round(machine.controller.post_filter_s / self.period_s))
+        self.kv = np.array(machine.axis_array("kv_1_s"))
+        self.ff = np.array(machine.axis_array("feedforward"))
+        self.vel_hz = np.array(machine.axis_array("velocity_loop_hz"))
+        self.vel_zeta = np.array(machine.axis_array("velocity_loop_damping"))
+        # Ramp lag per unit speed of each axis: (1 − f)/Kv, plus the moving average's (N − 1)·T/2.
+        self.lag_s = (1.0 - self.ff) / self.kv + (self.filter_samples - 1) * self.period_s / 2.0
+
+    def axis_response(self, omega: np.ndarray) -> np.ndarray:
+        """Complex frequency response X/R of each axis at ω (rad/s): shape (3, len(omega))."""
+        s = 1j * np.atleast_1d(np.asarray(omega, dtype=float))[None, :]
+        wn = 2.0 * np.pi * self.vel_hz[:, None]
+        zeta = self.vel_zeta[:, None]
+        ideal = self.vel_hz[:, None] <= 0
+        h = np.where(ideal, 1.0, wn**2 / (s**2 + 2.0 * zeta * wn * s + wn**2 + (wn == 0)))
+        kv, ff = self.kv[:, None], self.ff[:, None]
+        g = h * (kv + ff * s) / (s + h * kv)
+        n = self.filter_samples
+        if n > 1:  # moving average of n samples, common to all axes
+            k = np.arange(n)[:, None]
+            m = np.exp(-s[0][None, :] * k * self.period_s).mean(axis=0)  # delays e^(-s·kT), s = jω
+            g = g * m[None, :]
+        return g
+
+    def line_error_per_speed(self, tangent: np.ndarray) -> np.ndarray:
+        """Steady contour error per unit speed (mm per mm/s) on straight moves, unit tangents (m, 3)."""
+        lag = tangent * self.lag_s[None, :]  # following-error vector per unit speed
+        along = np.sum(lag * tangent, axis=1, keepdims=True)
+        return np.linalg.norm(lag - along * tangent, axis=1)
+
+    def arc_error(self, speed_mm_s: float | np.ndarray, radius_mm: float, plane: int) -> np.ndarray:
+        """Steady contour error (mm) on an arc of ``radius_mm`` in ``plane`` at each speed."""
+        speed = np.atleast_1d(np.asarray(speed_mm_s, dtype=float))
+        u, v, _ = PLANE_AXES[Plane(int(plane))]
+        g = self.axis_response(speed / radius_mm)  # (3, m)
+        phase = np.linspace(0.0, 2.0 * np.pi, 73)[:, None]
+        x = np.abs(g[u])[None, :] * np.cos(phase + np.angle(g[u])[None, :])
+        y = np.abs(g[v])[None, :] * np.sin(phase + np.angle(g[v])[None, :])
+        rho = np.hypot(x, y)
+        return radius_mm * np.max(np.abs(rho - 1.0), axis=0)
+
+    def arc_speed_cap(self, radius_mm: float, plane: int, error_mm: float) -> float:
+        """Largest speed whose steady arc error is at most ``error_mm`` (bisection; error grows with v)."""
+        lo, hi = 0.0, SPEED_CEILING_MM_S
+        if self.arc_error(hi, radius_mm, plane)[0] <= error_mm:
+            return hi
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            if self.arc_error(mid, radius_mm, plane)[0] <= error_mm:
+                lo = mid
+            else:
+                hi = mid
+        return lo
+
+
+
+# ------------------------------------------------------------------------------------ tabulated model
+@dataclass(frozen=True)
+class ServoTables:
+    """The servo error model of one machine, tabulated once for the planner's per-segment work."""
+
+    lag_s: np.ndarray  # (3,) steady lag per unit speed, s
+    arc_omega: np.ndarray  # (m,) ω grid, rad/s
+    arc_error: np.ndarray  # (3 planes, m) steady arc error per mm of radius, non-decreasing in ω
+    ramp_t: np.ndarray  # (k,) time grid, s
+    ramp_error: np.ndarray  # (3, k) E_k(t): following error after a unit velocity step, s (→ lag_s)
+
+
+def _ramp_error_response(model: ServoErrorModel, t: np.ndarray) -> np.ndarray:
+    """E_k(t) of every axis: the step response of (1 − G_k(s))/s, then the moving average if any."""
+    from scipy import signal
+
+    out = np.zeros((3, len(t)))
+    for k in range(3):
+        kv, ff = float(model.kv[k]), float(model.ff[k])
+        if model.vel_hz[k] > 0:  # (1 − G)/s = (D − f·ωn²)/(s·D + Kv·ωn²), D = s² + 2ζωn·s + ωn²
+            wn = 2.0 * math.pi * float(model.vel_hz[k])
+            zeta = float(model.vel_zeta[k])
+            num = [1.0, 2.0 * zeta * wn, wn * wn * (1.0 - ff)]
+            den = [1.0, 2.0 * zeta * wn, wn * wn, kv * wn * wn]
+        else:  # (1 − f)/(s + Kv)
+            num, den = [1.0 - ff], [1.0, kv]
+        _, out[k] = signal.step(signal.TransferFunction(num, den), T=t)
+    n = model.filter_samples
+    if n > 1:  # error = (r − M r) + M(r − G r): the average's own lag plus the averaged servo error
+        dt = model.period_s
+        ramp = t.copy()
+        shifted = [np.interp(t - i * dt, t, ramp, left=0.0) for i in range(n)]
+        own = ramp - np.mean(shifted, axis=0)
+        servo = np.mean([[np.interp(t - i * dt, t, out[k], left=0.0) for i in range(n)] for k in range(3)],
+                        axis=1)  # fmt: skip
+        out = own[None, :] + servo
+    return out
+
+
+@lru_cache(maxsize=256)  # (a randomised training run plans on a few dozen machines)
+def servo_tables(machine: MachineConfig) -> ServoTables:
+    """:class:`ServoTables` of ``machine`` (cached: machines are frozen and hashable)."""
+    model = ServoErrorModel(machine)
+    omega = np.geomspace(1e-2, 2e4, 400)
+    arc = np.zeros((3, len(omega)))
+    for plane in range(3):  # error per mm of radius: the radius only scales the circle
+        arc[plane] = np.maximum.accumulate(model.arc_error(omega, 1.0, plane))
+    horizon = 8.0 / float(np.min(model.kv)) + model.filter_samples * model.period_s
+    t = np.linspace(0.0, horizon, 160)
+    return ServoTables(lag_s=model.lag_s.copy(), arc_omega=omega, arc_error=arc, ramp_t=t,
+                       ramp_error=_ramp_error_response(model, t))  # fmt: skip
+
+
+def arc_caps(tables: ServoTables, radius_mm: np.ndarray, plane: np.ndarray, error_mm: float) -> np.ndarray:
+    """Largest speed on arcs of ``radius_mm`` (in ``plane``) whose steady error is ≤ ``error_mm``."""
+    radius = np.asarray(radius_mm, dtype=float)
+    caps = np.full(radius.shape, SPEED_CEILING_MM_S)
+    for p in np.unique(plane):
+        sel = plane == p
+        per_mm = error_mm / radius[sel]
+        table = tables.arc_error[int(p)]
+        omega = np.interp(per_mm, table, tables.arc_omega, right=tables.arc_omega[-1])
+        # Below the table the error grows at least linearly with ω: scaling down linearly is safe.
+        small = per_mm < table[0]
+        omega = np.where(small, tables.arc_omega[0] * per_mm / max(table[0], 1e-300), omega)
+        caps[sel] = np.where(per_mm >= table[-1], SPEED_CEILING_MM_S, omega * radius[sel])
+    return caps
+
+
+def corner_error_per_speed(tables: ServoTables, u_in: np.ndarray, u_out: np.ndarray) -> np.ndarray:
+    """c(u_in, u_out) per junction (mm per mm/s): the corner model of the module docstring, (m,)."""
+    return _corner_errors(np.ascontiguousarray(u_in, dtype=np.float64),
+                          np.ascontiguousarray(u_out, dtype=np.float64), tables.ramp_t,
+                          np.ascontiguousarray(tables.ramp_error.T), tables.lag_s)  # fmt: skip
+
+
+@njit(cache=True)
+def _corner_errors(u_in: np.ndarray, u_out: np.ndarray, t: np.ndarray, e: np.ndarray,
+                   lag: np.ndarray) -> np.ndarray:  # fmt: skip
+    """For each corner, max over t of the distance of y(t) = t·b − lag∘a − (b − a)∘E(t) from the two legs
+    {−α·a} and {β·b} (α, β ≥ 0): the actual point per unit speed, the corner at the origin."""
+    m = u_in.shape[0]
+    out = np.zeros(m)
+    y = np.zeros(3)
+    for j in range(m):
+        worst = 0.0
+        for k in range(t.shape[0]):
+            along_in = 0.0
+            along_out = 0.0
+            for c in range(3):
+                y[c] = t[k] * u_out[j, c] - lag[c] * u_in[j, c] - (u_out[j, c] - u_in[j, c]) * e[k, c]
+                along_in += y[c] * u_in[j, c]
+                along_out += y[c] * u_out[j, c]
+            along_in = min(along_in, 0.0)  # nearest point of the incoming leg
+            along_out = max(along_out, 0.0)  # ... and of the outgoing leg
+            d_in = 0.0
+            d_out = 0.0
+            for c in range(3):
+                d_in += (y[c] - along_in * u_in[j, c]) ** 2
+                d_out += (y[c] - along_out * u_out[j, c]) ** 2
+            d = math.sqrt(min(d_in, d_out))
+            if d > worst:
+                worst = d
+        out[j] = worst
+    return out

@@ -1,0 +1,111 @@
+"""One rollout: a policy drives a Feedrate env through an episode, the same way everywhere.
+
+``cnc-gym run`` (:mod:`cnc_gym.runner`), ``cnc-gym bench`` (:mod:`cnc_gym.benchmark.runner`), the suite
+generator's feasibility check, ``scripts/evaluate.py`` and the oracle's simulations all go through this
+module, so a baseline, a trained model and an RL agent are measured by the same code path:
+
+- :class:`Policy`, the protocol a policy implements (``reset(env)`` once per episode, after
+  ``env.reset()``; ``act(observation, info) -> action`` every control step);
+- :func:`policy_env`, the env a policy runs a program in: the env id and settings the policy names (a
+  trained model's: :mod:`cnc_gym.policies.model`), else ``cnc_gym/Feedrate-v0``, measured with the
+  programmed-path contour meter (:data:`CONTOUR_RULE`);
+- :func:`run_episode` (reset, then :func:`play`) and :func:`play` (the step loop from a given state),
+  which return an :class:`Episode` record; an optional ``on_step`` hook sees every step and can stop the
+  episode (``cnc-gym run``'s series, progress bar and ``--max-time``; the oracle's record of its
+  simulation).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+#: The env a policy runs in when it names none (the baselines: they turn the feed-override knob).
+DEFAULT_ENV_ID = "cnc_gym/Feedrate-v0"
+#: The contour meter of every ``run`` and ``bench`` episode: the programmed path ("path": the rapids the
+#: reference has left are part of it), whatever env version the policy acts in.
+CONTOUR_RULE = "path"
+
+#: ``on_step(steps, reward, terminated, truncated, info)``, called after every step (``steps`` counts it);
+#: True stops the episode there.
+StepHook = Callable[[int, float, bool, bool, dict[str, Any]], bool | None]
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """Anything that can turn the feed-override knob of a Feedrate env (or command its feed).
+
+    A policy may also name the env it acts in: ``env_id`` and ``env_kwargs`` attributes (a trained
+    model's env version and settings); :func:`policy_env` reads them.
+    """
+
+    #: Short human-readable name used in tables and plots (``constant:1.0``, ``classical``, a model file).
+    name: str
+
+    def reset(self, env: Any) -> None:
+        """Prepare for a new episode; ``env`` has just been reset (``env.unwrapped`` gives the toolpath,
+        machine and controller)."""
+
+    def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        """The env action for this control step."""
+
+
+@dataclass
+class Episode:
+    """What a rollout returns: the last ``info`` (the episode's totals), the return and the step count."""
+
+    info: dict[str, Any]
+    total_return: float
+    steps: int
+    terminated: bool  # the program ran to its end
+    truncated: bool  # the env's step budget cut it off
+    stopped: bool = False  # the ``on_step`` hook asked to stop
+
+    @property
+    def finished(self) -> bool:
+        """The program ran to its end (terminated, not truncated or stopped)."""
+        return self.terminated
+
+
+def policy_env(policy: Any, *, programs: list[Any], env_id: str | None = None,
+               contour_rule: str | None = CONTOUR_RULE, **settings: Any) -> Any:  # fmt: skip
+    """The Gymnasium env ``policy`` runs ``programs`` in: the env id and settings the policy names
+    (``env_id``, ``env_kwargs`` attributes), else ``env_id`` (default :data:`DEFAULT_ENV_ID`); then
+    ``settings`` (dialect, machine, units, plant …); measured with ``contour_rule`` (None: the env id's
+    own meter)."""
+    import gymnasium
+
+    import cnc_gym  # noqa: F401  (registers the env ids)
+
+    chosen = getattr(policy, "env_id", None) or env_id or DEFAULT_ENV_ID
+    kwargs = {**dict(getattr(policy, "env_kwargs", None) or {}), **settings, "programs": programs}
+    if contour_rule is not None:
+        kwargs["contour_rule"] = contour_rule
+    return gymnasium.make(chosen, **kwargs)
+
+
+def run_episode(env: Any, policy: Any, seed: int | None = 0, on_step: StepHook | None = None) -> Episode:
+    """One episode of ``env`` under ``policy``: reset with ``seed``, ``policy.reset(env)``, then
+    :func:`play`."""
+    observation, info = env.reset(seed=seed)
+    policy.reset(env)
+    return play(env, policy, observation, info, on_step)
+
+
+def play(env: Any, policy: Any, observation: Any, info: dict[str, Any],
+         on_step: StepHook | None = None) -> Episode:  # fmt: skip
+    """Step ``env`` under ``policy`` from ``observation`` and ``info`` (a state the caller reset or copied)
+    until the episode ends or ``on_step`` returns True."""
+    total, steps = 0.0, 0
+    terminated = truncated = stopped = False
+    while not (terminated or truncated):
+        observation, reward, terminated, truncated, info = env.step(policy.act(observation, info))
+        total += float(reward)
+        steps += 1
+        if on_step is not None and on_step(steps, reward, terminated, truncated, info):
+            stopped = True
+            break
+    return Episode(info, total, steps, bool(terminated), bool(truncated), stopped)

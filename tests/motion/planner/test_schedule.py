@@ -1,0 +1,72 @@
+"""The planner's schedule: the jerk-limited reach and scan against closed forms and a simulated S-curve,
+and the schedule of a plain line."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cnc_gym.machine import load_machine
+from cnc_gym.motion.planner import bidirectional_scan, jerk_limited_reach, plan_schedule
+from cnc_gym.programs import load_program
+
+
+def _s_curve_distance(v0: float, v1: float, accel: float, jerk: float) -> float:
+    """Distance of a jerk-limited ramp v0 → v1, integrated numerically (phases +J, 0, −J)."""
+    dv = v1 - v0
+    t_jerk = min(accel / jerk, math.sqrt(dv / jerk))
+    t_const = max(0.0, dv / accel - accel / jerk) if t_jerk == accel / jerk else 0.0
+    dt = 1e-6
+    t_total = 2 * t_jerk + t_const
+    t = np.arange(0.0, t_total, dt) + dt / 2
+    j = np.where(t < t_jerk, jerk, np.where(t < t_jerk + t_const, 0.0, -jerk))
+    a = np.cumsum(j) * dt
+    v = v0 + np.cumsum(a) * dt
+    return float(np.sum(v) * dt)
+
+
+@pytest.mark.parametrize(("v0", "v1"), [(0.0, 5.0), (10.0, 40.0), (20.0, 150.0)])
+def test_jerk_limited_reach_inverts_a_simulated_s_curve(v0, v1):
+    accel, jerk = 3000.0, 30000.0  # A²/J = 300 mm/s: the first two cases never reach A, the third does
+    distance = _s_curve_distance(v0, v1, accel, jerk)
+    assert jerk_limited_reach(v0, distance, accel, jerk) == pytest.approx(v1, rel=2e-3)
+
+
+def test_scan_with_huge_jerk_is_the_constant_acceleration_profile():
+    # With J → ∞ the reach is v = √(v_c² + 2·A·d) on both sides of a single slow point.
+    s = np.linspace(0.0, 100.0, 1001)
+    cap = np.full_like(s, 300.0)
+    cap[500] = 5.0
+    accel = 2000.0
+    out = bidirectional_scan(s, cap, accel, 1e12)
+    expected = np.minimum(cap, np.sqrt(5.0**2 + 2 * accel * np.abs(s - 50.0)))
+    np.testing.assert_allclose(out, expected, rtol=1e-3)
+    # Finite jerk: slower ramps, never above the cap, the cap kept far from the dip.
+    limited = bidirectional_scan(s, cap, accel, 20000.0)
+    assert np.all(limited <= expected + 1e-9)
+    assert limited[500] == 5.0 and limited[0] == 300.0 and limited[-1] == 300.0
+    assert np.all(np.diff(limited[:501]) <= 1e-12) and np.all(np.diff(limited[500:]) >= -1e-12)
+
+
+def test_schedule_of_a_line_runs_at_the_knobs_top_away_from_its_ends():
+    machine = load_machine("vmc-small")
+    _, toolpath = load_program("G90 G21\nG01 X100 F3000\nM30\n", "gsk25i", machine)
+    schedule = plan_schedule(toolpath, machine)
+    middle = (schedule.s > 20) & (schedule.s < 80)
+    assert np.all(schedule.override[middle] == pytest.approx(2.0))
+    assert math.isclose(schedule.s[-1], 100.0)
+
+
+@settings(deadline=None)
+@given(st.floats(0.0, 500.0), st.floats(0.0, 200.0), st.floats(10.0, 20000.0), st.floats(100.0, 1e6))
+def test_the_planners_reach_is_the_controllers(v0, distance, accel, jerk):
+    # The same S-curve reach, solved twice (the docstring of jerk_limited_reach says why): never apart by
+    # more than the last bits, or 1e-8 mm/s where the Newton stops differ near rest.
+    from cnc_gym.motion.kernel import reach_speed
+
+    assert jerk_limited_reach(v0, distance, accel, jerk) == pytest.approx(
+        reach_speed(v0, distance, accel, jerk), rel=1e-12, abs=1e-8)
