@@ -154,7 +154,14 @@ def cmd_trace(args: argparse.Namespace) -> int:
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. `cnc-gym trace p.nc | head`: not an error
         _silence_stdout()
+    print_notices(toolpath.notices)
     return 0
+
+
+def print_notices(notices: Sequence[str]) -> None:
+    """The interpreter's notes about a program, one line each on stderr (the tool path is on stdout)."""
+    for line in notices:
+        print(_one_line(line), file=sys.stderr)
 
 
 def cmd_run(args: argparse.Namespace) -> int:

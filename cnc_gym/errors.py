@@ -42,6 +42,11 @@ def _escape(match: re.Match) -> str:
     return match.group().encode("unicode_escape").decode("ascii")
 
 
+def notice_line(file: str, line: int, message: str, code: str) -> str:
+    """A note about a program, one line as an error's: ``FILE:LINE: note: message [code]``."""
+    return f"{printable(str(file), MAX_FILE_CHARS)}:{line}: note: {printable(message)} [{code}]"
+
+
 class CncGymError(Exception):
     """Base class of every error cnc-gym raises on purpose. ``str()`` is :func:`printable`."""
 

@@ -23,7 +23,7 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.errors import ConfigError, ProgramError, notice_line
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, MapError, map_arc
 from cnc_gym.gcode.codes import CodeSpec, code_name, gkey, round_to
 from cnc_gym.gcode.dialect import BlockPlan
@@ -76,6 +76,7 @@ class Interpreter:
             comp=CompensationState(settings, settings.new_offsets(tool_offsets)),
         )
         st.rotary_axes = rotary_axes
+        st.offsets.g92_shifts_all = dialect.g92_shifts_work_systems
         st.rotary_origin = [0.0] * len(rotary_axes)
         st.increment = dialect.least_increment_mm
         st.feed = dialect.hooks.initial_feed
@@ -149,6 +150,8 @@ class Interpreter:
         dialect's end-of-program hooks, and build the tool path."""
         st = self.state
         language = self.dialect.language
+        for line, message, code in st.program.notices:
+            st.builder.notice(notice_line(st.program.file, line, message, code))
         if language.system_variables is not None:
             st.variables.system = language.system_variables(self)
         try:
@@ -164,6 +167,10 @@ class Interpreter:
 
     def error(self, message: str, code: str, *, alarm: str | int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
+
+    def notice(self, message: str, code: str, *, line: int | None = None) -> None:
+        st = self.state
+        st.builder.notice(notice_line(st.file, st.out.line if line is None else line, message, code))
 
     def check_budget(self) -> None:
         runner = self.state.flow

@@ -100,6 +100,11 @@ class Toolpath:
     row's ``start``/``end`` are the curve's first/last control points and its ``length`` the curve's arc
     length. A NURBS row is evaluated by arc length like every other row.
 
+    ``machine_functions`` maps the index of a dwell row to the machine function it stands for (``"M13"``):
+    an M code the control hands to the machine (coolant, clamps, conveyors …), which waits for it at rest
+    (a 0 s exact-stop dwell). ``notices``: one-line notes the interpreter made about the program (text it
+    did not run, a setting the program seems to need), ``FILE:LINE: note: … [code]``.
+
     Rotary axes (machines with A/B/C): ``rotary_axes`` names them (``"B"``; ``""`` on a 3-axis path) and
     ``rotary_start``/``rotary_end`` (n, k) hold each row's start and end angle in degrees, machine
     coordinates. Only rapids and lines move them (linearly with the row). ``length`` stays the XYZ length;
@@ -128,6 +133,10 @@ class Toolpath:
     rotary_start: np.ndarray | None = None
     rotary_end: np.ndarray | None = None
     smoothing_tolerance_mm: np.ndarray | None = None
+    #: Dwell rows that stand for a machine function: row index → its M code (``"M13"``).
+    machine_functions: Mapping[int, str] = field(default_factory=dict)
+    #: One-line notes about the program (``FILE:LINE: note: message [code]``), in the order they were made.
+    notices: tuple[str, ...] = ()
     # Derived geometry, filled in __post_init__.
     length: np.ndarray = field(init=False, repr=False)
     planar_length: np.ndarray = field(init=False, repr=False)
@@ -156,6 +165,11 @@ class Toolpath:
                                  f"got {type(curve).__name__}")  # fmt: skip
             length[row] = curve.length
         object.__setattr__(self, "nurbs", FrozenDict(self.nurbs))
+        for row in self.machine_functions:
+            if not 0 <= row < n or self.kind[row] != SegmentKind.DWELL:
+                raise ValueError(f"toolpath row {row}: a machine function stands on a dwell row")
+        object.__setattr__(self, "machine_functions", FrozenDict(self.machine_functions))
+        object.__setattr__(self, "notices", tuple(self.notices))
         k = len(self.rotary_axes)
         for name in ("rotary_start", "rotary_end"):
             arr = getattr(self, name)
@@ -391,6 +405,11 @@ _DTYPES = {"kind": np.int8, "plane": np.int8, "line": np.int32, "file_index": np
 _POINT_FIELDS = ("start", "end", "center")
 
 
+#: Most notes one tool path keeps (a program that repeats one oddity a million times gets one line for it,
+#: and a program with a thousand different ones a bounded list).
+MAX_NOTICES = 50
+
+
 class ToolpathBuilder:
     """Appends segments row by row (one plain tuple per row, fields in the order of ``_FIELDS``: one list
     append per segment on the interpreter's hot path) and freezes them into a Toolpath."""
@@ -408,6 +427,20 @@ class ToolpathBuilder:
         # Smoothing tolerances: (first row, {segment kind: tolerance mm}) from that row on (sparse: the
         # rows in between cost nothing while they are appended; build() fills the column).
         self._smoothing: list[tuple[int, dict[int, float]]] = []
+        #: Dwell rows standing for a machine function (row → M code) and the notes of the run.
+        self.machine_functions: dict[int, str] = {}
+        self.notices: list[str] = []
+        self._notices_dropped = 0
+
+    def notice(self, text: str) -> None:
+        """Keep one note about the program (each text once, at most :data:`MAX_NOTICES` of them; the rest
+        are counted in a last line)."""
+        if text in self.notices:
+            return
+        if len(self.notices) >= MAX_NOTICES:
+            self._notices_dropped += 1
+            return
+        self.notices.append(text)
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -528,6 +561,10 @@ class ToolpathBuilder:
                 arrays[name] = np.fromiter(map(itemgetter(index), rows), dtype, count=n)
         rotary_start, rotary_end = self._rotary_arrays(len(self))
         smoothing = self._smoothing_array(arrays["kind"]) if self._smoothing else None
+        notices = tuple(self.notices)
+        if self._notices_dropped:
+            notices += (f"... and {self._notices_dropped} more notes",)
         return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves),
                         rotary_axes=self.rotary_axes, rotary_start=rotary_start,
-                        rotary_end=rotary_end, smoothing_tolerance_mm=smoothing)  # fmt: skip
+                        rotary_end=rotary_end, smoothing_tolerance_mm=smoothing,
+                        machine_functions=dict(self.machine_functions), notices=notices)  # fmt: skip

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from cnc_gym.errors import ProgramError
+from cnc_gym.errors import ProgramError, notice_line
 from cnc_gym.gcode.codes import gkey
 from cnc_gym.gcode.lang.fanuc.calls import CallConvention
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate, evaluate_condition
@@ -340,7 +340,10 @@ class FlowRunner(CallConvention):
         if self.reader is None:
             self.reader = self.dialect.language.reader(self.dialect, self.calls)
         program = self.reader.read(text, str(path))
-        file_index = self.core.state.builder.file_index(str(path))
+        builder = self.core.state.builder
+        for line, message, code in program.notices:
+            builder.notice(notice_line(str(path), line, message, code))
+        file_index = builder.file_index(str(path))
         span = program.units.get(number)
         if span is None:
             if program.units:
