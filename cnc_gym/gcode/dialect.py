@@ -64,6 +64,12 @@ class Seam(Protocol):
         names (:meth:`Dialect.error`); file and line added later."""
         ...
 
+    def notice(self, message: str, code: str) -> None:
+        """A one-line note about the current block for the user (``FILE:LINE: note: message [code]``, on the
+        tool path's ``notices``): something the controller does without an alarm that the user should know
+        (words it does not use, text it does not run, a setting the program seems to need)."""
+        ...
+
     @property
     def program_position(self) -> Vec:
         """The current position in program coordinates."""
@@ -371,6 +377,15 @@ class Dialect:
     least_increment_inch: float = 0.0001
     #: Largest start/end radius difference of an I/J/K arc, mm (GSK P1810); 0 disables the check.
     arc_radius_tolerance_mm: float = 0.01
+    #: The controller's parameter that holds that tolerance, as its manual names it ("P1810", "parameter
+    #: 3410"), cited in the arc error; "" where the manual names none.
+    arc_tolerance_parameter: str = ""
+    #: The manual whose sections the Fanuc family's messages cite ("GSK 25i": the family was written from
+    #: it); "": the dialect's own manual numbers its sections otherwise, and those messages cite none.
+    family_manual: str = ""
+    #: G92 shifts every work coordinate system by one vector, which stays across G54-G59 (Fanuc 0i); False:
+    #: G92 sets a floating system that replaces them until the next G54-G59 (GSK 25i §3.2.13).
+    g92_shifts_work_systems: bool = False
     max_words_per_block: int = 32
     #: Longest literal word, address letter included (GSK alarm 13 "A UNIT CHARACTER STRING EXCEEDS 16");
     #: words holding an expression are not limited.
@@ -434,6 +449,11 @@ class Dialect:
         if self.g60_modal and spec is not None and spec.group != 1:
             object.__setattr__(self, "gcodes", {**self.gcodes, key: replace(spec, group=1)})
         object.__setattr__(self, "roles", Roles.from_tables(self.gcodes))
+
+    def cite(self, section: str) -> str:
+        """``GSK 25i §3.2.19`` for a family message that cites the family's manual, or "" where this
+        dialect's manual is another (its sections would be wrong there)."""
+        return f"{self.family_manual} {section}" if self.family_manual else ""
 
     def alarm(self, code: str, condition: str | int | None = None) -> int | None:
         """The alarm number of an error: the number of ``condition`` when one is named (a key of

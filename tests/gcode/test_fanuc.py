@@ -115,6 +115,21 @@ def test_machine_specific_m_codes_are_refused_by_name():
     assert program_error("M123\n", dialect=FANUC).message == "unknown M code M123"
 
 
+# --------------------------------------------------------------------------- G92 and G54-G59
+def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
+    """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference
+    return; the GSK 25i's G92 replaces the work system until the next G54-G59 (§3.2.13). G55 = (100, 0).
+    At machine (10, 10) in G54, G92 X0 Y0 makes the shift (10, 10): G54 X5 is machine 15; G55 X5 is
+    100 + 10 + 5 = 115; G54 again keeps it (15)."""
+    text = "G10 L2 P2 X100.\nG00 X10. Y10.\nG92 X0 Y0\nG54 X5. Y5.\nG55 X5. Y5.\nG54 X5. Y5.\n"
+    assert ends(text) == [[10.0, 10.0, 0.0], [15.0, 15.0, 0.0], [115.0, 15.0, 0.0], [15.0, 15.0, 0.0]]
+    # The GSK 25i: G54 ends the G92 system, G55 is its own offset only.
+    gsk = [m["end"] for m in moves(text)]
+    assert gsk == [[10.0, 10.0, 0.0], [5.0, 5.0, 0.0], [105.0, 5.0, 0.0], [5.0, 5.0, 0.0]]
+    # A second G92 replaces the shift (from where the tool is): at machine 15, X0 → shift 15.
+    assert ends("G00 X10.\nG92 X0\nG00 X5.\nG92 X0\nG55 X1.\n")[-1] == [16.0, 0.0, 0.0]
+
+
 # --------------------------------------------------------------------------- power-on units
 HAAS_INCH = """%
 O40002 (HAAS STYLE, INCH MACHINE, NO G20)

@@ -47,6 +47,9 @@ DIALECT = Dialect(
     least_increment_mm=0.001,
     least_increment_inch=0.0001,
     arc_radius_tolerance_mm=0.02,  # parameter 3410 (a typical setting)
+    arc_tolerance_parameter="parameter 3410",
+    # G92 shifts every work system G54-G59 by one vector until reset or reference return (Fanuc 0i).
+    g92_shifts_work_systems=True,
     cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5),  # parameters 5114, 5115
     max_words_per_block=32,
     max_m_per_block=3,

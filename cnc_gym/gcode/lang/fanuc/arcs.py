@@ -109,9 +109,11 @@ def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
         else:
             r_end = math.hypot(end[u] - center[u], end[v] - center[v])
             if tol > 0 and abs(r_end - r_start) > tol:
+                parameter = core.dialect.arc_tolerance_parameter
                 raise core.error(f"{name}: radius at the start {r_start / s:.4f} and at the end "
                                  f"{r_end / s:.4f} differ by {abs(r_end - r_start) / s:.4f}, more than "
-                                 f"the tolerance {tol:g} mm (P1810)", "arc-radius-mismatch")  # fmt: skip
+                                 f"the tolerance {tol:g} mm{f' ({parameter})' if parameter else ''}",
+                                 "arc-radius-mismatch")  # fmt: skip
             if r_end < SAME_POINT_MM:
                 raise core.error(f"{name}: the centre is the end point", "arc-impossible")
             # Within tolerance: keep the centre and the radius, move the end point radially onto the

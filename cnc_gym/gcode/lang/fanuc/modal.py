@@ -68,8 +68,9 @@ def units(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
             len(st.builder) or st.offsets.floating is not None or any(st.offsets.local)):  # fmt: skip
         # §3.2.19: G20/G21 go at the start, before the work coordinate system is set, and must not
         # switch in the middle of a program (positions and offsets already given would change meaning).
-        raise core.error(f"{spec.name}: inch/metric input cannot switch after the program has moved or "
-                         "set a coordinate system (give it alone at the start, GSK 25i §3.2.19)",
+        where = core.dialect.cite("§3.2.19")
+        raise core.error(f"{spec.name}: inch/metric input cannot switch after the program has moved or set a "
+                         f"coordinate system (give it alone at the start{', ' + where if where else ''})",
                          "units-switch")  # fmt: skip
     st.inch = bool(spec.value)
     st.scale = INCH_MM if spec.value else 1.0
