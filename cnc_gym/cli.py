@@ -1,16 +1,17 @@
 """The ``cnc-gym`` command.
 
-    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--block-skip N ...]
+    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--block-skip N ...]
                           [--program-dir DIR] [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--plant lti|mujoco] [--policy P]
-                        [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--plant lti|mujoco]
+                        [--policy P] [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
                         [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
 the rule of :mod:`cnc_gym.programs`. ``trace`` prints the canonical tool path as JSON Lines (``kind``,
 ``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``--units``
-sets the input unit at power-on (:data:`UNITS_HELP`). ``run``
+sets the input unit at power-on (:data:`UNITS_HELP`), ``--setup`` the operator's work and tool offsets
+(:data:`SETUP_HELP`). ``run``
 simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`). ``bench``
 benchmarks policies on a suite or your programs (:mod:`cnc_gym.benchmark.cli`).
 
@@ -52,6 +53,9 @@ EXIT_STATUS_HELP = """exit status:
 UNITS_HELP = ("input unit at power-on, mm or inch (a controller parameter: a program without G20/G21 "
               "is read in it; the program's own G20/G21 still rules). Default: the machine preset's "
               "power_on_units, else the dialect's power-on code (G21)")
+SETUP_HELP = ("the operator's tables at power-on (YAML: work_offsets G54.. -> [x, y, z], tools n -> "
+              "length_mm, radius_mm; docs/configs.md), on top of the machine preset's setup section; the "
+              "program's G10 still changes them")
 PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PROGRAMS)} (a built-in name "
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
@@ -109,6 +113,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
                         help="machine preset name (configs/machines) or YAML path; default: none for trace, "
                              "the runner's default for run")  # fmt: skip
     parser.add_argument("--units", choices=INPUT_UNITS, default=None, help=UNITS_HELP)
+    parser.add_argument("--setup", metavar="FILE", default=None, help=SETUP_HELP)
     parser.add_argument("--max-blocks", metavar="N", type=int, default=None,
                         help=f"bound on executed blocks; a runaway loop ends in too-many-blocks "
                              f"(default {DEFAULT_MAX_BLOCKS:,})")  # fmt: skip
@@ -137,7 +142,7 @@ def cmd_trace(args: argparse.Namespace) -> int:
 
         machine = load_machine(args.machine)
     options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
-               "program_dir": args.program_dir, "units": args.units}  # fmt: skip
+               "program_dir": args.program_dir, "units": args.units, "setup": args.setup}  # fmt: skip
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)
@@ -165,6 +170,10 @@ def print_notices(notices: Sequence[str]) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    if args.setup is not None:  # the setup travels inside the machine record
+        from cnc_gym.machine import load_machine, with_setup
+
+        args.machine = with_setup(load_machine(args.machine or "vmc-small"), args.setup)
     try:
         from cnc_gym.runner import run_cli
 

@@ -32,6 +32,8 @@ from cnc_gym.machine import (
     PlantAxes,
     PlantConfig,
     RotaryAxisConfig,
+    SetupConfig,
+    ToolSetup,
 )
 
 REPO = Path(__file__).resolve().parent.parent
@@ -44,6 +46,8 @@ TABLES: dict[str, tuple[type, str]] = {
     "machine.plant": (PlantConfig, "plant."),
     "machine.plant.axes": (PlantAxes, "plant.axes."),
     "machine.plant.axis": (AxisMechanicsConfig, ""),
+    "machine.setup": (SetupConfig, "setup."),
+    "machine.setup.tool": (ToolSetup, ""),
     "task": (TaskConfig, ""),
     "reward": (RewardWeights, ""),
     "train": (TrainConfig, ""),

@@ -380,6 +380,9 @@ class Dialect:
     #: The controller's parameter that holds that tolerance, as its manual names it ("P1810", "parameter
     #: 3410"), cited in the arc error; "" where the manual names none.
     arc_tolerance_parameter: str = ""
+    #: The control has an external work offset (G10 L2 P0) added to every work system: a setup may set it
+    #: (``EXT``).
+    external_work_offset: bool = False
     #: The manual whose sections the Fanuc family's messages cite ("GSK 25i": the family was written from
     #: it); "": the dialect's own manual numbers its sections otherwise, and those messages cite none.
     family_manual: str = ""

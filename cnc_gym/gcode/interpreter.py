@@ -29,6 +29,7 @@ from cnc_gym.gcode.codes import CodeSpec, code_name, gkey, round_to
 from cnc_gym.gcode.dialect import BlockPlan
 from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.settings import FlowOptions, ToolMeasurement, skip_signal_surfaces
+from cnc_gym.gcode.setup import apply_setup
 from cnc_gym.gcode.state import CompensationState, State
 from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
@@ -36,7 +37,7 @@ from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathB
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect, Target, Vec
     from cnc_gym.gcode.program import Block, Program
-    from cnc_gym.machine import MachineConfig
+    from cnc_gym.machine import MachineConfig, SetupConfig
 
 INCH_MM = 25.4
 #: Pseudo-spec of an axis-only block: the modal motion.
@@ -48,13 +49,14 @@ class Interpreter:
 
     ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (a controller parameter; the
     program's own G20/G21 still rules); None: the machine preset's ``power_on_units``, else the dialect's
-    power-on code.
+    power-on code. ``setup``: the operator's work offsets and tool offsets at power-on (:mod:`.setup`);
+    ``tool_offsets`` entries are written on top of its tools.
     """
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
                  start: tuple[float, float, float] = (0.0, 0.0, 0.0), machine: MachineConfig | None = None,
                  tool_offsets=None, tool_measurement=None, skip_signal=None,
-                 units: str | None = None) -> None:  # fmt: skip
+                 units: str | None = None, setup: SetupConfig | None = None) -> None:  # fmt: skip
         self.dialect = dialect
         language = dialect.language
         # Rotary axes (A/B/C) the machine has: they move with G00/G01 only, in degrees.
@@ -130,6 +132,10 @@ class Interpreter:
             units = machine.power_on_units  # the preset's parameter, below an explicit argument
         if units is not None:
             self._power_on_units(units)
+        if setup is not None and not setup.empty:
+            apply_setup(self, setup)  # the operator's tables, before the program's first block
+            if tool_offsets is not None:  # … and the explicit tables of this run on top
+                st.comp.offsets = settings.new_offsets(_with_tables(st.comp.offsets, tool_offsets))
         self.update_modes()
 
     def _power_on_units(self, units: str) -> None:
@@ -554,6 +560,21 @@ class Interpreter:
             m, o = st.out.position, st.offsets.origin
             w = (m[0] - o[0], m[1] - o[1], m[2] - o[2])
             st.program_point = st.chain.invert(w) if st.chain.active else w
+
+
+def _with_tables(memory, tables):
+    """``memory`` (ToolOffsets) with the entries of ``tables`` (a ``tool_offsets=`` mapping or ToolOffsets)
+    written over it."""
+    from cnc_gym.gcode.offsets import ToolOffsets
+
+    extra = ToolOffsets.from_mapping(tables, count=memory.count, geometry_limit_mm=memory.geometry_limit_mm,
+                                     wear_limit_mm=memory.wear_limit_mm, d_is_diameter=memory.d_is_diameter)
+    merged = ToolOffsets.from_mapping(memory)
+    for key, table in extra.tables.items():
+        for number, value in enumerate(table):
+            if value:
+                merged.tables[key][number] = value
+    return merged
 
 
 def _on_plane(center, start, plane: Plane) -> Vec:

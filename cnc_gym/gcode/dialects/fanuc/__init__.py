@@ -50,6 +50,7 @@ DIALECT = Dialect(
     arc_tolerance_parameter="parameter 3410",
     # G92 shifts every work system G54-G59 by one vector until reset or reference return (Fanuc 0i).
     g92_shifts_work_systems=True,
+    external_work_offset=True,  # G10 L2 P0, the EXT offset of the work offset screen
     cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5),  # parameters 5114, 5115
     max_words_per_block=32,
     max_m_per_block=3,
