@@ -49,10 +49,12 @@ from cnc_gym.config import (
     Items,
     Number,
     Section,
+    Text,
     check_keys,
     check_object,
     choice,
     configs_dir,
+    flag,
     from_mapping,
     mapping,
     number,
@@ -67,8 +69,9 @@ from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
 __all__ = ["INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig",
-           "PlantConfig", "RotaryAxisConfig", "SetupConfig", "ToolSetup", "check_machine", "configs_dir",
-           "load_machine", "load_setup", "machine_names", "merge_setups", "with_setup"]  # fmt: skip
+           "MachineFunctionsConfig", "PlantConfig", "RotaryAxisConfig", "SetupConfig", "ToolSetup",
+           "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names", "merge_setups",
+           "with_setup"]  # fmt: skip
 
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
@@ -436,6 +439,28 @@ def merge_setups(base: SetupConfig, override: SetupConfig | None) -> SetupConfig
     return SetupConfig("mm", offsets, tools, f"{base.source} + {override.source}")
 
 
+def m_code_number(raw: Any) -> int:
+    """An M code number of a preset's ``machine_functions.m_codes``: an integer 0…999."""
+    if isinstance(raw, bool) or not isinstance(raw, int) or not 0 <= raw <= 999:
+        raise Invalid("is not an M code number (an integer 0…999)")
+    return raw
+
+
+@dataclass(frozen=True)
+class MachineFunctionsConfig:
+    """The M codes the machine builder added: the control hands them to the machine (no motion of the
+    program; the block waits for the machine's answer at rest)."""
+
+    m_codes: Mapping[int, str] = table(
+        m_code_number, "M code numbers 0…999", Text(max_length=200),
+        doc="M code → what it does on this machine: run as a machine function (a 0 s stop, listed on "
+            "the tool path) in every dialect, unless the dialect gives the code a meaning of its "
+            "own")  # fmt: skip
+    strict: bool = flag(False, doc="refuse an M code that is neither the dialect's own nor in `m_codes` "
+                                   "(and, for `fanuc`, not on its list of usual machine codes); false: "
+                                   "`fanuc` runs it as a machine function with a note")  # fmt: skip
+
+
 @dataclass(frozen=True)
 class MachineConfig:
     name: str = text("", doc="the preset's name (default: the file's name)")
@@ -454,6 +479,8 @@ class MachineConfig:
     plant: PlantConfig = section(PlantConfig, doc="servo backend and mechanics (see below)")  # noqa: RUF009
     setup: SetupConfig = section(SetupConfig, doc="the operator's tables at power-on: work offsets and tool "  # noqa: RUF009
                                  "offsets (see below); `--setup FILE` adds to them")  # fmt: skip
+    machine_functions: MachineFunctionsConfig = section(  # noqa: RUF009
+        MachineFunctionsConfig, doc="the machine builder's M codes (see below)")
 
     def __post_init__(self) -> None:
         if not isinstance(self.rotary_axes, RotaryAxes):

@@ -396,9 +396,14 @@ class Dialect:
     max_m_per_block: int = 3
     #: M-code groups (codes of one group may not share a block): group name → M keys.
     m_groups: Mapping[str, frozenset[int]] = field(default_factory=dict)
-    #: M codes the machine builder defines (the Fanuc-family range M10-M89 …) that this dialect rejects as
-    #: machine-specific, naming them: key → what the code usually does on such machines ("" if nothing).
+    #: M codes the machine builder defines (the Fanuc-family range M10-M89 …): key → what the code usually
+    #: does on such machines ("" if nothing). Refused by name, unless ``accepts_machine_mcodes``.
     machine_mcodes: Mapping[int, str] = field(default_factory=dict)
+    #: An M code that is not in ``mcodes`` is a machine function the control hands to the machine (run
+    #: without motion, listed on the tool path), as a Fanuc control does; one outside ``machine_mcodes`` and
+    #: the machine preset's list gets a note, and a preset's ``machine_functions.strict`` refuses it. False:
+    #: only the preset's list is accepted, every other unknown M code is refused.
+    accepts_machine_mcodes: bool = False
     #: Bracket nesting limit in expressions (GSK: 5, functions' brackets included).
     max_bracket_depth: int = 5
     #: Macro statement keywords (IF, THEN, GOTO, WHILE, DO, END) the reader recognises.

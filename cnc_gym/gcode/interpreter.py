@@ -272,7 +272,7 @@ class Interpreter:
                 key = gkey(number)
                 spec = dialect.mcodes.get(key)
                 if spec is None:
-                    raise self._unknown_m(key)
+                    spec = self._machine_function(key)  # or the error of an unknown M code
                 if not spec.implemented:
                     raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented",
                                      alarm=dialect.addresses["M"].alarm)  # fmt: skip
@@ -341,16 +341,37 @@ class Interpreter:
             st.restore_modes = False
             self.update_modes()
 
-    def _unknown_m(self, key: int) -> ProgramError:
+    def _machine_function(self, key: int) -> CodeSpec:
+        """An M code outside the dialect's table: a machine function when the machine preset lists it, or
+        when the dialect hands unknown M codes to the machine (``accepts_machine_mcodes``; one it does not
+        list either gets a note, and ``machine_functions.strict`` refuses it); else the unknown-code
+        error."""
         dialect = self.dialect
         name = code_name("M", key)
-        what = dialect.machine_mcodes.get(key)
-        if what is not None:
-            usual = f" (on many machines: {what})" if what else ""
-            return self.error(f"{name} is a machine-specific M code{usual}: the {dialect.title} dialect does "
-                              "not know this machine's M-code list, so it refuses it rather than ignore it",
-                              "unknown-code", alarm=dialect.addresses["M"].alarm)  # fmt: skip
-        return self.error(f"unknown M code {name}", "unknown-code", alarm=dialect.addresses["M"].alarm)
+        machine = self.state.machine
+        own = machine.machine_functions if machine is not None else None
+        listed = own.m_codes.get(key // 10) if own is not None and key % 10 == 0 else None
+        usual = dialect.machine_mcodes.get(key)
+        alarm = dialect.addresses["M"].alarm
+        if listed is not None:
+            return CodeSpec(name, -1, "machine_function", listed, step="stop")
+        if dialect.accepts_machine_mcodes:
+            if usual is not None:
+                return CodeSpec(name, -1, "machine_function", usual, step="stop")
+            if own is None or not own.strict:
+                self.notice(f"{name} is not on this machine's M-code list: run as a machine function without "
+                            "motion (list it in the machine preset's machine_functions.m_codes, or set "
+                            "machine_functions.strict to refuse it)", "machine-function")  # fmt: skip
+                return CodeSpec(name, -1, "machine_function", "", step="stop")
+            raise self.error(f"unknown M code {name}: not on this machine's M-code list (machine_functions."
+                             "strict)", "unknown-code", alarm=alarm)  # fmt: skip
+        if usual is not None:
+            on = f" (on many machines: {usual})" if usual else ""
+            raise self.error(f"{name} is a machine-specific M code{on}: the {dialect.title} dialect does not "
+                             "know this machine's M-code list, so it refuses it rather than ignore it (list "
+                             "it in the machine preset's machine_functions.m_codes)", "unknown-code",
+                             alarm=alarm)  # fmt: skip
+        raise self.error(f"unknown M code {name}", "unknown-code", alarm=alarm)
 
     def _reject_words(self, values: dict[str, float], allowed: frozenset, owner: CodeSpec | None) -> None:
         st = self.state

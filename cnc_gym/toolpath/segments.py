@@ -65,6 +65,9 @@ class SegmentMode(IntFlag):
     #: last interpolation cycle keeps the path speed. Recorded for the controller; the motion stage plans
     #: continuous-time profiles, so the last-cycle speed dip G36 avoids does not arise there.
     ROUND_BLOCK_END = 32
+    #: A dwell that stands for a machine function (an M code the control hands to the machine and waits
+    #: for at rest): ``Toolpath.machine_functions`` names its code.
+    MACHINE_FUNCTION = 64
 
 
 _FIELDS = (
@@ -168,6 +171,8 @@ class Toolpath:
         for row in self.machine_functions:
             if not 0 <= row < n or self.kind[row] != SegmentKind.DWELL:
                 raise ValueError(f"toolpath row {row}: a machine function stands on a dwell row")
+            if not self.modes[row] & SegmentMode.MACHINE_FUNCTION:
+                raise ValueError(f"toolpath row {row}: a machine function's row carries MACHINE_FUNCTION")
         object.__setattr__(self, "machine_functions", FrozenDict(self.machine_functions))
         object.__setattr__(self, "notices", tuple(self.notices))
         k = len(self.rotary_axes)
@@ -427,8 +432,9 @@ class ToolpathBuilder:
         # Smoothing tolerances: (first row, {segment kind: tolerance mm}) from that row on (sparse: the
         # rows in between cost nothing while they are appended; build() fills the column).
         self._smoothing: list[tuple[int, dict[int, float]]] = []
-        #: Dwell rows standing for a machine function (row → M code) and the notes of the run.
-        self.machine_functions: dict[int, str] = {}
+        #: The M codes of the machine-function dwells, in the order they were made (build() pairs them with
+        #: the rows flagged MACHINE_FUNCTION, which a look-ahead stage may append later), and the notes.
+        self.machine_functions: list[str] = []
         self.notices: list[str] = []
         self._notices_dropped = 0
 
@@ -561,10 +567,14 @@ class ToolpathBuilder:
                 arrays[name] = np.fromiter(map(itemgetter(index), rows), dtype, count=n)
         rotary_start, rotary_end = self._rotary_arrays(len(self))
         smoothing = self._smoothing_array(arrays["kind"]) if self._smoothing else None
+        flagged = np.flatnonzero(arrays["modes"] & SegmentMode.MACHINE_FUNCTION).tolist()
+        if len(flagged) != len(self.machine_functions):
+            raise ValueError(f"{len(flagged)} machine-function rows for {len(self.machine_functions)} codes")
+        functions = dict(zip(flagged, self.machine_functions, strict=True))
         notices = tuple(self.notices)
         if self._notices_dropped:
             notices += (f"... and {self._notices_dropped} more notes",)
         return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves),
                         rotary_axes=self.rotary_axes, rotary_start=rotary_start,
                         rotary_end=rotary_end, smoothing_tolerance_mm=smoothing,
-                        machine_functions=dict(self.machine_functions), notices=notices)  # fmt: skip
+                        machine_functions=functions, notices=notices)  # fmt: skip

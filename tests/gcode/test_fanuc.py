@@ -12,6 +12,7 @@ import pytest
 from gcode_helpers import close, moves, program_error, records
 
 from cnc_gym.gcode import get_dialect, interpret
+from cnc_gym.machine import machine_from_dict
 
 FANUC = "fanuc"
 
@@ -108,11 +109,32 @@ def test_m19_oriented_spindle_stop_is_recorded():
     assert program_error("M19\n").code == "not-implemented"  # the GSK 25i
 
 
-def test_machine_specific_m_codes_are_refused_by_name():
-    err = program_error("M88\n", dialect=FANUC)
-    assert err.code == "unknown-code" and "M88" in err.message and "through-spindle coolant" in err.message
-    assert "M97" in program_error("M97 P100\n", dialect=FANUC).message
-    assert program_error("M123\n", dialect=FANUC).message == "unknown M code M123"
+def test_machine_m_codes_are_machine_functions_listed_on_the_tool_path():
+    """An M code the control does not define is handed to the machine: no motion of the program, the block
+    ends at rest when the machine answers (a 0 s exact-stop dwell flagged machine_function, its code in the
+    trace record). One of the usual machine codes (M13, M88 …) passes silently, another (M20) with a note;
+    a preset's machine_functions lists its own codes and its strict setting refuses the rest."""
+    tp = interpret("S1000 M13\nG01 X1. F100.\nM88\nM20\nM30\n", dialect=FANUC)
+    dwells = [r for r in tp.to_records() if r["kind"] == "dwell"]
+    assert [(r["line"], r["machine_function"]) for r in dwells] == [(1, "M13"), (3, "M88"), (4, "M20")]
+    assert all(r["seconds"] == 0.0 and r["modes"] == ["exact_stop", "machine_function"] for r in dwells)
+    assert dict(tp.machine_functions) == {0: "M13", 2: "M88", 3: "M20"}
+    assert len(tp.notices) == 1 and tp.notices[0].startswith("<program>:4: note: M20 is not on this machine")
+    # In cutter compensation the machine function waits in the look-ahead: the contour is unchanged.
+    text = "G41 D1 G01 X10. Y0 F100.\n{m}X20.\nG40 X30. Y-10.\n"
+    plain = [r["end"] for r in records(text.format(m=""), dialect=FANUC, tool_offsets={"D": {1: 2.0}})]
+    with_m = records(text.format(m="M88\n"), dialect=FANUC, tool_offsets={"D": {1: 2.0}})
+    assert [r["end"] for r in with_m if r["kind"] != "dwell"] == plain
+    # The preset's list (any dialect) and its strict setting.
+    shop = machine_from_dict({"machine_functions": {"m_codes": {20: "part counter"}, "strict": True}})
+    listed = interpret("M20\nM88\n", dialect=FANUC, machine=shop).machine_functions
+    assert dict(listed) == {0: "M20", 1: "M88"}
+    assert program_error("M123\n", dialect=FANUC, machine=shop).message.endswith("(machine_functions.strict)")
+    assert dict(interpret("M20\n", machine=shop).machine_functions) == {0: "M20"}  # the GSK 25i too
+    # The GSK 25i refuses the others; Haas's M97 (a call) is refused by name everywhere.
+    assert program_error("M88\n").message == "unknown M code M88"
+    err = program_error("M97 P100\n", dialect=FANUC)
+    assert err.code == "not-implemented" and "M97" in err.message
 
 
 # --------------------------------------------------------------------------- G92 and G54-G59

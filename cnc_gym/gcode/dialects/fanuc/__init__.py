@@ -56,6 +56,7 @@ DIALECT = Dialect(
     max_m_per_block=3,
     m_groups=codes.M_GROUPS,
     machine_mcodes=MACHINE_MCODES,
+    accepts_machine_mcodes=True,  # the control hands an M code it does not know to the machine
     corner_words=frozenset({",C", ",R"}),
     max_bracket_depth=5,
     keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),

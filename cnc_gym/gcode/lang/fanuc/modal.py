@@ -204,9 +204,19 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
     out.dwell(seconds)
 
 
+def machine_function(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """An M code the control hands to the machine (coolant variants, clamps, conveyors …; the machine
+    builder's list): no motion of the program, the block ends when the machine answers — a 0 s exact-stop
+    dwell flagged MACHINE_FUNCTION, its code on the tool path (``Toolpath.machine_functions``)."""
+    st = core.state
+    st.out.dwell(0.0, SegmentMode.EXACT_STOP | SegmentMode.MACHINE_FUNCTION)
+    st.builder.machine_functions.append(spec.name)
+
+
 ACTIONS = {
     "record": record, "plane": plane, "distance": distance, "units": units, "path_mode": path_mode,
     "exact_stop_once": exact_stop_once, "feed": feed, "spindle_speed": spindle_speed, "tool": tool,
     "tool_change": tool_change, "spindle": spindle, "coolant": coolant, "stop": stop, "dwell": dwell,
     "cycle_return": record, "feed_mode": feed_mode, "spindle_orient": spindle_orient,
+    "machine_function": machine_function,
 }  # fmt: skip
