@@ -380,6 +380,9 @@ class Dialect:
     #: The controller's parameter that holds that tolerance, as its manual names it ("P1810", "parameter
     #: 3410"), cited in the arc error; "" where the manual names none.
     arc_tolerance_parameter: str = ""
+    #: Abbreviated macro words the reader writes out (Fanuc: ``WH`` → ``WHILE``, ``SQ`` → ``SQRT`` …;
+    #: ``lang/fanuc/abbreviations.py``); empty: none.
+    macro_abbreviations: Mapping[str, str] = field(default_factory=dict)
     #: The control has an external work offset (G10 L2 P0) added to every work system: a setup may set it
     #: (``EXT``).
     external_work_offset: bool = False

@@ -137,6 +137,40 @@ def test_machine_m_codes_are_machine_functions_listed_on_the_tool_path():
     assert err.code == "not-implemented" and "M97" in err.message
 
 
+# --------------------------------------------------------------------------- abbreviated macro words
+ABBREVIATED = """#1=0
+#2=0
+WH[#1LT3]DO1
+#1=#1+1
+#2=#2+SQ[16]
+G01 X#2 F100.
+EN1
+IF[#1EQ3]GO20
+G00 Y99.
+N20 #3=#1AN2
+IF[#3EQ2]TH#4=AT[1]/[1]
+G00 Y#4
+"""
+
+
+def test_abbreviated_macro_words_are_the_words():
+    """Fanuc reads the first two letters of a macro word as the word: WH[ is WHILE[, EN1 END1, GO20 GOTO20,
+    TH THEN, SQ[ SQRT[, AT[ ATAN[, AN AND. Three passes add SQRT[16] = 4 to X; GO20 skips Y99; 3 AND 2 = 2,
+    so #4 = ATAN[1]/[1] = 45."""
+    full = ABBREVIATED
+    for short, word in (("WH[", "WHILE["), ("EN1", "END1"), ("GO20", "GOTO20"), ("TH#", "THEN#"),
+                        ("SQ[", "SQRT["), ("AT[", "ATAN["), ("AN2", "AND2")):  # fmt: skip
+        full = full.replace(short, word)
+    assert ends(ABBREVIATED) == ends(full)
+    assert ends(ABBREVIATED) == [[4.0, 0.0, 0.0], [8.0, 0.0, 0.0], [12.0, 0.0, 0.0], [12.0, 45.0, 0.0]]
+    # Never where an address stands or inside a full word: WH without '[' is W and H, AND stays AND.
+    assert program_error("WH2\n", dialect=FANUC).code == "missing-value"  # W without a number
+    assert ends("#1=5AND4\nG00 X#1\n") == [[4.0, 0.0, 0.0]]
+    # The GSK 25i has no abbreviations: WH[ is an error there.
+    err = program_error("#1=0\nWH[#1LT3]DO1\nEND1\n")
+    assert err.code == "missing-value" and "write WHILE[…]DOn in full" in err.message
+
+
 # --------------------------------------------------------------------------- G92 and G54-G59
 def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
     """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference

@@ -11,8 +11,11 @@ from cnc_gym.gcode.dialect import Dialect
 from cnc_gym.gcode.dialects.fanuc import blocks
 from cnc_gym.gcode.dialects.fanuc.codes import ADDRESSES, ALARMS, G_CODES, M_CODES, MACHINE_MCODES, POWER_ON
 from cnc_gym.gcode.lang import fanuc
-from cnc_gym.gcode.lang.fanuc import checks, codes, cycles, least_units
+from cnc_gym.gcode.lang.fanuc import abbreviations, checks, codes, cycles, least_units
 from cnc_gym.gcode.settings import CompensationSettings, CycleParameters
+
+#: Abbreviated words the dialect reads besides its functions' (lang/fanuc/abbreviations.py).
+_STATEMENT_AND_OPERATOR_WORDS = frozenset({"WHILE", "GOTO", "END", "THEN", "AND", "XOR", "MOD"})
 
 #: The family's block checks with the G00/G01-beside-G28 rule (blocks.py).
 HOOKS = replace(fanuc.HOOKS, checks=(cycles.check_codes, blocks.motion_with_reference_return,
@@ -60,6 +63,9 @@ DIALECT = Dialect(
     corner_words=frozenset({",C", ",R"}),
     max_bracket_depth=5,
     keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),
+    # Fanuc's abbreviated macro words (WH[ is WHILE[, SQ[ is SQRT[ …), those whose word the dialect has.
+    macro_abbreviations={a: w for a, w in abbreviations.FANUC_ABBREVIATIONS.items()
+                         if w in codes.FUNCTIONS or w in _STATEMENT_AND_OPERATOR_WORDS},
     condition_operators=frozenset({"AND", "OR"}),  # IF[[#1 GT 0] AND [#2 LT 5]]GOTO10
     program_number_marks="O:",  # ":1234" is O1234 (ISO code)
     variables=((1, 33), (100, 199), (500, 999)),

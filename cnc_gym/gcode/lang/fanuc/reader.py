@@ -31,6 +31,7 @@ import re
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.lang.fanuc.abbreviations import expand as expand_abbreviations
 from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
 from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
 from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block
@@ -459,6 +460,8 @@ class Reader:
 
     def _scan_block(self, text: str, line: int) -> Block | None:
         """Everything that is not plain: block skip, expressions, variables, assignments, keywords, calls."""
+        if self.dialect.macro_abbreviations:
+            text = expand_abbreviations(text, self.dialect.macro_abbreviations)  # WH[ … is WHILE[ …
         code_rules = self._code_rules(text)
         if not self._mentions_call(text):
             try:
