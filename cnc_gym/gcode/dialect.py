@@ -380,6 +380,9 @@ class Dialect:
     #: The controller's parameter that holds that tolerance, as its manual names it ("P1810", "parameter
     #: 3410"), cited in the arc error; "" where the manual names none.
     arc_tolerance_parameter: str = ""
+    #: A dwell P with a decimal point (G04 P1.5, a cycle's P1.5) is in seconds (Haas: "P10. is 10 seconds,
+    #: P10 10 milliseconds"); False: refused (``decimal-point-not-allowed``, P is in ms).
+    dwell_p_decimal_seconds: bool = False
     #: Abbreviated macro words the reader writes out (Fanuc: ``WH`` → ``WHILE``, ``SQ`` → ``SQRT`` …;
     #: ``lang/fanuc/abbreviations.py``); empty: none.
     macro_abbreviations: Mapping[str, str] = field(default_factory=dict)

@@ -171,6 +171,34 @@ def test_abbreviated_macro_words_are_the_words():
     assert err.code == "missing-value" and "write WHILE[…]DOn in full" in err.message
 
 
+# --------------------------------------------------------------------------- Haas cycle and dwell rules
+def test_haas_cycles_without_r_drill_from_the_initial_level():
+    # No R ever given: the R level is the initial level (Z10): rapid over the hole, feed from Z10 to Z-5,
+    # back to Z10. The GSK 25i needs R in the first drilling block.
+    text = "G00 X0 Y0 Z10.\nG81 X1. Y1. Z-5. F100.\nX2.\nG80\n"
+    assert ends(text) == [[0.0, 0.0, 10.0], [1.0, 1.0, 10.0], [1.0, 1.0, -5.0], [1.0, 1.0, 10.0],
+                          [2.0, 1.0, 10.0], [2.0, 1.0, -5.0], [2.0, 1.0, 10.0]]  # fmt: skip
+    assert program_error(text).code == "cycle-missing-data"
+
+
+def test_haas_l_is_the_cycle_repeat_count():
+    # G91 with L3: three holes 5 apart; R-8 from the initial level 10 is 2, Z-5 from R is -3.
+    holes = [e for e in ends("G00 Z10.\nG91 G81 X5. Z-5. R-8. F100. L3\nG90 G80\n") if e[2] == -3.0]
+    assert holes == [[5.0, 0.0, -3.0], [10.0, 0.0, -3.0], [15.0, 0.0, -3.0]]
+    assert ends("G00 Z10.\nG81 X1. Z-1. R2. F100. L0\n") == [[0.0, 0.0, 10.0]]  # L0 stores the data only
+    assert program_error("G81 X1. Z-1. R2. F100. K2 L2\n", dialect=FANUC).code == "bad-cycle"
+    assert program_error("G81 X1. Z-1. R2. F100. L2\n").code == "unused-word"  # the GSK 25i: K only
+
+
+def test_haas_dwell_p_with_a_decimal_point_is_seconds():
+    # Haas: "P10. is 10 seconds, P10 10 milliseconds" — G04 and a cycle's P alike; the GSK 25i refuses the
+    # point.
+    dwells = [r["seconds"] for r in records("G04 P1.5\nG04 P1500\nG82 X1. Z-1. R2. P0.5 F100.\n",
+                                           dialect=FANUC) if r["kind"] == "dwell"]  # fmt: skip
+    assert dwells == [1.5, 1.5, 0.5]
+    assert program_error("G04 P1.5\n").code == "decimal-point-not-allowed"
+
+
 # --------------------------------------------------------------------------- G92 and G54-G59
 def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
     """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference

@@ -54,7 +54,11 @@ DIALECT = Dialect(
     # G92 shifts every work system G54-G59 by one vector until reset or reference return (Fanuc 0i).
     g92_shifts_work_systems=True,
     external_work_offset=True,  # G10 L2 P0, the EXT offset of the work offset screen
-    cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5),  # parameters 5114, 5115
+    # Parameters 5114, 5115; a cycle without R drills from the initial level and L is its repeat count
+    # (Haas; the L of older Fanuc 0-M programs).
+    cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5, r_defaults_to_initial=True,
+                                 l_repeats=True),
+    dwell_p_decimal_seconds=True,  # Haas: G04 P10. is 10 s, P10 10 ms; a cycle's P the same
     max_words_per_block=32,
     max_m_per_block=3,
     m_groups=codes.M_GROUPS,

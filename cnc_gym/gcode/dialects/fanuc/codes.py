@@ -12,6 +12,9 @@ from cnc_gym.gcode.lang.fanuc.codes import BIG, g, m, table, unbuilt
 
 G_CODES = table([
     *family.G_CODES,
+    # The canned cycles also take L, the repeat count (Haas; cycles.py, CycleParameters.l_repeats).
+    *[g(n, 9, "cycle", kind, step="motion", uses_axes=True, words=words + "L")
+      for n, (kind, words) in family.CYCLE_CODES.items()],
     # G94/G95: feed per minute / per revolution (F × S), group 05.
     g(94, 5, "feed_mode", "minute", step="feed_mode"),
     g(95, 5, "feed_mode", "revolution", step="feed_mode"),

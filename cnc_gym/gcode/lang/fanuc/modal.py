@@ -187,11 +187,13 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
     out = core.state.out
     if "P" in values:
         text = core.word_text("P")
-        if text is not None and "." in text:
-            raise core.error(f"G04 P{text}: P is in milliseconds and takes no decimal point (use X for "
-                             "seconds)", "decimal-point-not-allowed")  # fmt: skip
         raw = values["P"]
         seconds = round(raw) / 1000.0
+        if text is not None and "." in text:
+            if not core.dialect.dwell_p_decimal_seconds:
+                raise core.error(f"G04 P{text}: P is in milliseconds and takes no decimal point (use X for "
+                                 "seconds)", "decimal-point-not-allowed")  # fmt: skip
+            seconds = float(text)  # Haas: P10. is 10 seconds
     elif "X" in values:
         raw = values["X"]
         whole = not core.dialect.integer_is_unit and least_units.is_whole(core, "X")
