@@ -383,6 +383,9 @@ class Dialect:
     #: A dwell P with a decimal point (G04 P1.5, a cycle's P1.5) is in seconds (Haas: "P10. is 10 seconds,
     #: P10 10 milliseconds"); False: refused (``decimal-point-not-allowed``, P is in ms).
     dwell_p_decimal_seconds: bool = False
+    #: G codes (table keys) that take their block's comment as an argument (Haas G47: the text to engrave):
+    #: the reader keeps the comment on such a block (``Block.comment``).
+    comment_codes: frozenset[int] = frozenset()
     #: Abbreviated macro words the reader writes out (Fanuc: ``WH`` → ``WHILE``, ``SQ`` → ``SQRT`` …;
     #: ``lang/fanuc/abbreviations.py``); empty: none.
     macro_abbreviations: Mapping[str, str] = field(default_factory=dict)

@@ -331,6 +331,7 @@ class Interpreter:
         order = self._order
         items.sort(key=lambda s: order[s.step])
         st.block_words = block.words
+        st.block = block
         st.g53 = g53
         actions = self._actions
         for spec in items:

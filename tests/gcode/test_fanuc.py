@@ -199,6 +199,51 @@ def test_haas_dwell_p_with_a_decimal_point_is_seconds():
     assert program_error("G04 P1.5\n").code == "decimal-point-not-allowed"
 
 
+# --------------------------------------------------------------------------- G47 text engraving (Haas)
+def test_g47_engraves_the_comments_text_in_single_strokes():
+    """G47 P0 (TEXT): each stroke of the font at J/6 per grid unit, from X Y along I degrees: rapid to the
+    stroke's start, to R, plunge to Z at E, cut at F, back to R. "LI" at J6 (1 mm per unit), X10 Y20, I0:
+    L is one stroke (0,6)-(0,0)-(4,0); I three ((1,6)-(3,6), (2,6)-(2,0), (1,0)-(3,0)) 6 units on."""
+    text = "G00 Z5.\nG47 P0 (li) X10. Y20. J6. R2. Z-1. F300. E100.\n"
+    rows = [(r["kind"], r["end"], r.get("feed")) for r in records(text, dialect=FANUC)][1:]
+    expected = [("rapid", [10.0, 26.0, 5.0], None), ("rapid", [10.0, 26.0, 2.0], None),
+                ("line", [10.0, 26.0, -1.0], 100.0), ("line", [10.0, 20.0, -1.0], 300.0),
+                ("line", [14.0, 20.0, -1.0], 300.0)]  # fmt: skip
+    for x0, y0, x1, y1 in ((17, 26, 19, 26), (18, 26, 18, 20), (17, 20, 19, 20)):
+        expected += [("rapid", [expected[-1][1][0], expected[-1][1][1], 2.0], None),
+                     ("rapid", [float(x0), float(y0), 2.0], None),
+                     ("line", [float(x0), float(y0), -1.0], 100.0),
+                     ("line", [float(x1), float(y1), -1.0], 300.0)]  # fmt: skip
+    expected.append(("rapid", [19.0, 20.0, 2.0], None))
+    assert rows == expected
+    # I turns the line of text about X Y: "-" at I90 is the stroke (1,3)-(3,3) turned up: x = 10 - 3.
+    dash = [r["end"] for r in records("G47 P0 (-) X10. Y0 J6. I90. R2. Z-1. F300.\n", dialect=FANUC)]
+    assert [round(c, 9) + 0.0 for c in dash[-2]] == [7.0, 3.0, -1.0]
+
+
+def test_g47_serial_numbers_characters_and_errors():
+    # P1: #599 in as many digits as the comment has '#', then #599 + 1; P32-P126 one character.
+    serial = "#599=41\nG47 P1 (####) X0 Y0 J6. R1. Z-1. F100.\nG47 P1 (####) X0 Y0 J6. R1. Z-1.\n"
+    spelled = "G47 P0 (0041) X0 Y0 J6. R1. Z-1. F100.\nG47 P0 (0042) X0 Y0 J6. R1. Z-1.\n"
+    assert ends(serial) == ends(spelled)
+    assert ends("G47 P45 X0 Y0 J6. R1. Z-1. F100.\n") == ends("G47 P0 (-) X0 Y0 J6. R1. Z-1. F100.\n")
+    assert program_error("G47 P0 X0 Y0 J6. R1. Z-1. F100.\n", dialect=FANUC).code == "engrave-no-text"
+    assert program_error("G47 P0 (a~b) X0 Y0 R1. Z-1. F100.\n", dialect=FANUC).code == "bad-engrave"
+    assert program_error("G47 P0 (A) X0 Y0 R1. F100.\n", dialect=FANUC).code == "missing-value"
+    assert program_error("G91 G47 P0 (A) X0 Y0 R1. Z-1. F100.\n", dialect=FANUC).code == "bad-engrave"
+    # The GSK 25i's G47 is the position offset double increase, never an engraving.
+    assert program_error("G47 P0 (A) X0 Y0 R1. Z-1. F100.\n").code == "unused-word"
+
+
+def test_the_engraving_font_stays_in_its_cell():
+    from cnc_gym.gcode.dialects.fanuc.engraving import ADVANCE, CAP_HEIGHT, FONT
+
+    for char, glyph in FONT.items():
+        for stroke in glyph:
+            assert len(stroke) >= 2, char
+            assert all(0 <= x <= 4 < ADVANCE and -1 <= y <= CAP_HEIGHT for x, y in stroke), char
+
+
 # --------------------------------------------------------------------------- G92 and G54-G59
 def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
     """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference

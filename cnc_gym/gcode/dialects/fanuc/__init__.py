@@ -7,8 +7,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from cnc_gym.gcode.codes import gkey
 from cnc_gym.gcode.dialect import Dialect
-from cnc_gym.gcode.dialects.fanuc import blocks
+from cnc_gym.gcode.dialects.fanuc import blocks, engraving
 from cnc_gym.gcode.dialects.fanuc.codes import ADDRESSES, ALARMS, G_CODES, M_CODES, MACHINE_MCODES, POWER_ON
 from cnc_gym.gcode.lang import fanuc
 from cnc_gym.gcode.lang.fanuc import abbreviations, checks, codes, cycles, least_units
@@ -35,7 +36,7 @@ DIALECT = Dialect(
     execution_order=codes.EXECUTION_ORDER,
     addresses=ADDRESSES,
     words=codes.WORDS,
-    actions=dict(fanuc.ACTIONS),
+    actions={**fanuc.ACTIONS, **engraving.ACTIONS},
     cycles=dict(fanuc.CYCLES),
     language=LANGUAGE,
     hooks=HOOKS,
@@ -68,6 +69,7 @@ DIALECT = Dialect(
     max_bracket_depth=5,
     keywords=frozenset({"IF", "GOTO", "WHILE", "DO", "END", "THEN"}),
     # Fanuc's abbreviated macro words (WH[ is WHILE[, SQ[ is SQRT[ …), those whose word the dialect has.
+    comment_codes=frozenset({gkey(47)}),  # G47's text is its block's comment (Haas)
     macro_abbreviations={a: w for a, w in abbreviations.FANUC_ABBREVIATIONS.items()
                          if w in codes.FUNCTIONS or w in _STATEMENT_AND_OPERATOR_WORDS},
     condition_operators=frozenset({"AND", "OR"}),  # IF[[#1 GT 0] AND [#2 LT 5]]GOTO10

@@ -18,6 +18,11 @@ G_CODES = table([
     # G94/G95: feed per minute / per revolution (F × S), group 05.
     g(94, 5, "feed_mode", "minute", step="feed_mode"),
     g(95, 5, "feed_mode", "revolution", step="feed_mode"),
+    # G47: Haas's text engraving (engraving.py), not Fanuc's position offset double increase. I is an
+    # angle, J the text height, E the plunge feed; the text is the block's comment.
+    g(47, 0, "engrave", step="motion", uses_axes=True, words="PIJRE",
+      address_rules={"I": AddressRule(-360.0, 360.0, "plain"), "P": AddressRule(0.0, 126.0, "plain"),
+                     "E": AddressRule(0.0, 1000000.0, "feed")}),
     unbuilt(5.1, 0, "AI contour control G05.1"),
     unbuilt(7.1, 0, "cylindrical interpolation G07.1"),
     unbuilt(33, 1, "thread cutting G33"),

@@ -34,7 +34,7 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.lang.fanuc.abbreviations import expand as expand_abbreviations
 from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
 from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
-from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block
+from cnc_gym.gcode.program import Block, CommentedBlock, Program, SpecialBlock, literal_block
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -265,7 +265,15 @@ class Reader:
             for block in blocks:
                 if block.assign is not None:
                     block.message = self._last_comment
+            if self.dialect.comment_codes:  # a code that takes the comment as its argument (Haas G47)
+                blocks = [CommentedBlock.of(b, self._last_comment) if self._takes_comment(b) else b
+                          for b in blocks]  # fmt: skip
         return blocks
+
+    def _takes_comment(self, block: Block) -> bool:
+        codes = self.dialect.comment_codes
+        return any(word[0] == "G" and isinstance(word[1], str | float)
+                   and round(float(word[1]) * 10) in codes for word in block.words)  # fmt: skip
 
     def _strip_comments(self, text: str, line: int) -> str:
         out = []
