@@ -400,14 +400,30 @@ class Toolpath:
 
 
 #: Row fields of :class:`ToolpathBuilder`'s tuples, by position (the order of ``_FIELDS``).
-_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S = (_FIELDS.index(name) for name in (
-    "kind", "start", "end", "radius", "sweep", "feed", "dwell_s"))  # fmt: skip
+_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S, _TOOL = (_FIELDS.index(name) for name in (
+    "kind", "start", "end", "radius", "sweep", "feed", "dwell_s", "tool"))  # fmt: skip
 _NAN3 = (float("nan"),) * 3
 _RAPID, _LINE_KIND, _ARC, _DWELL, _NURBS = (int(k) for k in SegmentKind)
 _NO_MODES = SegmentMode.NONE
 _DTYPES = {"kind": np.int8, "plane": np.int8, "line": np.int32, "file_index": np.int16, "modes": np.uint8,
            "tool": np.int32}  # fmt: skip
 _POINT_FIELDS = ("start", "end", "center")
+
+
+def _nominal_seconds(row: tuple, rapid_mm_min: float) -> float:
+    """One builder row's seconds at its programmed feed (rapids at ``rapid_mm_min``; no acceleration)."""
+    kind = row[_KIND]
+    if kind == _DWELL:
+        return row[_DWELL_S]
+    start, end = row[_START], row[_END]
+    if kind == _ARC:
+        plane_length = abs(row[_SWEEP]) * row[_RADIUS]
+        chord = math.dist(start, end)
+        length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
+    else:
+        length = math.dist(start, end)
+    speed = rapid_mm_min if kind == _RAPID else row[_FEED]
+    return 60.0 * length / speed if speed and math.isfinite(speed) else 0.0
 
 
 #: Most notes one tool path keeps (a program that repeats one oddity a million times gets one line for it,
@@ -460,21 +476,18 @@ class ToolpathBuilder:
         ``rapid_mm_min``, dwells their time; no acceleration): the clock of a controller without a motion
         model."""
         for row in self._rows[first:]:
-            kind = row[_KIND]
-            if kind == _DWELL:
-                total += row[_DWELL_S]
-                continue
-            start, end = row[_START], row[_END]
-            if kind == _ARC:
-                plane_length = abs(row[_SWEEP]) * row[_RADIUS]
-                chord = math.dist(start, end)
-                length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
-            else:
-                length = math.dist(start, end)
-            speed = rapid_mm_min if kind == _RAPID else row[_FEED]
-            if speed and math.isfinite(speed):
-                total += 60.0 * length / speed
+            total += _nominal_seconds(row, rapid_mm_min)
         return total
+
+    def tool_seconds_since(self, first: int, rapid_mm_min: float, totals: dict[int, list[float]]) -> None:
+        """Add to ``totals`` (tool number → [seconds in the spindle, seconds cutting]) the nominal seconds of
+        the rows from ``first`` on (the clock of :meth:`nominal_seconds_since`), by the row's tool."""
+        for row in self._rows[first:]:
+            seconds = _nominal_seconds(row, rapid_mm_min)
+            entry = totals.setdefault(int(row[_TOOL]), [0.0, 0.0])
+            entry[0] += seconds
+            if row[_KIND] not in (_RAPID, _DWELL):
+                entry[1] += seconds
 
     def file_index(self, file: str) -> int:
         if file not in self.files:

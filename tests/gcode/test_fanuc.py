@@ -244,6 +244,22 @@ def test_the_engraving_font_stays_in_its_cell():
             assert all(0 <= x <= 4 < ADVANCE and -1 <= y <= CAP_HEIGHT for x, y in stroke), char
 
 
+# --------------------------------------------------------------------------- Haas system variables
+def test_haas_tool_life_table_and_timers_are_read_only():
+    """#5400+n / #5500+n: the feed and total seconds of tool n so far (nominal: programmed feed, rapids at
+    6000 mm/min); #5600+n limits 0; #3026 the tool in the spindle, #3027 the spindle speed, #3022 the feed
+    timer. Tool 5 cut 60 mm at 600 mm/min: 6 s. Writing one is alarm 116."""
+    text = ("T5 M06\nG01 X60. F600.\n#1=#5405\n#2=#5505\n#3=#5401\n#4=#3026\nS1200 M03\n#5=#3027\n"
+            "#6=#5605\n#7=#3022\nG00 X#1 Y#2 Z#4\nX#5 Y#6 Z#7\nY#3\n")  # fmt: skip
+    assert ends(text)[1:] == [[6.0, 6.0, 5.0], [1200.0, 0.0, 6.0]]
+    err = program_error("#5405=1\n", dialect=FANUC)
+    assert (err.code, err.alarm) == ("read-only-variable", 116) and "GSK" not in err.message
+    assert program_error("#1=#5405\n").code == "bad-variable"  # not a GSK 25i variable
+    # The Haas tool life check of a shop program: a fresh tool passes (#5405 = 0 < 6000).
+    assert ends("T5 M06\nIF [ #5405 GE 6000 ] THEN #3000= 15 (TOOL LIFE EXPIRED)\nG00 X1.\n") == [
+        [1.0, 0.0, 0.0]]
+
+
 # --------------------------------------------------------------------------- G92 and G54-G59
 def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
     """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference

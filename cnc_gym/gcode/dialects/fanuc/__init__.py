@@ -76,8 +76,9 @@ DIALECT = Dialect(
     program_number_marks="O:",  # ":1234" is O1234 (ISO code)
     variables=((1, 33), (100, 199), (500, 999)),
     system_variables=(
-        (1000, 1135), (2001, 2906), (3000, 3012), (3901, 3902), (4001, 4130), (5001, 5105), (10001, 13400),
-    ),
+        (1000, 1135), (2001, 2906), (3000, 3012), (3020, 3027), (3901, 3902), (4001, 4130), (5001, 5105),
+        (5401, 6000), (10001, 13400),
+    ),  # (#3020-#3027 and #5401-#6000: Haas's timers and tool life table, lang/fanuc/sysvars.py)
     # Tool length offset on Z whatever the plane (type A, parameter 5001#0 TLC = 0); G43 H_ alone puts it in
     # force for the next Z move.
     compensation=CompensationSettings(tool_length_type="A", startup_type="A", offset_count=400,
