@@ -1,10 +1,10 @@
 """The ``cnc-gym`` command.
 
-    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--block-skip N ...]
-                          [--program-dir DIR] [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--plant lti|mujoco]
-                        [--policy P] [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
-                        [--no-progress]
+    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
+                          [--block-skip N ...] [--program-dir DIR] [--max-blocks N]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
+                        [--plant lti|mujoco] [--policy P] [--json] [--plot FILE.png|DIR/] [--max-time SECONDS]
+                        [--max-blocks N] [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
@@ -56,6 +56,9 @@ UNITS_HELP = ("input unit at power-on, mm or inch (a controller parameter: a pro
 SETUP_HELP = ("the operator's tables at power-on (YAML: work_offsets G54.. -> [x, y, z], tools n -> "
               "length_mm, radius_mm; docs/configs.md), on top of the machine preset's setup section; the "
               "program's G10 still changes them")
+CALCULATOR_HELP = ("calculator-type input (Fanuc parameter 3401#0 DPI = 1): a number without a decimal "
+                   "point is in mm/inch/s, X10 = 10 mm (default: the machine preset's calculator_input, "
+                   "else the dialect's reading: fanuc X10 = 0.01 mm)")
 PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PROGRAMS)} (a built-in name "
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
@@ -114,6 +117,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
                              "the runner's default for run")  # fmt: skip
     parser.add_argument("--units", choices=INPUT_UNITS, default=None, help=UNITS_HELP)
     parser.add_argument("--setup", metavar="FILE", default=None, help=SETUP_HELP)
+    parser.add_argument("--calculator-input", action="store_true", help=CALCULATOR_HELP)
     parser.add_argument("--max-blocks", metavar="N", type=int, default=None,
                         help=f"bound on executed blocks; a runaway loop ends in too-many-blocks "
                              f"(default {DEFAULT_MAX_BLOCKS:,})")  # fmt: skip
@@ -142,7 +146,8 @@ def cmd_trace(args: argparse.Namespace) -> int:
 
         machine = load_machine(args.machine)
     options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
-               "program_dir": args.program_dir, "units": args.units, "setup": args.setup}  # fmt: skip
+               "program_dir": args.program_dir, "units": args.units, "setup": args.setup,
+               "calculator_input": args.calculator_input or None}  # fmt: skip
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)
@@ -170,10 +175,8 @@ def print_notices(notices: Sequence[str]) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    if args.setup is not None:  # the setup travels inside the machine record
-        from cnc_gym.machine import load_machine, with_setup
-
-        args.machine = with_setup(load_machine(args.machine or "vmc-small"), args.setup)
+    if args.setup is not None or args.calculator_input:  # both travel inside the machine record
+        args.machine = machine_with(args.machine or "vmc-small", args.setup, args.calculator_input)
     try:
         from cnc_gym.runner import run_cli
 
@@ -182,6 +185,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         # A part of the simulation stack that is missing (not yet built or not installed): one line.
         print(f"cnc-gym run: the simulation runner is not available ({exc})", file=sys.stderr)
         return EXIT_USAGE
+
+
+def machine_with(machine, setup: str | None, calculator_input: bool):
+    """The machine preset ``machine`` with a setup file on top of its own and calculator-type input on,
+    as given (``--setup``, ``--calculator-input``): the record ``run`` and ``bench`` pass along."""
+    import dataclasses
+
+    from cnc_gym.machine import load_machine, with_setup
+
+    loaded = with_setup(load_machine(machine), setup)
+    return dataclasses.replace(loaded, calculator_input=True) if calculator_input else loaded
 
 
 def _silence_stdout() -> None:

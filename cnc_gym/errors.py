@@ -42,9 +42,10 @@ def _escape(match: re.Match) -> str:
     return match.group().encode("unicode_escape").decode("ascii")
 
 
-def notice_line(file: str, line: int, message: str, code: str) -> str:
-    """A note about a program, one line as an error's: ``FILE:LINE: note: message [code]``."""
-    return f"{printable(str(file), MAX_FILE_CHARS)}:{line}: note: {printable(message)} [{code}]"
+def notice_line(file: str, line: int, message: str, code: str, level: str = "note") -> str:
+    """A note about a program, one line as an error's: ``FILE:LINE: note: message [code]`` (``level``:
+    ``note``, or ``warning`` for what is probably a mistake)."""
+    return f"{printable(str(file), MAX_FILE_CHARS)}:{line}: {level}: {printable(message)} [{code}]"
 
 
 class CncGymError(Exception):

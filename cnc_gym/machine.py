@@ -471,6 +471,11 @@ class MachineConfig:
     power_on_units: str | None = choice(None, (None, *INPUT_UNITS), doc="input unit at power-on, `mm` or "
                                         "`inch` (null: the dialect's power-on code: G21, Syntec G71); a "
                                         "program's G20/G21 still rules")  # fmt: skip
+    #: Calculator-type input (Fanuc 3401#0 DPI = 1): a number without a decimal point is in mm, inch or
+    #: seconds where the dialect would read least input increments (``--calculator-input`` sets it).
+    calculator_input: bool = flag(False, doc="calculator-type input (Fanuc parameter 3401#0 DPI = 1): `X10` "
+                                  "is 10 mm, not 10 least input increments, in the dialects that have the "
+                                  "setting (`fanuc`); false: the dialect's standard reading")  # fmt: skip
     controller: ControllerConfig = section(ControllerConfig, doc="path-level controller parameters")  # noqa: RUF009
     axes: tuple[AxisConfig, AxisConfig, AxisConfig] = (AxisConfig(), AxisConfig(), AxisConfig())
     source: str = "<defaults>"

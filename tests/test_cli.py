@@ -170,6 +170,23 @@ def test_trace_setup_gives_the_work_and_tool_offsets(tmp_path, capsys):
     assert len(err.splitlines()) == 1
 
 
+def test_trace_calculator_input(tmp_path, capsys):
+    # fanuc reads X10 as 10 least increments (0.01 mm); --calculator-input as 10 mm (parameter 3401#0 DPI
+    # = 1), as a preset's calculator_input does. A dialect without the setting is one line, exit 2.
+    program = write(tmp_path, "G00 X10\n")
+
+    def end_x(*argv):
+        status, out, err = run_main(["trace", program, "--dialect", "fanuc", *argv], capsys)
+        assert status == 0, err
+        return json.loads(out.splitlines()[0])["end"][0]
+
+    assert end_x() == 0.01
+    assert end_x("--calculator-input") == 10.0
+    assert end_x("--machine", write(tmp_path, "calculator_input: true\n", "calc.yaml")) == 10.0
+    status, out, err = run_main(["trace", program, "--dialect", "syntec", "--calculator-input"], capsys)
+    assert status == 2 and out == "" and "no calculator-type input setting" in err
+
+
 def test_run_setup_travels_in_the_machine_record(tmp_path, capsys, monkeypatch):
     seen = {}
 
@@ -182,7 +199,8 @@ def test_run_setup_travels_in_the_machine_record(tmp_path, capsys, monkeypatch):
     assert main(["run", program, "--setup", write(tmp_path, SETUP_FILE, "job.yaml")]) == 0
     machine = seen["machine"]
     assert machine.name == "vmc-small" and machine.setup.work_offsets["G54"] == (100.0, 50.0, -200.0)
-    assert machine.setup.tools[1].length_mm == 120.0
+    assert machine.setup.tools[1].length_mm == 120.0 and not machine.calculator_input
+    assert main(["run", program, "--calculator-input"]) == 0 and seen["machine"].calculator_input
 
 
 def test_run_with_a_setup_simulates_the_offset_path(tmp_path, capsys):

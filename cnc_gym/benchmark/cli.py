@@ -2,7 +2,7 @@
 
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split train|val|test] [--policy P ...]
                   [--per-family N] [--seeds 0,1,2] [--machine M] [--dialect D] [--units mm|inch]
-                  [--setup FILE] [--workers N] [--ray [ADDRESS]]
+                  [--setup FILE] [--calculator-input] [--workers N] [--ray [ADDRESS]]
                   [--json OUT.jsonl] [--plot DIR] [--no-progress]
 
 :func:`register` adds the subcommand to the ``cnc-gym`` parser; everything else is imported when the
@@ -48,6 +48,9 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     bench.add_argument("--setup", metavar="FILE", default=None,
                        help="the operator's work and tool offsets (YAML, docs/configs.md), on top of the "
                             "machine preset's setup section")  # fmt: skip
+    bench.add_argument("--calculator-input", action="store_true",
+                       help="calculator-type input: a number without a decimal point is in mm/inch/s "
+                            "(Fanuc parameter 3401#0 DPI = 1)")  # fmt: skip
     bench.add_argument("--workers", type=int, default=1, metavar="N",
                        help="local worker processes (default 1)")  # fmt: skip
     bench.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
@@ -85,8 +88,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         write_jsonl,
     )
     from cnc_gym.benchmark.suites import DEFAULT_SUITE
+    from cnc_gym.cli import machine_with
     from cnc_gym.errors import CncGymError
-    from cnc_gym.machine import load_machine, with_setup
 
     if args.workers < 1:
         raise CncGymError(f"--workers must be at least 1, got {args.workers}")
@@ -96,8 +99,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         raise CncGymError("each --policy may be given once")
     if args.programs:
         machine, dialect = args.machine or "vmc-small", args.dialect or "gsk25i"
-        if args.setup is not None:  # the setup travels inside the machine record
-            machine = with_setup(load_machine(machine), args.setup)
+        if args.setup is not None or args.calculator_input:  # they travel inside the machine record
+            machine = machine_with(machine, args.setup, args.calculator_input)
         programs = user_programs(args.programs, machine, dialect, args.units)
         config = BenchConfig(programs=programs, policies=policies, seeds=seeds, machine=machine,
                              dialect=dialect, units=args.units)  # fmt: skip
@@ -121,8 +124,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
                              suite=suite.name, suite_version=suite.version,
                              suite_sha256=suite.sha256)  # fmt: skip
         title = f"{suite.name} {split}"
-        if args.setup is not None:
-            config.machine = with_setup(load_machine(config.machine), args.setup)
+        if args.setup is not None or args.calculator_input:
+            config.machine = machine_with(config.machine, args.setup, args.calculator_input)
     config.workers = args.workers
     config.plant = args.plant
     if args.ray is not None:

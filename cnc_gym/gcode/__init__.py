@@ -22,6 +22,7 @@ import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
+from cnc_gym.gcode.dialect import calculator_input as calculator_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.program import Program
 from cnc_gym.gcode.settings import (
@@ -73,6 +74,7 @@ def interpret(
     skip_signal=None,
     units: str | None = None,
     setup=None,
+    calculator_input: bool | None = None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -106,9 +108,17 @@ def interpret(
     [100, 50, -200]}, "tools": {1: {"length_mm": 120, "radius_mm": 5}}}``) or a
     :class:`~cnc_gym.machine.SetupConfig`, on top of ``machine``'s ``setup`` section (docs/configs.md
     "Setup"); ``tool_offsets`` entries go on top of both. G10 still changes the tables at run time.
+    ``calculator_input``: True reads a number without a decimal point in mm, inch or seconds where the
+    dialect reads least increments (Fanuc parameter 3401#0 DPI = 1;
+    :func:`~cnc_gym.gcode.dialect.calculator_input`; a dialect without the setting is a ConfigError);
+    None: ``machine``'s ``calculator_input``, else the dialect's standard reading.
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
+    if calculator_input is None and machine is not None:
+        calculator_input = machine.calculator_input
+    if calculator_input:
+        spec = calculator_dialect(spec)
     switches = _skip_switches(block_skip)
     # The cyclic garbage collector would otherwise rescan the growing list of blocks and segment rows
     # again and again (no cycles are created here): pausing it makes a 100 000-line program several

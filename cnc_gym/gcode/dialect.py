@@ -372,6 +372,10 @@ class Dialect:
     user_alarm_base: int | None = None
     #: A number without a decimal point is in mm/inch/s (True, GSK 1800#0 DPI = 1) or in least increments.
     integer_is_unit: bool = True
+    #: The controller parameter that switches to calculator-type input (a number without a decimal point
+    #: in mm/inch/s: ``integer_is_unit``), as its manual names it (Fanuc "parameter 3401#0 DPI"); "": the
+    #: dialect has no such setting. :func:`calculator_input` makes the variant.
+    calculator_input_parameter: str = ""
     #: Least input increment in mm (G21) and inch (G20); literals are truncated to it, variables rounded.
     least_increment_mm: float = 0.0001
     least_increment_inch: float = 0.0001
@@ -517,3 +521,18 @@ def get_dialect(name: str | Dialect) -> Dialect:
     dialect = importlib.import_module(module).DIALECT
     _CACHE[key] = dialect
     return dialect
+
+
+def calculator_input(dialect: Dialect) -> Dialect:
+    """``dialect`` with calculator-type input: a number without a decimal point is in mm, inch or seconds
+    (``X10`` is 10 mm), the setting of ``calculator_input_parameter`` (Fanuc 3401#0 DPI = 1); a dialect
+    that reads numbers so already is returned as it is, one without the setting is a ConfigError."""
+    if dialect.integer_is_unit:
+        return dialect
+    if not dialect.calculator_input_parameter:
+        raise ConfigError(f"dialect {dialect.name} has no calculator-type input setting (its manual reads a "
+                          "number without a decimal point in least input units, always)")  # fmt: skip
+    key = f"{dialect.name}+calculator"
+    if key not in _CACHE:
+        _CACHE[key] = replace(dialect, integer_is_unit=True)
+    return _CACHE[key]

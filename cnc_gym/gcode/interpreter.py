@@ -156,8 +156,8 @@ class Interpreter:
         dialect's end-of-program hooks, and build the tool path."""
         st = self.state
         language = self.dialect.language
-        for line, message, code in st.program.notices:
-            st.builder.notice(notice_line(st.program.file, line, message, code))
+        for line, level, message, code in st.program.notices:
+            st.builder.notice(notice_line(st.program.file, line, message, code, level))
         if language.system_variables is not None:
             st.variables.system = language.system_variables(self)
         try:

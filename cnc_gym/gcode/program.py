@@ -144,7 +144,8 @@ class Program:
     ``units``: program number → ``(start, end)`` block indices of each ``O`` program in the text (start is
     the ``O`` block; end is the next ``O`` block or the end). ``main``: the extent of the first program
     (from block 0, whether or not it has an ``O`` number). ``notices``: the reader's notes about the text,
-    ``(line, message, code)`` (text it did not read, a number format the program seems to mix).
+    ``(line, level, message, code)`` (text it did not read; a number format the program seems to mix, a
+    ``warning``).
     """
 
     blocks: list[Block]
@@ -153,4 +154,4 @@ class Program:
     sequence_index: dict[int, list[int]] = field(default_factory=dict)
     units: dict[int, tuple[int, int]] = field(default_factory=dict)
     main: tuple[int, int] = (0, 0)
-    notices: list[tuple[int, str, str]] = field(default_factory=list)
+    notices: list[tuple[int, str, str, str]] = field(default_factory=list)

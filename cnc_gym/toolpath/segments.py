@@ -400,8 +400,9 @@ class Toolpath:
 
 
 #: Row fields of :class:`ToolpathBuilder`'s tuples, by position (the order of ``_FIELDS``).
-_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S, _TOOL = (_FIELDS.index(name) for name in (
-    "kind", "start", "end", "radius", "sweep", "feed", "dwell_s", "tool"))  # fmt: skip
+_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S, _TOOL, _LINE, _FILE_INDEX = (
+    _FIELDS.index(name)
+    for name in ("kind", "start", "end", "radius", "sweep", "feed", "dwell_s", "tool", "line", "file_index"))
 _NAN3 = (float("nan"),) * 3
 _RAPID, _LINE_KIND, _ARC, _DWELL, _NURBS = (int(k) for k in SegmentKind)
 _NO_MODES = SegmentMode.NONE
@@ -466,6 +467,13 @@ class ToolpathBuilder:
 
     def __len__(self) -> int:
         return len(self._rows)
+
+    def last_source(self) -> tuple[int, int] | None:
+        """(file index, line) of the last row, or None before the first."""
+        if not self._rows:
+            return None
+        row = self._rows[-1]
+        return int(row[_FILE_INDEX]), int(row[_LINE])
 
     def kinds_since(self, first: int) -> list[int]:
         """The :class:`SegmentKind` values of the rows from ``first`` on."""

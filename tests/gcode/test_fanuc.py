@@ -11,6 +11,7 @@ from __future__ import annotations
 import pytest
 from gcode_helpers import close, moves, program_error, records
 
+from cnc_gym.errors import ConfigError
 from cnc_gym.gcode import get_dialect, interpret
 from cnc_gym.machine import machine_from_dict
 
@@ -258,6 +259,41 @@ def test_haas_tool_life_table_and_timers_are_read_only():
     # The Haas tool life check of a shop program: a fresh tool passes (#5405 = 0 < 6000).
     assert ends("T5 M06\nIF [ #5405 GE 6000 ] THEN #3000= 15 (TOOL LIFE EXPIRED)\nG00 X1.\n") == [
         [1.0, 0.0, 0.0]]
+
+
+# --------------------------------------------------------------------------- calculator-type input
+MIXED = "G00 Z2\nX1.292 Y3.752\nG01 X26.377 Y31 F600\nG03 X26.937 Y30.161 I4.507 J2.402\n"
+
+
+def test_calculator_type_input_reads_integers_as_mm():
+    """Parameter 3401#0 DPI = 1 (calculator_input): X10 is 10 mm, G04 X2 2 s, K3 3 repeats; a preset's
+    calculator_input sets it, the argument rules. Dialects without the setting refuse it."""
+    assert ends("G00 X10 Y2.5\n", calculator_input=True) == [[10.0, 2.5, 0.0]]
+    assert ends("G00 X10 Y2.5\n") == [[0.01, 2.5, 0.0]]
+    assert [r["seconds"] for r in records("G04 X2\n", dialect=FANUC, calculator_input=True)] == [2.0]
+    calculator = machine_from_dict({"calculator_input": True})
+    assert ends("G00 X10\n", machine=calculator) == [[10.0, 0.0, 0.0]]
+    assert ends("G00 X10\n", machine=calculator, calculator_input=False) == [[0.01, 0.0, 0.0]]
+    assert [m["end"] for m in moves("G00 X10\n", calculator_input=True)] == [[10.0, 0.0, 0.0]]  # GSK: as ever
+    with pytest.raises(ConfigError, match="no calculator-type input setting"):
+        interpret("G00 X10\n", dialect="syntec", calculator_input=True)
+
+
+def test_mixed_decimal_points_get_a_warning_and_the_arc_error_names_the_block():
+    # Y31 next to decimal Y words: one warning naming the first integer word. The arc after it fails its
+    # radius check, and the error names Y31's block as the one that set the start point.
+    tp = interpret("G00 Z2\nX1.5 Y3.\nG01 X26 F600\nX4.\n", dialect=FANUC)
+    assert tp.notices == ("<program>:3: warning: X26 has no decimal point and reads 0.026 mm (26 least input "
+                          "increments, parameter 3401#0 DPI = 0), while other X words have one: if the "
+                          "program means X26. (26 mm), trace it with --calculator-input (the machine "
+                          "preset's calculator_input) [mixed-decimal-point]",)  # fmt: skip
+    assert interpret("G00 X10 Y20\nX0 Y5\n", dialect=FANUC).notices == ()  # integers alone: no warning
+    err = program_error(MIXED, dialect=FANUC)
+    assert err.code == "arc-radius-mismatch" and err.line == 4
+    assert err.message.endswith("; Y31 at line 3 (the start point) without a decimal point: least input "
+                                "increments (parameter 3401#0 DPI = 0: Y31 is 0.031 mm); if they mean mm, "
+                                "trace with --calculator-input")  # fmt: skip
+    assert ends(MIXED, calculator_input=True)[2] == [26.377, 31.0, 2.0]
 
 
 # --------------------------------------------------------------------------- G92 and G54-G59

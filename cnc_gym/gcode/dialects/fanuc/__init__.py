@@ -48,6 +48,7 @@ DIALECT = Dialect(
     # Parameter 3401#0 DPI = 0, the Fanuc standard: a number without a decimal point is in least input
     # increments of the unit in force (X1000 = 1 mm in G21, 0.1 inch in G20); IS-B: 0.001 mm, 0.0001 inch.
     integer_is_unit=False,
+    calculator_input_parameter="parameter 3401#0 DPI",  # --calculator-input: DPI = 1
     least_increment_mm=0.001,
     least_increment_inch=0.0001,
     arc_radius_tolerance_mm=0.02,  # parameter 3410 (a typical setting)

@@ -341,8 +341,8 @@ class FlowRunner(CallConvention):
             self.reader = self.dialect.language.reader(self.dialect, self.calls)
         program = self.reader.read(text, str(path))
         builder = self.core.state.builder
-        for line, message, code in program.notices:
-            builder.notice(notice_line(str(path), line, message, code))
+        for line, level, message, code in program.notices:
+            builder.notice(notice_line(str(path), line, message, code, level))
         file_index = builder.file_index(str(path))
         span = program.units.get(number)
         if span is None:
