@@ -261,6 +261,17 @@ def test_haas_tool_life_table_and_timers_are_read_only():
         [1.0, 0.0, 0.0]]
 
 
+# --------------------------------------------------------------------------- the 4-axis preset
+def test_vmc_4axis_is_vmc_small_with_an_a_table():
+    from cnc_gym.machine import load_machine
+
+    four, small = load_machine("vmc-4axis"), load_machine("vmc-small")
+    assert four.rotary_letters == "A" and four.axes == small.axes and four.controller == small.controller
+    rows = records("G00 X10. A90.\nG01 X20. A180. F1000.\n", dialect=FANUC, machine=four)
+    assert [r["rotary_end"] for r in rows] == [{"A": 90.0}, {"A": 180.0}]
+    assert program_error("G00 X10. A90.\n", dialect=FANUC, machine=small).code == "unsupported-axis"
+
+
 # --------------------------------------------------------------------------- calculator-type input
 MIXED = "G00 Z2\nX1.292 Y3.752\nG01 X26.377 Y31 F600\nG03 X26.937 Y30.161 I4.507 J2.402\n"
 
