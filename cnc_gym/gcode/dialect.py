@@ -64,10 +64,11 @@ class Seam(Protocol):
         names (:meth:`Dialect.error`); file and line added later."""
         ...
 
-    def notice(self, message: str, code: str) -> None:
-        """A one-line note about the current block for the user (``FILE:LINE: note: message [code]``, on the
-        tool path's ``notices``): something the controller does without an alarm that the user should know
-        (words it does not use, text it does not run, a setting the program seems to need)."""
+    def notice(self, message: str, code: str, *, line: int | None = None) -> None:
+        """A one-line note about the current block (or ``line`` of the running file) for the user
+        (``FILE:LINE: note: message [code]``, on the tool path's ``notices``): something the controller does
+        without an alarm that the user should know (words it does not use, text it does not run, a setting
+        the program seems to need)."""
         ...
 
     @property

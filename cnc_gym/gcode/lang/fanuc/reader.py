@@ -4,7 +4,8 @@ default :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`).
 Lexical rules (GSK 25i, §1.2.3; the dialect supplies the number formats):
 
 * a line is a block; ``;`` also ends a block (EOB, §1.2); a line holding only ``%`` is a tape mark and a
-  second one ends the tape (text after it is not read);
+  second one ends the tape (text after it is not read, and a note says so); text before a first ``%``
+  that has program text after it is the leader section, skipped with a note;
 * ``( … )`` is a comment; upper and lower case are the same; spaces and tabs are ignored;
 * ``/`` or ``/n`` (n = 1..9, several as ``/1/3``) at the head of a block marks it for optional block
   skip; a ``/`` later in the block discards the rest of the block (§1.3.4);
@@ -176,18 +177,33 @@ class Reader:
         lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
         # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
         simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
+        notices: list[tuple[int, str, str, str]] = []
+        leader = _leader_lines(lines)
+        if leader:
+            notices.append((1, "note", f"line{'s 1-' if leader > 1 else ' '}{leader} before the tape start '%' "
+                            f"(line {leader + 1}) {'are' if leader > 1 else 'is'} the leader section, not read "
+                            "(the control skips what comes before the first '%' of a file)",
+                            "leader-skipped"))  # fmt: skip
         for line_no, raw in enumerate(lines, start=1):
+            if line_no <= leader:
+                continue
             stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
             if colon and stripped[0] == ":":
                 stripped = "O" + stripped[1:]  # ``:1234`` is the program number O1234 (ISO code)
             if stripped.startswith("%"):
-                if stripped.strip("%").strip() and not stripped[1:].lstrip().startswith("("):
+                if not _is_tape_mark(stripped):
                     error = self.error("'%' must stand alone on its line (tape start/end mark)",
                                        "bad-character", line_no)  # fmt: skip
                     raise self._hinted(error, raw).located(file, line_no)
                 if seen_percent:
+                    rest = [n for n, r in enumerate(lines[line_no:], start=line_no + 1) if r.strip(_BLANKS)]
+                    if rest:
+                        notices.append((line_no, "note", f"line{'s' if len(rest) > 1 else ''} {rest[0]}"
+                                        f"{f'-{rest[-1]}' if len(rest) > 1 else ''} after the end-of-tape "
+                                        f"'%' (line {line_no}) {'are' if len(rest) > 1 else 'is'} not read",
+                                        "after-end-of-tape"))  # fmt: skip
                     break  # second '%': end of tape
                 seen_percent = True
                 continue
@@ -205,7 +221,7 @@ class Reader:
             except ProgramError as exc:
                 raise self._hinted(exc, raw).located(file, line_no) from None
         self._seen = {}
-        program = Program(blocks, file=file)
+        program = Program(blocks, file=file, notices=notices)
         for index, block in enumerate(blocks):
             if block.number is not None:
                 program.sequence_index.setdefault(block.number, []).append(index)
@@ -752,6 +768,30 @@ class Reader:
             raise self.error(f"unexpected {text[parser.pos:]!r} after the expression", "bad-expression", line,
                              parser.pos + 1)  # fmt: skip
         return (target, value), len(text)
+
+
+def _is_tape_mark(stripped: str) -> bool:
+    """A ``%`` line: the tape start or end mark, alone or with an end of block or a comment after it."""
+    rest = stripped.strip("%").strip(_BLANKS + ";")
+    return stripped.startswith("%") and (not rest or stripped[1:].lstrip().startswith("("))
+
+
+def _leader_lines(lines: list[str]) -> int:
+    """How many lines come before the tape start: the first ``%`` line when text before it is not blank and
+    program text follows it (a ``%`` with nothing after it is the end of the tape); else 0."""
+    first_text = None
+    for index, raw in enumerate(lines):
+        stripped = raw.strip(_BLANKS)
+        if not stripped:
+            continue
+        if stripped.startswith("%") and _is_tape_mark(stripped):
+            if first_text is None:
+                return 0  # the file starts with its tape start
+            follows = any(r.strip(_BLANKS) and not r.strip(_BLANKS).startswith("%") for r in lines[index + 1 :])
+            return index if follows else 0
+        if first_text is None:
+            first_text = index
+    return 0
 
 
 def _log10(x: float) -> float:
