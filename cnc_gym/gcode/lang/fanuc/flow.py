@@ -88,8 +88,8 @@ class FlowRunner(CallConvention):
                 continue
             blocks = program.blocks
             self.core.notice(f"program O{number:04d} (lines {blocks[start].line}-{blocks[end - 1].line}, "
-                             f"{end - start} blocks) in this file was never called: the run ended with {ran}; "
-                             "call it with M98 P or G65 P, or make it the first program of the file",
+                             f"{end - start} blocks) in this file was never called: the run ended with "
+                             f"{ran}; call it with M98 P or G65 P, or make it the first program of the file",
                              "uncalled-program", line=blocks[start].line)  # fmt: skip
 
     def _loop(self) -> None:

@@ -180,10 +180,10 @@ class Reader:
         notices: list[tuple[int, str, str, str]] = []
         leader = _leader_lines(lines)
         if leader:
-            notices.append((1, "note", f"line{'s 1-' if leader > 1 else ' '}{leader} before the tape start '%' "
-                            f"(line {leader + 1}) {'are' if leader > 1 else 'is'} the leader section, not read "
-                            "(the control skips what comes before the first '%' of a file)",
-                            "leader-skipped"))  # fmt: skip
+            lines_ = (f"lines 1-{leader} before the tape start '%' (line {leader + 1}) are" if leader > 1
+                      else "line 1 before the tape start '%' (line 2) is")  # fmt: skip
+            notices.append((1, "note", f"{lines_} the leader section, not read (the control skips what comes "
+                            "before the first '%' of a file)", "leader-skipped"))  # fmt: skip
         for line_no, raw in enumerate(lines, start=1):
             if line_no <= leader:
                 continue
@@ -787,8 +787,8 @@ def _leader_lines(lines: list[str]) -> int:
         if stripped.startswith("%") and _is_tape_mark(stripped):
             if first_text is None:
                 return 0  # the file starts with its tape start
-            follows = any(r.strip(_BLANKS) and not r.strip(_BLANKS).startswith("%") for r in lines[index + 1 :])
-            return index if follows else 0
+            after = (r.strip(_BLANKS) for r in lines[index + 1 :])
+            return index if any(r and not r.startswith("%") for r in after) else 0
         if first_text is None:
             first_text = index
     return 0
