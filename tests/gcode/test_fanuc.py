@@ -307,6 +307,28 @@ def test_mixed_decimal_points_get_a_warning_and_the_arc_error_names_the_block():
     assert ends(MIXED, calculator_input=True)[2] == [26.377, 31.0, 2.0]
 
 
+# --------------------------------------------------------------------------- the shop example
+def test_the_haas_style_shop_example_traces_with_its_setup():
+    """examples/haas_shop.nc with examples/shop_setup.yaml: coolant through the spindle as machine
+    functions, an abbreviated WH loop of two contour passes in G41, a G82 spot cycle without R repeated by
+    L with a P dwell in seconds, a G47 engraving; every Z carries G54 (-380) and the tool's length."""
+    from pathlib import Path
+
+    from cnc_gym.gcode import interpret_file
+
+    root = Path(__file__).resolve().parents[2] / "examples"
+    tp = interpret_file(root / "haas_shop.nc", dialect=FANUC, setup=root / "shop_setup.yaml")
+    assert tp.notices == ()
+    assert list(tp.machine_functions.values()) == ["M88", "M89"]  # (M08/M09 are the dialect's own)
+    rows = tp.to_records()
+    cut = {round(r["end"][2], 6) for r in rows if r["kind"] == "line" and r["line"] < 27}
+    assert {-380.0 + 112.4 - 4.0, -380.0 + 112.4 - 6.0} <= cut  # the two passes, Z-4 and Z-6 (H1 112.4)
+    spots = [r for r in rows if r["kind"] == "dwell" and r["seconds"] == 0.5]
+    assert len(spots) == 4  # L4
+    engraved = {round(r["end"][2], 6) for r in rows if r["kind"] == "line" and r["line"] == 38}
+    assert engraved == {round(-380.0 + 104.10 - 0.02 - 0.2, 6)}
+
+
 # --------------------------------------------------------------------------- G92 and G54-G59
 def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
     """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference
