@@ -211,6 +211,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _check_arguments(args)
         return args.func(args)
     except CncGymError as exc:
+        print_notices(getattr(exc, "notices", ()))
         print(_one_line(str(exc)), file=sys.stderr)
     except OSError as exc:
         program = getattr(args, "program", "")

@@ -59,8 +59,11 @@ class ProgramError(CncGymError):
     """A G-code program cannot be run: names file, line (1-based), a stable code and the controller alarm.
 
     ``str(err)`` is the contract line ``FILE:LINE: message [code]`` (file and message through
-    :func:`printable`); ``err.message`` keeps the message as raised.
+    :func:`printable`); ``err.message`` keeps the message as raised; ``err.notices`` the notes about the
+    program made before it stopped (e.g. the warning that explains the error), printed before the error.
     """
+
+    notices: tuple[str, ...] = ()
 
     def __init__(
         self,

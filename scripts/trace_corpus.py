@@ -62,11 +62,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=60.0,
                         help="seconds per file before it counts as a hang")  # fmt: skip
     parser.add_argument("--json", type=Path, default=None, help="also write one JSON record per file")
-    parser.add_argument("extra", nargs="*", help="more options for cnc-gym trace (after --)")
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # Everything after '--' goes to cnc-gym trace as it is (split here: argparse would bind an empty
+    # list of extra positionals to the folder's chunk and then refuse the options after '--').
+    extra = argv[argv.index("--") + 1 :] if "--" in argv else []
+    argv = argv[: argv.index("--")] if "--" in argv else argv
+    parser.epilog = "Options after -- are passed to cnc-gym trace (e.g. -- --calculator-input)."
     args = parser.parse_args(argv)
     if not args.folder.is_dir():
         parser.error(f"{args.folder}: not a folder")
-    options = ["--dialect", args.dialect, *args.extra]
+    options = ["--dialect", args.dialect, *extra]
     if args.program_dir is not None:
         options += ["--program-dir", str(args.program_dir)]
     files = sorted(p for p in args.folder.iterdir() if p.is_file() and not p.name.startswith("."))

@@ -33,3 +33,14 @@ def test_each_file_is_traced_or_refused_with_its_code(tmp_path, capsys):
         ("c_grbl.gcode", "refused", "missing-value", 0)]  # fmt: skip
     assert "machine-function" in records[1]["message"]
     assert "3 files: 2 traced, 1 refused, 0 crashed" in text and "refused by code: missing-value 1" in text
+
+
+def test_options_after_a_double_dash_go_to_trace(tmp_path, capsys):
+    corpus = tmp_path / "corpus"
+    corpus.mkdir()
+    (corpus / "rotary.nc").write_text("G00 X1. A90.\nM30\n")
+    script = _script()
+    assert script.main([str(corpus), "--timeout", "60"]) == 0
+    assert "refused  unsupported-axis" in capsys.readouterr().out
+    assert script.main([str(corpus), "--timeout", "60", "--", "--machine", "vmc-4axis"]) == 0
+    assert "1 files: 1 traced, 0 refused" in capsys.readouterr().out

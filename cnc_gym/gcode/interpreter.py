@@ -162,6 +162,9 @@ class Interpreter:
             st.variables.system = language.system_variables(self)
         try:
             language.runner(self, options or FlowOptions()).run()
+        except ProgramError as exc:  # the notes made so far go with the error (a warning may explain it)
+            exc.notices = exc.notices or tuple(st.builder.notices)
+            raise
         finally:
             # The runner and the system table point back here: drop them so no reference cycle keeps a
             # run's blocks alive after it returns.

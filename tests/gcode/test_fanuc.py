@@ -304,7 +304,19 @@ def test_mixed_decimal_points_get_a_warning_and_the_arc_error_names_the_block():
     assert err.message.endswith("; Y31 at line 3 (the start point) without a decimal point: least input "
                                 "increments (parameter 3401#0 DPI = 0: Y31 is 0.031 mm); if they mean mm, "
                                 "trace with --calculator-input")  # fmt: skip
+    assert err.notices and "[mixed-decimal-point]" in err.notices[0]  # the warning goes with the error
     assert ends(MIXED, calculator_input=True)[2] == [26.377, 31.0, 2.0]
+
+
+def test_cnc_gym_trace_prints_the_warning_before_the_error_it_explains(tmp_path, capsys):
+    from cnc_gym.cli import main
+
+    path = tmp_path / "mixed.nc"
+    path.write_text(MIXED)
+    assert main(["trace", str(path), "--dialect", "fanuc"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and lines[0].endswith("[mixed-decimal-point]")
+    assert lines[1].endswith("[arc-radius-mismatch]")
 
 
 # --------------------------------------------------------------------------- the shop example
