@@ -389,8 +389,8 @@ class Interpreter:
                                  "rotary-axis-context")  # fmt: skip
             if letter in self.dialect.other_axes:
                 axes = self.dialect.axes + st.rotary_axes
-                hint = (" — rotary axes come from the machine preset's rotary_axes (the gsk25i preset has B)"
-                        if letter in "ABC" else "")  # fmt: skip
+                hint = (" — rotary axes come from the machine preset's rotary_axes (--machine vmc-4axis "
+                        "has A, gsk25i B)" if letter in "ABC" else "")  # fmt: skip
                 raise self.error(f"axis {letter} is not on this machine (axes: {axes}){hint}",
                                  "unsupported-axis")  # fmt: skip
             context = f"with {owner.name}" if owner is not None else "in this block"

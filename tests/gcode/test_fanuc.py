@@ -269,7 +269,8 @@ def test_vmc_4axis_is_vmc_small_with_an_a_table():
     assert four.rotary_letters == "A" and four.axes == small.axes and four.controller == small.controller
     rows = records("G00 X10. A90.\nG01 X20. A180. F1000.\n", dialect=FANUC, machine=four)
     assert [r["rotary_end"] for r in rows] == [{"A": 90.0}, {"A": 180.0}]
-    assert program_error("G00 X10. A90.\n", dialect=FANUC, machine=small).code == "unsupported-axis"
+    err = program_error("G00 X10. A90.\n", dialect=FANUC, machine=small)
+    assert err.code == "unsupported-axis" and "--machine vmc-4axis has A" in err.message
 
 
 # --------------------------------------------------------------------------- calculator-type input
