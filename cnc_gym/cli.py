@@ -1,16 +1,17 @@
 """The ``cnc-gym`` command.
 
-    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--block-skip N ...]
-                          [--program-dir DIR] [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--plant lti|mujoco] [--policy P]
-                        [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
-                        [--no-progress]
+    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
+                          [--block-skip N ...] [--program-dir DIR] [--max-blocks N]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
+                        [--plant lti|mujoco] [--policy P] [--json] [--plot FILE.png|DIR/] [--max-time SECONDS]
+                        [--max-blocks N] [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
 the rule of :mod:`cnc_gym.programs`. ``trace`` prints the canonical tool path as JSON Lines (``kind``,
 ``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``--units``
-sets the input unit at power-on (:data:`UNITS_HELP`). ``run``
+sets the input unit at power-on (:data:`UNITS_HELP`), ``--setup`` the operator's work and tool offsets
+(:data:`SETUP_HELP`). ``run``
 simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`). ``bench``
 benchmarks policies on a suite or your programs (:mod:`cnc_gym.benchmark.cli`).
 
@@ -52,6 +53,12 @@ EXIT_STATUS_HELP = """exit status:
 UNITS_HELP = ("input unit at power-on, mm or inch (a controller parameter: a program without G20/G21 "
               "is read in it; the program's own G20/G21 still rules). Default: the machine preset's "
               "power_on_units, else the dialect's power-on code (G21)")
+SETUP_HELP = ("the operator's tables at power-on (YAML: work_offsets G54.. -> [x, y, z], tools n -> "
+              "length_mm, radius_mm; docs/configs.md), on top of the machine preset's setup section; the "
+              "program's G10 still changes them")
+CALCULATOR_HELP = ("calculator-type input (Fanuc parameter 3401#0 DPI = 1): a number without a decimal "
+                   "point is in mm/inch/s, X10 = 10 mm (default: the machine preset's calculator_input, "
+                   "else the dialect's reading: fanuc X10 = 0.01 mm)")
 PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PROGRAMS)} (a built-in name "
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
@@ -109,6 +116,8 @@ def _common(parser: argparse.ArgumentParser) -> None:
                         help="machine preset name (configs/machines) or YAML path; default: none for trace, "
                              "the runner's default for run")  # fmt: skip
     parser.add_argument("--units", choices=INPUT_UNITS, default=None, help=UNITS_HELP)
+    parser.add_argument("--setup", metavar="FILE", default=None, help=SETUP_HELP)
+    parser.add_argument("--calculator-input", action="store_true", help=CALCULATOR_HELP)
     parser.add_argument("--max-blocks", metavar="N", type=int, default=None,
                         help=f"bound on executed blocks; a runaway loop ends in too-many-blocks "
                              f"(default {DEFAULT_MAX_BLOCKS:,})")  # fmt: skip
@@ -137,7 +146,8 @@ def cmd_trace(args: argparse.Namespace) -> int:
 
         machine = load_machine(args.machine)
     options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
-               "program_dir": args.program_dir, "units": args.units}  # fmt: skip
+               "program_dir": args.program_dir, "units": args.units, "setup": args.setup,
+               "calculator_input": args.calculator_input or None}  # fmt: skip
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)
@@ -154,10 +164,19 @@ def cmd_trace(args: argparse.Namespace) -> int:
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. `cnc-gym trace p.nc | head`: not an error
         _silence_stdout()
+    print_notices(toolpath.notices)
     return 0
 
 
+def print_notices(notices: Sequence[str]) -> None:
+    """The interpreter's notes about a program, one line each on stderr (the tool path is on stdout)."""
+    for line in notices:
+        print(_one_line(line), file=sys.stderr)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
+    if args.setup is not None or args.calculator_input:  # both travel inside the machine record
+        args.machine = machine_with(args.machine or "vmc-small", args.setup, args.calculator_input)
     try:
         from cnc_gym.runner import run_cli
 
@@ -166,6 +185,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         # A part of the simulation stack that is missing (not yet built or not installed): one line.
         print(f"cnc-gym run: the simulation runner is not available ({exc})", file=sys.stderr)
         return EXIT_USAGE
+
+
+def machine_with(machine, setup: str | None, calculator_input: bool):
+    """The machine preset ``machine`` with a setup file on top of its own and calculator-type input on,
+    as given (``--setup``, ``--calculator-input``): the record ``run`` and ``bench`` pass along."""
+    import dataclasses
+
+    from cnc_gym.machine import load_machine, with_setup
+
+    loaded = with_setup(load_machine(machine), setup)
+    return dataclasses.replace(loaded, calculator_input=True) if calculator_input else loaded
 
 
 def _silence_stdout() -> None:
@@ -181,6 +211,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _check_arguments(args)
         return args.func(args)
     except CncGymError as exc:
+        print_notices(getattr(exc, "notices", ()))
         print(_one_line(str(exc)), file=sys.stderr)
     except OSError as exc:
         program = getattr(args, "program", "")

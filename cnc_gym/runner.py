@@ -290,6 +290,9 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
                       plant=plant)  # fmt: skip
     try:
         if log is not None:
+            for _, toolpath in env.unwrapped._programs:  # the interpreter's notes about the program
+                for note in toolpath.notices:
+                    print(note, file=log)
             _announce_long_program(env.unwrapped, max_time_s, log)
         return record_run(env, pol, progress=progress, max_time_s=max_time_s, log=log)
     finally:

@@ -2,7 +2,7 @@
 
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split train|val|test] [--policy P ...]
                   [--per-family N] [--seeds 0,1,2] [--machine M] [--dialect D] [--units mm|inch]
-                  [--workers N] [--ray [ADDRESS]]
+                  [--setup FILE] [--calculator-input] [--workers N] [--ray [ADDRESS]]
                   [--json OUT.jsonl] [--plot DIR] [--no-progress]
 
 :func:`register` adds the subcommand to the ``cnc-gym`` parser; everything else is imported when the
@@ -45,6 +45,12 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     bench.add_argument("--units", choices=INPUT_UNITS, default=None,
                        help="input unit at power-on for programs without G20/G21 (default: the machine "
                             "preset's power_on_units, else the dialect's G21)")  # fmt: skip
+    bench.add_argument("--setup", metavar="FILE", default=None,
+                       help="the operator's work and tool offsets (YAML, docs/configs.md), on top of the "
+                            "machine preset's setup section")  # fmt: skip
+    bench.add_argument("--calculator-input", action="store_true",
+                       help="calculator-type input: a number without a decimal point is in mm/inch/s "
+                            "(Fanuc parameter 3401#0 DPI = 1)")  # fmt: skip
     bench.add_argument("--workers", type=int, default=1, metavar="N",
                        help="local worker processes (default 1)")  # fmt: skip
     bench.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
@@ -82,6 +88,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         write_jsonl,
     )
     from cnc_gym.benchmark.suites import DEFAULT_SUITE
+    from cnc_gym.cli import machine_with
     from cnc_gym.errors import CncGymError
 
     if args.workers < 1:
@@ -92,6 +99,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         raise CncGymError("each --policy may be given once")
     if args.programs:
         machine, dialect = args.machine or "vmc-small", args.dialect or "gsk25i"
+        if args.setup is not None or args.calculator_input:  # they travel inside the machine record
+            machine = machine_with(machine, args.setup, args.calculator_input)
         programs = user_programs(args.programs, machine, dialect, args.units)
         config = BenchConfig(programs=programs, policies=policies, seeds=seeds, machine=machine,
                              dialect=dialect, units=args.units)  # fmt: skip
@@ -115,6 +124,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
                              suite=suite.name, suite_version=suite.version,
                              suite_sha256=suite.sha256)  # fmt: skip
         title = f"{suite.name} {split}"
+        if args.setup is not None or args.calculator_input:
+            config.machine = machine_with(config.machine, args.setup, args.calculator_input)
     config.workers = args.workers
     config.plant = args.plant
     if args.ray is not None:

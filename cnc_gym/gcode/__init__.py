@@ -22,6 +22,7 @@ import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
+from cnc_gym.gcode.dialect import calculator_input as calculator_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.program import Program
 from cnc_gym.gcode.settings import (
@@ -34,7 +35,7 @@ from cnc_gym.gcode.settings import (
 from cnc_gym.machine import INPUT_UNITS
 
 if TYPE_CHECKING:
-    from cnc_gym.machine import MachineConfig
+    from cnc_gym.machine import MachineConfig, SetupConfig
     from cnc_gym.toolpath import Toolpath
 
 __all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "get_dialect", "interpret",
@@ -72,6 +73,8 @@ def interpret(
     tool_measurement=None,
     skip_signal=None,
     units: str | None = None,
+    setup=None,
+    calculator_input: bool | None = None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -101,9 +104,21 @@ def interpret(
     machine sets; shop programs for inch machines often carry no G20); the program's own G20/G21 still
     rules. Default: ``machine``'s ``power_on_units`` when it sets one, else the dialect's power-on code
     (G21 on every built-in dialect; Syntec's G71).
+    ``setup``: the operator's tables at power-on, a setup file's path, its data (``{"work_offsets": {"G54":
+    [100, 50, -200]}, "tools": {1: {"length_mm": 120, "radius_mm": 5}}}``) or a
+    :class:`~cnc_gym.machine.SetupConfig`, on top of ``machine``'s ``setup`` section (docs/configs.md
+    "Setup"); ``tool_offsets`` entries go on top of both. G10 still changes the tables at run time.
+    ``calculator_input``: True reads a number without a decimal point in mm, inch or seconds where the
+    dialect reads least increments (Fanuc parameter 3401#0 DPI = 1;
+    :func:`~cnc_gym.gcode.dialect.calculator_input`; a dialect without the setting is a ConfigError);
+    None: ``machine``'s ``calculator_input``, else the dialect's standard reading.
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
+    if calculator_input is None and machine is not None:
+        calculator_input = machine.calculator_input
+    if calculator_input:
+        spec = calculator_dialect(spec)
     switches = _skip_switches(block_skip)
     # The cyclic garbage collector would otherwise rescan the growing list of blocks and segment rows
     # again and again (no cycles are created here): pausing it makes a 100 000-line program several
@@ -125,16 +140,27 @@ def interpret(
                               main_m99=main_m99)  # fmt: skip
         if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
+        tables = _setup(machine, setup)
         program = spec.language.reader(spec, calls).read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
                                tool_measurement=tool_measurement, skip_signal=skip_signal,
-                               units=units).run(options)  # fmt: skip
+                               units=units, setup=tables).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()
     if machine is not None:
         _check_travel(toolpath, machine, spec)
     return toolpath
+
+
+def _setup(machine: MachineConfig | None, setup) -> SetupConfig | None:
+    """The setup of a run: the machine preset's section with ``setup=`` on top (None: none at all)."""
+    from cnc_gym.machine import load_setup, merge_setups
+
+    given = None if setup is None else load_setup(setup)
+    if machine is None:
+        return given
+    return merge_setups(machine.setup, given)
 
 
 def interpret_file(

@@ -34,6 +34,7 @@ class Block:
     ``stmt``: ``("goto", target)``, ``("if_goto", cond, target)``, ``("if_then", cond, (target, value))``,
     ``("while", cond or None, m)`` (``DOm`` alone has no condition), ``("end", m)``.
     ``message``: the comment of an assignment block (``#3000=1 (TOOL NOT FOUND)``), else None.
+    ``comment``: the comment of a block that holds a code taking it as an argument (:class:`CommentedBlock`).
     """
 
     __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
@@ -51,6 +52,8 @@ class Block:
     kind: str | None = None
     stmt: Any = None  # a tuple whose shape depends on the statement (see above)
     message: str | None = None
+    #: The block's comment where a code of the block takes it as an argument (Haas G47's text), else None.
+    comment: str | None = None
 
     def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
                  assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
@@ -81,6 +84,23 @@ class SpecialBlock(Block):
         self.kind = kind
         self.stmt = stmt
         self.message = None
+
+
+class CommentedBlock(Block):
+    """A block whose comment is an argument of one of its codes (``Dialect.comment_codes``)."""
+
+    __slots__ = ("comment",)
+
+    @classmethod
+    def of(cls, block: Block, comment: str) -> Block:
+        """``block`` with ``comment`` (an ordinary block; statements and calls keep theirs unchanged)."""
+        if type(block) is not Block:
+            return block
+        out = cls.__new__(cls)
+        for name in Block.__slots__:
+            setattr(out, name, getattr(block, name))
+        out.comment = comment
+        return out
 
 
 def literal_block(line: int, words: Sequence, gs: list | None, ms: list | None, values: dict[str, float],
@@ -123,7 +143,9 @@ class Program:
 
     ``units``: program number → ``(start, end)`` block indices of each ``O`` program in the text (start is
     the ``O`` block; end is the next ``O`` block or the end). ``main``: the extent of the first program
-    (from block 0, whether or not it has an ``O`` number).
+    (from block 0, whether or not it has an ``O`` number). ``notices``: the reader's notes about the text,
+    ``(line, level, message, code)`` (text it did not read; a number format the program seems to mix, a
+    ``warning``).
     """
 
     blocks: list[Block]
@@ -132,3 +154,4 @@ class Program:
     sequence_index: dict[int, list[int]] = field(default_factory=dict)
     units: dict[int, tuple[int, int]] = field(default_factory=dict)
     main: tuple[int, int] = (0, 0)
+    notices: list[tuple[int, str, str, str]] = field(default_factory=list)

@@ -57,6 +57,11 @@ class CycleParameters:
     #: hold and manual retract at the bottom (like G88, without the shift). The manual names no selector
     #: but "canned cycle I / II"; its only parameter there, 009#7 FIX2, is not in the Parameter volume.
     g87_variant: int = 2
+    #: A cycle whose R was never given drills from the initial level (R = the initial level; Haas: R is
+    #: optional). False: the first drilling block must give R (``cycle-missing-data``).
+    r_defaults_to_initial: bool = False
+    #: L is the repeat count of a cycle block, as K (Haas, and the L of older Fanuc 0-M programs).
+    l_repeats: bool = False
 
     def __post_init__(self) -> None:
         if self.shift_direction not in (0, 1, 2, 3):

@@ -39,7 +39,8 @@ def toolpath_records(tp: Toolpath) -> list[dict]:
     """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
     data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
     coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that
-    carry one."""
+    carry one; ``machine_function`` (``"M13"``) on a dwell row that stands for an M code the control hands
+    to the machine."""
     return [_record(tp, i) for i in range(len(tp))]
 
 
@@ -52,6 +53,8 @@ def _record(tp: Toolpath, i: int) -> dict:
         rec["file"] = tp.files[int(tp.file_index[i])]
     if kind == SegmentKind.DWELL:
         rec["seconds"] = _r(tp.dwell_s[i])
+        if i in tp.machine_functions:
+            rec["machine_function"] = tp.machine_functions[i]
     else:
         rec["start"] = [_r(x) for x in tp.start[i]]
         rec["end"] = [_r(x) for x in tp.end[i]]
@@ -125,6 +128,8 @@ def toolpath_jsonl(tp: Toolpath) -> str:
     general |= cutting & ~np.isfinite(tp.feed)
     general |= (kind == SegmentKind.ARC) & ~(np.isfinite(tp.radius) & np.isfinite(tp.sweep))
     general |= (kind == SegmentKind.DWELL) & ~np.isfinite(tp.dwell_s)
+    if tp.machine_functions:
+        general[list(tp.machine_functions)] = True
     if tp.rotary_axes:
         general |= (kind == SegmentKind.LINE) | (kind == SegmentKind.RAPID)
     fast = ~general

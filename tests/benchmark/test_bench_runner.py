@@ -177,3 +177,25 @@ def test_cli_units_reads_user_programs_in_inch(tmp_path, capsys):
     capsys.readouterr()
     assert records["inch"]["units"] == "inch" and records[None]["units"] is None
     assert records["inch"]["cut_length_mm"] == pytest.approx(25.4 * records[None]["cut_length_mm"])
+
+
+def test_cli_setup_applies_the_work_offsets_to_user_programs(tmp_path, capsys):
+    # G54 at X200: the rapid to the start is 200 mm longer, so the bound is longer (the machine's dynamics,
+    # and so its digest, are the same).
+    program = tmp_path / "part.nc"
+    program.write_text("G54 G00 X0 Y0\nG01 X10. Y10. F1000.\n")
+    setup = tmp_path / "job.yaml"
+    setup.write_text("work_offsets:\n  G54: [200.0, 0.0, 0.0]\n")
+    records = {}
+    for name, extra in (("plain", []), ("setup", ["--setup", str(setup)])):
+        out = tmp_path / f"{name}.jsonl"
+        argv = ["bench", "--programs", str(program), "--policy", "bound", "--json", str(out), "--no-progress"]
+        assert main([*argv, *extra]) == 0
+        (records[name],) = read_jsonl([out])
+    capsys.readouterr()
+    assert records["setup"]["machine"] == records["plain"]["machine"] == "vmc-small"
+    assert records["setup"]["machine_sha256"] == records["plain"]["machine_sha256"]
+    assert records["setup"]["bound_s"] > records["plain"]["bound_s"]
+    assert main(["bench", "--programs", str(program), "--policy", "bound", "--no-progress", "--setup",
+                 str(tmp_path / "missing.yaml")]) == 2  # fmt: skip
+    assert "cannot read setup file" in capsys.readouterr().err

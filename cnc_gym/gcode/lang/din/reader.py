@@ -176,7 +176,7 @@ class DinReader:
             main = (0, len(blocks))
         else:
             main = (main_start, len(blocks))
-        program = DinProgram(blocks, file, program_number, {}, {}, main, local_units,
+        program = DinProgram(blocks, file, program_number, {}, {}, main, local_units=local_units,
                              has_main_header=main_start is not None)  # fmt: skip
         for start, end in (main, *local_units.values()):
             control.compile_unit(program, start, end)

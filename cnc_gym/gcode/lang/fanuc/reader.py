@@ -4,7 +4,8 @@ default :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`).
 Lexical rules (GSK 25i, §1.2.3; the dialect supplies the number formats):
 
 * a line is a block; ``;`` also ends a block (EOB, §1.2); a line holding only ``%`` is a tape mark and a
-  second one ends the tape (text after it is not read);
+  second one ends the tape (text after it is not read, and a note says so); text before a first ``%``
+  that has program text after it is the leader section, skipped with a note;
 * ``( … )`` is a comment; upper and lower case are the same; spaces and tabs are ignored;
 * ``/`` or ``/n`` (n = 1..9, several as ``/1/3``) at the head of a block marks it for optional block
   skip; a ``/`` later in the block discards the rest of the block (§1.3.4);
@@ -31,9 +32,10 @@ import re
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.lang.fanuc.abbreviations import expand as expand_abbreviations
 from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
 from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
-from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block
+from cnc_gym.gcode.program import Block, CommentedBlock, Program, SpecialBlock, literal_block
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -175,18 +177,33 @@ class Reader:
         lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
         # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
         simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
+        notices: list[tuple[int, str, str, str]] = []
+        leader = _leader_lines(lines)
+        if leader:
+            lines_ = (f"lines 1-{leader} before the tape start '%' (line {leader + 1}) are" if leader > 1
+                      else "line 1 before the tape start '%' (line 2) is")  # fmt: skip
+            notices.append((1, "note", f"{lines_} the leader section, not read (the control skips what comes "
+                            "before the first '%' of a file)", "leader-skipped"))  # fmt: skip
         for line_no, raw in enumerate(lines, start=1):
+            if line_no <= leader:
+                continue
             stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
             if colon and stripped[0] == ":":
                 stripped = "O" + stripped[1:]  # ``:1234`` is the program number O1234 (ISO code)
             if stripped.startswith("%"):
-                if stripped.strip("%").strip() and not stripped[1:].lstrip().startswith("("):
+                if not _is_tape_mark(stripped):
                     error = self.error("'%' must stand alone on its line (tape start/end mark)",
                                        "bad-character", line_no)  # fmt: skip
                     raise self._hinted(error, raw).located(file, line_no)
                 if seen_percent:
+                    rest = [n for n, r in enumerate(lines[line_no:], start=line_no + 1) if r.strip(_BLANKS)]
+                    if rest:
+                        notices.append((line_no, "note", f"line{'s' if len(rest) > 1 else ''} {rest[0]}"
+                                        f"{f'-{rest[-1]}' if len(rest) > 1 else ''} after the end-of-tape "
+                                        f"'%' (line {line_no}) {'are' if len(rest) > 1 else 'is'} not read",
+                                        "after-end-of-tape"))  # fmt: skip
                     break  # second '%': end of tape
                 seen_percent = True
                 continue
@@ -204,7 +221,7 @@ class Reader:
             except ProgramError as exc:
                 raise self._hinted(exc, raw).located(file, line_no) from None
         self._seen = {}
-        program = Program(blocks, file=file)
+        program = Program(blocks, file=file, notices=notices)
         for index, block in enumerate(blocks):
             if block.number is not None:
                 program.sequence_index.setdefault(block.number, []).append(index)
@@ -264,7 +281,15 @@ class Reader:
             for block in blocks:
                 if block.assign is not None:
                     block.message = self._last_comment
+            if self.dialect.comment_codes:  # a code that takes the comment as its argument (Haas G47)
+                blocks = [CommentedBlock.of(b, self._last_comment) if self._takes_comment(b) else b
+                          for b in blocks]  # fmt: skip
         return blocks
+
+    def _takes_comment(self, block: Block) -> bool:
+        codes = self.dialect.comment_codes
+        return any(word[0] == "G" and isinstance(word[1], str | float)
+                   and round(float(word[1]) * 10) in codes for word in block.words)  # fmt: skip
 
     def _strip_comments(self, text: str, line: int) -> str:
         out = []
@@ -459,6 +484,8 @@ class Reader:
 
     def _scan_block(self, text: str, line: int) -> Block | None:
         """Everything that is not plain: block skip, expressions, variables, assignments, keywords, calls."""
+        if self.dialect.macro_abbreviations:
+            text = expand_abbreviations(text, self.dialect.macro_abbreviations)  # WH[ … is WHILE[ …
         code_rules = self._code_rules(text)
         if not self._mentions_call(text):
             try:
@@ -741,6 +768,30 @@ class Reader:
             raise self.error(f"unexpected {text[parser.pos:]!r} after the expression", "bad-expression", line,
                              parser.pos + 1)  # fmt: skip
         return (target, value), len(text)
+
+
+def _is_tape_mark(stripped: str) -> bool:
+    """A ``%`` line: the tape start or end mark, alone or with an end of block or a comment after it."""
+    rest = stripped.strip("%").strip(_BLANKS + ";")
+    return stripped.startswith("%") and (not rest or stripped[1:].lstrip().startswith("("))
+
+
+def _leader_lines(lines: list[str]) -> int:
+    """How many lines come before the tape start: the first ``%`` line when text before it is not blank and
+    program text follows it (a ``%`` with nothing after it is the end of the tape); else 0."""
+    first_text = None
+    for index, raw in enumerate(lines):
+        stripped = raw.strip(_BLANKS)
+        if not stripped:
+            continue
+        if stripped.startswith("%") and _is_tape_mark(stripped):
+            if first_text is None:
+                return 0  # the file starts with its tape start
+            after = (r.strip(_BLANKS) for r in lines[index + 1 :])
+            return index if any(r and not r.startswith("%") for r in after) else 0
+        if first_text is None:
+            first_text = index
+    return 0
 
 
 def _log10(x: float) -> float:
