@@ -176,7 +176,9 @@ def print_notices(notices: Sequence[str]) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     if args.setup is not None or args.calculator_input:  # both travel inside the machine record
-        args.machine = machine_with(args.machine or "vmc-small", args.setup, args.calculator_input)
+        from cnc_gym.machine import machine_with_options
+
+        args.machine = machine_with_options(args.machine or "vmc-small", args.setup, args.calculator_input)
     try:
         from cnc_gym.runner import run_cli
 
@@ -185,17 +187,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         # A part of the simulation stack that is missing (not yet built or not installed): one line.
         print(f"cnc-gym run: the simulation runner is not available ({exc})", file=sys.stderr)
         return EXIT_USAGE
-
-
-def machine_with(machine, setup: str | None, calculator_input: bool):
-    """The machine preset ``machine`` with a setup file on top of its own and calculator-type input on,
-    as given (``--setup``, ``--calculator-input``): the record ``run`` and ``bench`` pass along."""
-    import dataclasses
-
-    from cnc_gym.machine import load_machine, with_setup
-
-    loaded = with_setup(load_machine(machine), setup)
-    return dataclasses.replace(loaded, calculator_input=True) if calculator_input else loaded
 
 
 def _silence_stdout() -> None:

@@ -569,6 +569,15 @@ def with_setup(machine: MachineConfig, setup: str | Path | Mapping | SetupConfig
     return dataclasses.replace(machine, setup=merge_setups(machine.setup, load_setup(setup)))
 
 
+def machine_with_options(machine: str | Path | MachineConfig, setup: str | Path | None,
+                         calculator_input: bool) -> MachineConfig:
+    """The machine preset ``machine`` with a setup file on top of its own and calculator-type input on, as
+    the command line gives them (``--setup``, ``--calculator-input``): the record ``run`` and ``bench``
+    pass along."""
+    loaded = with_setup(machine if isinstance(machine, MachineConfig) else load_machine(machine), setup)
+    return dataclasses.replace(loaded, calculator_input=True) if calculator_input else loaded
+
+
 def with_plant_backend(machine: MachineConfig, backend: str | None) -> MachineConfig:
     """``machine`` with ``plant.backend`` set to ``backend`` (None: as it is), e.g. for the env's
     ``plant=`` and the CLI's ``--plant``; a name not in :data:`PLANT_BACKENDS` is a ConfigError."""

@@ -88,8 +88,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         write_jsonl,
     )
     from cnc_gym.benchmark.suites import DEFAULT_SUITE
-    from cnc_gym.cli import machine_with
     from cnc_gym.errors import CncGymError
+    from cnc_gym.machine import machine_with_options
 
     if args.workers < 1:
         raise CncGymError(f"--workers must be at least 1, got {args.workers}")
@@ -100,7 +100,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.programs:
         machine, dialect = args.machine or "vmc-small", args.dialect or "gsk25i"
         if args.setup is not None or args.calculator_input:  # they travel inside the machine record
-            machine = machine_with(machine, args.setup, args.calculator_input)
+            machine = machine_with_options(machine, args.setup, args.calculator_input)
         programs = user_programs(args.programs, machine, dialect, args.units)
         config = BenchConfig(programs=programs, policies=policies, seeds=seeds, machine=machine,
                              dialect=dialect, units=args.units)  # fmt: skip
@@ -125,7 +125,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
                              suite_sha256=suite.sha256)  # fmt: skip
         title = f"{suite.name} {split}"
         if args.setup is not None or args.calculator_input:
-            config.machine = machine_with(config.machine, args.setup, args.calculator_input)
+            config.machine = machine_with_options(config.machine, args.setup, args.calculator_input)
     config.workers = args.workers
     config.plant = args.plant
     if args.ray is not None:
