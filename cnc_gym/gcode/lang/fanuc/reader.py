@@ -147,6 +147,8 @@ class Reader:
             text = self._strip_comments(raw, 0).translate(_NO_BLANKS).upper()
         except ProgramError:
             return False
+        if not text.isascii():
+            return False  # the line's error is its illegal character (read_line), whatever follows a ';'
         try:
             for index, part in enumerate(text.split(";")):
                 try:
@@ -353,9 +355,13 @@ class Reader:
         """A plain word's value after its address's rule; None: the block needs the scanner after all (macro
         arguments, a code's own number formats)."""
         letter, digits = pair
-        rule = self._fast_rules[letter]
+        rule = self._fast_rules.get(letter)
+        if rule is None:
+            raise self._unknown_address(letter, line)
         low, high, point_allowed, is_length = rule
         try:
+            if digits[0] == "-" and low >= 0:
+                self._literal(letter, digits, rule, line)  # raises bad-sign, also for "-0"
             if "." in digits:
                 fraction = len(digits) - digits.index(".") - 1
                 if not point_allowed or (is_length and fraction > self._decimals):
@@ -407,6 +413,8 @@ class Reader:
         value = float(digits)
         if is_length and not has_point and not self.dialect.integer_is_unit:
             value *= self._increment
+        if digits[0] == "-" and low >= 0:  # "N-0", "S-0": a minus sign where the address has none
+            raise self.error(f"{letter}{digits}: {letter} cannot be negative", "bad-sign", line)
         if not low <= value <= high:
             if value < 0 <= low:
                 raise self.error(f"{letter}{digits}: {letter} cannot be negative", "bad-sign", line)
@@ -414,6 +422,10 @@ class Reader:
             raise self.error(f"{letter}{digits}: out of range {low:g} to {high:g}", "value-out-of-range",
                              line, alarm=alarm)  # fmt: skip
         return value
+
+    def _unknown_address(self, letter: str, line: int, column: int | None = None) -> ProgramError:
+        """A letter that is no address of this controller (the H4C-M has no E: ``E1``, ``X1E3``)."""
+        return self.error(f"{letter} is not an address of this controller", "unknown-address", line, column)
 
     def _head(self, words: list, line: int) -> tuple[list, int | None]:
         """Take O (program number) and N (sequence number) off the head of a block."""
@@ -498,7 +510,7 @@ class Reader:
         # Optional block skip: /, /n, /1/3 at the head (§1.3.4).
         while pos < len(text) and text[pos] == "/":
             pos += 1
-            if pos < len(text) and text[pos].isdigit():
+            if pos < len(text) and "0" <= text[pos] <= "9":
                 n = int(text[pos])
                 if n == 0:
                     raise self.error("block skip switch must be 1 to 9", "bad-block-skip", line, pos + 1)
@@ -541,7 +553,7 @@ class Reader:
                 words.append((letter, value, text_digits))
                 continue
             if not ("A" <= c <= "Z"):
-                if c.isdigit() or c == ".":  # alarm 4 ADDRESS NOT FOUND
+                if _is_digit(c) or c == ".":  # alarm 4 ADDRESS NOT FOUND
                     raise self.error(f"a number without an address at {text[pos:pos + 8]!r}",
                                      "missing-address", line, pos + 1)  # fmt: skip
                 if c in "+-":  # alarm 6 ILLEGAL USE OF NEGATIVE SIGN
@@ -555,8 +567,11 @@ class Reader:
                 stmt, pos = self._statement(keyword, text, pos, line)
                 break
             letter = c
+            rule = rules.get(letter)
+            if rule is None:
+                raise self._unknown_address(letter, line, pos + 1)
             pos += 1
-            value, text_digits, pos = self._value(letter, text, pos, line, rules[letter])
+            value, text_digits, pos = self._value(letter, text, pos, line, rule)
             if text_digits is None:
                 has_expr = True
             words.append((letter, value, text_digits))
@@ -654,9 +669,9 @@ class Reader:
 
     def _goto_target(self, parser: ExpressionParser, line: int) -> tuple:
         c = parser._peek()
-        if c.isdigit():
+        if _is_digit(c):
             start = parser.pos
-            while parser._peek().isdigit():
+            while _is_digit(parser._peek()):
                 parser.pos += 1
             if parser._peek() == ".":
                 raise self.error("a GOTO sequence number is an integer", "bad-number", line, parser.pos + 1)
@@ -670,7 +685,7 @@ class Reader:
 
     def _loop_number(self, parser: ExpressionParser, word: str, line: int) -> int:
         start = parser.pos
-        while parser._peek().isdigit():
+        while _is_digit(parser._peek()):
             parser.pos += 1
         digits = parser.text[start : parser.pos]
         if not digits:
@@ -700,7 +715,7 @@ class Reader:
         match = _NUMBER_AT.match(text, pos)
         if match:
             end = match.end()
-            if end < len(text) and (text[end] == "." or text[end].isdigit()):
+            if end < len(text) and (text[end] == "." or _is_digit(text[end])):
                 bad = _NUMBER_AT.match(text, end)
                 tail = text[end : (bad.end() if bad else end + 1)]
                 # a second point (GSK/Fanuc alarm 7 ILLEGAL USE OF DECIMAL POINT), else bad-number's
@@ -724,7 +739,7 @@ class Reader:
             return node, None, parser.pos
         if sign:
             raise self.error(f"{letter}{sign}: sign without a number", "bad-sign", line, start)  # alarm 6
-        if c == "." or c.isdigit():
+        if c == "." or _is_digit(c):
             raise self.error(f"bad number after {letter}", "bad-number", line, start,
                              alarm=DECIMAL_POINT if c == "." else None)  # fmt: skip
         raise self.error(f"address {letter} has no value", "missing-value", line, start)
@@ -741,6 +756,11 @@ class Reader:
             raise self.error(f"unexpected {text[parser.pos:]!r} after the expression", "bad-expression", line,
                              parser.pos + 1)  # fmt: skip
         return (target, value), len(text)
+
+
+def _is_digit(c: str) -> bool:
+    """An ASCII digit (str.isdigit also takes '²' and '١', which are not program text)."""
+    return len(c) == 1 and "0" <= c <= "9"
 
 
 def _log10(x: float) -> float:
