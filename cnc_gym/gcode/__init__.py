@@ -125,7 +125,9 @@ def interpret(
                               main_m99=main_m99)  # fmt: skip
         if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
-        program = spec.language.reader(spec, calls).read(text, file)
+        reader = spec.language.reader(spec, calls)
+        reader.max_blocks = int(max_blocks)  # a text of more blocks than a run may execute: refused as read
+        program = reader.read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
                                tool_measurement=tool_measurement, skip_signal=skip_signal,
                                units=units).run(options)  # fmt: skip

@@ -9,6 +9,8 @@ Sections (§n) are those of the GSK 25i programming manual.
 
 from __future__ import annotations
 
+import re
+from array import array
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -17,16 +19,16 @@ from cnc_gym.errors import ProgramError
 
 
 class Block:
-    """One block after reading.
+    """One block after reading: the interface the core and the runners use, whatever the reader built.
 
     ``words``: ``(letter, value, text)`` tuples; ``value`` is a float for a literal (``text`` its
     digits, for decimal-point checks) or an expression node (``text`` None) evaluated at execution. A
-    plain block (read on the hot path) keeps just ``(letter, digits)`` pairs; ``word[-1]`` is the text
+    plain block (read on the hot path) gives just ``(letter, digits)`` pairs; ``word[-1]`` is the text
     either way.
     ``assign``: ``(target_node, value_node)`` for a macro assignment block (then ``words`` is empty).
     ``skip``: bit mask of the block-skip switches (bit n for ``/n``) that suppress the block.
-    ``gs``, ``ms``, ``values``: for a block without expressions, the words split once at read time (G
-    numbers, M numbers, other addresses → value); None when the block has expressions.
+    :meth:`split`: for a block without expressions, its words split into G numbers, M numbers and the other
+    addresses → value (``gs``, ``ms``, ``values``; None where the block has no G or M).
     ``kind``: None (an ordinary block), ``"assign"`` (a macro assignment, in ``assign``), ``"stmt"`` (a macro
     statement, in ``stmt``) or ``"call"`` (may call a macro; words kept in order, arguments read without the
     addresses' own rules, evaluated at run time; ``stmt`` is then ``("strict", block or ProgramError)``,
@@ -34,23 +36,53 @@ class Block:
     ``stmt``: ``("goto", target)``, ``("if_goto", cond, target)``, ``("if_then", cond, (target, value))``,
     ``("while", cond or None, m)`` (``DOm`` alone has no condition), ``("end", m)``.
     ``message``: the comment of an assignment block (``#3000=1 (TOOL NOT FOUND)``), else None.
+
+    Two kinds of record carry it: :class:`WordBlock` (its words as tuples, split once at read time) and
+    :class:`PlainBlock` (a block of literal words only, kept as its text and its numbers in the program's
+    :class:`LiteralStore`: about 250 bytes a line instead of 1 200, so that a huge program meets the
+    segment budget before it runs out of memory).
     """
 
-    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
-    line: int
-    words: Sequence  # (letter, value, text) tuples; a plain block keeps a list of (letter, digits) pairs
-    skip: int
-    has_expr: bool
-    assign: Any  # (target node, value node) or None
+    __slots__ = ()
     number: int | None
-    gs: list | None
-    ms: list | None
-    values: Any  # dict[str, float], or None for a block with expressions
-    # Ordinary blocks share these class-level defaults (no per-block stores on the read hot path);
-    # :class:`SpecialBlock` gives statements, assignments and calls their own.
+    skip: int = 0
+    has_expr: bool = False
+    assign: Any = None  # (target node, value node) or None
+    # Ordinary blocks share these class-level defaults; :class:`SpecialBlock` gives statements, assignments
+    # and calls their own.
     kind: str | None = None
     stmt: Any = None  # a tuple whose shape depends on the statement (see above)
     message: str | None = None
+
+    @property
+    def line(self) -> int:
+        """The block's line in its file (1-based)."""
+        raise NotImplementedError
+
+    @property
+    def words(self) -> Sequence:
+        """``(letter, value, text)`` tuples, or ``(letter, digits)`` pairs of a plain block."""
+        raise NotImplementedError
+
+    def split(self) -> tuple[list | None, list | None, dict[str, float]]:
+        """``(gs, ms, values)`` of a block without expressions."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}(line={self.line}, words={self.words!r}, skip={self.skip}, "
+                f"assign={self.assign!r}, kind={self.kind!r}, stmt={self.stmt!r})")  # fmt: skip
+
+
+class WordBlock(Block):
+    """A block whose words are ``(letter, value, text)`` tuples (see :class:`Block`); a block without
+    expressions keeps them split (``gs``, ``ms``, ``values``) from read time on."""
+
+    __slots__ = ("assign", "gs", "has_expr", "line", "ms", "number", "skip", "values", "words")
+    line: int  # slots where the interface has properties
+    words: Sequence
+    gs: list | None
+    ms: list | None
+    values: Any  # dict[str, float], or None for a block with expressions
 
     def __init__(self, line: int, words: tuple, *, skip: int = 0, has_expr: bool = False,
                  assign: tuple | None = None, number: int | None = None) -> None:  # fmt: skip
@@ -65,12 +97,11 @@ class Block:
         else:
             self.gs, self.ms, self.values = split_words(words)
 
-    def __repr__(self) -> str:
-        return (f"Block(line={self.line}, words={self.words!r}, skip={self.skip}, assign={self.assign!r}, "
-                f"kind={self.kind!r}, stmt={self.stmt!r})")
+    def split(self) -> tuple[list | None, list | None, dict[str, float]]:
+        return self.gs, self.ms, self.values
 
 
-class SpecialBlock(Block):
+class SpecialBlock(WordBlock):
     """A block of kind ``"assign"``, ``"stmt"`` or ``"call"`` (see :class:`Block`)."""
 
     __slots__ = ("kind", "message", "stmt")
@@ -83,10 +114,84 @@ class SpecialBlock(Block):
         self.message = None
 
 
+#: A plain block's words: an address letter and a literal (the reader checked them).
+_PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
+
+
+class LiteralStore:
+    """The numbers of a program's plain blocks, 8 bytes each, and the word shapes the blocks share.
+
+    A shape is ``(G count, M count, the other letters in order)``; a block's numbers sit in ``numbers`` from
+    its offset on: its G values, its M values, then the others' (the order :meth:`PlainBlock.split` reads).
+    """
+
+    __slots__ = ("numbers", "shapes")
+
+    def __init__(self) -> None:
+        self.numbers = array("d")
+        self.shapes: dict[tuple[int, int, tuple[str, ...]], tuple[int, int, tuple[str, ...]]] = {}
+
+    def add(self, line: int, text: str, gs: list | None, ms: list | None, values: dict[str, float],
+            number: int | None) -> PlainBlock:  # fmt: skip
+        """A plain block of ``text`` (upper case, no blanks) whose words the reader split and checked."""
+        numbers = self.numbers
+        offset = len(numbers)
+        if gs is not None:
+            numbers.extend(gs)
+        if ms is not None:
+            numbers.extend(ms)
+        numbers.extend(values.values())
+        key = (0 if gs is None else len(gs), 0 if ms is None else len(ms), tuple(values))
+        shape = self.shapes.setdefault(key, key)
+        return PlainBlock(line, text.encode("ascii"), numbers, offset, shape, number)
+
+
+class PlainBlock(Block):
+    """A block of literal words only (the reader's hot path), kept as its text (ASCII bytes) and its numbers
+    in the program's :class:`LiteralStore`; :meth:`split` builds ``gs``, ``ms`` and ``values`` when it runs
+    and ``words`` gives the ``(letter, digits)`` pairs again from the text. The line and the offset of its
+    numbers share one integer (``where``): every object a line costs counts at a million lines."""
+
+    __slots__ = ("number", "numbers", "shape", "text", "where")
+
+    def __init__(self, line: int, text: bytes, numbers: array, offset: int,
+                 shape: tuple[int, int, tuple[str, ...]], number: int | None) -> None:  # fmt: skip
+        self.where = line << 32 | offset
+        self.text = text
+        self.numbers = numbers
+        self.shape = shape
+        self.number = number
+
+    @property
+    def line(self) -> int:
+        return self.where >> 32
+
+    @property
+    def words(self) -> list[tuple[str, str]]:
+        return _PLAIN_WORD.findall(self.text.decode("ascii"))
+
+    def split(self) -> tuple[list | None, list | None, dict[str, float]]:
+        # Index by index: slicing the array and zipping cost about twice as much per block.
+        n_g, n_m, letters = self.shape
+        numbers, at = self.numbers, self.where & 0xFFFFFFFF
+        gs = ms = None
+        if n_g:
+            gs = [numbers[at]] if n_g == 1 else numbers[at : at + n_g].tolist()
+            at += n_g
+        if n_m:
+            ms = [numbers[at]] if n_m == 1 else numbers[at : at + n_m].tolist()
+            at += n_m
+        values = {}
+        for letter in letters:
+            values[letter] = numbers[at]
+            at += 1
+        return gs, ms, values
+
+
 def literal_block(line: int, words: Sequence, gs: list | None, ms: list | None, values: dict[str, float],
-                  number: int | None = None, skip: int = 0) -> Block:  # fmt: skip
+                  number: int | None = None, skip: int = 0) -> WordBlock:  # fmt: skip
     """A block of literal words already split (a reader's hot path): no ``__init__``, no second split."""
-    block = Block.__new__(Block)
+    block = WordBlock.__new__(WordBlock)
     block.line = line
     block.words = words
     block.skip = skip

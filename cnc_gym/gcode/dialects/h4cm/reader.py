@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 from cnc_gym.gcode.lang.fanuc import least_units
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate as family_evaluate
 from cnc_gym.gcode.lang.fanuc.least_units import LeastUnitReader
-from cnc_gym.gcode.program import SpecialBlock
+from cnc_gym.gcode.program import PlainBlock, SpecialBlock
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -104,7 +104,7 @@ class HustReader(LeastUnitReader):
             return self._g65(text, line)
         block = super()._plain_block(text, line)
         # A plain block keeps its (letter, digits) pairs, N included; a rescanned one got its key in _head.
-        if block.number is not None and len(block.words[0]) == 2:
+        if isinstance(block, PlainBlock) and block.number is not None:
             block.number = self._label(next(w[1] for w in block.words if w[0] == "N"), line)
         return block
 

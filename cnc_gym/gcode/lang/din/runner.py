@@ -313,6 +313,7 @@ class DinRunner:
                                      "program-not-found") from None  # fmt: skip
         text = raw.decode("latin-1")
         reader = self.dialect.language.reader(self.dialect, None)
+        reader.max_blocks = self.options.max_blocks
         program = cast("DinProgram", reader.read(text, str(path)))
         self._files[number] = program
         return program

@@ -339,6 +339,7 @@ class FlowRunner(CallConvention):
             text = raw.decode("latin-1")
         if self.reader is None:
             self.reader = self.dialect.language.reader(self.dialect, self.calls)
+            self.reader.max_blocks = self.options.max_blocks
         program = self.reader.read(text, str(path))
         file_index = self.core.state.builder.file_index(str(path))
         span = program.units.get(number)

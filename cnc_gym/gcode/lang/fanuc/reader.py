@@ -33,7 +33,8 @@ from typing import TYPE_CHECKING
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
 from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
-from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block
+from cnc_gym.gcode.program import Block, LiteralStore, Program, SpecialBlock, WordBlock
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -62,6 +63,27 @@ _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 _CALL_CONTROL = "GNOPL"
 #: The alarm condition of a misplaced decimal point (a second point, a point without digits).
 DECIMAL_POINT = "bad-number/decimal-point"
+#: Most distinct plain words whose checked values the reader keeps at once (then it starts over).
+_SEEN_WORDS = 1 << 14
+#: About how many characters of the text are split into lines at once (a list of all the lines of a 1M-line
+#: program would cost 80 bytes a line on top of the blocks).
+_CHUNK_CHARS = 1 << 20
+
+
+def text_lines(text: str):
+    """The lines of ``text`` (a block ends at CR, LF or CRLF only), a chunk of about ``_CHUNK_CHARS``
+    characters split at a time: the same lines as splitting the whole text, without a list of them all."""
+    split = _LINE_BREAK.split if _OTHER_BREAKS.search(text) else str.splitlines
+    size = len(text)
+    start = 0
+    while start < size:
+        end = text.find("\n", start + _CHUNK_CHARS)
+        end = size if end < 0 else end + 1  # a chunk ends after an LF, so no CRLF is cut in two
+        lines = split(text[start:end])
+        if split is not str.splitlines and end < size and lines and lines[-1] == "":
+            lines.pop()  # re.split leaves an empty last piece after the chunk's final LF
+        yield from lines
+        start = end
 
 
 class Reader:
@@ -80,6 +102,10 @@ class Reader:
         self._o_blocks: list[Block] = []
         # Plain words already checked in this file: (letter, digits) → value.
         self._seen: dict[tuple[str, str], float] = {}
+        # The numbers of this program's plain blocks.
+        self._store = LiteralStore()
+        #: Most blocks a program text may hold (the run's ``max_blocks``; ``interpret`` sets it).
+        self.max_blocks = DEFAULT_MAX_BLOCKS
         rules = dialect.addresses
         self._rules = rules
         self._length_letters = frozenset(a for a, r in rules.items() if r.unit == "length")
@@ -129,6 +155,12 @@ class Reader:
             self._deferred_letters |= {"R"}
         self._lenient_rules = lenient
 
+    def too_many_blocks(self, count: int) -> ProgramError:
+        """A program text of more blocks than a run may execute (``max_blocks``): refused while it is read,
+        so that a huge file of short lines costs a bounded amount of memory."""
+        return self.error(f"the program holds more than {self.max_blocks} blocks ({count} read so far), more "
+                          "than a run may execute (max_blocks)", "too-many-blocks", 0)  # fmt: skip
+
     def _hinted(self, exc: ProgramError, raw: str) -> ProgramError:
         """The error with a hint when the line looks like another language's syntax (hints.py)."""
         hint = self.dialect.language.hint
@@ -174,10 +206,12 @@ class Reader:
         program_number = None
         seen_percent = False
         colon = ":" in self.dialect.program_number_marks
-        lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        self._store = LiteralStore()
         # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
         simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
-        for line_no, raw in enumerate(lines, start=1):
+        for line_no, raw in enumerate(text_lines(text), start=1):
+            if not line_no & 0xFFFF and len(blocks) > self.max_blocks:
+                raise self.too_many_blocks(len(blocks)).located(file, line_no)
             stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
@@ -205,7 +239,10 @@ class Reader:
                 blocks.extend(self.read_line(stripped, line_no))
             except ProgramError as exc:
                 raise self._hinted(exc, raw).located(file, line_no) from None
+        if len(blocks) > self.max_blocks:
+            raise self.too_many_blocks(len(blocks)).located(file, blocks[self.max_blocks].line)
         self._seen = {}
+        self._store = LiteralStore()  # the blocks keep the program's store; the reader lets go of it
         program = Program(blocks, file=file)
         for index, block in enumerate(blocks):
             if block.number is not None:
@@ -313,6 +350,8 @@ class Reader:
                 value = self._plain_value(pair, text, line)
                 if value is None:
                     return self._rescan(text, line)
+                if len(seen) >= _SEEN_WORDS:
+                    seen.clear()  # bounded: a program of all-different coordinates must not grow it per line
                 seen[pair] = value
             if letter == "G":
                 if gs is None:
@@ -346,7 +385,7 @@ class Reader:
                 if not (head == "N" or (head == "O" and pairs[1][0] == "N")):
                     raise self.error("N must be at the head of the block", "misplaced-word", line)
                 number = int(values.pop("N"))
-        block = literal_block(line, pairs, gs, ms, values, number)
+        block = self._store.add(line, text, gs, ms, values, number)
         if has_o:
             self._o_blocks.append(block)
         return block
@@ -527,7 +566,7 @@ class Reader:
                 n = 1
             skip |= 1 << n
         if pos >= len(text):
-            return Block(line, (), skip=skip) if skip else None
+            return WordBlock(line, (), skip=skip) if skip else None
         words: list = []
         has_expr = False
         assign = None
@@ -608,7 +647,7 @@ class Reader:
         if relaxed and self._is_call(words):
             # Words stay in order for the arguments; split at run time if the block turns out ordinary.
             return SpecialBlock(line, tuple(words), skip=skip, number=number, kind="call")
-        return Block(line, tuple(words), skip=skip, has_expr=has_expr, assign=assign, number=number)
+        return WordBlock(line, tuple(words), skip=skip, has_expr=has_expr, assign=assign, number=number)
 
     def _is_call(self, words: list) -> bool:
         for letter, value, digits in words:
