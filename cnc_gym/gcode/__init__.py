@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.program import Program
@@ -147,13 +148,15 @@ def interpret_file(
     block_skip: frozenset[int] = frozenset(),
     **options,
 ) -> Toolpath:
-    """Interpret a program file (errors name the path). An unreadable file raises OSError.
+    """Interpret a program file (errors name the path). A path that is not a regular file, or a file over
+    :data:`~cnc_gym.files.MAX_PROGRAM_BYTES` (64 MiB), is a ConfigError before anything is read
+    (:func:`~cnc_gym.files.read_regular_file`); a missing or unreadable file raises OSError.
 
     ``options``: as :func:`interpret` (``max_blocks``, ``max_seconds``, ``max_segments``, ``program_dir``
     — default the file's folder —, ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
     """
     path = Path(path)
-    raw = path.read_bytes()
+    raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="G-code program")
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark, if any, is not part of the program
     except UnicodeDecodeError:

@@ -185,13 +185,13 @@ def test_trace_command_finds_subprograms_and_names_their_file(tmp_path, capsys):
 
 
 def test_unreadable_subprogram_file_is_a_program_error(tmp_path, monkeypatch):
-    from pathlib import Path
+    from cnc_gym.gcode.lang.fanuc import flow
 
     (tmp_path / "O0005.nc").write_text("O0005\nM99\n")
 
-    def refuse(self):
+    def refuse(path, **_):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(Path, "read_bytes", refuse)
+    monkeypatch.setattr(flow, "read_regular_file", refuse)
     err = program_error("M98 P5\n", program_dir=tmp_path)
     assert err.alarm == 59 and "cannot read" in err.message and "Permission denied" in err.message
