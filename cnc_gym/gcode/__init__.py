@@ -67,6 +67,7 @@ def interpret(
     max_seconds: float = DEFAULT_MAX_SECONDS,
     max_segments: int = DEFAULT_MAX_SEGMENTS,
     program_dir: str | Path | None = None,
+    follow_links: bool = False,
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
     tool_offsets=None,
@@ -81,7 +82,8 @@ def interpret(
     bound on the tool path's segments (``segment-budget``). The defaults (2 000 000 blocks, 60 s,
     2 000 000 segments) are far above real programs; raise them for a really long one.
     ``program_dir``: where M98/G65 look for programs not in the text (files ``O1002``, ``O1002.nc``,
-    ``1002.nc``); default the folder of ``file`` when that is a real file.
+    ``1002.nc``); default the folder of ``file`` when that is a real file. A called program's file that leads
+    out of that folder (a symbolic link to elsewhere) is ``program-not-found`` unless ``follow_links``.
     ``macro_calls``: G/M/T codes that call programs (GSK parameters 6050-6089, 6001#0), as a
     :class:`~cnc_gym.gcode.dialect.MacroCalls` or ``{"g_macro": {12: 9010}, "m_macro": {…},
     "m_sub": {6: 9001}, "t_sub": 9000}``; default the dialect's (GSK: none, the parameters' standard setting).
@@ -123,7 +125,7 @@ def interpret(
         folder = None if program_dir is None else str(program_dir)
         options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
                               max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
-                              main_m99=main_m99)  # fmt: skip
+                              main_m99=main_m99, follow_links=bool(follow_links))  # fmt: skip
         if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
         reader = spec.language.reader(spec, calls)

@@ -307,6 +307,9 @@ class DinRunner:
             where = self.options.program_dir or "the main program's folder"
             raise self.dialect.error(f"L{number}: no program file named {number} in {where}",
                                      "program-not-found")  # fmt: skip
+        outside = self.options.leaves_folder(path, self.main.file)
+        if outside is not None:
+            raise self.dialect.error(f"L{number}: {outside}", "program-not-found")
         try:
             raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="a called program")
         except OSError as exc:

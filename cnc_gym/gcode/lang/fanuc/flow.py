@@ -328,6 +328,9 @@ class FlowRunner(CallConvention):
                 f"or {number}.nc in {where})",
                 "program-not-found",
             )
+        outside = self.options.leaves_folder(path, self.main_program.file)
+        if outside is not None:
+            raise self.dialect.error(f"program O{number:04d}: {outside}", "program-not-found")
         try:
             raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="a called program")
         except OSError as exc:
