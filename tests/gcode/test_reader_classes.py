@@ -73,3 +73,23 @@ def test_trace_reports_each_class_in_one_line(tmp_path, capsys, dialect, text, c
     assert captured.out == ""
     assert captured.err.startswith(f"{program}:1: ") and captured.err.rstrip().endswith(f"[{code}]")
     assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
+
+
+@pytest.mark.parametrize("dialect", ALL)
+@pytest.mark.parametrize("letter", ["A", "I", "X", "F", "P"])
+def test_a_literal_too_long_for_a_float_is_one_clean_error(dialect, letter):
+    """``float()`` of 400 digits is infinity: rounding it to the least increment once crashed the DIN
+    reader (``G04 A1000…``, ``G43 I1000…``); it is an out-of-range or word-length error in every dialect."""
+    text = f"G04 {letter}1{'0' * 400};\n" if dialect != "h4cm" else f"{letter}1{'0' * 60}\n"
+    err = error_of(text, dialect)
+    expected = {"value-out-of-range", "word-too-long", "unused-word", "block-too-long", "syntax"}
+    assert err.line == 1 and err.code in expected
+
+
+def test_rounding_to_an_increment_keeps_infinity_for_the_range_check():
+    import math
+
+    from cnc_gym.gcode.codes import round_to
+
+    assert round_to(math.inf, 0.001) == math.inf and round_to(-math.inf, 0.001) == -math.inf
+    assert math.isnan(round_to(math.nan, 0.001)) and round_to(1.23456, 0.001) == 1.235
