@@ -35,26 +35,27 @@ def program(lines: int) -> str:
     return "\n".join(out) + "\n"
 
 
-def _phase(text: str, phase: str) -> None:
+def _phase(text: str, phase: str, dialect: str = "gsk25i") -> None:
     from cnc_gym.gcode import interpret, read_program
 
     if phase == "read":
-        result = read_program(text)
+        result = read_program(text, dialect=dialect)
         assert len(result.blocks) > 0
     else:
         # tracemalloc slows the run several times: no CPU-time bound here
-        result = interpret(text, max_segments=max(2_000_000, text.count("\n") + 1), max_seconds=1e6)
+        result = interpret(text, dialect=dialect, max_segments=max(2_000_000, text.count("\n") + 1),
+                           max_seconds=1e6)  # fmt: skip
         assert len(result) > 0
     del result
 
 
-def traced(text: str, phase: str) -> int:
+def traced(text: str, phase: str, dialect: str = "gsk25i") -> int:
     """Peak traced bytes of one phase above what was allocated before it."""
     gc.collect()
     tracemalloc.start()
     base = tracemalloc.get_traced_memory()[0]
     try:
-        _phase(text, phase)
+        _phase(text, phase, dialect)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -73,7 +74,7 @@ def _status(key: str) -> int | None:
     return None
 
 
-def _child(conn, lines: int, phase: str) -> None:
+def _child(conn, lines: int, phase: str, dialect: str) -> None:
     import cnc_gym.gcode  # noqa: F401 - imported before the baseline
 
     text = program(lines)
@@ -86,16 +87,16 @@ def _child(conn, lines: int, phase: str) -> None:
         base, peak = None, ""
     if base is None:
         base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-    _phase(text, phase)
+    _phase(text, phase, dialect)
     top = _status(peak) if peak else None
     conn.send((top if top is not None else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024) - base)
 
 
-def rss(lines: int, phase: str) -> int:
+def rss(lines: int, phase: str, dialect: str = "gsk25i") -> int:
     """Peak resident-set growth of one phase in a fresh process."""
     context = multiprocessing.get_context("spawn")
     parent, child = context.Pipe()
-    process = context.Process(target=_child, args=(child, lines, phase))
+    process = context.Process(target=_child, args=(child, lines, phase, dialect))
     process.start()
     value = parent.recv()
     process.join()
@@ -106,20 +107,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--lines", type=int, default=200_000, help="lines of the program (200000)")
     parser.add_argument("--rss", action="store_true", help="also measure the peak RSS in a fresh process")
+    parser.add_argument("--dialect", default="gsk25i", help="dialect to read the program in (gsk25i)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     args = parser.parse_args(argv)
-    result: dict = {"lines": args.lines, "python": sys.version.split()[0]}
+    result: dict = {"lines": args.lines, "dialect": args.dialect, "python": sys.version.split()[0]}
     if args.rss:  # first, while this process is small (a child starts from a copy of it)
         for phase in ("read", "interpret"):
-            result[f"{phase}_rss_bytes_per_line"] = round(rss(args.lines, phase) / args.lines, 1)
+            grown = rss(args.lines, phase, args.dialect)
+            result[f"{phase}_rss_bytes_per_line"] = round(grown / args.lines, 1)
     text = program(args.lines)
     result["text_bytes"] = len(text.encode())
     for phase in ("read", "interpret"):
-        result[f"{phase}_traced_bytes_per_line"] = round(traced(text, phase) / args.lines, 1)
+        result[f"{phase}_traced_bytes_per_line"] = round(traced(text, phase, args.dialect) / args.lines, 1)
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"program: {args.lines} lines, {result['text_bytes'] / 2**20:.1f} MiB of text "
+        print(f"program ({args.dialect}): {args.lines} lines, {result['text_bytes'] / 2**20:.1f} MiB of text "
               f"({result['text_bytes'] / args.lines:.1f} bytes/line)")  # fmt: skip
         for phase in ("read", "interpret"):
             line = f"{phase:<10} traced peak {result[f'{phase}_traced_bytes_per_line']:8.1f} bytes/line"
