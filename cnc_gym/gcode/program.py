@@ -121,46 +121,55 @@ _PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
 class LiteralStore:
     """The numbers of a program's plain blocks, 8 bytes each, and the word shapes the blocks share.
 
-    A shape is ``(G count, M count, the other letters in order)``; a block's numbers sit in ``numbers`` from
-    its offset on: its G values, its M values, then the others' (the order :meth:`PlainBlock.split` reads).
+    A shape is ``(G numbers, M numbers, the other letters in order)``: the G and M lists are the block's own
+    (codes repeat, so a few shapes serve a whole program; nothing changes a block's split lists in place),
+    the other words' numbers sit in ``numbers`` from the block's offset on.
     """
 
     __slots__ = ("numbers", "shapes")
 
+    #: Most shapes kept for sharing (then each block keeps its own: a program of all-different codes).
+    MAX_SHAPES = 1 << 16
+
     def __init__(self) -> None:
         self.numbers = array("d")
-        self.shapes: dict[tuple[int, int, tuple[str, ...]], tuple[int, int, tuple[str, ...]]] = {}
+        self.shapes: dict[tuple, tuple[list | None, list | None, tuple[str, ...]]] = {}
 
     def add(self, line: int, text: str, gs: list | None, ms: list | None, values: dict[str, float],
             number: int | None) -> PlainBlock:  # fmt: skip
         """A plain block of ``text`` (upper case, no blanks) whose words the reader split and checked."""
         numbers = self.numbers
         offset = len(numbers)
-        if gs is not None:
-            numbers.extend(gs)
-        if ms is not None:
-            numbers.extend(ms)
         numbers.extend(values.values())
-        key = (0 if gs is None else len(gs), 0 if ms is None else len(ms), tuple(values))
-        shape = self.shapes.setdefault(key, key)
-        return PlainBlock(line, text.encode("ascii"), numbers, offset, shape, number)
+        letters = tuple(values)
+        key = (letters, None if gs is None else tuple(gs), None if ms is None else tuple(ms))
+        shape = self.shapes.get(key)
+        if shape is None:
+            shape = (gs, ms, letters)
+            if len(self.shapes) < self.MAX_SHAPES:
+                self.shapes[key] = shape
+        block = PlainBlock.__new__(PlainBlock)
+        block.where = line << 32 | offset
+        block.text = text.encode("ascii")
+        block.numbers = numbers
+        block.shape = shape
+        block.number = number
+        return block
 
 
 class PlainBlock(Block):
-    """A block of literal words only (the reader's hot path), kept as its text (ASCII bytes) and its numbers
-    in the program's :class:`LiteralStore`; :meth:`split` builds ``gs``, ``ms`` and ``values`` when it runs
-    and ``words`` gives the ``(letter, digits)`` pairs again from the text. The line and the offset of its
-    numbers share one integer (``where``): every object a line costs counts at a million lines."""
+    """A block of literal words only (the reader's hot path), kept as its text (ASCII bytes), its shape (the
+    G and M numbers and the other letters, shared by the blocks of one shape) and its other numbers in the
+    program's :class:`LiteralStore`; :meth:`split` builds ``values`` when it runs and ``words`` gives the
+    ``(letter, digits)`` pairs again from the text. The line and the offset of its numbers share one
+    integer (``where``): every object a line costs counts at a million lines. Made by
+    :meth:`LiteralStore.add`."""
 
     __slots__ = ("number", "numbers", "shape", "text", "where")
-
-    def __init__(self, line: int, text: bytes, numbers: array, offset: int,
-                 shape: tuple[int, int, tuple[str, ...]], number: int | None) -> None:  # fmt: skip
-        self.where = line << 32 | offset
-        self.text = text
-        self.numbers = numbers
-        self.shape = shape
-        self.number = number
+    where: int  # the line << 32 | the offset of its numbers in the store
+    text: bytes
+    numbers: array
+    shape: tuple[list | None, list | None, tuple[str, ...]]
 
     @property
     def line(self) -> int:
@@ -171,16 +180,15 @@ class PlainBlock(Block):
         return _PLAIN_WORD.findall(self.text.decode("ascii"))
 
     def split(self) -> tuple[list | None, list | None, dict[str, float]]:
-        # Index by index: slicing the array and zipping cost about twice as much per block.
-        n_g, n_m, letters = self.shape
+        # The G and M lists are the shape's (shared, never changed in place); the values a fresh dict, built
+        # by index (slicing the array and zipping cost about twice as much per block).
+        gs, ms, letters = self.shape
         numbers, at = self.numbers, self.where & 0xFFFFFFFF
-        gs = ms = None
-        if n_g:
-            gs = [numbers[at]] if n_g == 1 else numbers[at : at + n_g].tolist()
-            at += n_g
-        if n_m:
-            ms = [numbers[at]] if n_m == 1 else numbers[at : at + n_m].tolist()
-            at += n_m
+        n = len(letters)
+        if n == 2:
+            return gs, ms, {letters[0]: numbers[at], letters[1]: numbers[at + 1]}
+        if n == 3:
+            return gs, ms, {letters[0]: numbers[at], letters[1]: numbers[at + 1], letters[2]: numbers[at + 2]}
         values = {}
         for letter in letters:
             values[letter] = numbers[at]
