@@ -10,7 +10,7 @@ line of each phase. ``--rss`` runs each phase again in a fresh child process and
 set (``ru_maxrss``) above the child's baseline (the interpreter imported, the text built), which also
 counts what tracemalloc does not see (numpy's buffers are traced; the allocator's slack is not).
 
-The interpreter's documented goal (docs/gcode.md, "Limits"): at most 300 bytes per line of such a program,
+The interpreter's documented goal (docs/gcode.md, "Bounds on time and memory"): at most 300 bytes per line of such a program,
 so that the 2 000 000-segment budget, not ``MemoryError``, stops a huge one.
 """
 
