@@ -1,7 +1,7 @@
 """The ``cnc-gym`` command.
 
     cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
-                          [--block-skip N ...] [--program-dir DIR] [--max-blocks N]
+                          [--block-skip N ...] [--program-dir DIR] [--follow-links] [--max-blocks N]
     cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
                         [--plant lti|mujoco] [--policy P] [--json] [--plot FILE.png|DIR/] [--max-time SECONDS]
                         [--max-blocks N] [--no-progress]
@@ -77,6 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="block skip switches that are ON (1..9; '/' alone is switch 1)")  # fmt: skip
     trace.add_argument("--program-dir", metavar="DIR", default=None,
                        help="where M98/G65 find called programs (default: the program's folder)")  # fmt: skip
+    trace.add_argument("--follow-links", action="store_true",
+                       help="let a called program's file be a link out of that folder (refused by default)")
     trace.set_defaults(func=cmd_trace)
 
     run = add_command(sub, "run", "simulate a program through controller and servo plant")
@@ -147,7 +149,8 @@ def cmd_trace(args: argparse.Namespace) -> int:
         machine = load_machine(args.machine)
     options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
                "program_dir": args.program_dir, "units": args.units, "setup": args.setup,
-               "calculator_input": args.calculator_input or None}  # fmt: skip
+               "calculator_input": args.calculator_input or None,
+               "follow_links": args.follow_links}  # fmt: skip
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)

@@ -34,6 +34,7 @@ from typing import Any
 import yaml
 
 from cnc_gym.errors import ConfigError
+from cnc_gym.files import read_regular_file
 
 #: Largest config file read (the shipped ones are 1-3 KB).
 MAX_CONFIG_BYTES = 256 * 1024
@@ -589,12 +590,9 @@ def parse_yaml(text_: str, source: str) -> Any:
 def read_yaml(path: str | Path, what: str) -> Any:
     """The data of a YAML config file (``what`` names the kind of config in messages), or ConfigError."""
     try:
-        with open(path, "rb") as f:
-            raw = f.read(MAX_CONFIG_BYTES + 1)
+        raw = read_regular_file(path, limit=MAX_CONFIG_BYTES, what=what)  # a FIFO or /dev/zero: refused
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
-    if len(raw) > MAX_CONFIG_BYTES:
-        raise ConfigError(f"{path}: {what} is larger than {MAX_CONFIG_BYTES // 1024} KiB")
     try:
         decoded = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

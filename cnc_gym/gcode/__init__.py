@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.dialect import calculator_input as calculator_dialect
 from cnc_gym.gcode.interpreter import Interpreter
@@ -67,6 +68,7 @@ def interpret(
     max_seconds: float = DEFAULT_MAX_SECONDS,
     max_segments: int = DEFAULT_MAX_SEGMENTS,
     program_dir: str | Path | None = None,
+    follow_links: bool = False,
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
     tool_offsets=None,
@@ -83,7 +85,8 @@ def interpret(
     bound on the tool path's segments (``segment-budget``). The defaults (2 000 000 blocks, 60 s,
     2 000 000 segments) are far above real programs; raise them for a really long one.
     ``program_dir``: where M98/G65 look for programs not in the text (files ``O1002``, ``O1002.nc``,
-    ``1002.nc``); default the folder of ``file`` when that is a real file.
+    ``1002.nc``); default the folder of ``file`` when that is a real file. A called program's file that leads
+    out of that folder (a symbolic link to elsewhere) is ``program-not-found`` unless ``follow_links``.
     ``macro_calls``: G/M/T codes that call programs (GSK parameters 6050-6089, 6001#0), as a
     :class:`~cnc_gym.gcode.dialect.MacroCalls` or ``{"g_macro": {12: 9010}, "m_macro": {…},
     "m_sub": {6: 9001}, "t_sub": 9000}``; default the dialect's (GSK: none, the parameters' standard setting).
@@ -137,11 +140,13 @@ def interpret(
         folder = None if program_dir is None else str(program_dir)
         options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
                               max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
-                              main_m99=main_m99)  # fmt: skip
+                              main_m99=main_m99, follow_links=bool(follow_links))  # fmt: skip
         if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
         tables = _setup(machine, setup)
-        program = spec.language.reader(spec, calls).read(text, file)
+        reader = spec.language.reader(spec, calls)
+        reader.max_blocks = int(max_blocks)  # a text of more blocks than a run may execute: refused as read
+        program = reader.read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
                                tool_measurement=tool_measurement, skip_signal=skip_signal,
                                units=units, setup=tables).run(options)  # fmt: skip
@@ -171,13 +176,15 @@ def interpret_file(
     block_skip: frozenset[int] = frozenset(),
     **options,
 ) -> Toolpath:
-    """Interpret a program file (errors name the path). An unreadable file raises OSError.
+    """Interpret a program file (errors name the path). A path that is not a regular file, or a file over
+    :data:`~cnc_gym.files.MAX_PROGRAM_BYTES` (64 MiB), is a ConfigError before anything is read
+    (:func:`~cnc_gym.files.read_regular_file`); a missing or unreadable file raises OSError.
 
     ``options``: as :func:`interpret` (``max_blocks``, ``max_seconds``, ``max_segments``, ``program_dir``
     — default the file's folder —, ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
     """
     path = Path(path)
-    raw = path.read_bytes()
+    raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="G-code program")
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark, if any, is not part of the program
     except UnicodeDecodeError:

@@ -253,11 +253,17 @@ def map_arc(chain: TransformChain, plane: Plane, sweep: float, start_m: Vec,
 
 
 class Output(Protocol):
-    """The output stage the interpreter moves: :class:`CanonicalMachine`, or a stage in front of it that
-    has the same interface (cutter compensation's)."""
+    """The output stage the interpreter moves (``State.out``): :class:`CanonicalMachine`, or a stage in front
+    of it that implements the same protocol (cutter compensation's ``OffsetStage``). The position is the
+    one moves are programmed from; the context attributes (line … spindle) go with the next segments;
+    ``rotary_next`` is the rotary axes' target of the next straight move."""
 
-    position: Vec
-    rotary: tuple[float, ...]
+    @property
+    def position(self) -> Vec: ...
+
+    @property
+    def rotary(self) -> tuple[float, ...]: ...
+
     rotary_next: tuple[float, ...] | None
     line: int
     file_index: int
@@ -274,6 +280,7 @@ class Output(Protocol):
     def nurbs_feed(self, curve, feed: float) -> None: ...
 
     def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None: ...
+
 
 class OffsetStack:
     """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them).

@@ -225,6 +225,8 @@ class BlockHooks:
 
 
 class ProgramReader(Protocol):
+    max_blocks: int  # most blocks a program text may hold (the run's max_blocks)
+
     def read(self, text: str, file: str = "<program>") -> Program: ...
 
 

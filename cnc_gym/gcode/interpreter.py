@@ -206,7 +206,7 @@ class Interpreter:
         if block.has_expr:
             gs, ms, values = split_words(self.evaluate_words(block.words))
         else:
-            gs, ms, values = block.gs, block.ms, block.values
+            gs, ms, values = block.split()
         if self._normalise is not None:
             gs, ms, values = self._normalise(self, gs, ms, values)
         st.out.line = block.line

@@ -23,7 +23,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from cnc_gym.errors import ProgramError, notice_line
+from cnc_gym.errors import ConfigError, ProgramError, notice_line
+from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.codes import gkey
 from cnc_gym.gcode.lang.fanuc.calls import CallConvention
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate, evaluate_condition
@@ -348,18 +349,24 @@ class FlowRunner(CallConvention):
                 f"or {number}.nc in {where})",
                 "program-not-found",
             )
+        outside = self.options.leaves_folder(path, self.main_program.file)
+        if outside is not None:
+            raise self.dialect.error(f"program O{number:04d}: {outside}", "program-not-found")
         try:
-            raw = path.read_bytes()
+            raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="a called program")
         except OSError as exc:
             raise self.dialect.error(
                 f"program O{number:04d}: cannot read {path} ({exc.strerror or exc})", "program-not-found"
             ) from None
+        except ConfigError as exc:  # not a regular file, or over the size limit
+            raise self.dialect.error(f"program O{number:04d}: {exc}", "program-not-found") from None
         try:
             text = raw.decode("utf-8-sig")
         except UnicodeDecodeError:
             text = raw.decode("latin-1")
         if self.reader is None:
             self.reader = self.dialect.language.reader(self.dialect, self.calls)
+            self.reader.max_blocks = self.options.max_blocks
         program = self.reader.read(text, str(path))
         builder = self.core.state.builder
         for line, level, message, code in program.notices:
