@@ -320,11 +320,16 @@ _CACHE_FIELDS = ("key", "digest")
 _MAX_CACHE_BYTES = 4096
 
 
+#: The layout of a cache file (part of the key: files of an earlier layout are never looked at).
+_CACHE_FORMAT = 2
+
+
 def bound_key(tp: Toolpath, machine: MachineConfig, action_mode: str = "override") -> str:
-    """The cache key of a bound: SHA-256 of :data:`BOUND_VERSION`, the action mode, the tool path's
-    digest and the machine's."""
+    """The cache key of a bound: SHA-256 of :data:`BOUND_VERSION`, the cache file layout, the action
+    mode, the tool path's digest and the machine's."""
     return hashlib.sha256(
-        f"{BOUND_VERSION}:{action_mode}:{toolpath_digest(tp)}:{machine_digest(machine)}".encode()
+        f"{BOUND_VERSION}:cache-{_CACHE_FORMAT}:{action_mode}:{toolpath_digest(tp)}:"
+        f"{machine_digest(machine)}".encode()
     ).hexdigest()
 
 
