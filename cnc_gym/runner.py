@@ -336,7 +336,13 @@ def run_cli(args: Any) -> int:
         plot_run(result, target / default_plot_name(result) if is_folder else target)
     summary = result.summary()
     if getattr(args, "json", False):
-        print(json.dumps(summary))
+        try:
+            text = json.dumps(summary, allow_nan=False)
+        except ValueError:
+            bad = [k for k, v in summary.items() if isinstance(v, float) and not math.isfinite(v)]
+            raise CncGymError(f"cnc-gym run: {result.program}: {', '.join(bad) or 'a value'} is not a finite "
+                              "number, which JSON cannot hold") from None  # fmt: skip
+        print(text)
     else:
         print(format_table([summary]))
     if not result.finished:

@@ -346,3 +346,13 @@ def test_the_projection_leaves_out_a_slow_start(monkeypatch):
     rate = float(line.split("(")[1].split()[0])
     period = gymnasium.make("cnc_gym/Feedrate-v0").unwrapped.control_period_s
     assert rate == pytest.approx(period / 0.01, rel=0.2)
+
+
+def test_run_json_never_prints_a_number_that_is_not_json(monkeypatch, capsys):
+    star = simulate("star", max_time_s=0.05)
+    star.contour_error_max_mm = math.nan
+    monkeypatch.setattr(runner, "simulate", lambda *a, **k: star)
+    assert main(["run", "star", "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.strip() == ("cnc-gym run: star: contour_error_max_mm is not a finite number, "
+                                         "which JSON cannot hold")  # fmt: skip
