@@ -26,6 +26,7 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 # Before numpy loads (the imports below): the commands' linear algebra is on small matrices (3-vectors, the
 # servo models' 5×5), where OpenBLAS's thread pool only costs. Started with a thread per core, it spins at
@@ -56,8 +57,26 @@ PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PR
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
 
+class CommandParser(argparse.ArgumentParser):
+    """argparse's parser, with a usage error in two lines: a one-line usage and the error (argparse's
+    own usage of ``bench`` wraps over eight lines). ``--help`` still prints the whole usage."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.short_usage()}\n{_one_line(f'{self.prog}: error: {message}')}\n")
+
+    def short_usage(self) -> str:
+        """``usage: cnc-gym run PROGRAM [options] (cnc-gym run --help)``: the positionals, then a hint."""
+        words = [self.prog]
+        for action in self._actions:
+            if action.option_strings:
+                continue
+            name = action.metavar or action.dest.upper()
+            words.append(f"{name} ..." if isinstance(action, argparse._SubParsersAction) else str(name))
+        return f"usage: {' '.join(words)} [options] (all of them: {self.prog} --help)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
+    parser = CommandParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
                                      epilog=EXIT_STATUS_HELP,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -176,7 +195,9 @@ def _silence_stdout() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``cnc-gym`` console script. Returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(list(argv) if argv is not None else None)
+    args, unknown = parser.parse_known_args(list(argv) if argv is not None else None)
+    if unknown:  # said by the command's parser, with its usage (argparse leaves it to the top one)
+        _command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(unknown)}")
     try:
         _check_arguments(args)
         return args.func(args)
@@ -191,6 +212,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("cnc-gym: interrupted", file=sys.stderr)
         return 130
     return EXIT_USAGE
+
+
+def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+            return action.choices[command]
+    return parser
 
 
 def _one_line(message: str) -> str:

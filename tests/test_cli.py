@@ -273,3 +273,28 @@ def test_units_option_errors(tmp_path, capsys):
     bad.write_text("power_on_units: metric\n")
     status, out, err = run_main(["trace", program, "--machine", str(bad)], capsys)
     assert status == 2 and out == "" and "power_on_units" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize(("argv", "fragment"), [
+    (["bench", "--workers", "x"], "cnc-gym bench: error: argument --workers: invalid int value: 'x'"),
+    (["bench", "--bogus", "1"], "cnc-gym bench: error: unrecognized arguments: --bogus 1"),
+    (["run"], "cnc-gym run: error: the following arguments are required: PROGRAM"),
+    (["trace", "star", "--block-skip", "a"], "cnc-gym trace: error: argument --block-skip"),
+    (["frob"], "cnc-gym: error: argument COMMAND: invalid choice: 'frob'"),
+    ([], "cnc-gym: error: the following arguments are required: COMMAND"),
+])  # fmt: skip
+def test_usage_errors_are_the_usage_line_and_one_error_line(argv, fragment, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    out, err = capsys.readouterr()
+    lines = err.splitlines()
+    assert exit_.value.code == 2 and out == "" and len(lines) == 2, err
+    command = "cnc-gym " + argv[0] if argv and argv[0] in ("bench", "run", "trace") else "cnc-gym"
+    assert lines[0].startswith(f"usage: {command} ") and lines[0].endswith(f"(all of them: {command} --help)")
+    assert lines[1].startswith(fragment), lines[1]
+
+
+def test_help_still_shows_the_whole_usage(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["bench", "--help"])
+    assert exit_.value.code == 0 and "--per-family N" in capsys.readouterr().out
