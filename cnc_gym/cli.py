@@ -23,6 +23,7 @@ false`` and a line on stderr says why; 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Sequence
@@ -40,6 +41,7 @@ from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
 DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
 
 
@@ -193,14 +195,19 @@ def _silence_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``cnc-gym`` console script. Returns the exit status."""
+    """Entry point of the ``cnc-gym`` console script. Returns the exit status.
+
+    Run as the program (``argv`` None), an interrupted command (status 130) ends the process at once:
+    by then its files are closed and its workers ended, and the interpreter's teardown of the numeric
+    libraries (numba, toppra, torch) would add 1–2 s on a loaded machine before Ctrl-C takes effect."""
     parser = build_parser()
     args, unknown = parser.parse_known_args(list(argv) if argv is not None else None)
     if unknown:  # said by the command's parser, with its usage (argparse leaves it to the top one)
         _command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(unknown)}")
+    status = EXIT_USAGE
     try:
         _check_arguments(args)
-        return args.func(args)
+        status = args.func(args)
     except CncGymError as exc:
         print(_one_line(str(exc)), file=sys.stderr)
     except OSError as exc:
@@ -210,8 +217,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(_one_line(f"{where}: {verb}{exc.strerror or exc}"), file=sys.stderr)
     except KeyboardInterrupt:
         print("cnc-gym: interrupted", file=sys.stderr)
-        return 130
-    return EXIT_USAGE
+        status = EXIT_INTERRUPTED
+    if status == EXIT_INTERRUPTED and argv is None:
+        _exit_now(status)
+    return status
 
 
 def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
@@ -219,6 +228,24 @@ def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.A
         if isinstance(action, argparse._SubParsersAction) and command in action.choices:
             return action.choices[command]
     return parser
+
+
+def _exit_now(status: int) -> None:
+    """Flush the output and end the process without the interpreter's teardown (a local Ray instance is
+    shut down first: it would outlive the process otherwise; multiprocessing releases a pool's locks, or
+    its resource tracker would warn about them)."""
+    ray = sys.modules.get("ray")
+    if ray is not None and getattr(ray, "is_initialized", lambda: False)():
+        ray.shutdown()
+    if "multiprocessing" in sys.modules:  # what its exit hook does: release a pool's queues and locks
+        from multiprocessing import util
+
+        with contextlib.suppress(Exception):
+            util._exit_function()  # type: ignore[attr-defined]
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(status)
 
 
 def _one_line(message: str) -> str:
