@@ -229,15 +229,17 @@ def test_one_line_gcode_with_a_slash_is_text_not_a_path(capsys):
 
 def test_docs_cli_matches_the_code():
     # docs/cli.md is derived from these constants; a change to one without the other fails here.
-    from cnc_gym.envs.render import DEFAULT_MAX_BINS
+    from cnc_gym.envs.render import ALONG_PATH_BINS, DEFAULT_MAX_BINS
     from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PLOT_FORMATS
+    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PATH_ERROR_BINS, PLOT_FORMATS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
     for key in JSON_KEYS:
         assert f"`{key}`" in text, key
     assert f"default {DEFAULT_MAX_BLOCKS:,}" in text
     assert f"at most {DEFAULT_MAX_BINS} time bins" in text
+    assert f"a max envelope of at most {ALONG_PATH_BINS}\nsteps" in text
+    assert f"kept in {PATH_ERROR_BINS}\npath-length bins" in text
     assert f"exceeds {LONG_RUN_NOTICE_S / 60:g} minutes" in text
     assert f"| {EXIT_TRUNCATED} | `run` only: truncated" in text
     assert all(f"`{suffix}`" in text for suffix in PLOT_FORMATS)
