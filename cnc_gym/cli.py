@@ -24,9 +24,11 @@ false`` and a line on stderr says why; 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 # Before numpy loads (the imports below): the commands' linear algebra is on small matrices (3-vectors, the
 # servo models' 5×5), where OpenBLAS's thread pool only costs. Started with a thread per core, it spins at
@@ -40,6 +42,7 @@ from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
 DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
 
 
@@ -63,8 +66,26 @@ PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PR
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
 
+class CommandParser(argparse.ArgumentParser):
+    """argparse's parser, with a usage error in two lines: a one-line usage and the error (argparse's
+    own usage of ``bench`` wraps over eight lines). ``--help`` still prints the whole usage."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.short_usage()}\n{_one_line(f'{self.prog}: error: {message}')}\n")
+
+    def short_usage(self) -> str:
+        """``usage: cnc-gym run PROGRAM [options] (cnc-gym run --help)``: the positionals, then a hint."""
+        words = [self.prog]
+        for action in self._actions:
+            if action.option_strings:
+                continue
+            name = action.metavar or action.dest.upper()
+            words.append(f"{name} ..." if isinstance(action, argparse._SubParsersAction) else str(name))
+        return f"usage: {' '.join(words)} [options] (all of them: {self.prog} --help)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
+    parser = CommandParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
                                      epilog=EXIT_STATUS_HELP,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -198,12 +219,19 @@ def _silence_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``cnc-gym`` console script. Returns the exit status."""
+    """Entry point of the ``cnc-gym`` console script. Returns the exit status.
+
+    Run as the program (``argv`` None), an interrupted command (status 130) ends the process at once:
+    by then its files are closed and its workers ended, and the interpreter's teardown of the numeric
+    libraries (numba, toppra, torch) would add 1–2 s on a loaded machine before Ctrl-C takes effect."""
     parser = build_parser()
-    args = parser.parse_args(list(argv) if argv is not None else None)
+    args, unknown = parser.parse_known_args(list(argv) if argv is not None else None)
+    if unknown:  # said by the command's parser, with its usage (argparse leaves it to the top one)
+        _command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(unknown)}")
+    status = EXIT_USAGE
     try:
         _check_arguments(args)
-        return args.func(args)
+        status = args.func(args)
     except CncGymError as exc:
         print_notices(getattr(exc, "notices", ()))
         print(_one_line(str(exc)), file=sys.stderr)
@@ -214,8 +242,35 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(_one_line(f"{where}: {verb}{exc.strerror or exc}"), file=sys.stderr)
     except KeyboardInterrupt:
         print("cnc-gym: interrupted", file=sys.stderr)
-        return 130
-    return EXIT_USAGE
+        status = EXIT_INTERRUPTED
+    if status == EXIT_INTERRUPTED and argv is None:
+        _exit_now(status)
+    return status
+
+
+def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+            return action.choices[command]
+    return parser
+
+
+def _exit_now(status: int) -> None:
+    """Flush the output and end the process without the interpreter's teardown (a local Ray instance is
+    shut down first: it would outlive the process otherwise; multiprocessing releases a pool's locks, or
+    its resource tracker would warn about them)."""
+    ray = sys.modules.get("ray")
+    if ray is not None and getattr(ray, "is_initialized", lambda: False)():
+        ray.shutdown()
+    if "multiprocessing" in sys.modules:  # what its exit hook does: release a pool's queues and locks
+        from multiprocessing import util
+
+        with contextlib.suppress(Exception):
+            util._exit_function()  # type: ignore[attr-defined]
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(status)
 
 
 def _one_line(message: str) -> str:

@@ -303,15 +303,17 @@ def test_one_line_gcode_with_a_slash_is_text_not_a_path(capsys):
 
 def test_docs_cli_matches_the_code():
     # docs/cli.md is derived from these constants; a change to one without the other fails here.
-    from cnc_gym.envs.render import DEFAULT_MAX_BINS
+    from cnc_gym.envs.render import ALONG_PATH_BINS, DEFAULT_MAX_BINS
     from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PLOT_FORMATS
+    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PATH_ERROR_BINS, PLOT_FORMATS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
     for key in JSON_KEYS:
         assert f"`{key}`" in text, key
     assert f"default {DEFAULT_MAX_BLOCKS:,}" in text
     assert f"at most {DEFAULT_MAX_BINS} time bins" in text
+    assert f"a max envelope of at most {ALONG_PATH_BINS}\nsteps" in text
+    assert f"kept in {PATH_ERROR_BINS}\npath-length bins" in text
     assert f"exceeds {LONG_RUN_NOTICE_S / 60:g} minutes" in text
     assert f"| {EXIT_TRUNCATED} | `run` only: truncated" in text
     assert all(f"`{suffix}`" in text for suffix in PLOT_FORMATS)
@@ -347,3 +349,28 @@ def test_units_option_errors(tmp_path, capsys):
     bad.write_text("power_on_units: metric\n")
     status, out, err = run_main(["trace", program, "--machine", str(bad)], capsys)
     assert status == 2 and out == "" and "power_on_units" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize(("argv", "fragment"), [
+    (["bench", "--workers", "x"], "cnc-gym bench: error: argument --workers: invalid int value: 'x'"),
+    (["bench", "--bogus", "1"], "cnc-gym bench: error: unrecognized arguments: --bogus 1"),
+    (["run"], "cnc-gym run: error: the following arguments are required: PROGRAM"),
+    (["trace", "star", "--block-skip", "a"], "cnc-gym trace: error: argument --block-skip"),
+    (["frob"], "cnc-gym: error: argument COMMAND: invalid choice: 'frob'"),
+    ([], "cnc-gym: error: the following arguments are required: COMMAND"),
+])  # fmt: skip
+def test_usage_errors_are_the_usage_line_and_one_error_line(argv, fragment, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    out, err = capsys.readouterr()
+    lines = err.splitlines()
+    assert exit_.value.code == 2 and out == "" and len(lines) == 2, err
+    command = "cnc-gym " + argv[0] if argv and argv[0] in ("bench", "run", "trace") else "cnc-gym"
+    assert lines[0].startswith(f"usage: {command} ") and lines[0].endswith(f"(all of them: {command} --help)")
+    assert lines[1].startswith(fragment), lines[1]
+
+
+def test_help_still_shows_the_whole_usage(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["bench", "--help"])
+    assert exit_.value.code == 0 and "--per-family N" in capsys.readouterr().out
