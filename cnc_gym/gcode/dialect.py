@@ -133,13 +133,15 @@ class Seam(Protocol):
 Action = Callable[..., None]
 
 
-@dataclass
+@dataclass(slots=True)
 class BlockPlan:
     """One block after its codes are looked up, as the block checks see it (:attr:`BlockHooks.checks`).
 
     ``by_group``: modal group → the block's code of that group; ``motion``: the block's motion code (or
     None); ``axis_owner``: the one-shot code that takes the axis words (G04 X, G92 …) or None; ``items``:
-    the codes to execute (a check may remove one it takes over); ``values``: the block's words.
+    the codes to execute (a check may remove one it takes over); ``values``: the block's words; ``keys``:
+    modal group → the key of the block's code of that group; ``g53``: the block holds G53. The
+    interpreter's check phase builds it (``Interpreter.check_block``) and its execute phase runs it.
     """
 
     by_group: dict[int, CodeSpec]
@@ -147,6 +149,8 @@ class BlockPlan:
     axis_owner: CodeSpec | None
     items: list[CodeSpec]
     values: dict[str, float]
+    keys: dict[int, int] = field(default_factory=dict)
+    g53: bool = False
 
 
 @dataclass
