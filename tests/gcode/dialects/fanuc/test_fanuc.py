@@ -329,7 +329,7 @@ def test_the_haas_style_shop_example_traces_with_its_setup():
 
     from cnc_gym.gcode import interpret_file
 
-    root = Path(__file__).resolve().parents[2] / "examples"
+    root = Path(__file__).resolve().parents[4] / "examples"
     tp = interpret_file(root / "haas_shop.nc", dialect=FANUC, setup=root / "shop_setup.yaml")
     assert tp.notices == ()
     assert list(tp.machine_functions.values()) == ["M88", "M89"]  # (M08/M09 are the dialect's own)
