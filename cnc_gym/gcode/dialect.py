@@ -30,6 +30,7 @@ action, never a literal GSK number.
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
@@ -496,8 +497,25 @@ class Dialect:
     def error(self, message: str, code: str, *, alarm: str | int | None = None, column: int | None = None,
               ) -> ProgramError:  # fmt: skip
         """A ProgramError with this dialect's alarm number for ``code`` or for the condition ``alarm``
-        (:meth:`alarm`); file and line are filled in later."""
+        (:meth:`alarm`); file and line are filled in later. In a dialect whose manual is not the family's
+        (:attr:`family_manual` empty), the family's section citations are left out of the message."""
+        if not self.family_manual and "GSK 25i §" in message:
+            message = drop_family_citations(message)
         return ProgramError(message, code=code, alarm=self.alarm(code, alarm), column=column)
+
+
+#: A citation of the Fanuc family's manual (the GSK 25i programming manual) inside a message.
+_CITATION = re.compile(r"GSK 25i §\d+(?:\.\d+)*")
+
+
+def drop_family_citations(message: str) -> str:
+    """``message`` without its "GSK 25i §n" citations (and the brackets or separators left empty), for a
+    dialect whose own manual numbers its sections otherwise: "(GSK 25i §3.2.5)" goes, "(only jumps out
+    of one are allowed, GSK 25i §3.7.5)" keeps its words."""
+    out = re.sub(r"\s*\(" + _CITATION.pattern + r"\)", "", message)
+    out = re.sub(r"[,;]\s*" + _CITATION.pattern + r"(?=\))", "", out)
+    out = re.sub(_CITATION.pattern + r"(?:[:;]\s*|\s+)", "", out)
+    return _CITATION.sub("", out)
 
 
 #: Dialect names → module under cnc_gym.gcode.dialects, or None where not built yet.
