@@ -235,11 +235,11 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
 
 def _reserved_codes(dialect: Dialect) -> dict[str, set[int]]:
     """Codes that cannot call a program: G00 and the macro-call codes (G65-G67); the stop and call M codes
-    (M00-M02, M30, M98, M99). Found in the dialect's tables by action."""
+    (M00-M02, M30, M98, M99, the Haas M97). Found in the dialect's tables by action."""
     g_codes = {key // 10 for key, spec in dialect.gcodes.items() if key % 10 == 0 and (
         spec.action in ("macro_call", "modal_call_cancel") or (spec.action == "motion" and spec.value == 0))}
-    m_codes = {key // 10 for key, spec in dialect.mcodes.items()
-               if spec.action in ("stop", "subprogram_call", "subprogram_return")}  # fmt: skip
+    calls = ("stop", "subprogram_call", "subprogram_return", "local_subprogram_call")
+    m_codes = {key // 10 for key, spec in dialect.mcodes.items() if spec.action in calls}
     return {"g_macro": g_codes, "m_macro": m_codes, "m_sub": m_codes}
 
 
