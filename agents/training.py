@@ -53,6 +53,8 @@ from cnc_gym.envs.options import (
 )
 from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.programs import DEFAULT_DIALECT
 
 #: The env versions a training config may name.
 ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
@@ -76,8 +78,8 @@ class EnvSettings:
                             "`suite:<name>/<split>` (train or val)", as_tuple=False),
         default_factory=lambda: ["star", "pocket", "freeform"],
     )
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str = declared(MACHINE_NAME, "vmc-small")
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
     action_mode: str = declared(dataclasses.replace(ACTION_MODE_V1, doc="what the action sets (`residual`: "
                                                     "Feedrate-v1 only)"), "override")  # fmt: skip
     control_period_s: float = declared(CONTROL_PERIOD, 0.01)

@@ -68,11 +68,13 @@ from cnc_gym.config import (
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
-__all__ = ["INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig",
-           "MachineFunctionsConfig", "PlantConfig", "RotaryAxisConfig", "SetupConfig", "ToolSetup",
-           "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names", "merge_setups",
-           "with_setup"]  # fmt: skip
+__all__ = ["DEFAULT_MACHINE", "INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig",
+           "MachineConfig", "MachineFunctionsConfig", "PlantConfig", "RotaryAxisConfig", "SetupConfig",
+           "ToolSetup", "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names",
+           "merge_setups", "with_setup"]  # fmt: skip
 
+#: The machine preset used where none is named (``cnc-gym run``, the envs, ``bench``, ``load_machine()``).
+DEFAULT_MACHINE = "vmc-small"
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
 
@@ -517,7 +519,7 @@ def machine_names() -> list[str]:
     return sorted(p.stem for p in (configs_dir() / "machines").glob("*.yaml"))
 
 
-def load_machine(name_or_path: str | Path | MachineConfig = "vmc-small") -> MachineConfig:
+def load_machine(name_or_path: str | Path | MachineConfig = DEFAULT_MACHINE) -> MachineConfig:
     """Load a preset by name (``vmc-small``, ``gsk25i``, ``p-loop-30`` …) or from a YAML path; a
     ``MachineConfig`` built in Python is checked against the same schema and returned."""
     if isinstance(name_or_path, MachineConfig):

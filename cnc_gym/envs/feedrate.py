@@ -15,10 +15,10 @@ from cnc_gym.envs.fused import FeedrateBatch, ObservationSpec, RewardSpec
 from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend, with_setup
+from cnc_gym.machine import DEFAULT_MACHINE, MachineConfig, load_machine, with_plant_backend, with_setup
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.plant import make_plant
-from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
+from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 #: Scalar observation entries, in order (the look-ahead block follows them).
@@ -243,8 +243,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def __init__(
         self,
         programs: Sequence[ProgramLike] | ProgramLike | None = None,
-        dialect: str = "gsk25i",
-        machine: str | Path | MachineConfig = "vmc-small",
+        dialect: str = DEFAULT_DIALECT,
+        machine: str | Path | MachineConfig = DEFAULT_MACHINE,
         action_mode: str = "override",
         control_period_s: float = 0.01,
         reward: str | Path | dict | RewardWeights | None = None,

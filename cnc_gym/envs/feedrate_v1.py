@@ -27,9 +27,9 @@ from cnc_gym.envs.options import (
 from cnc_gym.envs.planner_prior import PlannerPrior
 from cnc_gym.envs.randomization import DomainRandomization, MachineDraw, draw_machine
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig
+from cnc_gym.machine import DEFAULT_MACHINE, MachineConfig
 from cnc_gym.plant import make_plant
-from cnc_gym.programs import ProgramLike
+from cnc_gym.programs import DEFAULT_DIALECT, ProgramLike
 from cnc_gym.toolpath import Toolpath
 
 #: Action modes of v1: v0's two, and ``residual`` (the agent scales the deployable planner's knob).
@@ -72,8 +72,8 @@ class EnvArgumentsV1:
     """The keyword arguments of ``cnc_gym/Feedrate-v1``, checked."""
 
     programs: tuple[ProgramLike, ...] | None = declared(spec_of(EnvArguments, "programs"))
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str | Path | MachineConfig = declared(MACHINE_V1, "vmc-small")  # noqa: RUF009
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str | Path | MachineConfig = declared(MACHINE_V1, DEFAULT_MACHINE)  # noqa: RUF009
     action_mode: str = declared(ACTION_MODE_V1, "override")
     control_period_s: float = declared(CONTROL_PERIOD, 0.01)
     reward: RankingReward | None = section(  # noqa: RUF009
@@ -227,8 +227,8 @@ class FeedrateEnvV1(FeedrateEnv):
     def __init__(
         self,
         programs: Sequence[ProgramLike] | ProgramLike | None = None,
-        dialect: str = "gsk25i",
-        machine: str | Path | MachineConfig = "vmc-small",
+        dialect: str = DEFAULT_DIALECT,
+        machine: str | Path | MachineConfig = DEFAULT_MACHINE,
         action_mode: str = "override",
         control_period_s: float = 0.01,
         reward: dict | RankingReward | None = None,

@@ -37,9 +37,9 @@ from cnc_gym.config import (
     shown,
 )
 from cnc_gym.errors import CncGymError, ConfigError
-from cnc_gym.machine import INPUT_UNITS, PLANT_BACKENDS
+from cnc_gym.machine import DEFAULT_MACHINE, INPUT_UNITS, PLANT_BACKENDS
 from cnc_gym.motion import ActionError
-from cnc_gym.programs import PROGRAM_TYPES, ProgramLike
+from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
@@ -180,8 +180,8 @@ class EnvArguments:
         optional=True, doc="programs of the episodes: built-in names, `.nc` paths, G-code text, "
                            "`ProgramText` or interpreted `Program`s (None: the default task's set)",
     ))  # fmt: skip
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), DEFAULT_MACHINE)  # noqa: RUF009
     units: str | None = declared(UNITS)
     setup: Any = declared(SETUP)  # noqa: RUF009
     plant: str | None = declared(Choice(choices=(None, *PLANT_BACKENDS), doc="servo plant: `lti` (the exact "

@@ -27,6 +27,8 @@ from cnc_gym.envs.options import (
     RewardWeights,
 )
 from cnc_gym.errors import ConfigError
+from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.programs import DEFAULT_DIALECT
 
 __all__ = ["ACTION_MODES", "RewardWeights", "TaskConfig", "load_task", "resolve_reward", "reward_from_dict",
            "task_from_dict", "task_path"]  # fmt: skip
@@ -40,8 +42,8 @@ class TaskConfig:
     description: str = text("", max_length=4096, doc="one paragraph for people")
     programs: tuple[str, ...] = declared(PROGRAM_NAMES, default_factory=lambda: ("circle", "star", "freeform",
                                                                                   "pocket"))  # fmt: skip
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str = declared(MACHINE_NAME, "vmc-small")
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
     action_mode: str = declared(ACTION_MODE, "override")
     control_period_s: float = declared(CONTROL_PERIOD, 0.01)
     reward: RewardWeights = section(RewardWeights, doc="reward weights (docs/env.md, Reward)")  # noqa: RUF009
