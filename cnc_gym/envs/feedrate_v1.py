@@ -17,10 +17,12 @@ from cnc_gym.envs.feedrate import FeedrateEnv
 from cnc_gym.envs.fused import F_SIGNAL, SIG_PLANNER_OVERRIDE, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V1, ObservationLayout, markdown_table
 from cnc_gym.envs.options import (
+    ACTION_MODES,
     CONTROL_PERIOD,
     DIALECT,
     MAX_EPISODE_STEPS,
     RENDER_MODES,
+    WEIGHT_WHY,
     EnvArguments,
     MachineRef,
 )
@@ -33,10 +35,9 @@ from cnc_gym.programs import DEFAULT_DIALECT, ProgramLike
 from cnc_gym.toolpath import Toolpath
 
 #: Action modes of v1: v0's two, and ``residual`` (the agent scales the deployable planner's knob).
-ACTION_MODES_V1 = ("override", "feed", "residual")
+ACTION_MODES_V1 = (*ACTION_MODES, "residual")
 #: Where v1's argument errors come from, in their messages.
 SOURCE_V1 = "FeedrateEnv-v1"
-_WHY = "keeps every step's reward finite, and a return within float32 precision."
 
 
 @dataclass(frozen=True)
@@ -44,13 +45,13 @@ class RankingReward:
     """Weights of Feedrate-v1's reward (the class docstring of :class:`FeedrateEnvV1`). Any values in range
     keep the ranking rules: time and finish weights are positive, the others non-negative."""
 
-    time: float = number(1.0, 0, 1e6, low_open=True, why=_WHY,
+    time: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
                          doc="w_time: the episode's time cost per nominal time (> 0: faster ranks higher)")
-    progress: float = number(1.0, 0, 1e6, why=_WHY,
+    progress: float = number(1.0, 0, 1e6, why=WEIGHT_WHY,
                              doc="w_progress: paid over the whole path, in proportion to progress")
-    violation: float = number(10.0, 0, 1e6, why=_WHY,
+    violation: float = number(10.0, 0, 1e6, why=WEIGHT_WHY,
                               doc="w_violation: per mm of path cut with contour error over tolerance")
-    finish: float = number(1.0, 0, 1e6, low_open=True, why=_WHY,
+    finish: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
                            doc="w_finish: paid, with the step budget's time, on a violation-free finish")
 
 

@@ -55,7 +55,8 @@ RENDER_MODES = (None, "rgb_array")
 #: Where argument errors come from, in their messages.
 SOURCE = "FeedrateEnv"
 
-_WEIGHT_WHY = "keeps every step's reward finite, and a return within float32 precision."
+#: Why a reward weight is bounded (every reward weight of every version).
+WEIGHT_WHY = "keeps every step's reward finite, and a return within float32 precision."
 
 
 @dataclass(frozen=True)
@@ -65,20 +66,20 @@ class RewardWeights:
     (Δp: path progress in the step as a fraction of the program's length; see FeedrateEnv's docstring).
     """
 
-    time: float = number(10.0, 0, 1e6, why=_WEIGHT_WHY,
+    time: float = number(10.0, 0, 1e6, why=WEIGHT_WHY,
                          doc="w_time: the whole episode's time cost at nominal (100 %) speed")  # fmt: skip
-    contour_error: float = number(0.05, 0, 1e6, why=_WEIGHT_WHY,
+    contour_error: float = number(0.05, 0, 1e6, why=WEIGHT_WHY,
                                   doc="w_error: per step, per (e_max / tol)²")  # fmt: skip
     violation: float = number(
-        1.0, 0, 1e6, why=_WEIGHT_WHY, doc="w_violation: per control step whose contour error exceeds tol")
+        1.0, 0, 1e6, why=WEIGHT_WHY, doc="w_violation: per control step whose contour error exceeds tol")
     error_ratio_cap: float = number(
-        10.0, 0, 1e6, low_open=True, why=_WEIGHT_WHY,
+        10.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
         doc="c: e_max / tol is capped here so that one bad step cannot dominate a return")  # fmt: skip
     # Paid per unit of path progress; sums to exactly this over a finished episode whatever the policy,
     # so it leaves the undiscounted ranking of finishing policies unchanged but pays for progress when it
     # happens, which a discounted (γ < 1) learner needs to see that slow costs (see docs/env.md).
     progress: float = number(
-        10.0, 0, 1e6, why=_WEIGHT_WHY, doc="w_progress: paid over the whole path, in proportion to progress")
+        10.0, 0, 1e6, why=WEIGHT_WHY, doc="w_progress: paid over the whole path, in proportion to progress")
 
 
 # Specs shared by the env's arguments, the task file and the training config's env section.
