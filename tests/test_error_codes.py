@@ -4,7 +4,8 @@ code tables are written from it.
 Three checks, each catching what the others cannot: the test suite runs in strict mode (tests/conftest.py),
 so a code built at run time (from a table, a variable) that is not registered fails the test that reaches
 it; a static scan finds the literal codes at every raise and note site, reached by a test or not; and the
-docs tables must equal what scripts/error_code_docs.py writes from the registry.
+docs tables must equal what scripts/error_code_docs.py writes from the registry. The dialects' alarm
+tables and the docs' alarm indexes may name registered codes only.
 """
 
 from __future__ import annotations
@@ -146,3 +147,19 @@ def test_the_docs_tables_are_written_from_the_registry():
     module_spec.loader.exec_module(module)
     stale = "docs tables are stale: run .venv/bin/python scripts/error_code_docs.py"
     assert module.main(["--check"]) == 0, stale
+
+
+@pytest.mark.parametrize("index", sorted(p.name for p in (REPO / "docs").glob("*_alarms.md")))
+def test_the_alarm_indexes_name_registered_codes(index):
+    # The "Our code" column of each dialect's alarm index (docs/*_alarms.md).
+    column, named = None, set()
+    for line in (REPO / "docs" / index).read_text().splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if not line.startswith("|"):
+            continue
+        if "Our code" in cells:
+            column = cells.index("Our code")
+        elif column is not None and len(cells) > column:
+            named |= {code.split("/")[0] for code in re.findall(r"`([^`]+)`", cells[column])}
+    assert column is not None and named, f"{index} has no 'Our code' column, or no code in it"
+    assert named <= CODES, f"{index} names codes that are not registered: {sorted(named - CODES)}"
