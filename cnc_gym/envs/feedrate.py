@@ -13,7 +13,17 @@ from gymnasium import spaces
 
 from cnc_gym.envs.fused import FeedrateBatch, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V0, ObservationLayout, markdown_table
-from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
+from cnc_gym.envs.options import (
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
+    DEFAULT_LOOKAHEAD_MM,
+    DEFAULT_LOOKAHEAD_POINTS,
+    EnvNotReset,
+    control_ticks,
+    env_arguments,
+    parse_action,
+    reset_choice,
+)
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE, MachineConfig, load_machine, with_plant_backend, with_setup
@@ -204,13 +214,13 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         programs: Sequence[ProgramLike] | ProgramLike | None = None,
         dialect: str = DEFAULT_DIALECT,
         machine: str | Path | MachineConfig = DEFAULT_MACHINE,
-        action_mode: str = "override",
-        control_period_s: float = 0.01,
+        action_mode: str = DEFAULT_ACTION_MODE,
+        control_period_s: float = DEFAULT_CONTROL_PERIOD_S,
         reward: str | Path | dict | RewardWeights | None = None,
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
-        lookahead_mm: float = 24.0,
-        lookahead_points: int = 8,
+        lookahead_mm: float = DEFAULT_LOOKAHEAD_MM,
+        lookahead_points: int = DEFAULT_LOOKAHEAD_POINTS,
         units: str | None = None,
         plant: str | None = None,
         contour_rule: str = "cuts",

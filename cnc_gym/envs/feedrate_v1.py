@@ -19,6 +19,10 @@ from cnc_gym.envs.observation import OBSERVATION_V1, ObservationLayout, markdown
 from cnc_gym.envs.options import (
     ACTION_MODES,
     CONTROL_PERIOD,
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
+    DEFAULT_LOOKAHEAD_MM,
+    DEFAULT_LOOKAHEAD_POINTS,
     DIALECT,
     MAX_EPISODE_STEPS,
     RENDER_MODES,
@@ -75,8 +79,8 @@ class EnvArgumentsV1:
     programs: tuple[ProgramLike, ...] | None = declared(spec_of(EnvArguments, "programs"))
     dialect: str = declared(DIALECT, DEFAULT_DIALECT)
     machine: str | Path | MachineConfig = declared(MACHINE_V1, DEFAULT_MACHINE)  # noqa: RUF009
-    action_mode: str = declared(ACTION_MODE_V1, "override")
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    action_mode: str = declared(ACTION_MODE_V1, DEFAULT_ACTION_MODE)
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RankingReward | None = section(  # noqa: RUF009
         RankingReward, optional=True, doc="reward weights (null: the defaults)")
     randomize: DomainRandomization | None = section(  # noqa: RUF009
@@ -84,8 +88,8 @@ class EnvArgumentsV1:
     residual_range: float = declared(RESIDUAL_RANGE, 2.0)
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
-    lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
-    lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
+    lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), DEFAULT_LOOKAHEAD_MM)
+    lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), DEFAULT_LOOKAHEAD_POINTS)
     units: str | None = declared(spec_of(EnvArguments, "units"))
     setup: Any = declared(spec_of(EnvArguments, "setup"))  # noqa: RUF009
     plant: str | None = declared(spec_of(EnvArguments, "plant"))
@@ -230,15 +234,15 @@ class FeedrateEnvV1(FeedrateEnv):
         programs: Sequence[ProgramLike] | ProgramLike | None = None,
         dialect: str = DEFAULT_DIALECT,
         machine: str | Path | MachineConfig = DEFAULT_MACHINE,
-        action_mode: str = "override",
-        control_period_s: float = 0.01,
+        action_mode: str = DEFAULT_ACTION_MODE,
+        control_period_s: float = DEFAULT_CONTROL_PERIOD_S,
         reward: dict | RankingReward | None = None,
         randomize: dict | DomainRandomization | None = None,
         residual_range: float = 2.0,
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
-        lookahead_mm: float = 24.0,
-        lookahead_points: int = 8,
+        lookahead_mm: float = DEFAULT_LOOKAHEAD_MM,
+        lookahead_points: int = DEFAULT_LOOKAHEAD_POINTS,
         units: str | None = None,
         plant: str | None = None,
         contour_rule: str = "cuts",

@@ -55,6 +55,12 @@ RENDER_MODES = (None, "rgb_array")
 #: Where argument errors come from, in their messages.
 SOURCE = "FeedrateEnv"
 
+#: Defaults of the arguments every env version shares (the envs' signatures and the config schemas use them).
+DEFAULT_ACTION_MODE = "override"
+DEFAULT_CONTROL_PERIOD_S = 0.01
+DEFAULT_LOOKAHEAD_MM = 24.0
+DEFAULT_LOOKAHEAD_POINTS = 8
+
 #: Why a reward weight is bounded (every reward weight of every version).
 WEIGHT_WHY = "keeps every step's reward finite, and a return within float32 precision."
 
@@ -188,16 +194,18 @@ class EnvArguments:
     plant: str | None = declared(Choice(choices=(None, *PLANT_BACKENDS), doc="servo plant: `lti` (the exact "
                                         "linear model) or `mujoco` (masses, friction, compliance, backlash); "
                                         "null: the machine preset's `plant.backend`"))  # fmt: skip
-    action_mode: str = declared(ACTION_MODE, "override")
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    action_mode: str = declared(ACTION_MODE, DEFAULT_ACTION_MODE)
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: Any = declared(RewardRef(doc="reward weights (None: configs/tasks/default.yaml)"))  # noqa: RUF009
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
     lookahead_mm: float = number(
-        24.0, 0, 10_000, low_open=True, unit="mm", doc="how far ahead the observation's look-ahead reads",
+        DEFAULT_LOOKAHEAD_MM, 0, 10_000, low_open=True, unit="mm",
+        doc="how far ahead the observation's look-ahead reads",
         why="the look-ahead scans the path this far every step; no machine brakes over 10 m.")  # fmt: skip
     lookahead_points: int = number(
-        8, 1, 256, integer=True, doc="look-ahead points in the observation (4 entries each)",
+        DEFAULT_LOOKAHEAD_POINTS, 1, 256, integer=True,
+        doc="look-ahead points in the observation (4 entries each)",
         why="the observation has 9 + 4 × this entries.")  # fmt: skip
     contour_rule: str = declared(CONTOUR_RULE, "cuts")
 

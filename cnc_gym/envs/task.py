@@ -20,6 +20,8 @@ from cnc_gym.envs.options import (
     ACTION_MODE,
     ACTION_MODES,
     CONTROL_PERIOD,
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
     DIALECT,
     MACHINE_NAME,
     PROGRAM_NAMES,
@@ -44,8 +46,8 @@ class TaskConfig:
                                                                                   "pocket"))  # fmt: skip
     dialect: str = declared(DIALECT, DEFAULT_DIALECT)
     machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
-    action_mode: str = declared(ACTION_MODE, "override")
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    action_mode: str = declared(ACTION_MODE, DEFAULT_ACTION_MODE)
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RewardWeights = section(RewardWeights, doc="reward weights (docs/env.md, Reward)")  # noqa: RUF009
     source: str = "<defaults>"
 
