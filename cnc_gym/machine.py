@@ -90,6 +90,8 @@ _TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double 
 #: The input units a controller can be in at power-on (a preset's ``power_on_units``,
 #: ``interpret(units=)``, ``--units``): G21 millimetres or G20 inches.
 INPUT_UNITS = ("mm", "inch")
+#: Millimetres in an inch (the interpreter's G20 scale, a setup in inch, the rotary feed rule in G20).
+INCH_MM = 25.4
 
 _ROTARY_WHY = "as the linear axes', degrees counting as mm (the GSK rotary feed rule)."
 
@@ -409,7 +411,7 @@ class SetupConfig:
         """The same tables with every length in mm."""
         if self.units == "mm":
             return self
-        k = 25.4
+        k = INCH_MM
         offsets = FrozenDict({key: tuple(c * k for c in xyz) for key, xyz in self.work_offsets.items()})
         tools = FrozenDict({n: ToolSetup(*(getattr(t, f.name) * k for f in dataclasses.fields(ToolSetup)))
                             for n, t in self.tools.items()})  # fmt: skip
