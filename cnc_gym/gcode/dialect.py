@@ -518,9 +518,11 @@ def drop_family_citations(message: str) -> str:
     return _CITATION.sub("", out)
 
 
+#: The dialect a program is read in when none is named (``interpret``, ``cnc-gym``, the envs, ``bench``).
+DEFAULT_DIALECT = "gsk25i"
 #: Dialect names → module under cnc_gym.gcode.dialects, or None where not built yet.
 DIALECT_MODULES: dict[str, str | None] = {
-    "gsk25i": "cnc_gym.gcode.dialects.gsk25i",
+    DEFAULT_DIALECT: "cnc_gym.gcode.dialects.gsk25i",
     "fanuc": "cnc_gym.gcode.dialects.fanuc",
     "h4cm": "cnc_gym.gcode.dialects.h4cm",
     "syntec": "cnc_gym.gcode.dialects.syntec",

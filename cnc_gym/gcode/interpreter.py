@@ -31,7 +31,7 @@ from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.settings import FlowOptions, ToolMeasurement, skip_signal_surfaces
 from cnc_gym.gcode.setup import apply_setup
 from cnc_gym.gcode.state import CompensationState, State
-from cnc_gym.machine import INPUT_UNITS
+from cnc_gym.machine import INCH_MM, INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
 
 if TYPE_CHECKING:
@@ -39,7 +39,6 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.program import Block, Program
     from cnc_gym.machine import MachineConfig, SetupConfig
 
-INCH_MM = 25.4
 #: Pseudo-spec of an axis-only block: the modal motion.
 IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
 
