@@ -211,13 +211,8 @@ class Reader:
         self._store = LiteralStore()
         # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
         simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
-        notices: list[tuple[int, str, str, str]] = []
         leader = _leader_lines(text)
-        if leader:
-            lines_ = (f"lines 1-{leader} before the tape start '%' (line {leader + 1}) are" if leader > 1
-                      else "line 1 before the tape start '%' (line 2) is")  # fmt: skip
-            notices.append((1, "note", f"{lines_} the leader section, not read (the control skips what comes "
-                            "before the first '%' of a file)", "leader-skipped"))  # fmt: skip
+        notices = [_leader_notice(leader)] if leader else []
         numbered = enumerate(text_lines(text), start=1)
         for line_no, raw in numbered:
             if line_no <= leader:
@@ -237,10 +232,7 @@ class Reader:
                 if seen_percent:
                     rest = [n for n, r in numbered if r.strip(_BLANKS)]  # the lines after it
                     if rest:
-                        notices.append((line_no, "note", f"line{'s' if len(rest) > 1 else ''} {rest[0]}"
-                                        f"{f'-{rest[-1]}' if len(rest) > 1 else ''} after the end-of-tape "
-                                        f"'%' (line {line_no}) {'are' if len(rest) > 1 else 'is'} not read",
-                                        "after-end-of-tape"))  # fmt: skip
+                        notices.append(_end_of_tape_notice(line_no, rest))
                     break  # second '%': end of tape
                 seen_percent = True
                 continue
@@ -261,7 +253,12 @@ class Reader:
             raise self.too_many_blocks(len(blocks)).located(file, blocks[self.max_blocks].line)
         self._seen = {}
         self._store = LiteralStore()  # the blocks keep the program's store; the reader lets go of it
-        program = Program(blocks, file=file, notices=notices)
+        return self._indexed(Program(blocks, file=file, notices=notices), program_number)
+
+    def _indexed(self, program: Program, program_number: int | None) -> Program:
+        """``program`` with its sequence numbers indexed (for GOTO, M99 P) and its ``O`` programs found:
+        their block ranges (``units``), the main program's extent and number."""
+        blocks, file = program.blocks, program.file
         for index, block in enumerate(blocks):
             if block.number is not None:
                 program.sequence_index.setdefault(block.number, []).append(index)
@@ -823,6 +820,21 @@ class Reader:
             raise self.error(f"unexpected {text[parser.pos:]!r} after the expression", "bad-expression", line,
                              parser.pos + 1)  # fmt: skip
         return (target, value), len(text)
+
+
+def _leader_notice(leader: int) -> tuple[int, str, str, str]:
+    """The note that lines 1..``leader`` before the tape start were not read."""
+    lines = (f"lines 1-{leader} before the tape start '%' (line {leader + 1}) are" if leader > 1
+             else "line 1 before the tape start '%' (line 2) is")  # fmt: skip
+    return (1, "note", f"{lines} the leader section, not read (the control skips what comes before the first "
+            "'%' of a file)", "leader-skipped")  # fmt: skip
+
+
+def _end_of_tape_notice(line: int, rest: list[int]) -> tuple[int, str, str, str]:
+    """The note that the lines ``rest`` after the end-of-tape ``%`` of ``line`` were not read."""
+    which = f"lines {rest[0]}-{rest[-1]} are" if len(rest) > 1 else f"line {rest[0]} is"
+    return (line, "note", f"{which.rsplit(' ', 1)[0]} after the end-of-tape '%' (line {line}) "
+            f"{which.rsplit(' ', 1)[1]} not read", "after-end-of-tape")
 
 
 def _is_tape_mark(stripped: str) -> bool:
