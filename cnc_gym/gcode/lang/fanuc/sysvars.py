@@ -134,25 +134,8 @@ class SystemVariables:
             offsets = core.state.offsets
             table = offsets.external if k == 0 else offsets.wcs[k - 1]
             return table[axis] / self._scale
-        if index == 3000 or index == 3006:
-            raise self._error(f"#{index} can only be written", "read-only-variable")
-        if index in (3001, 3002):
-            seconds = self._nominal_seconds()
-            if index == 3001:
-                return math.fmod(seconds * 1000.0 + self._ms_offset, _MS_WRAP)
-            return math.fmod(seconds / 3600.0 + self._hours_offset, _HOURS_WRAP)
-        if index == 3003:
-            return self.single_block
-        if index == 3004:
-            return float(self.run_control)
-        if index == 3011:
-            return self.date
-        if index == 3012:
-            return self.time_of_day
-        if index == 3901:
-            return self.parts_done
-        if index == 3902:
-            return self.parts_required
+        if 3000 <= index <= 3999:
+            return self._run_state(index)
         if 4001 <= index <= 4022:
             key = core.state.modal.get(index - 4000)
             return None if key is None else key / 10.0
@@ -160,11 +143,25 @@ class SystemVariables:
             return self._last_value(_LAST_VALUE[index])
         if 5001 <= index <= 5105:
             return self._position(index)
-        if 3020 <= index <= 3027:
-            return self._haas_timer(index)
         if 5401 <= index <= 6000:
             return self._tool_life(index)
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
+
+    def _run_state(self, index: int) -> float:
+        """#3000-#3999: the clocks, the run's switches, the date and time, the part counters."""
+        if index == 3000 or index == 3006:
+            raise self._error(f"#{index} can only be written", "read-only-variable")
+        if index in (3001, 3002):
+            seconds = self._nominal_seconds()
+            if index == 3001:
+                return math.fmod(seconds * 1000.0 + self._ms_offset, _MS_WRAP)
+            return math.fmod(seconds / 3600.0 + self._hours_offset, _HOURS_WRAP)
+        if 3020 <= index <= 3027:
+            return self._haas_timer(index)
+        value = {3003: self.single_block, 3004: float(self.run_control), 3011: self.date,
+                 3012: self.time_of_day, 3901: self.parts_done,
+                 3902: self.parts_required}.get(index)  # fmt: skip
+        return self._missing(index) if value is None else value
 
     def _haas_timer(self, index: int) -> float:
         """#3020-#3027 (module docstring): the nominal clock of the run, by what it counts."""
