@@ -1118,6 +1118,14 @@ def _gather(sf, observations):
 INFO_KEYS = (*OUTPUT_INFO_KEYS, "program")
 
 
+def step_needs_compiling(*, parallel: bool = False) -> bool:
+    """Whether this process's first batch step compiles the fused step: numba's disk cache holds none for
+    this source and CPU (a fresh install, or a kernel changed). Reads the cache's index, compiles nothing."""
+    from cnc_gym.numba_cache import needs_compiling
+
+    return needs_compiling([_run_parallel if parallel else _run_serial])
+
+
 def _dependencies() -> None:
     from cnc_gym.motion.planner import rule
     from cnc_gym.numba_cache import refresh_on_change
