@@ -12,14 +12,16 @@ module, so a baseline, a trained model and an RL agent are measured by the same 
 - :func:`run_episode` (reset, then :func:`play`) and :func:`play` (the step loop from a given state),
   which return an :class:`Episode` record; an optional ``on_step`` hook sees every step and can stop the
   episode (``cnc-gym run``'s series, progress bar and ``--max-time``; the oracle's record of its
-  simulation).
+  simulation);
+- :func:`announce_compiling`, the line a command prints before the simulator compiles (a cold numba
+  cache: the first run after an install or an update).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, TextIO, runtime_checkable
 
 import numpy as np
 
@@ -28,6 +30,14 @@ DEFAULT_ENV_ID = "cnc_gym/Feedrate-v0"
 #: The contour meter of every ``run`` and ``bench`` episode: the programmed path ("path": the rapids the
 #: reference has left are part of it), whatever env version the policy acts in.
 CONTOUR_RULE = "path"
+
+#: What a command prints before the simulator compiles: numba's disk cache keeps the machine code, so only
+#: the first run after an install or an update waits (docs/env.md, "Speed": the cold and warm figures).
+COMPILING_NOTICE = ("cnc-gym: compiling the simulator (first run only, about {} s; longer on a busy "
+                    "machine)")
+#: The CPU seconds the notice quotes: the compile of ``make demo``'s runs on an idle machine (docs/env.md).
+COMPILE_CPU_S = 30
+_announced = False
 
 #: ``on_step(steps, reward, terminated, truncated, info)``, called after every step (``steps`` counts it);
 #: True stops the episode there.
@@ -109,3 +119,17 @@ def play(env: Any, policy: Any, observation: Any, info: dict[str, Any],
             stopped = True
             break
     return Episode(info, total, steps, bool(terminated), bool(truncated), stopped)
+
+
+def announce_compiling(log: TextIO, *, parallel: bool = False) -> bool:
+    """Print :data:`COMPILING_NOTICE` on ``log`` when this process's first env step will compile (the
+    fused step is neither loaded nor in numba's disk cache), once per process; True if printed. Cheap:
+    it reads the cache's index, compiles nothing."""
+    global _announced
+    from cnc_gym.envs.fused import step_needs_compiling
+
+    if _announced or not step_needs_compiling(parallel=parallel):
+        return False
+    _announced = True
+    print(COMPILING_NOTICE.format(COMPILE_CPU_S), file=log, flush=True)
+    return True

@@ -32,7 +32,7 @@ from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries, range_indices
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE
 from cnc_gym.programs import DEFAULT_DIALECT
-from cnc_gym.rollout import play, policy_env
+from cnc_gym.rollout import announce_compiling, play, policy_env
 
 #: Keys of the ``--json`` object (the contract of docs/cli.md, "What `run` prints").
 JSON_KEYS = (
@@ -380,6 +380,7 @@ def simulate(program: Any, *, dialect: str = DEFAULT_DIALECT, machine: str = DEF
                 for note in toolpath.notices:
                     print(note, file=log)
             _announce_long_program(env.unwrapped, max_time_s, log)
+            announce_compiling(log)
         return record_run(env, pol, progress=progress, max_time_s=max_time_s, log=log)
     finally:
         env.close()

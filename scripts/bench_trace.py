@@ -5,8 +5,11 @@ Each command runs in a fresh process (start-up included, as a user runs it), its
 file; the commands are interleaved over ``--repeats`` repeats and the median of each is reported, in
 wall time and in CPU time (the child's user + system seconds), with the ratio to the reference.
 
+- **programs**: ``--lines`` blocks of G01 moves with a G02 arc every ``--arc-every`` blocks (default
+  10: one arc in ten; alternately I/J and R arcs), and a 3-line file (one G01, one G02 arc), where
+  start-up is nearly all of the time;
 - **reference**: ``rs274 -g`` (LinuxCNC's stand-alone interpreter, Debian package ``linuxcnc-uspace``)
-  on the same program, when it is on PATH (the program's ``O1000`` line, which rs274ngc would read as
+  on the same programs, when it is on PATH (the program's ``O1000`` line, which rs274ngc would read as
   an O-word, is left out of its copy); else only cnc-gym's figures are printed;
 - ``--before DIR``: also time the ``cnc_gym`` package in DIR (another checkout, e.g. from
   ``git archive``), run with ``PYTHONPATH=DIR``: before/after figures in one run;
@@ -19,6 +22,7 @@ wall time and in CPU time (the child's user + system seconds), with the ratio to
 Usage::
 
     .venv/bin/python scripts/bench_trace.py                        # 100 000 lines, 5 repeats
+    .venv/bin/python scripts/bench_trace.py --arc-every 2          # half of the blocks arcs
     .venv/bin/python scripts/bench_trace.py --before /tmp/main-checkout --json out.json
 """
 
@@ -37,9 +41,30 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_interpreter import generate_program  # the interpreter benchmark's program
+STARTUP = "cnc-gym trace, 3-line file"
+REFERENCE_TINY = "rs274 -g, 3-line file"
+#: The 3-line file: a move, an arc and the program end.
+TINY = "G21 G90 G01 X5 Y0 F1200\nG02 X10 Y5 R5\nM30\n"
 
-STARTUP = "cnc-gym trace (start-up: a one-line program)"
+
+def generate_program(n_lines: int, arc_every: int = 10) -> str:
+    """``n_lines`` blocks: a header, G01 moves along a zigzag with a G02 quarter arc every ``arc_every``
+    blocks (I/J and R forms alternately), then M30."""
+    out = ["%", "O1000", "G21 G17 G90 G94 G54", "G00 X0 Y0 Z5", "G01 Z-1 F800"]
+    x, y, k, arcs = 0.0, 0.0, 0, 0
+    while len(out) < n_lines - 2:
+        k += 1
+        if k % arc_every == 0:  # clockwise quarter arc of radius 1 from (x, y) to (x + 1, y - 1)
+            arcs += 1
+            words = "I0 J-1.000" if arcs % 2 else "R1.000"
+            x, y = x + 1.0, y - 1.0
+            out.append(f"G02 X{x:.3f} Y{y:.3f} {words} F1200")
+        else:
+            x += 0.5
+            y += 0.25 if k % 2 else -0.25
+            out.append(f"G01 X{x:.3f} Y{y:.3f} F1200")
+    out += ["M30", "%"]
+    return "\n".join(out) + "\n"
 _TRACE = "import sys; from cnc_gym.cli import main; sys.argv[0] = 'cnc-gym'; sys.exit(main())"
 
 
@@ -77,6 +102,7 @@ def split(text: str) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lines", type=int, default=100_000, help="program length (default 100 000)")
+    parser.add_argument("--arc-every", type=int, default=10, help="a G02 arc every N blocks (default 10)")
     parser.add_argument("--repeats", type=int, default=5, help="interleaved repeats (default 5)")
     parser.add_argument("--before", metavar="DIR", help="also time the cnc_gym package in DIR")
     parser.add_argument("--json", metavar="FILE", help="write every figure to FILE as JSON")
@@ -85,9 +111,9 @@ def main(argv: list[str] | None = None) -> int:
     work = Path(tempfile.mkdtemp(prefix="bench_trace_"))
     try:
         program = work / "program.nc"
-        program.write_text(generate_program(args.lines))
+        program.write_text(generate_program(args.lines, args.arc_every))
         tiny = work / "tiny.nc"
-        tiny.write_text("G01 X1 F100\nM30\n")
+        tiny.write_text(TINY)
         trace = [sys.executable, "-c", _TRACE, "trace"]
         cached = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
         commands: dict[str, tuple[list[str], dict[str, str] | None]] = {
@@ -102,6 +128,7 @@ def main(argv: list[str] | None = None) -> int:
             ngc = work / "program.ngc"
             ngc.write_text(program.read_text().replace("O1000\n", "", 1))
             commands["rs274 -g"] = ([rs274, "-g", str(ngc)], None)
+            commands[REFERENCE_TINY] = ([rs274, "-g", str(tiny)], None)
         times: dict[str, dict[str, list[float]]] = {name: {"wall": [], "cpu": []} for name in commands}
         for command, environment in commands.values():  # warm-up: bytecode cache, file cache
             timed_run(command, work / "out.txt", environment)
@@ -110,16 +137,17 @@ def main(argv: list[str] | None = None) -> int:
                 wall, cpu = timed_run(command, work / "out.txt", environment)
                 times[name]["wall"].append(wall)
                 times[name]["cpu"].append(cpu)
-        result: dict = {"lines": args.lines, "repeats": args.repeats}
+        result: dict = {"lines": args.lines, "arc_every": args.arc_every, "repeats": args.repeats}
         reference = "rs274 -g" if rs274 else None
-        print(f"{args.lines:,}-line G01/G02 program, fresh processes, median of {args.repeats}")
+        print(f"{args.lines:,}-line G01/G02 program (an arc every {args.arc_every} blocks) and a 3-line "
+              f"file, fresh processes, median of {args.repeats}")  # fmt: skip
         print(f"{'command':46s} {'wall s':>7s} {'CPU s':>7s}" + ("   ratio to rs274 (wall | CPU)" if reference
                                                                    else ""))  # fmt: skip
         medians = {name: {k: statistics.median(v) for k, v in t.items()} for name, t in times.items()}
         for name, m in medians.items():
             line = f"{name:46s} {m['wall']:7.3f} {m['cpu']:7.3f}"
             if reference:
-                ref = medians[reference]
+                ref = medians[REFERENCE_TINY if name in (STARTUP, REFERENCE_TINY) else reference]
                 m["ratio_wall"], m["ratio_cpu"] = m["wall"] / ref["wall"], m["cpu"] / ref["cpu"]
                 line += f"   {m['ratio_wall']:5.2f}× | {m['ratio_cpu']:5.2f}×"
             print(line)

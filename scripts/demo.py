@@ -5,7 +5,8 @@
 For each built-in program it runs the constant override at 100 % and the classical planner through the
 env (controller + servo plant), prints cycle time, max/RMS contour error and violations, and writes one
 PNG per run (path coloured by feed, contour error along the path) under ``--out``; the plots of one program
-share one feed colour scale.
+share one feed colour scale. On stderr: a line before the simulator compiles (the first run after an
+install) and a line per run as it ends.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ def main(argv: list[str] | None = None) -> int:
     from cnc_gym.gcode.dialect import DEFAULT_DIALECT
     from cnc_gym.machine import DEFAULT_MACHINE
     from cnc_gym.programs import program_names
+    from cnc_gym.rollout import announce_compiling
     from cnc_gym.runner import default_plot_name, feed_limits, format_table, plot_run, simulate
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -38,9 +40,14 @@ def main(argv: list[str] | None = None) -> int:
     rows, plots = [], []
     started = time.perf_counter()
     try:
+        announce_compiling(sys.stderr)
         for program in programs:
-            results = [simulate(program, dialect=args.dialect, machine=args.machine, policy=policy)
-                       for policy in args.policies]  # fmt: skip
+            results = []
+            for policy in args.policies:  # a line per run as it ends: the demo takes a while
+                begun = time.perf_counter()
+                results.append(simulate(program, dialect=args.dialect, machine=args.machine, policy=policy))
+                print(f"  {program} under {policy}: cycle time {results[-1].cycle_time_s:.3f} s "
+                      f"({time.perf_counter() - begun:.1f} s)", file=sys.stderr, flush=True)  # fmt: skip
             # One feed colour scale for the program's plots, so the policies compare at a glance.
             shared = feed_limits(results)
             for result in results:

@@ -17,3 +17,11 @@ from hypothesis import settings
 settings.register_profile("ci", derandomize=True, database=None, print_blob=True)
 settings.register_profile("explore", print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "explore"))
+
+# The commands' "compiling the simulator" line goes to stderr once per process, before the first env step
+# that compiles: in a test process it would land in whichever test steps first (a clean checkout's cache
+# is cold), and tests that expect nothing on stderr would depend on their order. It is tested on its own
+# (tests/test_rollout.py).
+import cnc_gym.rollout  # noqa: E402
+
+cnc_gym.rollout._announced = True

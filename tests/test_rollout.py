@@ -108,3 +108,32 @@ def test_the_baselines_are_policies(spec):
     from cnc_gym.policies import make_policy
 
     assert isinstance(make_policy(spec), Policy)
+
+
+def test_the_compiling_notice_is_said_once_per_process_and_only_when_it_compiles(monkeypatch):
+    import io
+
+    from cnc_gym import rollout
+    from cnc_gym.envs import fused
+
+    log = io.StringIO()
+    monkeypatch.setattr(rollout, "_announced", False)
+    monkeypatch.setattr(fused, "step_needs_compiling", lambda parallel=False: False)
+    assert not rollout.announce_compiling(log)
+    monkeypatch.setattr(fused, "step_needs_compiling", lambda parallel=False: True)
+    assert rollout.announce_compiling(log)
+    assert not rollout.announce_compiling(log)
+    assert log.getvalue().count("compiling the simulator (first run only") == 1
+
+
+def test_the_readme_check_knows_the_notice():
+    # scripts/readme_tour.py leaves the first run's notice out of the shown output it compares.
+    import sys
+    from pathlib import Path
+
+    from cnc_gym.rollout import COMPILING_NOTICE
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    import readme_tour
+
+    assert COMPILING_NOTICE.format(30).startswith(readme_tour.COMPILING_PREFIX)

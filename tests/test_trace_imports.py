@@ -1,5 +1,6 @@
-"""``cnc-gym trace`` starts fast: the interpreter path loads neither numba, scipy nor Gymnasium, and the
-env still registers when Gymnasium is imported after cnc_gym (or before)."""
+"""``cnc-gym trace`` starts fast: the interpreter path loads none of the simulation's heavy libraries
+(numba, scipy, matplotlib, MuJoCo, Gymnasium, torch), with or without a machine preset, and the env still
+registers when Gymnasium is imported after cnc_gym (or before)."""
 
 from __future__ import annotations
 
@@ -7,16 +8,23 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 
 def run(code: str) -> str:
     return subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
 
 
-def test_trace_loads_no_heavy_module(tmp_path):
+#: What a simulation needs and a trace does not: each costs start-up time (numba alone ~0.3 s).
+HEAVY = ("numba", "llvmlite", "scipy", "matplotlib", "mujoco", "gymnasium", "torch", "toppra")
+
+
+@pytest.mark.parametrize("options", [[], ["--machine", "vmc-small", "--dialect", "fanuc"]])
+def test_trace_loads_no_heavy_module(tmp_path, options):
     program = tmp_path / "p.nc"
     program.write_text("G90 G21\nG01 X5 F1200\nG02 X10 Y5 R5\nM30\n")
-    out = run(f"import sys; from cnc_gym.cli import main; main(['trace', {str(program)!r}]); "
-              "print(sorted(m for m in ('numba', 'scipy', 'gymnasium') if m in sys.modules))")
+    out = run(f"import sys; from cnc_gym.cli import main; main(['trace', {str(program)!r}, *{options!r}]); "
+              f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
     assert out.strip().splitlines()[-1] == "[]"
     assert '"kind": "arc"' in out
 

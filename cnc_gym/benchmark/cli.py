@@ -105,6 +105,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from cnc_gym.errors import CncGymError
     from cnc_gym.gcode.dialect import DEFAULT_DIALECT
     from cnc_gym.machine import DEFAULT_MACHINE, machine_with_options
+    from cnc_gym.rollout import announce_compiling
 
     if args.workers < 1:
         raise CncGymError(f"--workers must be at least 1, got {args.workers}")
@@ -154,6 +155,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     # The file is made before any work (an unwritable path costs nothing) and gets each record as its
     # task finishes: Ctrl-C keeps every finished one.
     out = JsonlAppender(args.json) if args.json else None
+    announce_compiling(sys.stderr)
     started = time.perf_counter()
     try:
         records = run_bench(config, on_records=out.append if out is not None else None)

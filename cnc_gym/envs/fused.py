@@ -576,13 +576,13 @@ def _reference(e, bank_f, bank_i, sf, si, knob, seg_f, pt_f, dwell_f, curve_f, s
     ticks = reference.shape[0]
     cfg = scalars[_S_CFG : _S_CFG + 6]
     if st_i[K.K_PHASE] != K.PHASE_DONE:
+        # One call with a typed mode, not one per literal mode: numba would compile the controller twice.
         if bank_i[CI_FEED_MODE]:  # the knob commands the feed (replacing F), 0 … max feed
-            K.advance_into(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, 1, 1.0, 1.0,
-                           (knob + 1.0) * 0.5 * cfg_f[CF_MAX_FEED] / 60.0, pts, out, False, True)  # fmt: skip
+            mode, override, feed = np.int64(1), 1.0, (knob + 1.0) * 0.5 * cfg_f[CF_MAX_FEED] / 60.0
         else:
-            K.advance_into(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, 0,
-                           (knob + 1.0) * 0.5 * cfg_f[CF_MAX_OVERRIDE], 1.0, 0.0, pts, out, False,
-                           True)  # fmt: skip
+            mode, override, feed = np.int64(0), (knob + 1.0) * 0.5 * cfg_f[CF_MAX_OVERRIDE], 0.0
+        K.advance_into(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, override, 1.0, feed,
+                       pts, out, False, True)  # fmt: skip
         for t in range(ticks):
             for a in range(3):
                 reference[t, a] = out[t, K.O_X + a]
@@ -1116,6 +1116,14 @@ def _gather(sf, observations):
 #: Info keys of a batch without reward terms, finish bonus or planner (v0's), in the order of
 #: :meth:`FeedrateBatch.info`.
 INFO_KEYS = (*OUTPUT_INFO_KEYS, "program")
+
+
+def step_needs_compiling(*, parallel: bool = False) -> bool:
+    """Whether this process's first batch step compiles the fused step: numba's disk cache holds none for
+    this source and CPU (a fresh install, or a kernel changed). Reads the cache's index, compiles nothing."""
+    from cnc_gym.numba_cache import needs_compiling
+
+    return needs_compiling([_run_parallel if parallel else _run_serial])
 
 
 def _dependencies() -> None:

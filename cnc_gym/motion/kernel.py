@@ -742,7 +742,10 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     # no faster than the peak speed. (The distance itself is not monotone in the target speed.)
     _, t_stop = brake(v_hi, a_hi, 0.0, acc_b, jerk_b)
     reach_far = top_hi * t_stop
-    n_pts = 0
+    # Typed integers, not literals: numba compiles a called function once per literal argument, and a
+    # counter that starts at a literal is first typed as that literal (compiled twice over, once wasted).
+    n_pts = np.int64(0)
+    hard, soft = np.int64(1), np.int64(2)  # the points' columns: the hard (geometric) and soft speed limits
     for q in range(k + 1, q_end + 1):
         d_q = pt_f[q, P_S] - s
         if d_q - ds_hi > reach_far:
@@ -780,36 +783,36 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     ds, v1, a1 = 0.0, v, a
     w_follow = 0.0
     m_cap = cap_hard
-    m_col = 1
+    m_col = hard
     # Where the override is still slewing down, the speed must not dip below where it will settle.
     cap_final = _target(seg_f, seg_i, k, mode, knob, rapid_ov, cmd)
     j_track = max(_track_jerk(v, a, cap_soft, jerk_b, dt), j_lo)
     if v >= cap_final:
         j_track = max(j_track, _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, cap_final))
-    if j_track < j_hi and _upper_ok(j_track, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+    if j_track < j_hi and _upper_ok(j_track, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft):
         j = j_track  # the largest safe jerk is at least this: no search needed (cruise, settling)
-    elif _upper_ok(j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+    elif _upper_ok(j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft):
         j = min(j_hi, j_track)
-    elif _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
-        j = _largest_upper(j_lo, j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+    elif _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft):
+        j = _largest_upper(j_lo, j_hi, s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft)
         j = min(j, j_track)
-    elif _safe_now(s, v, a, acc_b, jerk_b, cap_soft, pts, n_pts, 2):
+    elif _safe_now(s, v, a, acc_b, jerk_b, cap_soft, pts, n_pts, soft):
         # Safe, but no constant jerk keeps it so (the braking switches inside this period): follow a
         # braking manoeuvre exactly for one period (see _pick_manoeuvre).
         manoeuvre = True
-        w_follow, certified = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+        w_follow, certified = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft)
         j = min(j_track, j_hi)  # what the period would do before braking
         m_cap = cap_soft
-        m_col = 2
+        m_col = soft
         if not certified:
-            rescued, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+            rescued, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft)
             if not rescued:
-                _, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+                _, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, hard)
             rescued = True
     else:
         # The certificate is lost. Where every soft limit is still reachable (it was lost to the window
         # sliding or to the braking jerk growing, not to the override), keep them all (see _rescue).
-        rescued, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, 2)
+        rescued, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_soft, pts, n_pts, soft)
         if not rescued:
             # The operator's target cannot be met any more (override turned down): slow down as fast as
             # the jerk allows without undershooting the lowest violated target ...
@@ -832,16 +835,17 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
             j = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, floor)
             j = max(j, min(_track_jerk(v, a, floor, jerk_b, dt), j_hi))
             # ... but never faster than the hard (geometric) limits allow.
-            if not _upper_ok(j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
-                if _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1):
-                    j = _largest_upper(j_lo, j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+            if not _upper_ok(j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, hard):
+                if _upper_ok(j_lo, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, hard):
+                    j = _largest_upper(j_lo, j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, hard)
                 else:
                     manoeuvre = True
-                    w_follow, certified = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+                    w_follow, certified = _pick_manoeuvre(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts,
+                                                          hard)
                     m_cap = cap_hard
-                    m_col = 1
+                    m_col = hard
                     if not certified:
-                        _, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, 1)
+                        _, ds, v1, a1 = _rescue(s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, hard)
                         rescued = True
 
     if rescued:

@@ -75,8 +75,10 @@ def test_ctrl_c_keeps_every_finished_record_cancels_the_rest_and_leaves_no_worke
     kept = _records(out)
     assert process.returncode == 130, stderr
     assert stdout == "" and "Traceback" not in stderr, stderr
-    assert stderr.strip().splitlines()[-1].endswith(f"kept {len(kept)} finished episode record(s) in {out}")
-    assert len(stderr.strip().splitlines()) == 1, stderr
+    # (a cold numba cache adds the "compiling the simulator" line before the work: not the interrupt's)
+    lines = [line for line in stderr.strip().splitlines() if not line.startswith("cnc-gym: compiling")]
+    assert lines[-1].endswith(f"kept {len(kept)} finished episode record(s) in {out}")
+    assert len(lines) == 1, stderr
     # Every record seen before the interrupt is kept, whole; the pending work was cancelled, not finished.
     assert [r for r in kept if r in seen] == seen
     assert len(seen) <= len(kept) < 63
