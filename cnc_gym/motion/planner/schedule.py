@@ -8,8 +8,6 @@ they loop over the path.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -23,6 +21,7 @@ from cnc_gym.motion.planner.error_model import (
     corner_error_per_speed,
     servo_tables,
 )
+from cnc_gym.motion.planner.record import Schedule
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 
@@ -34,39 +33,6 @@ def _ramp_length(v0: float, v: float, accel: float, jerk: float) -> float:
         return 0.0
     t = 2.0 * math.sqrt(dv / jerk) if dv <= accel * accel / jerk else dv / accel + accel / jerk
     return 0.5 * (v0 + v) * t
-
-
-@njit(cache=True)
-def jerk_limited_reach(v0: float, distance_mm: float, accel: float, jerk: float) -> float:
-    """Highest speed reachable from ``v0`` (at zero acceleration) within ``distance_mm``.
-
-    S-curve with jerk ``jerk`` and acceleration capped at ``accel``: a change Δv ≤ A²/J takes
-    T = 2·√(Δv/J) over L = (v0 + v)·√(Δv/J), i.e. ``(v − v0)(v + v0)² = J·L²`` (solved by Newton in
-    w = v + v0 from the right, where the cubic is increasing and convex); a larger change takes
-    T = Δv/A + A/J over L = (v0 + v)/2·T, a quadratic in v.
-
-    The controller solves the same reach (:func:`cnc_gym.motion.kernel.reach_speed`, another Newton start
-    and stop); the two agree to the last bit or two. The scan keeps this one because the planner's
-    override is part of Feedrate-v1 and v2's observation and info: solving with the controller's would
-    move those values in their last bits (``scripts/fingerprint_env.py`` changes on every v1 case), an
-    observation change that the project answers with a new env version.
-    """
-    if distance_mm <= 0:
-        return v0
-    dv_full = accel * accel / jerk
-    if distance_mm > _ramp_length(v0, v0 + dv_full, accel, jerk):
-        b = dv_full  # v² + (A²/J)·v + (v0·A²/J − v0² − 2·A·L) = 0
-        c = v0 * dv_full - v0 * v0 - 2.0 * accel * distance_mm
-        return 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
-    target = jerk * distance_mm * distance_mm
-    w = 2.0 * v0 + dv_full
-    for _ in range(60):
-        f = (w - 2.0 * v0) * w * w - target
-        step = f / (w * (3.0 * w - 4.0 * v0))
-        w -= step
-        if abs(step) < 1e-9 * max(w, 1.0):
-            break
-    return max(w - v0, v0)
 
 
 def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float) -> np.ndarray:
@@ -98,29 +64,10 @@ def _scan(s: np.ndarray, out: np.ndarray, accel_at: np.ndarray, jerk: float) -> 
                 distance = abs(anchor_s - s[i])
                 # Cheap test first: is the cap itself reachable from the anchor?
                 if _ramp_length(anchor_v, out[i], anchor_a, jerk) > distance:
-                    out[i] = jerk_limited_reach(anchor_v, distance, anchor_a, jerk)
+                    out[i] = K.reach_speed(anchor_v, distance, anchor_a, jerk)
                     continue
             have = True
             anchor_s, anchor_v, anchor_a = s[i], out[i], accel_at[i]
-
-
-@dataclass
-class Schedule:
-    """The planner's result for one program: override to command at each path position."""
-
-    s: np.ndarray  # grid of path positions, mm
-    cap_mm_s: np.ndarray  # tolerance speed cap (after refinement)
-    speed_mm_s: np.ndarray  # scheduled (reachable) speed
-    override: np.ndarray  # speed / programmed feed, clipped to [0, max_override]; max_override on rapids
-    iterations: int = 0
-    predicted_violations: int = 0
-
-    @cached_property
-    def table(self) -> np.ndarray:
-        """(n, 2) rows of path position and override: the table the compiled rule reads
-        (:func:`~cnc_gym.motion.planner.rule.planner_override`)."""
-        return np.column_stack((np.asarray(self.s, dtype=np.float64),
-                                np.asarray(self.override, dtype=np.float64)))  # fmt: skip
 
 
 # --------------------------------------------------------------------------------------------- planner
@@ -326,34 +273,6 @@ def _schedule_nodes(s0, length, cutting, feed, piece_cap, point_cap, turn, point
         if cutting[piece[i]] and f > 0:
             override[i] = min(max(speed[i] / f, 0.0), top)
     return node_s, cap, speed, override
-
-
-class SchedulePlanner:
-    """The planner as a service: the schedule of a (tool path, machine), planned once and recalled after.
-
-    ``margin``: the fraction of the contour tolerance the schedules aim at; ``cache_size``: schedules
-    kept (a randomised machine makes a new one every episode). A tool path is recognised by identity
-    (they are immutable): the cache holds it, so its id stays unique while its schedule is kept.
-    """
-
-    def __init__(self, margin: float = MARGIN, cache_size: int = 64) -> None:
-        self.margin = float(margin)
-        self.cache_size = int(cache_size)
-        self._cache: dict[tuple[int, MachineConfig], tuple[Toolpath, Schedule]] = {}
-
-    def schedule(self, toolpath: Toolpath, machine: MachineConfig,
-                 limits: PathLimits | None = None) -> Schedule:  # fmt: skip
-        """The schedule of ``toolpath`` on ``machine`` (planned, or recalled). ``limits``: the controller's
-        static tables when the caller has them (what a controller's look-ahead knows), else built."""
-        key = (id(toolpath), machine)
-        cached = self._cache.get(key)
-        if cached is not None and cached[0] is toolpath:
-            return cached[1]
-        schedule = plan_schedule(toolpath, machine, limits=limits, margin=self.margin)
-        if len(self._cache) >= self.cache_size:
-            self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = (toolpath, schedule)
-        return schedule
 
 
 def _dependencies() -> None:
