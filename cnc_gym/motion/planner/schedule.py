@@ -95,6 +95,9 @@ HOLD_MAX = 8.0
 WINDOWS_MM = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
 #: The servo's response time in loop time constants 1/Kv (what "sees as a point" means above).
 RESPONSE_TIME_CONSTANTS = 1.0
+#: A window is an arc only where no single junction in it makes this share of its net turn.
+SPREAD_SHARE = 0.5
+CONTROLLER_LIMITS = True
 
 
 @njit(cache=True)
@@ -204,15 +207,16 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLim
     accel = float(min(machine.axis_array("max_accel_mm_s2")))
     jerk = float(min(machine.axis_array("max_jerk_mm_s3")))
     node_s, node_cap, speed, override = _plan(
-        seg_f, seg_i, np.ascontiguousarray(lim.pt_f[:, K.P_S]), lim.curve_f, tables.lag_s, tables.arc_omega,
+        seg_f, seg_i, lim.pt_f, np.ascontiguousarray(lim.pt_f[:, K.P_S]), lim.curve_f, tables.lag_s, tables.arc_omega,
         tables.arc_error, tables.ramp_t, approach.ramp_error, approach.excess_integral, target, top,
-        1.0 / kv_min, accel, jerk, float(ctl.override_slew_per_s), np.array(WINDOWS_MM))
+        1.0 / kv_min, accel, jerk, float(ctl.override_slew_per_s),
+        K.TRACK_PERIODS * float(ctl.interpolation_period_s), np.array(WINDOWS_MM))
     return Schedule(s=node_s, cap_mm_s=node_cap, speed_mm_s=speed, override=override)
 
 
 @njit(cache=True)
-def _plan(seg_f, seg_i, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ramp_e, excess_int, target,
-          top, time_constant, accel, jerk, slew_per_s, windows):  # fmt: skip
+def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ramp_e, excess_int, target,
+          top, time_constant, accel, jerk, slew_per_s, settle_s, windows):  # fmt: skip
     """The schedule (node positions, caps, speeds, overrides): piece caps, junction corners with their
     approach holds, the net-turn windows, the jerk-limited scan and the knob per node."""
     n = seg_f.shape[0]
@@ -247,31 +251,7 @@ def _plan(seg_f, seg_i, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ram
             if seg_i[k, K.I_TABLE] < 0 and seg_i[k, K.I_KIND] == K.KIND_ARC:
                 axis[seg_i[k, K.I_PW]] = 1.0
             piece_cap[k] = min(piece_cap[k], _arc_cap(1.0 / curvature, axis, arc_omega, arc_table, target))
-    # ---- nodes: every junction, and inside moves every NODE_SPACING_MM at most
-    count = np.empty(n, dtype=np.int64)
-    total = 1
-    for k in range(n):
-        count[k] = max(math.ceil(seg_f[k, K.F_LEN] / NODE_SPACING_MM), 1)
-        total += count[k]
-    node_s = np.empty(total)
-    piece = np.empty(total, dtype=np.int64)
-    point = np.full(total, -1, dtype=np.int64)  # the junction a node sits on, -1 inside a move
-    i = 0
-    for k in range(n):
-        for j in range(count[k]):
-            node_s[i] = seg_f[k, K.F_S0] + j * seg_f[k, K.F_LEN] / count[k]
-            piece[i] = k
-            if j == 0:
-                point[i] = k
-            i += 1
-    node_s[i], piece[i], point[i] = seg_f[n - 1, K.F_S0] + seg_f[n - 1, K.F_LEN], n - 1, n
-    cap = np.empty(total)
-    for i in range(total):
-        cap[i] = piece_cap[piece[i]]
-        q = point[i]
-        if 0 < q < n:
-            cap[i] = min(cap[i], piece_cap[q - 1])
-    # ---- the run of cutting moves each node is in (windows never reach across a rapid)
+    # ---- the run of cutting moves each move is in (holds and windows never reach across a rapid)
     run_lo = np.empty(n)
     run_hi = np.empty(n)
     start = 0
@@ -287,13 +267,15 @@ def _plan(seg_f, seg_i, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ram
     # ---- junctions between cutting moves: the corner model, held after the corner, and held before it
     # as long as the excess lag of the deceleration into it needs
     hold_after = HOLD_TIME_CONSTANTS * time_constant
-    budget = target
     corner_target = CORNER_SHARE * target
+    corner_v = np.full(n + 1, np.inf)
+    hold_lo = np.zeros(n + 1)
+    hold_hi = np.zeros(n + 1)
     u_in = np.zeros(3)
     u_out = np.zeros(3)
-    for i in range(total):
-        q = point[i]
-        if q <= 0 or q >= n or not (cutting[q - 1] and cutting[q]):
+    extra = 0
+    for q in range(1, n):
+        if not (cutting[q - 1] and cutting[q]):
             continue
         dot = 0.0
         for a in range(3):
@@ -305,7 +287,7 @@ def _plan(seg_f, seg_i, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ram
         per_speed = corner_approach_error(u_in, u_out, 1.0, 0.0, 0.0, 0.0, ramp_t, ramp_e, excess_int, lag)
         if per_speed <= 1e-12:
             continue
-        v_c = min(corner_target / per_speed, piece_cap[q - 1], piece_cap[q])  # (not cap[i]: other holds)
+        v_c = min(corner_target / per_speed, piece_cap[q - 1], piece_cap[q])
         # The approach: from the incoming move's cap down to v_c, a ramp at the path acceleration (the
         # override's slew bounds it too), then a hold at v_c of the shortest length that keeps the error
         # within the budget.
@@ -316,24 +298,74 @@ def _plan(seg_f, seg_i, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ram
             a_eff = max(min(accel, slew_per_s * feed[q - 1]) if feed[q - 1] > 0 else accel, 1e-3)
             ramp = drop / a_eff + a_eff / jerk
             steps = int(HOLD_MAX / HOLD_STEP)
-            found = False
             for m in range(steps + 1):
                 hold = m * HOLD_STEP * time_constant
                 if corner_approach_error(u_in, u_out, v_c, drop, ramp, hold, ramp_t, ramp_e, excess_int,
-                                         lag) <= budget:  # fmt: skip
-                    found = True
+                                         lag) <= target:  # fmt: skip
                     break
-            if not found:  # (a ramp longer than the loop's memory is not plausible: keep the longest hold)
-                hold = HOLD_MAX * time_constant
-        lo = max(point_s[q] - v_c * hold, run_lo[q - 1])
-        hi = point_s[q] + v_c * hold_after
-        j = i
-        while j > 0 and node_s[j - 1] >= lo - 1e-9:
-            j -= 1
-        while j < total and node_s[j] <= hi:
-            cap[j] = min(cap[j], v_c)
+            # The controller reaches the knob's speed later than the scan's profile: it turns an
+            # acceleration into the deceleration and ends that with the jerk limit (a/J each), and
+            # settles on the target over a few periods.
+            hold += 2.0 * a_eff / jerk + settle_s
+        corner_v[q] = v_c
+        hold_lo[q] = max(seg_f[q, K.F_S0] - v_c * hold, run_lo[q - 1])
+        hold_hi[q] = min(seg_f[q, K.F_S0] + v_c * hold_after, run_hi[q])
+        extra += 2
+    # ---- nodes: every junction, inside moves every NODE_SPACING_MM at most, and the ends of the holds
+    count = np.empty(n, dtype=np.int64)
+    total = 1 + extra
+    for k in range(n):
+        count[k] = max(math.ceil(seg_f[k, K.F_LEN] / NODE_SPACING_MM), 1)
+        total += count[k]
+    node_s = np.empty(total)
+    i = 0
+    for k in range(n):
+        for j in range(count[k]):
+            node_s[i] = seg_f[k, K.F_S0] + j * seg_f[k, K.F_LEN] / count[k]
+            i += 1
+    node_s[i] = seg_f[n - 1, K.F_S0] + seg_f[n - 1, K.F_LEN]
+    i += 1
+    for q in range(1, n):
+        if math.isfinite(corner_v[q]):
+            node_s[i], node_s[i + 1] = hold_lo[q], hold_hi[q]
+            i += 2
+    node_s = np.sort(node_s)
+    piece = np.empty(total, dtype=np.int64)
+    point = np.full(total, -1, dtype=np.int64)  # the junction a node sits on, -1 inside a move
+    k = 0
+    for i in range(total):
+        while k < n - 1 and node_s[i] >= point_s[k + 1]:
+            k += 1
+        piece[i] = k
+        if node_s[i] == point_s[k] and (i == 0 or node_s[i - 1] != node_s[i]):
+            point[i] = k
+    point[total - 1] = n
+    cap = np.empty(total)
+    for i in range(total):
+        cap[i] = piece_cap[piece[i]]
+        q = point[i]
+        if 0 < q < n:
+            cap[i] = min(cap[i], piece_cap[q - 1])
+        if CONTROLLER_LIMITS and cutting[piece[i]]:
+            cap[i] = min(cap[i], seg_f[piece[i], K.F_CAP])
+            if 0 < q < n and cutting[q - 1] and pt_f[q, K.P_HARD] > 0.0:
+                cap[i] = min(cap[i], pt_f[q, K.P_HARD])
+    j0 = 0
+    for q in range(1, n):
+        if not math.isfinite(corner_v[q]):
+            continue
+        while j0 < total and node_s[j0] < hold_lo[q] - 1e-9:
+            j0 += 1
+        j = j0
+        while j < total and node_s[j] <= hold_hi[q] + 1e-9:
+            cap[j] = min(cap[j], corner_v[q])
             j += 1
     # ---- net-turn windows: clusters of junctions seen as one corner, chains of short moves as arcs
+    junction_turn = np.zeros(n + 1)
+    for q in range(1, n):
+        if cutting[q - 1] and cutting[q]:
+            dot = t1[q - 1, 0] * t0[q, 0] + t1[q - 1, 1] * t0[q, 1] + t1[q - 1, 2] * t0[q, 2]
+            junction_turn[q] = math.acos(min(max(dot, -1.0), 1.0))
     ta = np.zeros(3)
     tb = np.zeros(3)
     for i in range(total):
@@ -362,7 +394,14 @@ def _plan(seg_f, seg_i, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ram
             axis[2] = ta[0] * tb[1] - ta[1] * tb[0]
             span = b_s - a_s
             v_point = span / (RESPONSE_TIME_CONSTANTS * time_constant)  # above it, the window is a point
-            v_arc = _arc_cap(span / turn, axis, arc_omega, arc_table, target)
+            # Seen as an arc only where the turn is spread over the window: a turn most of which is one
+            # junction's is that junction's corner (the corner model has it, at the speed at the corner).
+            sharpest = 0.0
+            for q in range(ka + 1, kb + 1):
+                sharpest = max(sharpest, junction_turn[q])
+            v_arc = SPEED_CEILING_MM_S
+            if sharpest < SPREAD_SHARE * turn:
+                v_arc = _arc_cap(span / turn, axis, arc_omega, arc_table, target)
             if v_arc < v_point:
                 cap_w = v_arc
             else:
