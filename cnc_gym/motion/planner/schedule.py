@@ -35,39 +35,41 @@ def _ramp_length(v0: float, v: float, accel: float, jerk: float) -> float:
     return 0.5 * (v0 + v) * t
 
 
-def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float) -> np.ndarray:
+def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float,
+                       decel_share: float = 1.0) -> np.ndarray:  # fmt: skip
     """Largest speed profile ≤ ``cap`` whose rises and falls are reachable under (A, J).
 
     Backward pass (can we slow down in time for every later cap?) then forward pass (can we speed up
     that fast?). Each pass keeps one anchor, the last point where the cap itself was binding; ``accel``
-    may vary along the path (one value per point): a ramp uses the lowest value of the points it spans.
-    Compiled (:func:`_scan`): O(n).
+    may vary along the path (one value per point): a ramp uses the lowest value of the points it spans;
+    decelerations use ``decel_share`` of it. Compiled (:func:`_scan`): O(n).
     """
     s = np.ascontiguousarray(s, dtype=np.float64)
     out = np.array(cap, dtype=np.float64)
     accel_at = np.ascontiguousarray(np.broadcast_to(np.asarray(accel, dtype=np.float64), out.shape))
-    _scan(s, out, accel_at, float(jerk))
+    _scan(s, out, accel_at, float(jerk), float(decel_share))
     return out
 
 
 @njit(cache=True)
-def _scan(s: np.ndarray, out: np.ndarray, accel_at: np.ndarray, jerk: float) -> None:
+def _scan(s: np.ndarray, out: np.ndarray, accel_at: np.ndarray, jerk: float, decel_share: float) -> None:
     n = len(s)
     for backward in (True, False):
         have = False
         anchor_s = anchor_v = anchor_a = 0.0
+        share = decel_share if backward else 1.0
         for k in range(n):
             i = n - 1 - k if backward else k
             if have:
                 # The ramp from the anchor crosses every point since: the lowest acceleration among them.
-                anchor_a = min(anchor_a, accel_at[i])
+                anchor_a = min(anchor_a, share * accel_at[i])
                 distance = abs(anchor_s - s[i])
                 # Cheap test first: is the cap itself reachable from the anchor?
                 if _ramp_length(anchor_v, out[i], anchor_a, jerk) > distance:
                     out[i] = K.reach_speed(anchor_v, distance, anchor_a, jerk)
                     continue
             have = True
-            anchor_s, anchor_v, anchor_a = s[i], out[i], accel_at[i]
+            anchor_s, anchor_v, anchor_a = s[i], out[i], share * accel_at[i]
 
 
 # --------------------------------------------------------------------------------------------- planner
@@ -98,6 +100,9 @@ RESPONSE_TIME_CONSTANTS = 1.0
 #: A window is an arc only where no single junction in it makes this share of its net turn.
 SPREAD_SHARE = 0.5
 CONTROLLER_LIMITS = True
+#: Decelerations are scheduled at this share of the acceleration the path and the override's slew allow:
+#: the controller follows the knob with its jerk limit, and lags a steep ramp by ~a²/J.
+DECEL_SHARE = 0.5
 
 
 @njit(cache=True)
@@ -207,9 +212,9 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLim
     accel = float(min(machine.axis_array("max_accel_mm_s2")))
     jerk = float(min(machine.axis_array("max_jerk_mm_s3")))
     node_s, node_cap, speed, override = _plan(
-        seg_f, seg_i, lim.pt_f, np.ascontiguousarray(lim.pt_f[:, K.P_S]), lim.curve_f, tables.lag_s, tables.arc_omega,
-        tables.arc_error, tables.ramp_t, approach.ramp_error, approach.excess_integral, target, top,
-        1.0 / kv_min, accel, jerk, float(ctl.override_slew_per_s),
+        seg_f, seg_i, lim.pt_f, np.ascontiguousarray(lim.pt_f[:, K.P_S]), lim.curve_f, tables.lag_s,
+        tables.arc_omega, tables.arc_error, tables.ramp_t, approach.ramp_error, approach.excess_integral,
+        target, top, 1.0 / kv_min, accel, jerk, float(ctl.override_slew_per_s),
         K.TRACK_PERIODS * float(ctl.interpolation_period_s), np.array(WINDOWS_MM))
     return Schedule(s=node_s, cap_mm_s=node_cap, speed_mm_s=speed, override=override)
 
@@ -295,7 +300,8 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         drop = v_b - v_c if math.isfinite(v_b) else 0.0
         hold = 0.0
         if drop > 1e-9:
-            a_eff = max(min(accel, slew_per_s * feed[q - 1]) if feed[q - 1] > 0 else accel, 1e-3)
+            a_full = max(min(accel, slew_per_s * feed[q - 1]) if feed[q - 1] > 0 else accel, 1e-3)
+            a_eff = DECEL_SHARE * a_full
             ramp = drop / a_eff + a_eff / jerk
             steps = int(HOLD_MAX / HOLD_STEP)
             for m in range(steps + 1):
@@ -304,9 +310,9 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
                                          lag) <= target:  # fmt: skip
                     break
             # The controller reaches the knob's speed later than the scan's profile: it turns an
-            # acceleration into the deceleration and ends that with the jerk limit (a/J each), and
-            # settles on the target over a few periods.
-            hold += 2.0 * a_eff / jerk + settle_s
+            # acceleration (up to the full one) into the deceleration and ends that with the jerk limit,
+            # and settles on the target over a few periods, twice (the override, then the speed).
+            hold += (a_full + a_eff) / jerk + 2.0 * settle_s
         corner_v[q] = v_c
         hold_lo[q] = max(seg_f[q, K.F_S0] - v_c * hold, run_lo[q - 1])
         hold_hi[q] = min(seg_f[q, K.F_S0] + v_c * hold_after, run_hi[q])
@@ -418,7 +424,7 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         accel_at[i] = max(min(accel, slew_per_s * f) if f > 0 else accel, 1e-3)
         finite[i] = cap[i] if math.isfinite(cap[i]) else SPEED_CEILING_MM_S
     speed = finite.copy()
-    _scan(node_s, speed, accel_at, jerk)
+    _scan(node_s, speed, accel_at, jerk, DECEL_SHARE)
     override = np.full(total, top)
     for i in range(total):
         f = feed[piece[i]]
