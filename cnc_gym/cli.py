@@ -1,16 +1,17 @@
 """The ``cnc-gym`` command.
 
-    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--block-skip N ...]
-                          [--program-dir DIR] [--max-blocks N]
-    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--plant lti|mujoco] [--policy P]
-                        [--json] [--plot FILE.png|DIR/] [--max-time SECONDS] [--max-blocks N]
-                        [--no-progress]
+    cnc-gym trace PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
+                          [--block-skip N ...] [--program-dir DIR] [--follow-links] [--max-blocks N]
+    cnc-gym run PROGRAM [--dialect D] [--machine M] [--units mm|inch] [--setup FILE] [--calculator-input]
+                        [--plant lti|mujoco] [--policy P] [--json] [--plot FILE.png|DIR/] [--max-time SECONDS]
+                        [--max-blocks N] [--no-progress]
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split S] [--policy P ...] [--workers N] ...
 
 PROGRAM is a G-code file or a built-in program name (``circle``, ``star``, ``freeform``, ``pocket``), by
 the rule of :mod:`cnc_gym.programs`. ``trace`` prints the canonical tool path as JSON Lines (``kind``,
 ``line``, ``end``, ``feed``, ``center``, ``plane``, ``sweep_deg``, ``seconds`` and extras). ``--units``
-sets the input unit at power-on (:data:`UNITS_HELP`). ``run``
+sets the input unit at power-on (:data:`UNITS_HELP`), ``--setup`` the operator's work and tool offsets
+(:data:`SETUP_HELP`). ``run``
 simulates the program through controller and plant (implemented in :mod:`cnc_gym.runner`). ``bench``
 benchmarks policies on a suite or your programs (:mod:`cnc_gym.benchmark.cli`).
 
@@ -23,9 +24,11 @@ false`` and a line on stderr says why; 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 # Before numpy loads (the imports below): the commands' linear algebra is on small matrices (3-vectors, the
 # servo models' 5×5), where OpenBLAS's thread pool only costs. Started with a thread per core, it spins at
@@ -39,6 +42,7 @@ from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
 DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
 
 
@@ -52,12 +56,36 @@ EXIT_STATUS_HELP = """exit status:
 UNITS_HELP = ("input unit at power-on, mm or inch (a controller parameter: a program without G20/G21 "
               "is read in it; the program's own G20/G21 still rules). Default: the machine preset's "
               "power_on_units, else the dialect's power-on code (G21)")
+SETUP_HELP = ("the operator's tables at power-on (YAML: work_offsets G54.. -> [x, y, z], tools n -> "
+              "length_mm, radius_mm; docs/configs.md), on top of the machine preset's setup section; the "
+              "program's G10 still changes them")
+CALCULATOR_HELP = ("calculator-type input (Fanuc parameter 3401#0 DPI = 1): a number without a decimal "
+                   "point is in mm/inch/s, X10 = 10 mm (default: the machine preset's calculator_input, "
+                   "else the dialect's reading: fanuc X10 = 0.01 mm)")
 PROGRAM_HELP = (f"G-code file, or a built-in program name: {', '.join(BUILTIN_PROGRAMS)} (a built-in name "
                 "wins over a file of that name in the current folder: write ./star for the file)")
 
 
+class CommandParser(argparse.ArgumentParser):
+    """argparse's parser, with a usage error in two lines: a one-line usage and the error (argparse's
+    own usage of ``bench`` wraps over eight lines). ``--help`` still prints the whole usage."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"{self.short_usage()}\n{_one_line(f'{self.prog}: error: {message}')}\n")
+
+    def short_usage(self) -> str:
+        """``usage: cnc-gym run PROGRAM [options] (cnc-gym run --help)``: the positionals, then a hint."""
+        words = [self.prog]
+        for action in self._actions:
+            if action.option_strings:
+                continue
+            name = action.metavar or action.dest.upper()
+            words.append(f"{name} ..." if isinstance(action, argparse._SubParsersAction) else str(name))
+        return f"usage: {' '.join(words)} [options] (all of them: {self.prog} --help)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
+    parser = CommandParser(prog="cnc-gym", description="CNC feed-rate control gym: tools.",
                                      epilog=EXIT_STATUS_HELP,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -70,6 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="block skip switches that are ON (1..9; '/' alone is switch 1)")  # fmt: skip
     trace.add_argument("--program-dir", metavar="DIR", default=None,
                        help="where M98/G65 find called programs (default: the program's folder)")  # fmt: skip
+    trace.add_argument("--follow-links", action="store_true",
+                       help="let a called program's file be a link out of that folder (refused by default)")
     trace.set_defaults(func=cmd_trace)
 
     run = add_command(sub, "run", "simulate a program through controller and servo plant")
@@ -109,6 +139,8 @@ def _common(parser: argparse.ArgumentParser) -> None:
                         help="machine preset name (configs/machines) or YAML path; default: none for trace, "
                              "the runner's default for run")  # fmt: skip
     parser.add_argument("--units", choices=INPUT_UNITS, default=None, help=UNITS_HELP)
+    parser.add_argument("--setup", metavar="FILE", default=None, help=SETUP_HELP)
+    parser.add_argument("--calculator-input", action="store_true", help=CALCULATOR_HELP)
     parser.add_argument("--max-blocks", metavar="N", type=int, default=None,
                         help=f"bound on executed blocks; a runaway loop ends in too-many-blocks "
                              f"(default {DEFAULT_MAX_BLOCKS:,})")  # fmt: skip
@@ -137,7 +169,9 @@ def cmd_trace(args: argparse.Namespace) -> int:
 
         machine = load_machine(args.machine)
     options = {"dialect": args.dialect, "machine": machine, "block_skip": frozenset(args.block_skip),
-               "program_dir": args.program_dir, "units": args.units}  # fmt: skip
+               "program_dir": args.program_dir, "units": args.units, "setup": args.setup,
+               "calculator_input": args.calculator_input or None,
+               "follow_links": args.follow_links}  # fmt: skip
     if args.max_blocks is not None:
         options["max_blocks"] = args.max_blocks
     source = resolve_program(args.program)
@@ -154,10 +188,21 @@ def cmd_trace(args: argparse.Namespace) -> int:
         sys.stdout.flush()
     except BrokenPipeError:  # e.g. `cnc-gym trace p.nc | head`: not an error
         _silence_stdout()
+    print_notices(toolpath.notices)
     return 0
 
 
+def print_notices(notices: Sequence[str]) -> None:
+    """The interpreter's notes about a program, one line each on stderr (the tool path is on stdout)."""
+    for line in notices:
+        print(_one_line(line), file=sys.stderr)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
+    if args.setup is not None or args.calculator_input:  # both travel inside the machine record
+        from cnc_gym.machine import machine_with_options
+
+        args.machine = machine_with_options(args.machine or "vmc-small", args.setup, args.calculator_input)
     try:
         from cnc_gym.runner import run_cli
 
@@ -174,13 +219,21 @@ def _silence_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``cnc-gym`` console script. Returns the exit status."""
+    """Entry point of the ``cnc-gym`` console script. Returns the exit status.
+
+    Run as the program (``argv`` None), an interrupted command (status 130) ends the process at once:
+    by then its files are closed and its workers ended, and the interpreter's teardown of the numeric
+    libraries (numba, toppra, torch) would add 1–2 s on a loaded machine before Ctrl-C takes effect."""
     parser = build_parser()
-    args = parser.parse_args(list(argv) if argv is not None else None)
+    args, unknown = parser.parse_known_args(list(argv) if argv is not None else None)
+    if unknown:  # said by the command's parser, with its usage (argparse leaves it to the top one)
+        _command_parser(parser, args.command).error(f"unrecognized arguments: {' '.join(unknown)}")
+    status = EXIT_USAGE
     try:
         _check_arguments(args)
-        return args.func(args)
+        status = args.func(args)
     except CncGymError as exc:
+        print_notices(getattr(exc, "notices", ()))
         print(_one_line(str(exc)), file=sys.stderr)
     except OSError as exc:
         program = getattr(args, "program", "")
@@ -189,8 +242,35 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(_one_line(f"{where}: {verb}{exc.strerror or exc}"), file=sys.stderr)
     except KeyboardInterrupt:
         print("cnc-gym: interrupted", file=sys.stderr)
-        return 130
-    return EXIT_USAGE
+        status = EXIT_INTERRUPTED
+    if status == EXIT_INTERRUPTED and argv is None:
+        _exit_now(status)
+    return status
+
+
+def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
+            return action.choices[command]
+    return parser
+
+
+def _exit_now(status: int) -> None:
+    """Flush the output and end the process without the interpreter's teardown (a local Ray instance is
+    shut down first: it would outlive the process otherwise; multiprocessing releases a pool's locks, or
+    its resource tracker would warn about them)."""
+    ray = sys.modules.get("ray")
+    if ray is not None and getattr(ray, "is_initialized", lambda: False)():
+        ray.shutdown()
+    if "multiprocessing" in sys.modules:  # what its exit hook does: release a pool's queues and locks
+        from multiprocessing import util
+
+        with contextlib.suppress(Exception):
+            util._exit_function()  # type: ignore[attr-defined]
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(status)
 
 
 def _one_line(message: str) -> str:

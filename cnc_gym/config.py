@@ -1,8 +1,9 @@
 """The configs' schema and reader: one declaration per key (type, range, unit, meaning), one way to check.
 
 Every key of a machine, task or training config is a dataclass field declared with one of
-:func:`number`, :func:`text`, :func:`choice`, :func:`flag`, :func:`items` or :func:`section`; the field's
-metadata holds its :class:`Spec` (type, allowed range, unit, meaning, and why the range is what it is).
+:func:`number`, :func:`text`, :func:`choice`, :func:`flag`, :func:`items`, :func:`table` or
+:func:`section`; the field's metadata holds its :class:`Spec` (type, allowed range, unit, meaning, and
+why the range is what it is).
 :func:`from_mapping` builds a dataclass from YAML data with those specs, :func:`check_object` checks one
 built in Python, and :func:`markdown_table` writes the docs' key tables from the same specs (a test
 keeps the docs equal to them). Adding a key is one field declaration.
@@ -33,6 +34,7 @@ from typing import Any
 import yaml
 
 from cnc_gym.errors import ConfigError
+from cnc_gym.files import read_regular_file
 
 #: Largest config file read (the shipped ones are 1-3 KB).
 MAX_CONFIG_BYTES = 256 * 1024
@@ -251,6 +253,22 @@ class Items(Spec):
 
 
 @dataclass(frozen=True)
+class Table(Spec):
+    """A mapping whose keys are data (``G54``, a tool number): each key checked and made canonical by
+    ``key`` (a callable that returns the key or raises :class:`Invalid`), each value by ``value`` (a spec,
+    or a :class:`Section` for a mapping per key). Built as a :class:`~cnc_gym.frozen.FrozenDict`."""
+
+    key: Callable[[Any], Any] | None = None
+    #: What a key is, for messages and docs ("`G54`…`G59`, `G54.1 P1`…").
+    key_doc: str = ""
+    value: Spec = Spec()
+    max_entries: int = 1000
+
+    def _allowed(self) -> str:
+        return f"mapping of {self.key_doc} → {self.value.allowed()} (at most {self.max_entries})"
+
+
+@dataclass(frozen=True)
 class Section(Spec):
     """A nested mapping read into the dataclass ``of``."""
 
@@ -302,6 +320,15 @@ def items(default_factory: Callable[[], Any], item: Spec, *, min_items: int = 1,
     return declared(spec, default_factory=default_factory)
 
 
+def table(key: Callable[[Any], Any], key_doc: str, value: Spec, *, doc: str = "", why: str = "",
+          max_entries: int = 1000) -> Any:  # fmt: skip
+    """A config key that maps data keys to values (:class:`Table`); the default is empty."""
+    from cnc_gym.frozen import FrozenDict
+
+    spec = Table(doc=doc, why=why, key=key, key_doc=key_doc, value=value, max_entries=max_entries)
+    return declared(spec, default_factory=FrozenDict)
+
+
 def section(of: type, *, doc: str = "", optional: bool = False) -> Any:
     """A nested section (a mapping read into the dataclass ``of``)."""
     spec = Section(doc=doc, optional=optional, of=of)
@@ -343,6 +370,8 @@ def mapping(data: Any, source: str, where: str) -> dict:
 
 def parse_value(spec: Spec, raw: Any, source: str, path: str) -> Any:
     """One value checked against its spec; ConfigError ``source: path problem``."""
+    if isinstance(spec, Table):
+        return _parse_table(spec, raw, source, path)
     if isinstance(spec, Section) and spec.of is not None:
         if raw is None and spec.optional:
             return None
@@ -354,6 +383,25 @@ def parse_value(spec: Spec, raw: Any, source: str, path: str) -> Any:
         return spec.parse(raw)
     except Invalid as exc:
         raise ConfigError(f"{_place(source, path)} {exc}") from None
+
+
+def _parse_table(spec: Table, raw: Any, source: str, path: str) -> Any:
+    from cnc_gym.frozen import FrozenDict
+
+    data = mapping(raw, source, path)
+    if len(data) > spec.max_entries:
+        raise ConfigError(f"{_place(source, path)} must have at most {spec.max_entries} entries, "
+                          f"got {len(data)}")  # fmt: skip
+    out: dict = {}
+    for raw_key, raw_value in data.items():
+        try:
+            key = spec.key(raw_key) if spec.key is not None else raw_key
+        except Invalid as exc:
+            raise ConfigError(f"{_place(source, path)} key {shown(raw_key, 40)} {exc}") from None
+        if key in out:
+            raise ConfigError(f"{_place(source, path)} names {key} twice ({shown(raw_key, 40)})")
+        out[key] = parse_value(spec.value, raw_value, source, f"{path}.{key}")
+    return FrozenDict(out)
 
 
 def _join(where: str, key: str) -> str:
@@ -407,6 +455,8 @@ def markdown_table(cls: type, prefix: str = "") -> str:
 def _default_text(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_default_text(v)}" for k, v in value.items()) + "}"
     if isinstance(value, list | tuple):
         return "[" + ", ".join(_default_text(v) for v in value) + "]"
     if isinstance(value, float):
@@ -540,12 +590,9 @@ def parse_yaml(text_: str, source: str) -> Any:
 def read_yaml(path: str | Path, what: str) -> Any:
     """The data of a YAML config file (``what`` names the kind of config in messages), or ConfigError."""
     try:
-        with open(path, "rb") as f:
-            raw = f.read(MAX_CONFIG_BYTES + 1)
+        raw = read_regular_file(path, limit=MAX_CONFIG_BYTES, what=what)  # a FIFO or /dev/zero: refused
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
-    if len(raw) > MAX_CONFIG_BYTES:
-        raise ConfigError(f"{path}: {what} is larger than {MAX_CONFIG_BYTES // 1024} KiB")
     try:
         decoded = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -42,6 +42,12 @@ def _escape(match: re.Match) -> str:
     return match.group().encode("unicode_escape").decode("ascii")
 
 
+def notice_line(file: str, line: int, message: str, code: str, level: str = "note") -> str:
+    """A note about a program, one line as an error's: ``FILE:LINE: note: message [code]`` (``level``:
+    ``note``, or ``warning`` for what is probably a mistake)."""
+    return f"{printable(str(file), MAX_FILE_CHARS)}:{line}: {level}: {printable(message)} [{code}]"
+
+
 class CncGymError(Exception):
     """Base class of every error cnc-gym raises on purpose. ``str()`` is :func:`printable`."""
 
@@ -53,8 +59,11 @@ class ProgramError(CncGymError):
     """A G-code program cannot be run: names file, line (1-based), a stable code and the controller alarm.
 
     ``str(err)`` is the contract line ``FILE:LINE: message [code]`` (file and message through
-    :func:`printable`); ``err.message`` keeps the message as raised.
+    :func:`printable`); ``err.message`` keeps the message as raised; ``err.notices`` the notes about the
+    program made before it stopped (e.g. the warning that explains the error), printed before the error.
     """
+
+    notices: tuple[str, ...] = ()
 
     def __init__(
         self,

@@ -18,6 +18,7 @@ Layout of a preset file::
     axes: {x: {kv_1_s: 40}, y: {kv_1_s: 38}, z: {...}}                        # per-axis overrides
     rotary_axes: {b: {rapid_deg_min: 3600, ...}}                              # optional A/B/C axes
     plant: {backend: mujoco, timestep_s: 0.0005, axes: {x: {load_mass_kg: 150, ...}, ...}}  # optional
+    setup: {work_offsets: {G54: [100, 50, -200]}, tools: {1: {length_mm: 120, radius_mm: 5}}}  # optional
 
 Rotary axes (``RotaryAxisConfig``) are optional: a machine without them rejects A/B/C words by name. The
 controller times their moves and keeps their speed, acceleration and jerk within limits; the plant
@@ -37,16 +38,23 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Iterator
+import re
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from cnc_gym.config import (
+    Invalid,
+    Items,
+    Number,
+    Section,
+    Text,
     check_keys,
     check_object,
     choice,
     configs_dir,
+    flag,
     from_mapping,
     mapping,
     number,
@@ -54,14 +62,16 @@ from cnc_gym.config import (
     schema,
     section,
     shown,
+    table,
     text,
 )
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
 __all__ = ["INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig",
-           "PlantConfig", "RotaryAxisConfig", "check_machine", "configs_dir", "load_machine",
-           "machine_names"]  # fmt: skip
+           "MachineFunctionsConfig", "PlantConfig", "RotaryAxisConfig", "SetupConfig", "ToolSetup",
+           "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names", "merge_setups",
+           "with_setup"]  # fmt: skip
 
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
@@ -311,6 +321,146 @@ class PlantConfig:
     axes: PlantAxes = section(PlantAxes, doc="per-axis mechanics (see below)")  # noqa: RUF009
 
 
+# ------------------------------------------------------------------------------------------- the setup
+_OFFSET_WHY = ("±1 km: any machine's travel; each dialect's own offset limits (GSK 25i ±999.999 mm geometry, "
+               "±99.999 mm wear …) are checked when a program runs.")  # fmt: skip
+_WORK_OFFSET_KEY = re.compile(r"G0*(5[4-9])(?:\.([1-9]))?(?:P0*([0-9]{1,4}))?|EXT")
+#: The work offset keys a setup may name (the docs' wording).
+WORK_OFFSET_KEYS = ("`G54`…`G59`, `G54.1 P1`…`G54.1 P300` (the dialect's extended systems), "
+                    "`G59.1`…`G59.9` (Syntec), `EXT` (the external offset, G10 L2 P0)")  # fmt: skip
+
+
+def work_offset_key(raw: Any) -> str:
+    """A setup's work offset key in its canonical spelling (``"g54.1p05"`` → ``"G54.1 P5"``, ``"G54.1"`` →
+    ``"G54.1 P1"``), or :class:`~cnc_gym.config.Invalid`. Whether the dialect has the system is checked when
+    a program runs (:func:`cnc_gym.gcode.setup.apply_setup`)."""
+    text_ = raw.replace(" ", "").upper() if isinstance(raw, str) else None
+    match = _WORK_OFFSET_KEY.fullmatch(text_) if text_ else None
+    if match is None:
+        raise Invalid(f"is not a work coordinate system ({WORK_OFFSET_KEYS.replace('`', '')})")
+    if text_ == "EXT":
+        return "EXT"
+    code, sub, p = match.groups()
+    if sub is None:
+        if p is not None:
+            raise Invalid("is not a work coordinate system: P goes with G54.1 (G54.1 P5)")
+        return f"G{code}"
+    if code == "54" and sub == "1":
+        number_ = int(p or 1)
+        if not 1 <= number_ <= 300:
+            raise Invalid(f"is not a work coordinate system: G54.1 P{number_} is outside P1…P300")
+        return f"G54.1 P{number_}"
+    if p is not None:
+        raise Invalid(f"is not a work coordinate system: G{code}.{sub} takes no P")
+    return f"G{code}.{sub}"
+
+
+def tool_number(raw: Any) -> int:
+    """A setup's tool (offset) number: an integer 1…9999, or :class:`~cnc_gym.config.Invalid`."""
+    if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= 9999:
+        raise Invalid("is not an offset number (an integer 1…9999)")
+    return raw
+
+
+@dataclass(frozen=True)
+class ToolSetup:
+    """One offset number of the operator's tool table: what an H word (length) and a D word (radius) of
+    that number read, geometry plus wear."""
+
+    length_mm: float = number(0.0, -1e4, 1e4, unit="mm", why=_OFFSET_WHY.replace("1 km", "10 m"),
+                              doc="tool length offset: H geometry (the AZ-MC1's D record length, the H4C-M's "
+                                  "group Z offset)")  # fmt: skip
+    radius_mm: float = number(0.0, -1e4, 1e4, unit="mm", why=_OFFSET_WHY.replace("1 km", "10 m"),
+                              doc="cutter radius: D geometry (the AZ-MC1's D record radius, the H4C-M's "
+                                  "group R)")  # fmt: skip
+    length_wear_mm: float = number(0.0, -1e4, 1e4, unit="mm", doc="tool length wear (added to the length)",
+                                   why=_OFFSET_WHY.replace("1 km", "10 m"))  # fmt: skip
+    radius_wear_mm: float = number(0.0, -1e4, 1e4, unit="mm", doc="cutter radius wear (added to the radius)",
+                                   why=_OFFSET_WHY.replace("1 km", "10 m"))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SetupConfig:
+    """The operator's tables as the control holds them when the program starts: the work offsets and the
+    tool offsets. A program's G10 still changes them while it runs (docs/configs.md "Setup")."""
+
+    units: str = choice("mm", INPUT_UNITS, doc="unit of every length in this setup: `mm` or `inch`")
+    work_offsets: Mapping[str, tuple[float, float, float]] = table(
+        work_offset_key, WORK_OFFSET_KEYS,
+        Items(item=Number(low=-1e6, high=1e6, unit="mm"), min_items=3, max_items=3,
+              noun="values of [x, y, z]"),
+        doc="work coordinate system → its origin `[x, y, z]` in machine coordinates",
+        why=_OFFSET_WHY)  # fmt: skip
+    tools: Mapping[int, ToolSetup] = table(
+        tool_number, "offset numbers 1…9999", Section(of=ToolSetup),
+        doc="offset number → `length_mm`, `radius_mm` and their wear (the H and D words of that number read "
+            "them)")  # fmt: skip
+    source: str = "<defaults>"
+    #: Where the tables sit in ``source``: "" (a setup file) or ``"setup."`` (a preset's section).
+    where: str = ""
+
+    @property
+    def empty(self) -> bool:
+        return not self.work_offsets and not self.tools
+
+    def in_mm(self) -> SetupConfig:
+        """The same tables with every length in mm."""
+        if self.units == "mm":
+            return self
+        k = 25.4
+        offsets = FrozenDict({key: tuple(c * k for c in xyz) for key, xyz in self.work_offsets.items()})
+        tools = FrozenDict({n: ToolSetup(*(getattr(t, f.name) * k for f in dataclasses.fields(ToolSetup)))
+                            for n, t in self.tools.items()})  # fmt: skip
+        return SetupConfig("mm", offsets, tools, self.source, self.where)
+
+
+def load_setup(setup: str | Path | Mapping | SetupConfig) -> SetupConfig:
+    """A setup from a YAML file's path, a mapping of its data, or a :class:`SetupConfig` (checked); every
+    problem is one ConfigError line naming the file and the key."""
+    if isinstance(setup, SetupConfig):
+        check_object(setup, setup.source)
+        return setup
+    if isinstance(setup, str | Path):
+        data = read_yaml(setup, "setup file")
+        return from_mapping(SetupConfig, data, str(setup), "", {"source": str(setup)})
+    if isinstance(setup, Mapping):
+        return from_mapping(SetupConfig, dict(setup), "setup", "", {"source": "setup"})  # (its own messages)
+    raise ConfigError(f"setup must be a YAML path, a mapping or a SetupConfig, got {type(setup).__name__}")
+
+
+def merge_setups(base: SetupConfig, override: SetupConfig | None) -> SetupConfig:
+    """``base``'s tables with ``override``'s entries on top (a key in both: ``override``'s), in mm."""
+    if override is None or override.empty:
+        return base
+    if base.empty:
+        return override
+    a, b = base.in_mm(), override.in_mm()
+    offsets, tools = FrozenDict({**a.work_offsets, **b.work_offsets}), FrozenDict({**a.tools, **b.tools})
+    return SetupConfig("mm", offsets, tools, f"{base.source} + {override.source}")
+
+
+def m_code_number(raw: Any) -> int:
+    """An M code number of a preset's ``machine_functions.m_codes``: an integer 0…999."""
+    if isinstance(raw, bool) or not isinstance(raw, int) or not 0 <= raw <= 999:
+        raise Invalid("is not an M code number (an integer 0…999)")
+    return raw
+
+
+@dataclass(frozen=True)
+class MachineFunctionsConfig:
+    """The M codes the machine builder added: the control hands them to the machine (no motion of the
+    program; the block waits for the machine's answer at rest)."""
+
+    m_codes: Mapping[int, str] = table(
+        m_code_number, "M code numbers 0…999", Text(max_length=200),
+        doc="M code → what it does on this machine: run as a machine function (a 0 s stop, listed on "
+            "the tool path) in every dialect, unless the dialect gives the code a meaning of its "
+            "own")  # fmt: skip
+    strict: bool = flag(False, doc="refuse an M code that is neither the dialect's own nor in `m_codes` "
+                                   "(and, for `fanuc`, not on its list of usual machine codes); false: "
+                                   "`fanuc` runs it as a machine function with a note")  # fmt: skip
+
+
 @dataclass(frozen=True)
 class MachineConfig:
     name: str = text("", doc="the preset's name (default: the file's name)")
@@ -321,12 +471,21 @@ class MachineConfig:
     power_on_units: str | None = choice(None, (None, *INPUT_UNITS), doc="input unit at power-on, `mm` or "
                                         "`inch` (null: the dialect's power-on code: G21, Syntec G71); a "
                                         "program's G20/G21 still rules")  # fmt: skip
+    #: Calculator-type input (Fanuc 3401#0 DPI = 1): a number without a decimal point is in mm, inch or
+    #: seconds where the dialect would read least input increments (``--calculator-input`` sets it).
+    calculator_input: bool = flag(False, doc="calculator-type input (Fanuc parameter 3401#0 DPI = 1): `X10` "
+                                  "is 10 mm, not 10 least input increments, in the dialects that have the "
+                                  "setting (`fanuc`); false: the dialect's standard reading")  # fmt: skip
     controller: ControllerConfig = section(ControllerConfig, doc="path-level controller parameters")  # noqa: RUF009
     axes: tuple[AxisConfig, AxisConfig, AxisConfig] = (AxisConfig(), AxisConfig(), AxisConfig())
     source: str = "<defaults>"
     #: Rotary axes by upper-case letter, in A, B, C order (empty: a 3-axis machine).
     rotary_axes: RotaryAxes = field(default_factory=RotaryAxes)
     plant: PlantConfig = section(PlantConfig, doc="servo backend and mechanics (see below)")  # noqa: RUF009
+    setup: SetupConfig = section(SetupConfig, doc="the operator's tables at power-on: work offsets and tool "  # noqa: RUF009
+                                 "offsets (see below); `--setup FILE` adds to them")  # fmt: skip
+    machine_functions: MachineFunctionsConfig = section(  # noqa: RUF009
+        MachineFunctionsConfig, doc="the machine builder's M codes (see below)")
 
     def __post_init__(self) -> None:
         if not isinstance(self.rotary_axes, RotaryAxes):
@@ -395,7 +554,28 @@ def machine_from_dict(data: Any, source: str = "<dict>") -> MachineConfig:
     own = {key: value for key, value in data.items() if key not in _AXIS_SECTIONS}
     own.setdefault("name", Path(source).stem)
     built = {"axes": axes, "rotary_axes": rotary, "source": source}
-    return from_mapping(MachineConfig, own, source, "", built)
+    machine = from_mapping(MachineConfig, own, source, "", built)
+    if not machine.setup.empty:  # the setup's errors at run time name the preset
+        machine = dataclasses.replace(machine, setup=dataclasses.replace(machine.setup, source=source,
+                                                                         where="setup."))
+    return machine
+
+
+def with_setup(machine: MachineConfig, setup: str | Path | Mapping | SetupConfig | None) -> MachineConfig:
+    """``machine`` with ``setup`` (a setup file, its data or a SetupConfig) on top of its preset's ``setup``
+    section (an entry in both: the file's); None: ``machine`` as it is."""
+    if setup is None:
+        return machine
+    return dataclasses.replace(machine, setup=merge_setups(machine.setup, load_setup(setup)))
+
+
+def machine_with_options(machine: str | Path | MachineConfig, setup: str | Path | None,
+                         calculator_input: bool) -> MachineConfig:
+    """The machine preset ``machine`` with a setup file on top of its own and calculator-type input on, as
+    the command line gives them (``--setup``, ``--calculator-input``): the record ``run`` and ``bench``
+    pass along."""
+    loaded = with_setup(machine if isinstance(machine, MachineConfig) else load_machine(machine), setup)
+    return dataclasses.replace(loaded, calculator_input=True) if calculator_input else loaded
 
 
 def with_plant_backend(machine: MachineConfig, backend: str | None) -> MachineConfig:

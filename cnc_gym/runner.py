@@ -28,7 +28,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries
+from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries, range_indices
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.rollout import play, policy_env
 
@@ -53,6 +53,8 @@ _PROJECTION_NOTICE_WALL_S = 60.0
 
 #: Points of the programmed path drawn on the plot (plus every segment end).
 _PATH_POINTS = 20_000
+#: Path-length bins of the recorded error along the path (the plot merges them to its resolution).
+PATH_ERROR_BINS = 8192
 
 _SERIES_COLUMNS = {"time_s": "last", "path_s": "last", "feed_mm_min": "mean", "override": "mean",
                    "contour_error_mm": "max"}  # fmt: skip
@@ -90,11 +92,21 @@ class RunResult:
     feed_mm_min: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     override: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     contour_error_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
-    # The programmed path: points, whether each point's segment cuts, the feed run there (NaN where the
-    # run did not get to), for the plot.
+    # The programmed path: points (at path positions path_sample_s), whether each point's segment cuts,
+    # the feed run there (NaN where the run did not get to), for the plot.
     path_xyz: np.ndarray = field(repr=False, default_factory=lambda: np.zeros((0, 3)))
     cutting: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=bool))
     path_feed_mm_min: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    path_sample_s: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    # The largest contour error along the path (:class:`PathErrorEnvelope`; NaN where the run did not get
+    # to): per path-length bin (edges, mm) and per programmed segment (one entry per tool path row, with
+    # its edges along the path, program line and whether it cuts), for the plot.
+    path_error_edges_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    path_error_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    segment_s_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    segment_line: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=np.int64))
+    segment_cutting: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, dtype=bool))
+    segment_error_mm: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
 
     def summary(self) -> dict[str, Any]:
         """The JSON-able summary (plain Python numbers)."""
@@ -150,6 +162,7 @@ def record_run(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = 
     tolerance = float(info.get("tolerance_mm", base.machine.controller.contour_tolerance_mm))
     nominal = float(getattr(base, "nominal_time_s", 0.0))
     series = BinnedSeries(_SERIES_COLUMNS, max_bins) if record else None
+    envelope = PathErrorEnvelope(toolpath) if record else None
     bar = None
     if progress:
         from tqdm import tqdm
@@ -166,6 +179,8 @@ def record_run(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = 
         if series is not None:
             series.add(info["cycle_time_s"], info["path_s"], info["feed_mm_min"], info["override"],
                        info["contour_error_mm"])  # fmt: skip
+        if envelope is not None:
+            envelope.add(info["path_s"], info["contour_error_mm"])
         if steps % 20 == 0:
             if bar is not None:
                 bar.n = round(100 * float(info.get("progress", 0.0)))
@@ -218,7 +233,75 @@ def record_run(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = 
         for name in _SERIES_COLUMNS:
             setattr(result, name, data[name])
         _sample_path(result, toolpath)
+    if envelope is not None:
+        envelope.finish()
+        result.path_error_edges_mm, result.path_error_mm = envelope.grid_edges, envelope.grid
+        result.segment_s_mm = envelope.segment_edges.copy()
+        result.segment_line = np.asarray(toolpath.line).copy()
+        result.segment_cutting = _cutting_rows(toolpath)
+        result.segment_error_mm = envelope.segment
     return result
+
+
+class PathErrorEnvelope:
+    """The largest contour error along the path, from a run's control steps: per path-length bin (a fixed
+    grid of :data:`PATH_ERROR_BINS` over the whole path) and per programmed segment.
+
+    A step's error (its largest over its servo samples) goes to every bin and every segment its reference
+    swept, from the previous step's path position to this one's, so that a chain of segments shorter than
+    a step leaves no gaps and a long segment is marked only where its error was. The position is the
+    reference's: the servo follows it by the following error (v/Kv, a fraction of a millimetre where the
+    path turns and the feed drops), so an error shows at most that far ahead of the tool. Memory: the grid
+    and one number per segment (the tool path holds many more), whatever the length of the run; steps are
+    taken in batches.
+    """
+
+    _BATCH = 4096
+
+    def __init__(self, toolpath: Any, bins: int = 0) -> None:
+        bins = bins or PATH_ERROR_BINS
+        self.segment_edges = np.asarray(toolpath.s_start, dtype=float)
+        total = float(self.segment_edges[-1]) if len(self.segment_edges) else 0.0
+        self.grid_edges = np.linspace(0.0, total, bins + 1) if total > 0 else np.zeros(1)
+        self.segment = np.full(max(len(self.segment_edges) - 1, 0), np.nan)
+        self.grid = np.full(len(self.grid_edges) - 1, np.nan)
+        self._s: list[float] = []
+        self._e: list[float] = []
+        self._last_s = 0.0
+
+    def add(self, path_s: float, error_mm: float) -> None:
+        self._s.append(float(path_s))
+        self._e.append(float(error_mm))
+        if len(self._s) >= self._BATCH:
+            self._flush()
+
+    def finish(self) -> PathErrorEnvelope:
+        self._flush()
+        return self
+
+    def _flush(self) -> None:
+        s, error = np.asarray(self._s), np.asarray(self._e)
+        self._s.clear()
+        self._e.clear()
+        if not len(s):
+            return
+        before = np.concatenate(([self._last_s], s[:-1]))
+        self._last_s = float(s[-1])
+        low, high = np.minimum(before, s), np.maximum(before, s)
+        for edges, target in ((self.segment_edges, self.segment), (self.grid_edges, self.grid)):
+            if len(target):
+                last = len(target) - 1
+                first_row = np.clip(np.searchsorted(edges, low, side="right") - 1, 0, last)
+                last_row = np.clip(np.searchsorted(edges, high, side="right") - 1, first_row, last)
+                rows, step = range_indices(first_row, last_row)
+                np.fmax.at(target, rows, error[step])
+
+
+def _cutting_rows(toolpath: Any) -> np.ndarray:
+    from cnc_gym.toolpath import SegmentKind
+
+    kind = np.asarray(toolpath.kind)
+    return (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
 
 
 def _sample_path(result: RunResult, toolpath: Any) -> None:
@@ -230,6 +313,7 @@ def _sample_path(result: RunResult, toolpath: Any) -> None:
     s, points = toolpath.sample(max(toolpath.total_length / _PATH_POINTS, 1e-3))
     kind = toolpath.kind[toolpath.segment_at(s)]
     result.path_xyz = points
+    result.path_sample_s = s
     result.cutting = (kind == SegmentKind.LINE) | (kind == SegmentKind.ARC) | (kind == SegmentKind.NURBS)
     feed = np.full(len(s), np.nan)
     if len(result.path_s):
@@ -290,6 +374,9 @@ def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small
                       plant=plant)  # fmt: skip
     try:
         if log is not None:
+            for _, toolpath in env.unwrapped._programs:  # the interpreter's notes about the program
+                for note in toolpath.notices:
+                    print(note, file=log)
             _announce_long_program(env.unwrapped, max_time_s, log)
         return record_run(env, pol, progress=progress, max_time_s=max_time_s, log=log)
     finally:
@@ -336,7 +423,13 @@ def run_cli(args: Any) -> int:
         plot_run(result, target / default_plot_name(result) if is_folder else target)
     summary = result.summary()
     if getattr(args, "json", False):
-        print(json.dumps(summary))
+        try:
+            text = json.dumps(summary, allow_nan=False)
+        except ValueError:
+            bad = [k for k, v in summary.items() if isinstance(v, float) and not math.isfinite(v)]
+            raise CncGymError(f"cnc-gym run: {result.program}: {', '.join(bad) or 'a value'} is not a finite "
+                              "number, which JSON cannot hold") from None  # fmt: skip
+        print(text)
     else:
         print(format_table([summary]))
     if not result.finished:
@@ -411,16 +504,26 @@ def run_figure(result: RunResult, *, feed_range: tuple[float, float] | None = No
     """The run's matplotlib figure (Agg; close it with ``plt.close``).
 
     The XY path coloured by the feed run there (rapids thin grey; the part the run did not reach dashed),
-    XZ and YZ views when the program cuts in Z (more than plunges), and the contour error over time as a
-    max envelope per time bin with the tolerance line. A truncated run says so in the figure's title.
-    ``feed_range`` fixes the colour scale, so that plots of several runs compare (:func:`feed_limits`).
+    XZ and YZ views when the program cuts in Z (more than plunges), with the stretches cut over tolerance
+    marked in red and the worst one named by its program line; and the contour error along the path
+    (path length on the x axis, so that a 10 000-line program reads like its drawing): the largest error
+    per stretch of path (:class:`PathErrorEnvelope`), merged to the plot's resolution by maximum, over
+    the tolerance line, the violations in red, rapids shaded. A truncated run says so in the figure's
+    title. ``feed_range`` fixes the colour scale, so that plots of several runs compare
+    (:func:`feed_limits`).
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cnc_gym.envs.render import plot_error_envelope, plot_path_views, wants_z_views
+    from cnc_gym.envs.render import (
+        mark_violations,
+        plot_error_along_path,
+        plot_path_views,
+        wants_z_views,
+        worst_violation,
+    )
 
     if wants_z_views(result.path_xyz, result.cutting):
         fig, axes = plt.subplots(2, 2, figsize=(12, 9.5), constrained_layout=True)
@@ -431,20 +534,18 @@ def run_figure(result: RunResult, *, feed_range: tuple[float, float] | None = No
         views = {"XY": ax_xy}
     plot_path_views(fig, views, result.path_xyz, result.cutting, result.path_feed_mm_min, feed_range)
     ax_xy.set_title(f"{result.program}: tool path coloured by feed")
-    plot_error_envelope(ax_err, result.time_s, result.contour_error_mm, result.tolerance_mm,
-                        bin_s=_bin_seconds(result))  # fmt: skip
+    worst = worst_violation(result, result.tolerance_mm)
+    mark_violations(views, result.path_xyz, result.path_sample_s, result.path_error_edges_mm,
+                    result.path_error_mm, result.tolerance_mm, worst)  # fmt: skip
+    plot_error_along_path(ax_err, result.path_error_edges_mm, result.path_error_mm, result.tolerance_mm,
+                          segment_edges_mm=result.segment_s_mm, cutting=result.segment_cutting,
+                          worst=worst)  # fmt: skip
     ax_err.set_title(f"{result.policy}: cycle {result.cycle_time_s:.2f} s, {result.violations} violations")
     if not result.finished:
         why = "--max-time" if result.stopped_by == MAX_TIME else "step budget"
         fig.suptitle(f"truncated ({why}) at {result.cycle_time_s:g} s, {100 * result.progress:.0f} % of the "
                      "path: the numbers cover the part run", color="C3", fontsize=12)  # fmt: skip
     return fig
-
-
-def _bin_seconds(result: RunResult) -> float:
-    if len(result.time_s) >= 2 and result.steps:
-        return result.cycle_time_s / max(result.steps, 1) * result.bin_steps
-    return 0.0
 
 
 def format_table(rows: list[dict[str, Any]]) -> str:

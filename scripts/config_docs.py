@@ -28,9 +28,12 @@ from cnc_gym.machine import (
     AxisMechanicsConfig,
     ControllerConfig,
     MachineConfig,
+    MachineFunctionsConfig,
     PlantAxes,
     PlantConfig,
     RotaryAxisConfig,
+    SetupConfig,
+    ToolSetup,
 )
 from cnc_gym_agents.training import EnvSettings, LagrangianSettings, PPOSettings, TrainConfig
 
@@ -44,6 +47,9 @@ TABLES: dict[str, tuple[type, str]] = {
     "machine.plant": (PlantConfig, "plant."),
     "machine.plant.axes": (PlantAxes, "plant.axes."),
     "machine.plant.axis": (AxisMechanicsConfig, ""),
+    "machine.setup": (SetupConfig, "setup."),
+    "machine.setup.tool": (ToolSetup, ""),
+    "machine.machine_functions": (MachineFunctionsConfig, "machine_functions."),
     "task": (TaskConfig, ""),
     "reward": (RewardWeights, ""),
     "train": (TrainConfig, ""),

@@ -4,7 +4,7 @@
 
 For each built-in program it runs the constant override at 100 % and the classical planner through the
 env (controller + servo plant), prints cycle time, max/RMS contour error and violations, and writes one
-PNG per run (path coloured by feed, contour error over time) under ``--out``; the plots of one program
+PNG per run (path coloured by feed, contour error along the path) under ``--out``; the plots of one program
 share one feed colour scale.
 """
 

@@ -482,21 +482,141 @@ def mutate(grammar: Grammar, text: str, corpus: list[str]) -> str:
     return text
 
 
-def programs(seed: int):
-    """Endless (kind, text): grammar programs, and mutations of seeds and earlier grammar programs."""
-    rng = random.Random(seed)
+# ====================================================================================== targets
+#: Characters by class, for the reader rules that look at a character's class (ASCII digits and letters are
+#: program text; blanks are dropped; a comment, ';', '%', '/', '#', '[', ',' … start a construct; anything
+#: else is an illegal character): each class in every position of ``CHARACTER_TEMPLATES``.
+CHARACTER_CLASSES: dict[str, str] = {
+    "ascii-digit": "0159",
+    "unicode-digit": "²³¹١٢۳०১๓０９߁",  # str.isdigit() takes all of them; none is a digit of a program
+    "unicode-letter": "ıéßﬁΩЖＧＸ",  # 'ı'.upper() == 'I', 'ﬁ'.upper() == 'FI', 'ß'.upper() == 'SS'
+    "ascii-letter": "AEGLNOPXZ",
+    "lower-case": "aegnoxz",
+    "blank": " \t\v\f",
+    "unicode-space": "\u00a0\u2003\u3000\u200b\ufeff",
+    "line-break": "\r\n\x1c\x1d\x1e\x85\u2028\u2029",
+    "control": "\x00\x07\x08\x1b\x7f",
+    "structure": "()%;/#[]=,:$",
+    "sign-point": "+-.",
+    "punctuation": "*&!?<>@^_{}|~`\"'\\",
+    "combining": "\u0301\u0338",
+    "odd-code-point": "\ufffd\U0001f600\ud800",  # a replacement character, an emoji, a lone surrogate
+}
+#: Blocks with one character slot ``{c}``: every construct the readers have a rule for.
+CHARACTER_TEMPLATES = [
+    "{c}", "G01 X{c} F100", "G01 X1{c} F100", "G01 X{c}1 F100", "G0{c}1 X1", "G01 X1 F100{c}",
+    "#1={c}", "#{c}=1", "#1=1{c}2", "#1=[{c}]", "#1=SIN[{c}]", "/{c} G01 X1 F100", "/1{c} G00 X1",
+    "N{c} G00 X1", "N1{c} G00 X1", "O{c}", ":{c}", "%{c}", "GOTO{c}", "GOTO1{c}", "IF[{c}EQ1]GOTO1",
+    "IF[#1EQ{c}]THEN#2=1", "WHILE[{c}LT1]DO1", "DO{c}", "END{c}", "M98 P{c}", "M98 P1 L{c}", "G65 P1 A{c}",
+    "G00 X[1{c}2]", "G00 X1 ({c})", "G00 X1 ({c}", "({c}) G00 X1", "G01 X1 ,{c}1 F100", "G01 X1 ,L{c} F100",
+    "G10 L2 P{c} X1", "G04 P{c}", "G04 X{c}", "${c}", "R{c}=1", "R1={c}", "L{c}", "G01 X1 Y2 {c} F100",
+    "G02 X1 Y0 R{c} F100", "G81 X0 Y0 Z-1 R{c} F100", "{c}G00 X1", "G00{c}X1",
+]  # fmt: skip
+#: How a block ends: the ';'-terminated variants run every rule through the ';' path of the readers.
+TERMINATORS = ["", "", ";", ";", "; (note)", ";G00 X1", " ;", ";;", "; move to X1"]
+#: Odd numbers for any address: signs, exponents, Unicode digits, huge and tiny values, expressions.
+ODD_NUMBERS = [
+    "", "0", "-0", "+0", "+1", "-1", "--1", "+-1", "-+1", "1-", "1+", "1e3", "1E3", "1e-3", "1E+3", "1e",
+    "e3", "1.5e2", "1.E2", ".5", "5.", ".", "1.2.3", "-.", "+.", "00000001", "99999999", "999999999",
+    "9999999999999999", "9" * 40, "1" + "0" * 400, "0." + "0" * 30 + "1", "99999999.9999", "0.00000001",
+    "-999999.9999", "1000000", "-1000000", "²", "1²", "١٢", "１", "#1", "-#1", "#-1", "#[1]", "[1]", "[-1]",
+    "[1e3]", "#0", "#99999999", "#[1/0]", "[1/0]", "nan", "inf", "NaN", "Infinity", "0x10", "1_000", "1,5",
+    "1 2", " 1", "1\t2", "[" * 7 + "1" + "]" * 7, "#" * 5 + "1", "[SQRT[-1]]", "[9" + "9" * 30 + "]",
+]  # fmt: skip
+ADDRESS_LETTERS = [chr(c) for c in range(ord("A"), ord("Z") + 1)] + [",L", ",R", ",C"]
+#: Blocks with one word slot ``{w}``: the address letter in the company of the codes that give it meaning.
+ADDRESS_CONTEXTS = [
+    "{w}", "{w}", "G00 {w}", "G01 X1 {w} F100", "G02 X1 Y0 R1 {w} F100", "G03 X0 Y1 I-1 {w} F100",
+    "G81 X0 Y0 Z-1 R1 {w} F100", "G83 X0 Y0 Z-2 R0 Q1 {w} F10", "G76 X0 Y0 Z-1 R1 Q1 {w} F100",
+    "G65 P1 {w}", "G66 P1 {w}", "M98 P1 {w}", "G10 L2 P1 {w}", "G10 L12 P1 {w}", "G04 {w}", "G68 X0 Y0 {w}",
+    "G51 X0 Y0 {w}", "G43 {w} Z1", "G41 D1 G01 X1 {w} F100", "G05 P10000 {w}", "N1 {w}", "G92 {w}",
+    "G28 {w}", "G54.1 {w}", "G31 X1 {w} F100", "G37 {w}", "G110 X0 Y0 Z-5 R2 I10 J5 D0 Q2 L3 {w} F300",
+    "G122 X0 Y0 I10 J0 K3 {w}", "G126 X0 Y0 I20 J10 L4 Z-1 R2 {w} F300", "M03 {w}", "T1 M06 {w}",
+    "G16 {w}", "#1={w}", "IF[#1EQ1]GOTO{w}", "G22 X0 Y0 {w}", "G34 X0 Y0 {w}", "G134 X0 Y0 {w}",
+    "$IF R1==1 {w}", "LL1 {w}", "G161 {w}",
+]  # fmt: skip
+
+#: Program kinds and their default weights in a run.
+DEFAULT_MIX: dict[str, float] = {"grammar": 2, "mutated": 2, "characters": 3, "addresses": 3}
+
+
+def character_program(rng: random.Random) -> str:
+    """One character of one class in one construct, with or without a ';' end, in a small program."""
+    chars = CHARACTER_CLASSES[rng.choice(list(CHARACTER_CLASSES))]
+    c = rng.choice(chars)
+    if rng.random() < 0.15:
+        c = c * rng.randint(2, 3) if rng.random() < 0.5 else c + rng.choice(chars)
+    block = rng.choice(CHARACTER_TEMPLATES).replace("{c}", c)
+    if rng.random() < 0.2:
+        block = block.lower()
+    lines = [block + rng.choice(TERMINATORS)]
+    if rng.random() < 0.5:
+        lines.insert(0, rng.choice(["G90 G00 X0 Y0", "%", "O1", "N1 G00 X0", "#1=1", "G91", "(header)"]))
+    if rng.random() < 0.5:
+        lines.append(rng.choice(["M30", "G00 X1", "N1 M99", "%", "M02;"]))
+    return "\n".join(lines) + rng.choice(["\n", "\n", "", "\r\n"])
+
+
+def odd_number(rng: random.Random) -> str:
+    """An odd number: one of ``ODD_NUMBERS``, or a built one (signs, leading zeros, a point, an exponent, a
+    Unicode digit somewhere)."""
+    if rng.random() < 0.5:
+        return rng.choice(ODD_NUMBERS)
+    sign = rng.choice(["", "", "", "-", "+", "--", "+-", "-+"])
+    digits = rng.choice([str(rng.randint(0, 9)), str(rng.randint(0, 10 ** rng.randint(1, 30))),
+                         "0" * rng.randint(1, 20) + "1", ""])  # fmt: skip
+    point = rng.choice(["", "", ".", "." + str(rng.randint(0, 99999)), ".."])
+    exponent = rng.choice(["", "", "", "e3", "E-2", "e+10", "E400", "e", "E-"])
+    text = sign + digits + point + exponent
+    if rng.random() < 0.15:
+        at = rng.randint(0, len(text))
+        text = text[:at] + rng.choice("²٣０߁") + text[at:]
+    return text
+
+
+def address_program(rng: random.Random) -> str:
+    """Every address letter A-Z (and the ,L ,R ,C corner words) with an odd number, in a block of a code that
+    gives it a meaning or of none, with or without a ';' end."""
+    word = rng.choice(ADDRESS_LETTERS) + odd_number(rng)
+    if rng.random() < 0.2:
+        word += " " + rng.choice(ADDRESS_LETTERS) + odd_number(rng)
+    block = rng.choice(ADDRESS_CONTEXTS).replace("{w}", word)
+    if rng.random() < 0.15:
+        block = block.lower()
+    head = rng.choice(["G90 G00 X0 Y0 Z10", "G91", "G20", "M03 S1000", ""])
+    lines = [head, block + rng.choice(TERMINATORS)]
+    lines.append(rng.choice(["M30", "G80", "G40 G49 G80", ""]))
+    if rng.random() < 0.5:
+        lines += ["O1", "G00 X#1", "M99"]  # M98 P1 / G65 P1 find a program
+    return "\n".join(line for line in lines if line) + "\n"
+
+
+def program_at(seed: int, index: int, mix: dict[str, float] | None = None) -> tuple[str, str]:
+    """Program ``index`` of the run with ``seed``: ``(kind, text)``, a pure function of the three (so a run
+    restarts anywhere, a batch runs in any worker, and ``--save`` names what to reproduce)."""
+    weights = mix or DEFAULT_MIX
+    rng = random.Random(f"{seed}/{index}")
+    kind = rng.choices(list(weights), list(weights.values()))[0]
     grammar = Grammar(rng)
-    corpus = list(SEEDS)
+    if kind == "grammar":
+        return kind, grammar.program()
+    if kind == "mutated":
+        corpus = [*SEEDS, grammar.program()]
+        base = corpus[-1] if rng.random() < 0.5 else rng.choice(SEEDS)
+        return kind, mutate(grammar, base, corpus)
+    if kind == "characters":
+        return kind, character_program(rng)
+    if kind == "addresses":
+        return kind, address_program(rng)
+    raise ValueError(f"unknown program kind {kind!r} (choose from {', '.join(DEFAULT_MIX)})")
+
+
+def programs(seed: int, mix: dict[str, float] | None = None):
+    """Endless ``(kind, text)``: :func:`program_at` for index 0, 1, 2 …"""
+    index = 0
     while True:
-        if rng.random() < 0.5:
-            text = grammar.program()
-            if len(corpus) < 400:
-                corpus.append(text)
-            else:
-                corpus[rng.randrange(len(SEEDS), len(corpus))] = text
-            yield "grammar", text
-        else:
-            yield "mutated", mutate(grammar, rng.choice(corpus), corpus)
+        yield program_at(seed, index, mix)
+        index += 1
 
 
 # ====================================================================================== running
@@ -527,11 +647,8 @@ def _classify(text: str, time_limit: float, dialect: str = "gsk25i") -> tuple[st
         line = str(err)
         good = (bool(err.code) and "\n" not in line and len(line) <= MAX_LINE_CHARS and err.line >= 1
                 and line.startswith("fuzz.nc:"))  # fmt: skip
-        return (
-            (f"error:{err.code}" if good else "crash:bad-error-line"),
-            time.process_time() - start,
-            line[:300],
-        )
+        outcome = f"error:{err.code}" if good else "crash:bad-error-line"
+        return outcome, time.process_time() - start, line[:300]
     except MemoryError:
         return "over-memory", time.process_time() - start, ""
     except BaseException as exc:
@@ -552,7 +669,57 @@ def _classify(text: str, time_limit: float, dialect: str = "gsk25i") -> tuple[st
     return "ok", seconds, ""
 
 
-def _worker(conn, time_limit: float, memory_limit_mb: float) -> None:
+@dataclass
+class Task:
+    """A batch of programs for one worker: indices ``start`` … ``start + count - 1`` of the run."""
+
+    seed: int
+    start: int
+    count: int
+    dialects: tuple[str, ...]
+    mix: dict[str, float]
+    time_limit: float
+    cli_every: int
+
+
+@dataclass
+class BatchResult:
+    """What a worker sends back for a task: counts, not programs (only the bad ones and the few sampled for
+    the console check travel back)."""
+
+    done: int = 0  # programs run (fewer than the task's count after a memory failure)
+    outcomes: Counter = field(default_factory=Counter)  # (dialect, kind, outcome) → programs
+    slowest: list = field(default_factory=list)  # (cpu seconds, outcome, index), the 5 slowest
+    bad: list = field(default_factory=list)  # (index, kind, dialect, outcome, detail, text)
+    cli: list = field(default_factory=list)  # (index, dialect, outcome, text) for the console check
+    peak_rss_mb: float = 0.0
+
+
+def run_batch(task: Task, progress=None) -> BatchResult:
+    """Run a task's programs in this process (``progress.value``: the index being run, for the parent's
+    backstop)."""
+    result = BatchResult()
+    for index in range(task.start, task.start + task.count):
+        if progress is not None:
+            progress.value = index
+        kind, text = program_at(task.seed, index, task.mix)
+        dialect = task.dialects[index % len(task.dialects)]
+        outcome, cpu, detail = _classify(text, task.time_limit, dialect)
+        result.done += 1
+        result.outcomes[(dialect, kind, outcome)] += 1
+        if len(result.slowest) < 5 or cpu > result.slowest[-1][0]:
+            result.slowest = sorted([*result.slowest, (round(cpu, 3), outcome, index)], reverse=True)[:5]
+        if outcome.startswith(BAD_PREFIXES):
+            result.bad.append((index, kind, dialect, outcome, detail, text))
+        elif task.cli_every and index % task.cli_every == 0 and outcome != "error:time-budget":
+            result.cli.append((index, dialect, outcome, text))
+        if outcome == "over-memory":
+            break  # a fresh worker: the failed allocation may have left the heap fragmented
+    result.peak_rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return result
+
+
+def _worker(conn, progress, memory_limit_mb: float) -> None:
     signal.signal(signal.SIGPROF, _on_alarm)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles ^C
     try:
@@ -566,25 +733,31 @@ def _worker(conn, time_limit: float, memory_limit_mb: float) -> None:
 
     while True:
         try:
-            text, dialect = conn.recv()
+            task = conn.recv()
         except EOFError:
             return
-        outcome = _classify(text, time_limit, dialect)
-        conn.send((*outcome, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+        if task is None:
+            return
+        conn.send(run_batch(task, progress))
 
 
 class _Worker:
-    def __init__(self, time_limit: float, memory_limit_mb: float) -> None:
-        self.time_limit, self.memory_limit_mb = time_limit, memory_limit_mb
+    """One forked worker process that runs tasks; restarted after a kill or a memory failure."""
+
+    def __init__(self, memory_limit_mb: float) -> None:
+        self.memory_limit_mb = memory_limit_mb
         self.process: multiprocessing.process.BaseProcess | None = None
         self.conn: Any = None  # multiprocessing.connection.Connection
+        self.progress: Any = None  # multiprocessing.Value: the index being run
+        self.task: Task | None = None
+        self.watch: tuple[int, float | None] = (-1, None)  # (index seen, worker CPU seconds then)
 
     def start(self) -> None:
         context = multiprocessing.get_context("fork")
         self.conn, child = context.Pipe()
-        self.process = context.Process(
-            target=_worker, args=(child, self.time_limit, self.memory_limit_mb), daemon=True
-        )
+        self.progress = context.Value("q", -1, lock=False)
+        self.process = context.Process(target=_worker, args=(child, self.progress, self.memory_limit_mb),
+                                       daemon=True)  # fmt: skip
         self.process.start()
         child.close()
 
@@ -595,35 +768,30 @@ class _Worker:
             self.conn.close()
             self.process = None
 
-    def run(self, text: str, dialect: str = "gsk25i") -> tuple[str, float, str, float]:
+    def submit(self, task: Task) -> None:
         if self.process is None:
             self.start()
-        self.conn.send((text, dialect))
-        # The CPU alarm ends a slow program inside the worker; this backstop catches one stuck in a long C
-        # call (the alarm runs only between Python bytecodes): the worker's own CPU time, read from /proc
-        # (wall time on a loaded machine says little), and a far wall-clock limit.
+        self.task = task
+        self.watch = (-1, None)
+        self.conn.send(task)
+
+    def stuck(self, cpu_limit: float) -> tuple[str, int] | None:
+        """The backstop, between answers: (outcome, index) when the worker died, or has spent more than
+        ``cpu_limit`` CPU seconds (read from /proc: wall time on a loaded machine says little) on one
+        program (the CPU alarm runs only between Python bytecodes, so a long C call escapes it)."""
         process = self.process
         assert process is not None
-        cpu_limit, wall_limit = 2 * self.time_limit + 10, 30 * self.time_limit + 300
-        cpu_start, wall_start = _cpu_seconds(process.pid), time.monotonic()
-        while not self.conn.poll(1.0):
-            cpu = _cpu_seconds(process.pid)
-            over_cpu = cpu is not None and cpu_start is not None and cpu - cpu_start > cpu_limit
-            if over_cpu or time.monotonic() - wall_start > wall_limit or not process.is_alive():
-                break
-        else:
-            try:
-                outcome, seconds, detail, rss = self.conn.recv()
-                if outcome == "over-memory":
-                    self.stop()  # a fresh worker: the failed allocation may have left the heap fragmented
-                return outcome, seconds, detail, rss
-            except EOFError:
-                pass
-        alive, code = process.is_alive(), process.exitcode
-        self.stop()
-        if alive:
-            return "over-time", cpu_limit, "killed by the backstop: no answer", 0.0
-        return "over-memory", 0.0, f"worker died (exit {code})", 0.0
+        index = int(self.progress.value)
+        if not process.is_alive():
+            return "over-memory", index
+        cpu = _cpu_seconds(process.pid)
+        seen, since = self.watch
+        if index != seen or since is None:
+            self.watch = (index, cpu)
+            return None
+        if cpu is not None and cpu - since > cpu_limit:
+            return "over-time", index
+        return None
 
 
 def _cpu_seconds(pid: int | None) -> float | None:
@@ -684,11 +852,22 @@ class Report:
     by_kind: Counter = field(default_factory=Counter)
     by_dialect: Counter = field(default_factory=Counter)
     outcomes: Counter = field(default_factory=Counter)
+    by_dialect_class: Counter = field(default_factory=Counter)  # (dialect, class) → programs
+    by_kind_class: Counter = field(default_factory=Counter)  # (kind, class) → programs
     cli_checked: int = 0
     slowest: list = field(default_factory=list)  # (cpu seconds, outcome, index), the 5 slowest
     peak_rss_mb: float = 0.0
     seconds: float = 0.0
-    bad: list = field(default_factory=list)  # (index, kind, outcome, detail, text)
+    cpu_seconds: float = 0.0  # the workers' CPU time
+    bad: list = field(default_factory=list)  # (index, kind, outcome, detail, text); detail names the dialect
+
+    def add(self, dialect: str, kind: str, outcome: str, n: int = 1) -> None:
+        self.tried += n
+        self.by_kind[kind] += n
+        self.by_dialect[dialect] += n
+        self.outcomes[outcome] += n
+        self.by_dialect_class[(dialect, outcome.split(":")[0])] += n
+        self.by_kind_class[(kind, outcome.split(":")[0])] += n
 
     def classes(self) -> dict[str, int]:
         """Outcome classes (ok / error / crash / over-time / over-memory / cli-mismatch) and counts."""
@@ -698,17 +877,26 @@ class Report:
         return dict(out)
 
     def as_dict(self) -> dict:
+        def nested(counter: Counter) -> dict:
+            table: dict[str, dict[str, int]] = {}
+            for (outer, inner), n in sorted(counter.items()):
+                table.setdefault(outer, {})[inner] = n
+            return table
+
         return {
             "seed": self.seed,
             "programs": self.tried,
             "by_kind": dict(self.by_kind),
             "by_dialect": dict(self.by_dialect),
             "classes": self.classes(),
+            "by_dialect_class": nested(self.by_dialect_class),
+            "by_kind_class": nested(self.by_kind_class),
             "outcomes": dict(self.outcomes.most_common()),
             "cli_checked": self.cli_checked,
             "slowest": self.slowest,
             "peak_rss_mb": round(self.peak_rss_mb),
             "seconds": round(self.seconds, 1),
+            "cpu_seconds": round(self.cpu_seconds, 1),
             "bad": [{"index": i, "kind": k, "outcome": o, "detail": d} for i, k, o, d, _ in self.bad],
         }
 
@@ -718,65 +906,159 @@ def fuzz(
     seed: int = 0,
     programs_budget: int | None = 1000,
     seconds: float | None = None,
-    time_limit: float = 10.0,
+    time_limit: float = 4.0,
     memory_limit_mb: float = 2048.0,
     cli_every: int = 500,
     save: Path | None = None,
     progress: bool = False,
     dialects: Sequence[str] = ("gsk25i",),
+    mix: dict[str, float] | None = None,
+    workers: int = 1,
+    batch: int = 250,
 ) -> Report:
-    """Run the fuzzer until ``programs_budget`` programs or ``seconds`` (whichever first). Program ``i``
-    runs under ``dialects[i % len(dialects)]`` (the grammar is the Fanuc family's: in another language
-    family most programs are errors, which still checks that every outcome is one clean line)."""
+    """Run the fuzzer until ``programs_budget`` programs or ``seconds`` (whichever first), in ``workers``
+    forked processes that each run batches of ``batch`` programs in-process and send back counts. Program
+    ``i`` is :func:`program_at` ``(seed, i, mix)`` and runs under ``dialects[i % len(dialects)]`` (the
+    grammar is the Fanuc family's: in another language family most programs are errors, which still checks
+    that every outcome is one clean line)."""
+    weights = dict(mix or DEFAULT_MIX)
+    dialect_list = tuple(dialects)
     report = Report(seed=seed)
-    worker = _Worker(time_limit, memory_limit_mb)
+    pool = [_Worker(memory_limit_mb) for _ in range(max(1, workers))]
+    cpu_limit = 2 * time_limit + 10
     started = time.monotonic()
+    pending: list[tuple[int, int]] = []  # (start, count) handed back after a worker was killed
+    next_start = 0
     bar = None
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=programs_budget, unit="program", disable=None, file=sys.stderr)
-    try:
-        for index, (kind, text) in enumerate(programs(seed)):
-            if programs_budget is not None and index >= programs_budget:
-                break
+        bar = tqdm(total=programs_budget, unit="program", disable=None, file=sys.stderr, smoothing=0.05)
+
+    def next_task() -> Task | None:
+        nonlocal next_start
+        if pending:
+            start, count = pending.pop()
+        else:
             if seconds is not None and time.monotonic() - started >= seconds:
-                break
-            dialect = dialects[index % len(dialects)]
-            outcome, cpu, detail, rss = worker.run(text, dialect)
-            report.tried += 1
-            report.by_kind[kind] += 1
-            report.by_dialect[dialect] += 1
-            report.peak_rss_mb = max(report.peak_rss_mb, rss)
-            report.slowest = sorted([*report.slowest, (round(cpu, 3), outcome, index)], reverse=True)[:5]
-            checkable = not outcome.startswith(BAD_PREFIXES) and outcome != "error:time-budget"
-            if cli_every and index % cli_every == 0 and checkable:
-                report.cli_checked += 1
-                problem = check_cli(text, outcome, time_limit, dialect)
-                if problem:
-                    outcome, detail = "cli-mismatch", problem
-            report.outcomes[outcome] += 1
-            if outcome.startswith(BAD_PREFIXES):
-                report.bad.append((index, kind, outcome, detail, text))
-                if save is not None:
-                    _save(save, index, outcome, detail, text)
-            if bar is not None:
-                bar.update()
-                if index % 50 == 0:
-                    bar.set_postfix(bad=len(report.bad))
-    finally:
+                return None
+            left = None if programs_budget is None else programs_budget - next_start
+            if left is not None and left <= 0:
+                return None
+            start, count = next_start, batch if left is None else min(batch, left)
+            next_start += count
+        return Task(seed, start, count, dialect_list, weights, time_limit, cli_every)
+
+    def record_bad(index: int, kind: str, dialect: str, outcome: str, detail: str, text: str) -> None:
+        report.bad.append((index, kind, outcome, f"[{dialect}] {detail}", text))
+        if save is not None:
+            _save(save, index, dialect, outcome, detail, text)
+
+    def merge(worker: _Worker, result: BatchResult) -> None:
+        task = worker.task
+        assert task is not None
+        for (dialect, kind, outcome), n in result.outcomes.items():
+            report.add(dialect, kind, outcome, n)
+        report.slowest = sorted([*report.slowest, *result.slowest], reverse=True)[:5]
+        report.peak_rss_mb = max(report.peak_rss_mb, result.peak_rss_mb)
+        for index, kind, dialect, outcome, detail, text in result.bad:
+            record_bad(index, kind, dialect, outcome, detail, text)
+        for index, dialect, outcome, text in result.cli:
+            report.cli_checked += 1
+            problem = check_cli(text, outcome, time_limit, dialect)
+            if problem:
+                kind = program_at(seed, index, weights)[0]
+                report.outcomes[outcome] -= 1
+                report.outcomes["cli-mismatch"] += 1
+                report.by_dialect_class[(dialect, outcome.split(":")[0])] -= 1
+                report.by_dialect_class[(dialect, "cli-mismatch")] += 1
+                report.by_kind_class[(kind, outcome.split(":")[0])] -= 1
+                report.by_kind_class[(kind, "cli-mismatch")] += 1
+                record_bad(index, kind, dialect, "cli-mismatch", problem, text)
+        if result.done < task.count:  # stopped after a memory failure: the rest goes to a fresh worker
+            worker.stop()
+            pending.append((task.start + result.done, task.count - result.done))
+        if bar is not None:
+            bar.update(result.done)
+            bar.set_postfix(bad=len(report.bad))
+
+    def kill(worker: _Worker, outcome: str, index: int) -> None:
+        task = worker.task
+        assert task is not None
+        cpu = _cpu_seconds(worker.process.pid if worker.process else None) or 0.0
+        report.cpu_seconds += cpu
         worker.stop()
+        kind, text = program_at(seed, index, weights)
+        dialect = dialect_list[index % len(dialect_list)]
+        # The programs before it ran, but their counts died with the worker: run them again elsewhere.
+        if index > task.start:
+            pending.append((task.start, index - task.start))
+        if task.start + task.count > index + 1:
+            pending.append((index + 1, task.start + task.count - index - 1))
+        report.add(dialect, kind, outcome)
+        detail = "killed by the backstop: no answer" if outcome == "over-time" else "worker died"
+        record_bad(index, kind, dialect, outcome, detail, text)
+        if bar is not None:
+            bar.update(1)
+
+    from multiprocessing.connection import wait
+
+    try:
+        busy: dict[Any, _Worker] = {}
+        idle = list(pool)
+        while True:
+            while idle:
+                task = next_task()
+                if task is None:
+                    break
+                worker = idle.pop()
+                worker.submit(task)
+                busy[worker.conn] = worker
+            if not busy:
+                break
+            for conn in wait(list(busy), timeout=1.0):
+                worker = busy.pop(conn)
+                try:
+                    result = conn.recv()
+                except EOFError:
+                    busy[conn] = worker  # died: the backstop below names the program
+                    continue
+                merge(worker, result)
+                idle.append(worker)
+            for conn, worker in list(busy.items()):
+                stuck = worker.stuck(cpu_limit)
+                if stuck is not None:
+                    del busy[conn]
+                    kill(worker, *stuck)
+                    idle.append(worker)
+    finally:
+        for worker in pool:
+            if worker.process is not None:
+                report.cpu_seconds += _cpu_seconds(worker.process.pid) or 0.0
+            worker.stop()
         if bar is not None:
             bar.close()
     report.seconds = time.monotonic() - started
     return report
 
 
-def _save(folder: Path, index: int, outcome: str, detail: str, text: str) -> None:
+def _save(folder: Path, index: int, dialect: str, outcome: str, detail: str, text: str) -> None:
     where = folder / outcome.replace(":", "-")
     where.mkdir(parents=True, exist_ok=True)
-    (where / f"{index:07d}.nc").write_bytes(text.encode("utf-8", "surrogatepass"))
-    (where / f"{index:07d}.txt").write_text(detail + "\n")
+    (where / f"{index:07d}-{dialect}.nc").write_bytes(text.encode("utf-8", "surrogatepass"))
+    (where / f"{index:07d}-{dialect}.txt").write_text(detail + "\n")
+
+
+def _parse_mix(text: str) -> dict[str, float]:
+    mix: dict[str, float] = {}
+    for part in text.split(","):
+        name, _, weight = part.partition("=")
+        if name not in DEFAULT_MIX:
+            raise ValueError(f"unknown program kind {name!r} (choose from {', '.join(DEFAULT_MIX)})")
+        mix[name] = float(weight) if weight else 1.0
+    if not any(w > 0 for w in mix.values()):
+        raise ValueError("at least one program kind needs a positive weight")
+    return mix
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -788,9 +1070,7 @@ def main(argv: list[str] | None = None) -> int:
         "--programs", type=int, default=None, help="programs to try (default 10000 without --seconds)"
     )
     parser.add_argument("--seconds", type=float, default=None, help="wall-clock budget in seconds")
-    parser.add_argument(
-        "--time-limit", type=float, default=10.0, help="CPU seconds one program may take (10)"
-    )
+    parser.add_argument("--time-limit", type=float, default=4.0, help="CPU seconds one program may take (4)")
     parser.add_argument("--memory-limit", type=float, default=2048.0, help="MiB one program may add (2048)")
     parser.add_argument(
         "--cli-every",
@@ -806,6 +1086,13 @@ def main(argv: list[str] | None = None) -> int:
         help="dialect name, a comma-separated list taken in turn, or 'all' (every registered dialect); "
         "default gsk25i",
     )
+    parser.add_argument(
+        "--mix",
+        default=",".join(f"{k}={v:g}" for k, v in DEFAULT_MIX.items()),
+        help="program kinds and weights (default %(default)s)",
+    )
+    parser.add_argument("--workers", type=int, default=1, help="worker processes (default 1)")
+    parser.add_argument("--batch", type=int, default=250, help="programs per task sent to a worker (250)")
     args = parser.parse_args(argv)
     from cnc_gym.gcode import DIALECT_MODULES
 
@@ -814,6 +1101,12 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [name for name in dialects if name not in built]
     if unknown:
         parser.error(f"unknown dialect {unknown[0]!r}: choose from {', '.join(built)} or all")
+    try:
+        mix = _parse_mix(args.mix)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if args.workers < 1 or args.batch < 1:
+        parser.error("--workers and --batch are at least 1")
     budget = args.programs if args.programs is not None else (None if args.seconds else 10_000)
     report = fuzz(
         seed=args.seed,
@@ -825,22 +1118,32 @@ def main(argv: list[str] | None = None) -> int:
         save=args.save,
         progress=not args.json,
         dialects=dialects,
+        mix=mix,
+        workers=args.workers,
+        batch=args.batch,
     )
     if args.json:
         print(json.dumps(report.as_dict()))
     else:
         print(
-            f"seed {report.seed}: {report.tried} programs "
-            f"({dict(report.by_kind)}; {dict(report.by_dialect)}) "
-            f"in {report.seconds:.0f} s, "
-            f"{report.cli_checked} also through `cnc-gym trace`; "
-            f"worker peak RSS {report.peak_rss_mb:.0f} MiB"
+            f"seed {report.seed}: {report.tried} programs in {report.seconds:.0f} s "
+            f"({report.cpu_seconds:.0f} s worker CPU), "
+            f"{report.cli_checked} also through `cnc-gym trace`; worker peak RSS {report.peak_rss_mb:.0f} MiB"
         )
+        classes = sorted(report.classes(), key=lambda c: (c not in ("ok", "error"), c))
+        print(f"  {'':<12}" + "".join(f"{c:>14}" for c in classes) + f"{'total':>10}")
+        for title, table, keys in (("dialect", report.by_dialect_class, sorted(report.by_dialect)),
+                                   ("kind", report.by_kind_class, sorted(report.by_kind))):  # fmt: skip
+            for key in keys:
+                row = "".join(f"{table[(key, c)]:>14}" for c in classes)
+                total = report.by_dialect[key] if title == "dialect" else report.by_kind[key]
+                print(f"  {key:<12}{row}{total:>10}")
+            print()
         for name, n in sorted(report.classes().items(), key=lambda kv: -kv[1]):
             print(f"  {name:<14} {n:>8}  {100 * n / max(report.tried, 1):6.2f} %")
         common = report.outcomes.most_common()
         codes = [f"{o.split(':', 1)[1]} {n}" for o, n in common if o.startswith("error:")]
-        print("  error codes:  " + ", ".join(codes))
+        print(f"  error codes ({len(codes)}): " + ", ".join(codes))
         print(
             "  slowest (CPU s, outcome, program #): "
             + ", ".join(f"{s:.2f} {o} #{i}" for s, o, i in report.slowest)

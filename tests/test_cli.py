@@ -141,6 +141,80 @@ def test_run_dispatches_to_the_runner(tmp_path, capsys, monkeypatch):
     assert main(["run", program, "--units", "inch"]) == 0 and seen["units"] == "inch"
 
 
+SETUP_FILE = "work_offsets:\n  G54: [100.0, 50.0, -200.0]\ntools:\n  1: {length_mm: 120.0, radius_mm: 5.0}\n"
+
+
+def test_trace_setup_gives_the_work_and_tool_offsets(tmp_path, capsys):
+    # G54 = (100, 50, -200), H1 = 120: Z10 with G43 H1 is machine -70. A preset's setup section is below
+    # the file's; a bad file is one line, exit 2, nothing on stdout.
+    program = write(tmp_path, "G54 G00 X0 Y0\nG43 H1 Z10.\n")
+    setup = write(tmp_path, SETUP_FILE, "job.yaml")
+    status, out, err = run_main(["trace", program, "--dialect", "fanuc", "--setup", setup], capsys)
+    assert status == 0 and err == ""
+    ends = [json.loads(line)["end"] for line in out.splitlines()]
+    assert ends == [[100.0, 50.0, 0.0], [100.0, 50.0, -70.0]]
+    preset = write(tmp_path, "name: shop\nsetup:\n  work_offsets:\n    G54: [1.0, 2.0, 3.0]\n", "shop.yaml")
+    status, out, _ = run_main(["trace", program, "--dialect", "fanuc", "--machine", preset], capsys)
+    assert status == 0 and json.loads(out.splitlines()[0])["end"] == [1.0, 2.0, 0.0]
+    status, out, _ = run_main(["trace", program, "--dialect", "fanuc", "--machine", preset, "--setup", setup],
+                              capsys)  # fmt: skip
+    assert status == 0 and json.loads(out.splitlines()[0])["end"] == [100.0, 50.0, 0.0]
+    bad = write(tmp_path, "tools:\n  1: {length: 1}\n", "bad.yaml")
+    status, out, err = run_main(["trace", program, "--setup", bad], capsys)
+    assert status == 2 and out == ""
+    assert err.strip().endswith("unknown key tools.1.length (allowed: length_mm, length_wear_mm, radius_mm, "
+                                "radius_wear_mm)")
+    ext = write(tmp_path, "work_offsets:\n  EXT: [0, 0, 0]\n", "ext.yaml")
+    status, out, err = run_main(["trace", program, "--dialect", "h4cm", "--setup", ext], capsys)
+    assert status == 2 and out == "" and "work_offsets.EXT cannot be set" in err
+    assert len(err.splitlines()) == 1
+
+
+def test_trace_calculator_input(tmp_path, capsys):
+    # fanuc reads X10 as 10 least increments (0.01 mm); --calculator-input as 10 mm (parameter 3401#0 DPI
+    # = 1), as a preset's calculator_input does. A dialect without the setting is one line, exit 2.
+    program = write(tmp_path, "G00 X10\n")
+
+    def end_x(*argv):
+        status, out, err = run_main(["trace", program, "--dialect", "fanuc", *argv], capsys)
+        assert status == 0, err
+        return json.loads(out.splitlines()[0])["end"][0]
+
+    assert end_x() == 0.01
+    assert end_x("--calculator-input") == 10.0
+    assert end_x("--machine", write(tmp_path, "calculator_input: true\n", "calc.yaml")) == 10.0
+    status, out, err = run_main(["trace", program, "--dialect", "syntec", "--calculator-input"], capsys)
+    assert status == 2 and out == "" and "no calculator-type input setting" in err
+
+
+def test_run_setup_travels_in_the_machine_record(tmp_path, capsys, monkeypatch):
+    seen = {}
+
+    def run_cli(args):
+        seen.update(vars(args))
+        return 0
+
+    monkeypatch.setitem(sys.modules, "cnc_gym.runner", types.SimpleNamespace(run_cli=run_cli))
+    program = write(tmp_path, "G00 X1\n")
+    assert main(["run", program, "--setup", write(tmp_path, SETUP_FILE, "job.yaml")]) == 0
+    machine = seen["machine"]
+    assert machine.name == "vmc-small" and machine.setup.work_offsets["G54"] == (100.0, 50.0, -200.0)
+    assert machine.setup.tools[1].length_mm == 120.0 and not machine.calculator_input
+    assert main(["run", program, "--calculator-input"]) == 0 and seen["machine"].calculator_input
+
+
+def test_run_with_a_setup_simulates_the_offset_path(tmp_path, capsys):
+    # The same program with and without the setup: the G54 offset moves the first rapid 100 mm further.
+    program = write(tmp_path, "G54 G00 X0 Y0\nG01 X10. F3000.\nM30\n")
+    results = {}
+    for name, extra in (("plain", []), ("setup", ["--setup", write(tmp_path, SETUP_FILE, "job.yaml")])):
+        status, out, _ = run_main(["run", program, "--dialect", "fanuc", "--json", "--no-progress", *extra],
+                                  capsys)  # fmt: skip
+        assert status == 0
+        results[name] = json.loads(out)
+    assert results["setup"]["nominal_time_s"] > results["plain"]["nominal_time_s"] + 0.1
+
+
 def test_run_without_a_runner_is_a_one_line_error(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "cnc_gym.runner", None)  # import fails
     status, out, err = run_main(["run", write(tmp_path, "G00 X1\n")], capsys)
@@ -229,15 +303,17 @@ def test_one_line_gcode_with_a_slash_is_text_not_a_path(capsys):
 
 def test_docs_cli_matches_the_code():
     # docs/cli.md is derived from these constants; a change to one without the other fails here.
-    from cnc_gym.envs.render import DEFAULT_MAX_BINS
+    from cnc_gym.envs.render import ALONG_PATH_BINS, DEFAULT_MAX_BINS
     from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PLOT_FORMATS
+    from cnc_gym.runner import EXIT_TRUNCATED, JSON_KEYS, LONG_RUN_NOTICE_S, PATH_ERROR_BINS, PLOT_FORMATS
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
     for key in JSON_KEYS:
         assert f"`{key}`" in text, key
     assert f"default {DEFAULT_MAX_BLOCKS:,}" in text
     assert f"at most {DEFAULT_MAX_BINS} time bins" in text
+    assert f"a max envelope of at most {ALONG_PATH_BINS}\nsteps" in text
+    assert f"kept in {PATH_ERROR_BINS}\npath-length bins" in text
     assert f"exceeds {LONG_RUN_NOTICE_S / 60:g} minutes" in text
     assert f"| {EXIT_TRUNCATED} | `run` only: truncated" in text
     assert all(f"`{suffix}`" in text for suffix in PLOT_FORMATS)
@@ -273,3 +349,28 @@ def test_units_option_errors(tmp_path, capsys):
     bad.write_text("power_on_units: metric\n")
     status, out, err = run_main(["trace", program, "--machine", str(bad)], capsys)
     assert status == 2 and out == "" and "power_on_units" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize(("argv", "fragment"), [
+    (["bench", "--workers", "x"], "cnc-gym bench: error: argument --workers: invalid int value: 'x'"),
+    (["bench", "--bogus", "1"], "cnc-gym bench: error: unrecognized arguments: --bogus 1"),
+    (["run"], "cnc-gym run: error: the following arguments are required: PROGRAM"),
+    (["trace", "star", "--block-skip", "a"], "cnc-gym trace: error: argument --block-skip"),
+    (["frob"], "cnc-gym: error: argument COMMAND: invalid choice: 'frob'"),
+    ([], "cnc-gym: error: the following arguments are required: COMMAND"),
+])  # fmt: skip
+def test_usage_errors_are_the_usage_line_and_one_error_line(argv, fragment, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    out, err = capsys.readouterr()
+    lines = err.splitlines()
+    assert exit_.value.code == 2 and out == "" and len(lines) == 2, err
+    command = "cnc-gym " + argv[0] if argv and argv[0] in ("bench", "run", "trace") else "cnc-gym"
+    assert lines[0].startswith(f"usage: {command} ") and lines[0].endswith(f"(all of them: {command} --help)")
+    assert lines[1].startswith(fragment), lines[1]
+
+
+def test_help_still_shows_the_whole_usage(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["bench", "--help"])
+    assert exit_.value.code == 0 and "--per-family N" in capsys.readouterr().out

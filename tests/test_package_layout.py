@@ -159,7 +159,7 @@ def test_the_stage_check_finds_a_planted_import(source, target):
 def test_the_cycle_checks_find_plantedcycles():
     edges = {k: set(v) for k, v in GRAPH.items()}
     edges["cnc_gym.errors"].add("cnc_gym.config")  # config imports errors: a two-module cycle
-    assert any(c == {"cnc_gym.errors", "cnc_gym.config"} for c in cycles(edges))
+    assert any({"cnc_gym.errors", "cnc_gym.config"} <= c for c in cycles(edges))
     edges = {k: set(v) for k, v in GRAPH.items()}
     edges["cnc_gym.benchmark.suites"].add("cnc_gym.runner")
     edges["cnc_gym.runner"].add("cnc_gym.benchmark.metrics")

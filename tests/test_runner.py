@@ -346,3 +346,71 @@ def test_the_projection_leaves_out_a_slow_start(monkeypatch):
     rate = float(line.split("(")[1].split()[0])
     period = gymnasium.make("cnc_gym/Feedrate-v0").unwrapped.control_period_s
     assert rate == pytest.approx(period / 0.01, rel=0.2)
+
+
+def test_run_json_never_prints_a_number_that_is_not_json(monkeypatch, capsys):
+    star = simulate("star", max_time_s=0.05)
+    star.contour_error_max_mm = math.nan
+    monkeypatch.setattr(runner, "simulate", lambda *a, **k: star)
+    assert main(["run", "star", "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.strip() == ("cnc-gym run: star: contour_error_max_mm is not a finite number, "
+                                         "which JSON cannot hold")  # fmt: skip
+
+
+def test_a_step_marks_every_segment_its_reference_swept_and_only_those():
+    from cnc_gym.runner import PathErrorEnvelope
+    from cnc_gym.toolpath import ToolpathBuilder
+
+    builder = ToolpathBuilder()
+    for k in range(10):  # ten 0.1 mm chords, then one 50 mm line
+        builder.line((0.1 * k, 0, 0), (0.1 * (k + 1), 0, 0), feed=600, line=k + 1)
+    builder.line((1.0, 0, 0), (51.0, 0, 0), feed=600, line=11)
+    envelope = PathErrorEnvelope(builder.build(), bins=102)  # 0.5 mm bins
+    envelope.add(0.35, 0.001)  # the first step sweeps chords 1-4
+    envelope.add(0.95, 0.003)  # the second, chords 4-10
+    envelope.add(20.0, 0.002)  # then far into the long line
+    envelope.finish()
+    np.testing.assert_array_equal(envelope.segment[:3], 0.001)
+    np.testing.assert_array_equal(envelope.segment[3:10], 0.003)  # chord 4 got the larger of the two
+    assert envelope.segment[10] == 0.002
+    assert envelope.grid[0] == 0.003 and envelope.grid[1] == 0.003  # the bins of 0-0.5 and 0.5-1 mm
+    assert np.all(envelope.grid[2:40] == 0.002) and np.all(np.isnan(envelope.grid[41:]))  # not reached
+
+
+def test_a_long_program_plots_its_error_along_the_path_with_the_violations_marked():
+    # 10 000 G01 chords of a wiggly spiral at 150 %: the time panel drew a solid band on such a program.
+    from matplotlib.lines import Line2D
+
+    from cnc_gym.envs.render import ALONG_PATH_BINS
+
+    lines = ["G90 G21 G17", "G00 X10 Y0 Z5", "G01 Z-1 F600", "F3000"]
+    for k in range(1, 10_001):
+        t = k / 10_000
+        angle = 2 * math.pi * 6 * t
+        radius = 10 + 20 * t + 1.2 * math.sin(40 * angle)
+        lines.append(f"X{radius * math.cos(angle):.3f} Y{radius * math.sin(angle):.3f}")
+    result = simulate(ProgramText("\n".join([*lines, "M30"]) + "\n", name="spiral"), policy="constant:1.5",
+                      max_time_s=8.0)  # fmt: skip
+    assert len(result.segment_line) > 10_000 and not result.finished
+    # The recorded envelope holds the run's largest error, where the run got to and nowhere else.
+    assert np.nanmax(result.path_error_mm) == pytest.approx(result.contour_error_max_mm, rel=1e-12)
+    reached = result.path_error_edges_mm[:-1] <= result.last_path_s
+    assert np.all(np.isfinite(result.path_error_mm[reached][1:])) and np.all(~np.isfinite(
+        result.path_error_mm[~reached]))  # fmt: skip
+    fig = run_figure(result)
+    try:
+        ax_xy, ax_err = fig.axes[0], fig.axes[1]
+        assert ax_err.get_xlabel().startswith("path length")
+        envelope = [line for line in ax_err.get_lines() if line.get_label().startswith("contour error")]
+        assert len(envelope) == 1 and len(envelope[0].get_xdata()) <= 2 * ALONG_PATH_BINS  # steps, no band
+        assert ax_err.get_xlim()[1] == pytest.approx(result.path_length_mm)
+        ticks = [line for line in ax_err.get_lines() if line.get_marker() == "|"]
+        assert ticks and len(ticks[0].get_xdata()) > 0  # the violations, under the axis
+        halo = [line for line in ax_xy.get_lines() if isinstance(line, Line2D) and line.get_label() ==
+                "over tolerance"]  # fmt: skip
+        assert halo and len(halo[0].get_xdata()) > 0
+        worst = int(result.segment_line[np.nanargmax(result.segment_error_mm)])
+        assert any(f"line {worst}" in text.get_text() for ax in (ax_xy, ax_err) for text in ax.texts)
+    finally:
+        plt.close(fig)

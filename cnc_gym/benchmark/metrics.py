@@ -36,7 +36,7 @@ RECORD_KEYS = (
     "machine", "machine_sha256", "plant", "dialect", "units", "policy", "seed", "commit", "cnc_gym_version",
     "bound_s", "bound_version", "cycle_time_s", "time_ratio", "violation_length_mm", "violation_time_s",
     "contour_error_max_mm", "contour_error_rms_mm", "tolerance_mm", "violations", "steps", "finished",
-    "feasible", "score", "total_return", "reference",
+    "stopped_by", "feasible", "score", "total_return", "reference",
 )  # fmt: skip
 
 

@@ -15,7 +15,7 @@ from cnc_gym.envs.fused import FeedrateBatch, ObservationSpec, RewardSpec
 from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend
+from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend, with_setup
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.plant import make_plant
 from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
@@ -198,7 +198,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     ``Program``\ s, by the rule of :mod:`cnc_gym.programs`; None = the default task's set), ``dialect``,
     ``machine`` (name, YAML path or ``MachineConfig``), ``units`` (the input unit at power-on, ``"mm"`` or
     ``"inch"``, for programs without G20/G21; None: the machine preset's ``power_on_units``, else the
-    dialect's; an interpreted ``Program`` keeps the unit it was read in), ``action_mode``,
+    dialect's; an interpreted ``Program`` keeps the unit it was read in), ``setup`` (the operator's work
+    and tool offsets: a setup YAML path, a dict or a ``SetupConfig``, on top of the machine preset's
+    ``setup`` section; docs/configs.md), ``action_mode``,
     ``control_period_s`` (a multiple of the interpolation period), ``reward`` (None, a task YAML path or a
     dict of weights), ``max_episode_steps``, ``render_mode`` (None or ``"rgb_array"``), ``lookahead_mm``,
     ``lookahead_points``, ``plant`` (``"lti"`` or ``"mujoco"``: the servo plant, overriding the machine
@@ -253,13 +255,14 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         units: str | None = None,
         plant: str | None = None,
         contour_rule: str = "cuts",
+        setup: Any = None,
     ) -> None:
         # Every argument checked once, against one schema (cnc_gym/envs/options.py).
         args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
                              lookahead_mm=lookahead_mm, lookahead_points=lookahead_points,
-                             units=units, plant=plant, contour_rule=contour_rule)  # fmt: skip
+                             units=units, plant=plant, contour_rule=contour_rule, setup=setup)  # fmt: skip
         self._configure(args)
         self.reward_weights = resolve_reward(args.reward)
         # Observation and reward: declared once (observation_spec_v0, reward_spec_v0), assembled by the
@@ -273,7 +276,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _configure(self, args: Any) -> None:
         """The machine, periods, references and programs of checked arguments (v0's and later versions')."""
-        self.machine: MachineConfig = with_plant_backend(load_machine(args.machine), args.plant)
+        # (the setup rides in the machine record: every program's interpretation and cache key see it)
+        self.machine: MachineConfig = with_setup(with_plant_backend(load_machine(args.machine), args.plant),
+                                                 args.setup)  # fmt: skip
         self.action_mode = args.action_mode
         self.render_mode = args.render_mode
         self.dialect = args.dialect

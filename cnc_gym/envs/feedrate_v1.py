@@ -89,6 +89,7 @@ class EnvArgumentsV1:
     lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
     lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
     units: str | None = declared(spec_of(EnvArguments, "units"))
+    setup: Any = declared(spec_of(EnvArguments, "setup"))  # noqa: RUF009
     plant: str | None = declared(spec_of(EnvArguments, "plant"))
     contour_rule: str = declared(spec_of(EnvArguments, "contour_rule"), "cuts")
     planner_version: int = declared(PLANNER_VERSION_V1, 1)
@@ -199,8 +200,8 @@ class FeedrateEnvV1(FeedrateEnv):
     ## Arguments
 
     v0's (``programs``, ``dialect``, ``machine``, ``control_period_s``, ``max_episode_steps``,
-    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``, ``plant``, ``contour_rule``:
-    ``"cuts"`` for v1, ``"path"`` for v2 and v3), and ``action_mode``
+    ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``, ``setup``, ``plant``,
+    ``contour_rule``: ``"cuts"`` for v1, ``"path"`` for v2 and v3), and ``action_mode``
     (with ``residual``),
     ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
     (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
@@ -252,6 +253,7 @@ class FeedrateEnvV1(FeedrateEnv):
         units: str | None = None,
         plant: str | None = None,
         contour_rule: str = "cuts",
+        setup: Any = None,
         planner_version: int = 1,
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
@@ -259,7 +261,8 @@ class FeedrateEnvV1(FeedrateEnv):
                                 residual_range=residual_range, max_episode_steps=max_episode_steps,
                                 render_mode=render_mode, lookahead_mm=lookahead_mm,
                                 lookahead_points=lookahead_points, units=units, plant=plant,
-                                contour_rule=contour_rule, planner_version=planner_version)  # fmt: skip
+                                contour_rule=contour_rule, setup=setup,
+                                planner_version=planner_version)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
         self.reward_weights = args.reward or RankingReward()

@@ -138,6 +138,27 @@ class MachineRef(Spec):
         return "preset name, YAML path or `MachineConfig`"
 
 
+class SetupRef(Spec):
+    """The operator's tables: None (the machine preset's ``setup`` section alone), a setup YAML path, a
+    dict of its data or a ``SetupConfig`` (docs/configs.md "Setup")."""
+
+    def _parse(self, raw: Any) -> Any:
+        from cnc_gym.machine import SetupConfig, load_setup
+
+        if raw is None:
+            return None
+        if isinstance(raw, str | os.PathLike | dict | SetupConfig):
+            return load_setup(raw if not isinstance(raw, os.PathLike) else Path(raw))
+        raise Invalid(f"must be None, a setup YAML path, a dict or a SetupConfig, got {shown(raw)}")
+
+    def _allowed(self) -> str:
+        return "null, setup YAML path, dict or `SetupConfig`"
+
+
+SETUP = SetupRef(doc="the operator's work and tool offsets at power-on, on top of the machine preset's "
+                     "`setup` section (null: the preset's alone); a program's G10 still changes them")
+
+
 class RewardRef(Spec):
     """Reward weights: None (the default task's), a task YAML path, a dict of weights or RewardWeights
     (None is one of its values, not "optional")."""
@@ -162,6 +183,7 @@ class EnvArguments:
     dialect: str = declared(DIALECT, "gsk25i")
     machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
     units: str | None = declared(UNITS)
+    setup: Any = declared(SETUP)  # noqa: RUF009
     plant: str | None = declared(Choice(choices=(None, *PLANT_BACKENDS), doc="servo plant: `lti` (the exact "
                                         "linear model) or `mujoco` (masses, friction, compliance, backlash); "
                                         "null: the machine preset's `plant.backend`"))  # fmt: skip

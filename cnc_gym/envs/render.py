@@ -12,7 +12,7 @@ on an Agg canvas (no display needed) and reused.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
 
@@ -400,3 +400,144 @@ def plot_error_envelope(ax, t_end_s: np.ndarray, error_mm: np.ndarray, tolerance
     ax.set_ylabel("contour error (µm)")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False, fontsize=fontsize)
 
+
+
+#: Path-length bins the error-along-the-path panel draws at most: about one per pixel column of a
+#: plot's width, so that a program of many short segments draws as an envelope, not a solid band.
+ALONG_PATH_BINS = 400
+
+
+class Violation(NamedTuple):
+    """The worst stretch over tolerance: where along the path (mm), its program line and its error."""
+
+    s_start_mm: float
+    s_end_mm: float
+    line: int
+    error_mm: float
+
+
+def worst_violation(run: Any, tolerance_mm: float) -> Violation | None:
+    """The largest error over ``tolerance_mm`` of a run (``segment_error_mm`` per programmed segment,
+    with ``segment_s_mm`` edges and ``segment_line``; ``path_error_mm`` per path-length bin with
+    ``path_error_edges_mm``): its segment's program line, and where along the path within that segment
+    the error was largest. None when nothing is over tolerance."""
+    segment = np.asarray(run.segment_error_mm, dtype=float)
+    if not len(segment) or not np.any(segment > tolerance_mm):
+        return None
+    k = int(np.nanargmax(segment))
+    lo, hi = float(run.segment_s_mm[k]), float(run.segment_s_mm[k + 1])
+    edges, grid = np.asarray(run.path_error_edges_mm), np.asarray(run.path_error_mm, dtype=float)
+    inside = np.flatnonzero((edges[1:] >= lo) & (edges[:-1] <= hi) & np.isfinite(grid))
+    if len(inside):
+        b = int(inside[np.argmax(grid[inside])])
+        lo, hi = max(lo, float(edges[b])), min(hi, float(edges[b + 1]))
+    return Violation(lo, hi, int(run.segment_line[k]), float(segment[k]))
+
+
+def path_envelope(edges_mm: np.ndarray, error_mm: np.ndarray,
+                  max_bins: int = ALONG_PATH_BINS) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The maxima ``error_mm`` of the stretches of path from ``edges_mm[i]`` to ``edges_mm[i + 1]`` as a step
+    envelope: ``(x, y)`` with bin k from ``x[k]`` to ``x[k + 1]`` at ``y[k]``. At most ``max_bins`` bins: the
+    stretches themselves when there are few enough, else equal path-length bins, each at the largest error
+    of the stretches it overlaps (NaN where none was reached)."""
+    edges = np.asarray(edges_mm, dtype=float)
+    error = np.asarray(error_mm, dtype=float)
+    keep = edges[1:] > edges[:-1]  # zero-length stretches (dwells) take no room on a length axis
+    if len(error) <= max_bins or not np.any(keep):
+        return edges, error
+    lo, hi = float(edges[0]), float(edges[-1])
+    width = (hi - lo) / max_bins
+    x = lo + width * np.arange(max_bins + 1)
+    first = np.clip(((edges[:-1][keep] - lo) / width).astype(np.int64), 0, max_bins - 1)
+    last = np.clip(np.ceil((edges[1:][keep] - lo) / width).astype(np.int64) - 1, first, max_bins - 1)
+    bins, owner = range_indices(first, last)
+    y = np.full(max_bins, np.nan)
+    np.fmax.at(y, bins, error[keep][owner])
+    return x, y
+
+
+def range_indices(first: np.ndarray, last: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every index of the ranges ``first[k]..last[k]`` (inclusive, ``last >= first``), and for each the
+    range ``k`` it came from."""
+    counts = np.asarray(last) - np.asarray(first) + 1
+    owner = np.repeat(np.arange(len(counts)), counts)
+    offset = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    return np.asarray(first)[owner] + offset, owner
+
+
+def plot_error_along_path(ax, edges_mm: np.ndarray, error_mm: np.ndarray, tolerance_mm: float, *,
+                          segment_edges_mm: np.ndarray | None = None, cutting: np.ndarray | None = None,
+                          worst: Violation | None = None, max_bins: int = ALONG_PATH_BINS,
+                          fontsize: float | None = None) -> None:  # fmt: skip
+    """Contour error against path length: the envelope of :func:`path_envelope` filled below, the
+    stretches over tolerance in red, rapids shaded grey (``cutting`` per segment of ``segment_edges_mm``;
+    the programmed path's meter counts their error too), the tolerance line and the worst violation named
+    by its program line. The legend sits under the axes so it never hides the line."""
+    tol_um = tolerance_mm * 1000.0
+    x, y = path_envelope(edges_mm, error_mm, max_bins)
+    top = tol_um
+    if len(y) and np.any(np.isfinite(y)):
+        y_um = y * 1000.0
+        xs = np.repeat(x, 2)[1:-1]  # each bin as a flat step: no slope between neighbours
+        ys = np.repeat(y_um, 2)
+        width = (x[-1] - x[0]) / max(len(y), 1)
+        ax.fill_between(xs, ys, color="C0", alpha=0.3, lw=0)
+        ax.plot(xs, ys, color="C0", lw=0.8, label=f"contour error (max per {width:.2g} mm of path)")
+        over = ys > tol_um
+        if np.any(over):
+            ax.fill_between(xs, ys, tol_um, where=over, color="C3", alpha=0.6, lw=0, interpolate=False,
+                            label="over tolerance")  # fmt: skip
+            # ... and a tick under the axis at each such stretch: a narrow spike is found at a glance.
+            over_bins = np.flatnonzero(y_um > tol_um)
+            ax.plot(0.5 * (x[over_bins] + x[over_bins + 1]), np.zeros(len(over_bins)), "|", color="C3",
+                    markersize=12, mew=1.5, clip_on=False, zorder=4)  # fmt: skip
+        top = max(top, float(np.nanmax(y_um)))
+    if cutting is not None and segment_edges_mm is not None and len(cutting) == len(segment_edges_mm) - 1:
+        for a, b in _runs(~np.asarray(cutting, dtype=bool) & (np.diff(segment_edges_mm) > 0)):
+            ax.axvspan(segment_edges_mm[a], segment_edges_mm[b + 1], color="0.88", lw=0, zorder=0)
+    ax.axhline(tol_um, color="C3", ls="--", lw=1.2, label=f"tolerance {tol_um:g} µm")
+    if worst is not None:
+        ax.annotate(f"line {worst.line}: {worst.error_mm * 1000:.1f} µm",
+                    xy=(0.5 * (worst.s_start_mm + worst.s_end_mm), worst.error_mm * 1000.0), xytext=(0, 8),
+                    textcoords="offset points", ha="center", color="C3", fontsize=fontsize or 9)  # fmt: skip
+    ax.set_ylim(0.0, 1.15 * top)
+    if len(edges_mm) >= 2 and edges_mm[-1] > edges_mm[0]:
+        ax.set_xlim(edges_mm[0], edges_mm[-1])
+    ax.set_xlabel("path length (mm; rapids shaded)")
+    ax.set_ylabel("contour error (µm)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2, frameon=False, fontsize=fontsize)
+
+
+def mark_violations(views: dict, xyz: np.ndarray, sample_s: np.ndarray, edges_mm: np.ndarray,
+                    error_mm: np.ndarray, tolerance_mm: float,
+                    worst: Violation | None = None) -> None:  # fmt: skip
+    """Mark in each view (``{"XY": ax, ...}``) the path points (at path positions ``sample_s``) whose
+    stretch of path (``edges_mm``, ``error_mm``) is over tolerance, and the worst violation with its
+    program line."""
+    if worst is None or len(xyz) != len(sample_s) or not len(xyz) or len(edges_mm) < 2:
+        return
+    rows = np.clip(np.searchsorted(edges_mm, sample_s, side="right") - 1, 0, len(error_mm) - 1)
+    over = np.asarray(error_mm)[rows] > tolerance_mm
+    at_worst = (sample_s >= worst.s_start_mm) & (sample_s <= worst.s_end_mm)
+    spot = xyz[np.flatnonzero(at_worst)[len(np.flatnonzero(at_worst)) // 2]] if np.any(at_worst) else None
+    for label, ax in views.items():
+        i, j = _VIEW_AXES[label]
+        # A red halo under the feed colours (which stay readable), where the path was cut over tolerance.
+        ax.plot(xyz[over, i], xyz[over, j], "o", ms=6, mew=0, color="C3", alpha=0.3, ls="none", zorder=1.5,
+                label="over tolerance")  # fmt: skip
+        if spot is not None:
+            ax.annotate(f"worst: line {worst.line}, {worst.error_mm * 1000:.1f} µm", xy=(spot[i], spot[j]),
+                        xytext=(18, 18), textcoords="offset points", color="C3", fontsize=9, zorder=5,
+                        arrowprops={"arrowstyle": "->", "color": "C3"}, bbox=_LABEL_BOX)  # fmt: skip
+
+
+_LABEL_BOX = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "C3", "alpha": 0.85}
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``(first, last)`` index of each run of True in ``mask``."""
+    idx = np.flatnonzero(mask)
+    if not len(idx):
+        return []
+    gap = np.diff(idx) > 1
+    return list(zip(idx[np.r_[True, gap]].tolist(), idx[np.r_[gap, True]].tolist(), strict=True))

@@ -21,7 +21,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
+from cnc_gym.gcode.dialect import calculator_input as calculator_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.program import Program
 from cnc_gym.gcode.settings import (
@@ -34,7 +36,7 @@ from cnc_gym.gcode.settings import (
 from cnc_gym.machine import INPUT_UNITS
 
 if TYPE_CHECKING:
-    from cnc_gym.machine import MachineConfig
+    from cnc_gym.machine import MachineConfig, SetupConfig
     from cnc_gym.toolpath import Toolpath
 
 __all__ = ["DIALECT_MODULES", "Dialect", "Interpreter", "Program", "get_dialect", "interpret",
@@ -66,12 +68,15 @@ def interpret(
     max_seconds: float = DEFAULT_MAX_SECONDS,
     max_segments: int = DEFAULT_MAX_SEGMENTS,
     program_dir: str | Path | None = None,
+    follow_links: bool = False,
     macro_calls: MacroCalls | dict | None = None,
     main_m99: str = "end",
     tool_offsets=None,
     tool_measurement=None,
     skip_signal=None,
     units: str | None = None,
+    setup=None,
+    calculator_input: bool | None = None,
 ) -> Toolpath:
     """Interpret a whole program once into an immutable Toolpath (machine coordinates, mm, mm/min, s).
 
@@ -80,7 +85,8 @@ def interpret(
     bound on the tool path's segments (``segment-budget``). The defaults (2 000 000 blocks, 60 s,
     2 000 000 segments) are far above real programs; raise them for a really long one.
     ``program_dir``: where M98/G65 look for programs not in the text (files ``O1002``, ``O1002.nc``,
-    ``1002.nc``); default the folder of ``file`` when that is a real file.
+    ``1002.nc``); default the folder of ``file`` when that is a real file. A called program's file that leads
+    out of that folder (a symbolic link to elsewhere) is ``program-not-found`` unless ``follow_links``.
     ``macro_calls``: G/M/T codes that call programs (GSK parameters 6050-6089, 6001#0), as a
     :class:`~cnc_gym.gcode.dialect.MacroCalls` or ``{"g_macro": {12: 9010}, "m_macro": {…},
     "m_sub": {6: 9001}, "t_sub": 9000}``; default the dialect's (GSK: none, the parameters' standard setting).
@@ -101,9 +107,21 @@ def interpret(
     machine sets; shop programs for inch machines often carry no G20); the program's own G20/G21 still
     rules. Default: ``machine``'s ``power_on_units`` when it sets one, else the dialect's power-on code
     (G21 on every built-in dialect; Syntec's G71).
+    ``setup``: the operator's tables at power-on, a setup file's path, its data (``{"work_offsets": {"G54":
+    [100, 50, -200]}, "tools": {1: {"length_mm": 120, "radius_mm": 5}}}``) or a
+    :class:`~cnc_gym.machine.SetupConfig`, on top of ``machine``'s ``setup`` section (docs/configs.md
+    "Setup"); ``tool_offsets`` entries go on top of both. G10 still changes the tables at run time.
+    ``calculator_input``: True reads a number without a decimal point in mm, inch or seconds where the
+    dialect reads least increments (Fanuc parameter 3401#0 DPI = 1;
+    :func:`~cnc_gym.gcode.dialect.calculator_input`; a dialect without the setting is a ConfigError);
+    None: ``machine``'s ``calculator_input``, else the dialect's standard reading.
     Every program error raises :class:`~cnc_gym.errors.ProgramError` (``FILE:LINE: message [code]``).
     """
     spec = get_dialect(dialect)
+    if calculator_input is None and machine is not None:
+        calculator_input = machine.calculator_input
+    if calculator_input:
+        spec = calculator_dialect(spec)
     switches = _skip_switches(block_skip)
     # The cyclic garbage collector would otherwise rescan the growing list of blocks and segment rows
     # again and again (no cycles are created here): pausing it makes a 100 000-line program several
@@ -122,19 +140,32 @@ def interpret(
         folder = None if program_dir is None else str(program_dir)
         options = FlowOptions(max_blocks=int(max_blocks), max_seconds=float(max_seconds),
                               max_segments=int(max_segments), program_dir=folder, macro_calls=calls,
-                              main_m99=main_m99)  # fmt: skip
+                              main_m99=main_m99, follow_links=bool(follow_links))  # fmt: skip
         if units is not None and units not in INPUT_UNITS:
             raise ConfigError(f"units must be 'mm' or 'inch', got {units!r}")
-        program = spec.language.reader(spec, calls).read(text, file)
+        tables = _setup(machine, setup)
+        reader = spec.language.reader(spec, calls)
+        reader.max_blocks = int(max_blocks)  # a text of more blocks than a run may execute: refused as read
+        program = reader.read(text, file)
         toolpath = Interpreter(program, spec, block_skip=switches, machine=machine, tool_offsets=tool_offsets,
                                tool_measurement=tool_measurement, skip_signal=skip_signal,
-                               units=units).run(options)  # fmt: skip
+                               units=units, setup=tables).run(options)  # fmt: skip
     finally:
         if collecting:
             gc.enable()
     if machine is not None:
         _check_travel(toolpath, machine, spec)
     return toolpath
+
+
+def _setup(machine: MachineConfig | None, setup) -> SetupConfig | None:
+    """The setup of a run: the machine preset's section with ``setup=`` on top (None: none at all)."""
+    from cnc_gym.machine import load_setup, merge_setups
+
+    given = None if setup is None else load_setup(setup)
+    if machine is None:
+        return given
+    return merge_setups(machine.setup, given)
 
 
 def interpret_file(
@@ -145,13 +176,15 @@ def interpret_file(
     block_skip: frozenset[int] = frozenset(),
     **options,
 ) -> Toolpath:
-    """Interpret a program file (errors name the path). An unreadable file raises OSError.
+    """Interpret a program file (errors name the path). A path that is not a regular file, or a file over
+    :data:`~cnc_gym.files.MAX_PROGRAM_BYTES` (64 MiB), is a ConfigError before anything is read
+    (:func:`~cnc_gym.files.read_regular_file`); a missing or unreadable file raises OSError.
 
     ``options``: as :func:`interpret` (``max_blocks``, ``max_seconds``, ``max_segments``, ``program_dir``
     — default the file's folder —, ``macro_calls``, ``main_m99``, ``tool_offsets``, ``units`` …).
     """
     path = Path(path)
-    raw = path.read_bytes()
+    raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="G-code program")
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark, if any, is not part of the program
     except UnicodeDecodeError:

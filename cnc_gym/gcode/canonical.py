@@ -253,11 +253,17 @@ def map_arc(chain: TransformChain, plane: Plane, sweep: float, start_m: Vec,
 
 
 class Output(Protocol):
-    """The output stage the interpreter moves: :class:`CanonicalMachine`, or a stage in front of it that
-    has the same interface (cutter compensation's)."""
+    """The output stage the interpreter moves (``State.out``): :class:`CanonicalMachine`, or a stage in front
+    of it that implements the same protocol (cutter compensation's ``OffsetStage``). The position is the
+    one moves are programmed from; the context attributes (line … spindle) go with the next segments;
+    ``rotary_next`` is the rotary axes' target of the next straight move."""
 
-    position: Vec
-    rotary: tuple[float, ...]
+    @property
+    def position(self) -> Vec: ...
+
+    @property
+    def rotary(self) -> tuple[float, ...]: ...
+
     rotary_next: tuple[float, ...] | None
     line: int
     file_index: int
@@ -275,6 +281,7 @@ class Output(Protocol):
 
     def dwell(self, seconds: float, modes: SegmentMode = SegmentMode.NONE) -> None: ...
 
+
 class OffsetStack:
     """Work offsets of one program run, all in mm (stored physically; G20/G21 do not rescale them).
 
@@ -291,6 +298,10 @@ class OffsetStack:
         self.active_wcs: int | None = 0
         self.local: list[float] = [0.0, 0.0, 0.0]  # G52
         self.floating: list[float] | None = None  # G92 origin in machine coordinates, or None
+        #: G92 shifts every work system by one vector (Fanuc 0i) instead of replacing them until the next
+        #: G54-G59 (GSK 25i §3.2.13); set from the dialect (``Dialect.g92_shifts_work_systems``).
+        self.g92_shifts_all = False
+        self.shift: list[float] = [0.0, 0.0, 0.0]  # the G92 shift of every work system (g92_shifts_all)
         self.tool_length: list[float] = [0.0, 0.0, 0.0]  # G43/G44 vector (compensation module)
         self.origin: Vec = ZERO
         self.update()
@@ -304,12 +315,16 @@ class OffsetStack:
         return extra if extra > 0 else 0
 
     def work_origin(self) -> list[float]:
-        if self.floating is not None:
+        if self.floating is not None and not self.g92_shifts_all:
             return list(self.floating)
         if self.active_wcs is None:
-            return list(self.external)
-        w = self.wcs[self.active_wcs]
-        return [self.external[a] + w[a] for a in range(3)]
+            base = list(self.external)
+        else:
+            w = self.wcs[self.active_wcs]
+            base = [self.external[a] + w[a] for a in range(3)]
+        if self.g92_shifts_all:
+            base = [base[a] + self.shift[a] for a in range(3)]
+        return base
 
     def update(self) -> None:
         """Recompute the program→machine translation after any change."""
@@ -321,16 +336,25 @@ class OffsetStack:
     def select_wcs(self, index: int | None) -> None:
         """G54..G59 (0..5), G54.1 P1..P48 (6..53); None: no work coordinate system, the work origin is the
         machine zero (plus the external offset): a DIN controller's G53 "no zero offset". GSK: selecting
-        any work coordinate system drops a G92 floating system (§3.2.13). An index outside the stack is a
+        any work coordinate system drops a G92 floating system (§3.2.13); with ``g92_shifts_all`` (Fanuc
+        0i) the G92 shift stays and applies to the new system too. An index outside the stack is a
         ValueError (a negative one would silently pick a slot from the end)."""
         if index is not None and not 0 <= index < len(self.wcs):
             raise ValueError(f"work coordinate system index {index} is not 0..{len(self.wcs) - 1}")
         self.active_wcs = index
-        self.floating = None
+        if not self.g92_shifts_all:
+            self.floating = None
         self.update()
 
     def set_floating(self, axis: int, machine_pos: float, program_value: float) -> None:
-        """G92 on one axis: the current machine position gets ``program_value``; clears that axis's G52."""
+        """G92 on one axis: the current machine position gets ``program_value``; clears that axis's G52.
+        With ``g92_shifts_all`` the difference becomes the shift of every work system (Fanuc 0i)."""
+        if self.g92_shifts_all:
+            self.floating = self.floating or [0.0, 0.0, 0.0]  # (marks "a G92 is in force")
+            unshifted = self.work_origin()[axis] - self.shift[axis]
+            self.shift[axis] = machine_pos - program_value - self.tool_length[axis] - unshifted
+            self.local[axis] = 0.0
+            return
         if self.floating is None:
             self.floating = self.work_origin()
         # The tool length vector stays in the origin, so the position reads ``program_value`` right after.

@@ -23,7 +23,11 @@ def code_name(letter: str, key: int) -> str:
 
 
 def round_to(x: float, step: float) -> float:
-    """Round half away from zero to a multiple of ``step`` (an address's least input increment)."""
+    """Round half away from zero to a multiple of ``step`` (an address's least input increment). An infinite
+    or NaN ``x`` (a literal of 400 digits reads as infinity) comes back as it is, for the caller's range check
+    to refuse."""
+    if not math.isfinite(x):
+        return x
     n = math.floor(abs(x) / step + 0.5 + 1e-9)
     return math.copysign(n * step, x) if n else 0.0
 

@@ -64,6 +64,13 @@ class Seam(Protocol):
         names (:meth:`Dialect.error`); file and line added later."""
         ...
 
+    def notice(self, message: str, code: str, *, line: int | None = None) -> None:
+        """A one-line note about the current block (or ``line`` of the running file) for the user
+        (``FILE:LINE: note: message [code]``, on the tool path's ``notices``): something the controller does
+        without an alarm that the user should know (words it does not use, text it does not run, a setting
+        the program seems to need)."""
+        ...
+
     @property
     def program_position(self) -> Vec:
         """The current position in program coordinates."""
@@ -218,6 +225,8 @@ class BlockHooks:
 
 
 class ProgramReader(Protocol):
+    max_blocks: int  # most blocks a program text may hold (the run's max_blocks)
+
     def read(self, text: str, file: str = "<program>") -> Program: ...
 
 
@@ -366,11 +375,36 @@ class Dialect:
     user_alarm_base: int | None = None
     #: A number without a decimal point is in mm/inch/s (True, GSK 1800#0 DPI = 1) or in least increments.
     integer_is_unit: bool = True
+    #: The controller parameter that switches to calculator-type input (a number without a decimal point
+    #: in mm/inch/s: ``integer_is_unit``), as its manual names it (Fanuc "parameter 3401#0 DPI"); "": the
+    #: dialect has no such setting. :func:`calculator_input` makes the variant.
+    calculator_input_parameter: str = ""
     #: Least input increment in mm (G21) and inch (G20); literals are truncated to it, variables rounded.
     least_increment_mm: float = 0.0001
     least_increment_inch: float = 0.0001
     #: Largest start/end radius difference of an I/J/K arc, mm (GSK P1810); 0 disables the check.
     arc_radius_tolerance_mm: float = 0.01
+    #: The controller's parameter that holds that tolerance, as its manual names it ("P1810", "parameter
+    #: 3410"), cited in the arc error; "" where the manual names none.
+    arc_tolerance_parameter: str = ""
+    #: A dwell P with a decimal point (G04 P1.5, a cycle's P1.5) is in seconds (Haas: "P10. is 10 seconds,
+    #: P10 10 milliseconds"); False: refused (``decimal-point-not-allowed``, P is in ms).
+    dwell_p_decimal_seconds: bool = False
+    #: G codes (table keys) that take their block's comment as an argument (Haas G47: the text to engrave):
+    #: the reader keeps the comment on such a block (``Block.comment``).
+    comment_codes: frozenset[int] = frozenset()
+    #: Abbreviated macro words the reader writes out (Fanuc: ``WH`` → ``WHILE``, ``SQ`` → ``SQRT`` …;
+    #: ``lang/fanuc/abbreviations.py``); empty: none.
+    macro_abbreviations: Mapping[str, str] = field(default_factory=dict)
+    #: The control has an external work offset (G10 L2 P0) added to every work system: a setup may set it
+    #: (``EXT``).
+    external_work_offset: bool = False
+    #: The manual whose sections the Fanuc family's messages cite ("GSK 25i": the family was written from
+    #: it); "": the dialect's own manual numbers its sections otherwise, and those messages cite none.
+    family_manual: str = ""
+    #: G92 shifts every work coordinate system by one vector, which stays across G54-G59 (Fanuc 0i); False:
+    #: G92 sets a floating system that replaces them until the next G54-G59 (GSK 25i §3.2.13).
+    g92_shifts_work_systems: bool = False
     max_words_per_block: int = 32
     #: Longest literal word, address letter included (GSK alarm 13 "A UNIT CHARACTER STRING EXCEEDS 16");
     #: words holding an expression are not limited.
@@ -378,9 +412,14 @@ class Dialect:
     max_m_per_block: int = 3
     #: M-code groups (codes of one group may not share a block): group name → M keys.
     m_groups: Mapping[str, frozenset[int]] = field(default_factory=dict)
-    #: M codes the machine builder defines (the Fanuc-family range M10-M89 …) that this dialect rejects as
-    #: machine-specific, naming them: key → what the code usually does on such machines ("" if nothing).
+    #: M codes the machine builder defines (the Fanuc-family range M10-M89 …): key → what the code usually
+    #: does on such machines ("" if nothing). Refused by name, unless ``accepts_machine_mcodes``.
     machine_mcodes: Mapping[int, str] = field(default_factory=dict)
+    #: An M code that is not in ``mcodes`` is a machine function the control hands to the machine (run
+    #: without motion, listed on the tool path), as a Fanuc control does; one outside ``machine_mcodes`` and
+    #: the machine preset's list gets a note, and a preset's ``machine_functions.strict`` refuses it. False:
+    #: only the preset's list is accepted, every other unknown M code is refused.
+    accepts_machine_mcodes: bool = False
     #: Bracket nesting limit in expressions (GSK: 5, functions' brackets included).
     max_bracket_depth: int = 5
     #: Macro statement keywords (IF, THEN, GOTO, WHILE, DO, END) the reader recognises.
@@ -435,6 +474,11 @@ class Dialect:
             object.__setattr__(self, "gcodes", {**self.gcodes, key: replace(spec, group=1)})
         object.__setattr__(self, "roles", Roles.from_tables(self.gcodes))
 
+    def cite(self, section: str) -> str:
+        """``GSK 25i §3.2.19`` for a family message that cites the family's manual, or "" where this
+        dialect's manual is another (its sections would be wrong there)."""
+        return f"{self.family_manual} {section}" if self.family_manual else ""
+
     def alarm(self, code: str, condition: str | int | None = None) -> int | None:
         """The alarm number of an error: the number of ``condition`` when one is named (a key of
         :attr:`alarms`, none when this dialect has no number for it; an int is a dialect's own number,
@@ -480,3 +524,18 @@ def get_dialect(name: str | Dialect) -> Dialect:
     dialect = importlib.import_module(module).DIALECT
     _CACHE[key] = dialect
     return dialect
+
+
+def calculator_input(dialect: Dialect) -> Dialect:
+    """``dialect`` with calculator-type input: a number without a decimal point is in mm, inch or seconds
+    (``X10`` is 10 mm), the setting of ``calculator_input_parameter`` (Fanuc 3401#0 DPI = 1); a dialect
+    that reads numbers so already is returned as it is, one without the setting is a ConfigError."""
+    if dialect.integer_is_unit:
+        return dialect
+    if not dialect.calculator_input_parameter:
+        raise ConfigError(f"dialect {dialect.name} has no calculator-type input setting (its manual reads a "
+                          "number without a decimal point in least input units, always)")  # fmt: skip
+    key = f"{dialect.name}+calculator"
+    if key not in _CACHE:
+        _CACHE[key] = replace(dialect, integer_is_unit=True)
+    return _CACHE[key]

@@ -23,12 +23,13 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.errors import ConfigError, ProgramError, notice_line
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, MapError, map_arc
 from cnc_gym.gcode.codes import CodeSpec, code_name, gkey, round_to
 from cnc_gym.gcode.dialect import BlockPlan
 from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.settings import FlowOptions, ToolMeasurement, skip_signal_surfaces
+from cnc_gym.gcode.setup import apply_setup
 from cnc_gym.gcode.state import CompensationState, State
 from cnc_gym.machine import INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
@@ -36,7 +37,7 @@ from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathB
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect, Target, Vec
     from cnc_gym.gcode.program import Block, Program
-    from cnc_gym.machine import MachineConfig
+    from cnc_gym.machine import MachineConfig, SetupConfig
 
 INCH_MM = 25.4
 #: Pseudo-spec of an axis-only block: the modal motion.
@@ -48,13 +49,14 @@ class Interpreter:
 
     ``units``: the input unit in force at power-on, ``"mm"`` or ``"inch"`` (a controller parameter; the
     program's own G20/G21 still rules); None: the machine preset's ``power_on_units``, else the dialect's
-    power-on code.
+    power-on code. ``setup``: the operator's work offsets and tool offsets at power-on (:mod:`.setup`);
+    ``tool_offsets`` entries are written on top of its tools.
     """
 
     def __init__(self, program: Program, dialect: Dialect, *, block_skip: frozenset[int] = frozenset(),
                  start: tuple[float, float, float] = (0.0, 0.0, 0.0), machine: MachineConfig | None = None,
                  tool_offsets=None, tool_measurement=None, skip_signal=None,
-                 units: str | None = None) -> None:  # fmt: skip
+                 units: str | None = None, setup: SetupConfig | None = None) -> None:  # fmt: skip
         self.dialect = dialect
         language = dialect.language
         # Rotary axes (A/B/C) the machine has: they move with G00/G01 only, in degrees.
@@ -76,6 +78,7 @@ class Interpreter:
             comp=CompensationState(settings, settings.new_offsets(tool_offsets)),
         )
         st.rotary_axes = rotary_axes
+        st.offsets.g92_shifts_all = dialect.g92_shifts_work_systems
         st.rotary_origin = [0.0] * len(rotary_axes)
         st.increment = dialect.least_increment_mm
         st.feed = dialect.hooks.initial_feed
@@ -129,6 +132,10 @@ class Interpreter:
             units = machine.power_on_units  # the preset's parameter, below an explicit argument
         if units is not None:
             self._power_on_units(units)
+        if setup is not None and not setup.empty:
+            apply_setup(self, setup)  # the operator's tables, before the program's first block
+            if tool_offsets is not None:  # … and the explicit tables of this run on top
+                st.comp.offsets = settings.new_offsets(_with_tables(st.comp.offsets, tool_offsets))
         self.update_modes()
 
     def _power_on_units(self, units: str) -> None:
@@ -149,10 +156,15 @@ class Interpreter:
         dialect's end-of-program hooks, and build the tool path."""
         st = self.state
         language = self.dialect.language
+        for line, level, message, code in st.program.notices:
+            st.builder.notice(notice_line(st.program.file, line, message, code, level))
         if language.system_variables is not None:
             st.variables.system = language.system_variables(self)
         try:
             language.runner(self, options or FlowOptions()).run()
+        except ProgramError as exc:  # the notes made so far go with the error (a warning may explain it)
+            exc.notices = exc.notices or tuple(st.builder.notices)
+            raise
         finally:
             # The runner and the system table point back here: drop them so no reference cycle keeps a
             # run's blocks alive after it returns.
@@ -164,6 +176,10 @@ class Interpreter:
 
     def error(self, message: str, code: str, *, alarm: str | int | None = None) -> ProgramError:
         return self.dialect.error(message, code, alarm=alarm)
+
+    def notice(self, message: str, code: str, *, line: int | None = None) -> None:
+        st = self.state
+        st.builder.notice(notice_line(st.file, st.out.line if line is None else line, message, code))
 
     def check_budget(self) -> None:
         runner = self.state.flow
@@ -190,7 +206,7 @@ class Interpreter:
         if block.has_expr:
             gs, ms, values = split_words(self.evaluate_words(block.words))
         else:
-            gs, ms, values = block.gs, block.ms, block.values
+            gs, ms, values = block.split()
         if self._normalise is not None:
             gs, ms, values = self._normalise(self, gs, ms, values)
         st.out.line = block.line
@@ -259,7 +275,7 @@ class Interpreter:
                 key = gkey(number)
                 spec = dialect.mcodes.get(key)
                 if spec is None:
-                    raise self._unknown_m(key)
+                    spec = self._machine_function(key)  # or the error of an unknown M code
                 if not spec.implemented:
                     raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented",
                                      alarm=dialect.addresses["M"].alarm)  # fmt: skip
@@ -318,6 +334,7 @@ class Interpreter:
         order = self._order
         items.sort(key=lambda s: order[s.step])
         st.block_words = block.words
+        st.block = block
         st.g53 = g53
         actions = self._actions
         for spec in items:
@@ -328,16 +345,37 @@ class Interpreter:
             st.restore_modes = False
             self.update_modes()
 
-    def _unknown_m(self, key: int) -> ProgramError:
+    def _machine_function(self, key: int) -> CodeSpec:
+        """An M code outside the dialect's table: a machine function when the machine preset lists it, or
+        when the dialect hands unknown M codes to the machine (``accepts_machine_mcodes``; one it does not
+        list either gets a note, and ``machine_functions.strict`` refuses it); else the unknown-code
+        error."""
         dialect = self.dialect
         name = code_name("M", key)
-        what = dialect.machine_mcodes.get(key)
-        if what is not None:
-            usual = f" (on many machines: {what})" if what else ""
-            return self.error(f"{name} is a machine-specific M code{usual}: the {dialect.title} dialect does "
-                              "not know this machine's M-code list, so it refuses it rather than ignore it",
-                              "unknown-code", alarm=dialect.addresses["M"].alarm)  # fmt: skip
-        return self.error(f"unknown M code {name}", "unknown-code", alarm=dialect.addresses["M"].alarm)
+        machine = self.state.machine
+        own = machine.machine_functions if machine is not None else None
+        listed = own.m_codes.get(key // 10) if own is not None and key % 10 == 0 else None
+        usual = dialect.machine_mcodes.get(key)
+        alarm = dialect.addresses["M"].alarm
+        if listed is not None:
+            return CodeSpec(name, -1, "machine_function", listed, step="stop")
+        if dialect.accepts_machine_mcodes:
+            if usual is not None:
+                return CodeSpec(name, -1, "machine_function", usual, step="stop")
+            if own is None or not own.strict:
+                self.notice(f"{name} is not on this machine's M-code list: run as a machine function without "
+                            "motion (list it in the machine preset's machine_functions.m_codes, or set "
+                            "machine_functions.strict to refuse it)", "machine-function")  # fmt: skip
+                return CodeSpec(name, -1, "machine_function", "", step="stop")
+            raise self.error(f"unknown M code {name}: not on this machine's M-code list (machine_functions."
+                             "strict)", "unknown-code", alarm=alarm)  # fmt: skip
+        if usual is not None:
+            on = f" (on many machines: {usual})" if usual else ""
+            raise self.error(f"{name} is a machine-specific M code{on}: the {dialect.title} dialect does not "
+                             "know this machine's M-code list, so it refuses it rather than ignore it (list "
+                             "it in the machine preset's machine_functions.m_codes)", "unknown-code",
+                             alarm=alarm)  # fmt: skip
+        raise self.error(f"unknown M code {name}", "unknown-code", alarm=alarm)
 
     def _reject_words(self, values: dict[str, float], allowed: frozenset, owner: CodeSpec | None) -> None:
         st = self.state
@@ -351,8 +389,8 @@ class Interpreter:
                                  "rotary-axis-context")  # fmt: skip
             if letter in self.dialect.other_axes:
                 axes = self.dialect.axes + st.rotary_axes
-                hint = (" — rotary axes come from the machine preset's rotary_axes (the gsk25i preset has B)"
-                        if letter in "ABC" else "")  # fmt: skip
+                hint = (" — rotary axes come from the machine preset's rotary_axes (--machine vmc-4axis "
+                        "has A, gsk25i B)" if letter in "ABC" else "")  # fmt: skip
                 raise self.error(f"axis {letter} is not on this machine (axes: {axes}){hint}",
                                  "unsupported-axis")  # fmt: skip
             context = f"with {owner.name}" if owner is not None else "in this block"
@@ -547,6 +585,21 @@ class Interpreter:
             m, o = st.out.position, st.offsets.origin
             w = (m[0] - o[0], m[1] - o[1], m[2] - o[2])
             st.program_point = st.chain.invert(w) if st.chain.active else w
+
+
+def _with_tables(memory, tables):
+    """``memory`` (ToolOffsets) with the entries of ``tables`` (a ``tool_offsets=`` mapping or ToolOffsets)
+    written over it."""
+    from cnc_gym.gcode.offsets import ToolOffsets
+
+    extra = ToolOffsets.from_mapping(tables, count=memory.count, geometry_limit_mm=memory.geometry_limit_mm,
+                                     wear_limit_mm=memory.wear_limit_mm, d_is_diameter=memory.d_is_diameter)
+    merged = ToolOffsets.from_mapping(memory)
+    for key, table in extra.tables.items():
+        for number, value in enumerate(table):
+            if value:
+                merged.tables[key][number] = value
+    return merged
 
 
 def _on_plane(center, start, plane: Plane) -> Vec:

@@ -57,6 +57,11 @@ class CycleParameters:
     #: hold and manual retract at the bottom (like G88, without the shift). The manual names no selector
     #: but "canned cycle I / II"; its only parameter there, 009#7 FIX2, is not in the Parameter volume.
     g87_variant: int = 2
+    #: A cycle whose R was never given drills from the initial level (R = the initial level; Haas: R is
+    #: optional). False: the first drilling block must give R (``cycle-missing-data``).
+    r_defaults_to_initial: bool = False
+    #: L is the repeat count of a cycle block, as K (Haas, and the L of older Fanuc 0-M programs).
+    l_repeats: bool = False
 
     def __post_init__(self) -> None:
         if self.shift_direction not in (0, 1, 2, 3):
@@ -212,6 +217,8 @@ class FlowOptions:
     (a simulated episode is one part; docs/gcode.md). ``"restart"``: the controller's behaviour (§1.3.1), back
     to the start (or to ``Nn`` for ``M99 Pn``), so only a macro exit (a GOTO to M30) ends the run, else
     ``max_blocks`` does.
+    ``follow_links``: a called program's file may lead out of the folder programs are looked up in (a
+    symbolic link to elsewhere); off by default, when such a file is refused (:meth:`leaves_folder`).
     """
 
     max_blocks: int = DEFAULT_MAX_BLOCKS
@@ -220,15 +227,34 @@ class FlowOptions:
     program_dir: str | None = None
     macro_calls: MacroCalls | None = None
     main_m99: str = "end"
+    follow_links: bool = False
+
+    def program_folder(self, main_file: str) -> str | None:
+        """The folder called programs are looked up in: ``program_dir``, else the main program's own folder
+        (none when the main program is not a file)."""
+        if self.program_dir is not None:
+            return self.program_dir
+        main = Path(main_file)
+        return str(main.parent) if main.is_file() else None
+
+    def leaves_folder(self, path: Path, main_file: str) -> str | None:
+        """Why a called program's file ``path`` may not be read: it leads out of the lookup folder (a
+        symbolic link, itself or on the way, to somewhere else), unless ``follow_links``. None when it may.
+        The folder's own real path is the boundary, so a folder reached through a link is fine."""
+        folder = self.program_folder(main_file)
+        if self.follow_links or folder is None:
+            return None
+        root = os.path.realpath(folder)
+        real = os.path.realpath(path)
+        if os.path.commonpath([root, real]) == root:
+            return None
+        return (f"{path.name} leads out of the folder {folder} (to {real}); a called program is read only "
+                "from inside its folder (follow_links=True, --follow-links, allows links out of it)")
 
     def program_files(self, main_file: str) -> dict[str, Path]:
-        """Lower-case file name → path of every file in the folder called programs are looked up in:
-        ``program_dir``, else the main program's own folder (none when the main program is not a file).
-        The first of two names that differ only in case wins (sorted order)."""
-        folder = self.program_dir
-        if folder is None:
-            main = Path(main_file)
-            folder = str(main.parent) if main.is_file() else None
+        """Lower-case file name → path of every file in the folder called programs are looked up in
+        (:meth:`program_folder`). The first of two names that differ only in case wins (sorted order)."""
+        folder = self.program_folder(main_file)
         files: dict[str, Path] = {}
         if folder is not None and os.path.isdir(folder):
             for entry in sorted(os.listdir(folder)):

@@ -110,7 +110,7 @@ class CompensationState:
     """Tool compensation of one run: the offset memory, the selected D and H numbers, the G40/G41/G42
     and G43/G44/G49 modes, and the output stage that compensates moves once a program needs it.
 
-    ``stage`` is the cutter-compensation stage (``lang/fanuc/compensation.OffsetStage``) installed in
+    ``stage`` is the cutter-compensation stage (``lang/fanuc/compensation/stage.OffsetStage``) installed in
     place of ``State.out`` the first time a program needs it (plain programs keep the direct path).
     ``length_restore``: G28/G30 cancel the tool length vector at the intermediate point; the cancelled
     part per axis, restored by the next block that commands that axis, or None.

@@ -46,7 +46,10 @@ ramp over a whole grid interval at each end and the "bound" would be slower than
 line the result is the closed-form trapezoid, on any grid (tests/motion/test_bound.py).
 
 Results are cached in memory and on disk (``$CNC_GYM_CACHE_DIR/bound`` or ``~/.cache/cnc-gym/bound``),
-keyed by a hash of the tool path, the machine's parameters, the action mode and :data:`BOUND_VERSION`.
+keyed by a hash of the tool path, the machine's parameters, the action mode and :data:`BOUND_VERSION`. A
+cache file is checked before it is used (:func:`check_cache_record`: the expected fields and version, its
+own key, finite non-negative times that add up, a digest of key and values); a file that fails is computed
+again with a one-line notice, so an edited or damaged file never reaches a record.
 """
 
 from __future__ import annotations
@@ -311,36 +314,126 @@ def cache_dir() -> Path:
 
 _MEMORY: dict[str, BoundResult] = {}
 
+#: The fields of a cache file besides the result's own: the key it was stored under and a digest of both.
+_CACHE_FIELDS = ("key", "digest")
+#: Largest cache file read (a result is about 300 bytes).
+_MAX_CACHE_BYTES = 4096
+
+
+#: The layout of a cache file (part of the key: files of an earlier layout are never looked at).
+_CACHE_FORMAT = 2
+
+
+def bound_key(tp: Toolpath, machine: MachineConfig, action_mode: str = "override") -> str:
+    """The cache key of a bound: SHA-256 of :data:`BOUND_VERSION`, the cache file layout, the action
+    mode, the tool path's digest and the machine's."""
+    return hashlib.sha256(
+        f"{BOUND_VERSION}:cache-{_CACHE_FORMAT}:{action_mode}:{toolpath_digest(tp)}:"
+        f"{machine_digest(machine)}".encode()
+    ).hexdigest()
+
+
+def _cache_digest(key: str, values: dict) -> str:
+    """What a cache file's ``digest`` must be: SHA-256 of its key and its values (in the order of
+    :class:`BoundResult`), so that a value edited by hand, or a file copied under another key, shows."""
+    fields = [f.name for f in dataclasses.fields(BoundResult)]
+    text = json.dumps([key, *(values.get(name) for name in fields)], allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def cache_record(key: str, result: BoundResult) -> dict:
+    """The object a cache file holds: the result's fields, its key and their digest."""
+    values = result.to_dict()
+    return {**values, "key": key, "digest": _cache_digest(key, values)}
+
+
+def check_cache_record(data: object, key: str) -> BoundResult:
+    """The :class:`BoundResult` a cache file's object holds, if it is one for ``key``: an object of
+    exactly the expected fields, of :data:`BOUND_VERSION`, stored under ``key``, with finite non-negative
+    times whose parts add up to the total and a matching digest. Raises ValueError saying why not."""
+    if not isinstance(data, dict):
+        raise ValueError(f"not an object but {type(data).__name__}")
+    fields = [f.name for f in dataclasses.fields(BoundResult)]
+    expected = {*fields, *_CACHE_FIELDS}
+    if set(data) != expected:
+        odd = sorted(map(str, set(data) ^ expected))[:4]
+        raise ValueError(f"not a bound record (fields {', '.join(odd)} missing or unexpected)")
+    if type(data["version"]) is not int or data["version"] != BOUND_VERSION:
+        raise ValueError(f"bound version {data['version']!r}, expected {BOUND_VERSION}")
+    if data["key"] != key:
+        raise ValueError("stored under another program or machine")
+    times = ("total_s", "cutting_s", "rapid_s", "dwell_s")
+    for name in times:
+        value = data[name]
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) \
+                or value < 0:  # fmt: skip
+            raise ValueError(f"{name} is {value!r}, not a finite non-negative number")
+    grid = data["gridpoints"]
+    if isinstance(grid, bool) or not isinstance(grid, int) or grid < 0:
+        raise ValueError(f"gridpoints is {grid!r}, not a non-negative integer")
+    parts = data["cutting_s"] + data["rapid_s"] + data["dwell_s"]
+    if not math.isclose(data["total_s"], parts, rel_tol=1e-12, abs_tol=1e-12):
+        raise ValueError(f"total_s {data['total_s']!r} is not the sum of its parts ({parts!r})")
+    if data["digest"] != _cache_digest(key, data):
+        raise ValueError("its digest does not match its contents")
+    return BoundResult(**{name: data[name] for name in fields})
+
+
+def _stderr_notice(message: str) -> None:
+    import sys
+
+    print(message, file=sys.stderr)
+
 
 def time_optimal_bound(tp: Toolpath, machine: MachineConfig, *, action_mode: str = "override",
-                       cache: bool = True) -> BoundResult:  # fmt: skip
+                       cache: bool = True, notice=_stderr_notice) -> BoundResult:  # fmt: skip
     """The bound of ``tp`` on ``machine`` (cached by tool path and machine hash; see the module docstring).
 
-    A cache file that cannot be read or written is ignored (the bound is computed again).
+    A cache file is used only when :func:`check_cache_record` accepts it; anything else (not JSON, not an
+    object, another version or key, a time that is not a finite non-negative number, a total that is not
+    the sum of its parts, a digest that does not match) is computed again and rewritten, and ``notice``
+    gets one line saying which file and why (default: printed on stderr). A file that cannot be read or
+    written is ignored silently (the bound is computed again). The cache is a convenience, not a trust
+    boundary: what it saves is only ever a recomputation.
     """
-    key = hashlib.sha256(
-        f"{BOUND_VERSION}:{action_mode}:{toolpath_digest(tp)}:{machine_digest(machine)}".encode()
-    ).hexdigest()
+    key = bound_key(tp, machine, action_mode)
     if cache and key in _MEMORY:
         return _MEMORY[key]
     path = cache_dir() / f"{key}.json"
     if cache:
         try:
-            data = json.loads(path.read_text())
-            if data.get("version") == BOUND_VERSION:
-                result = BoundResult(**data)
+            with path.open("rb") as fh:
+                raw = fh.read(_MAX_CACHE_BYTES + 1)
+        except OSError:
+            raw = None
+        if raw is not None:
+            try:
+                if len(raw) > _MAX_CACHE_BYTES:
+                    raise ValueError(f"larger than {_MAX_CACHE_BYTES} bytes")
+                data = json.loads(raw, parse_constant=_refuse_constant)
+                result = check_cache_record(data, key)
+            except (ValueError, RecursionError) as exc:
+                if notice is not None:
+                    why = str(exc).splitlines()[0][:160] if str(exc) else type(exc).__name__
+                    notice(f"cnc-gym: bound cache {path}: {why}; computing the bound again")
+            else:
                 _MEMORY[key] = result
                 return result
-        except (OSError, ValueError, TypeError):
-            pass
     result = compute_bound(tp, machine, action_mode=action_mode)
+    if not all(math.isfinite(v) and v >= 0 for v in (result.total_s, result.cutting_s, result.rapid_s,
+                                                       result.dwell_s)):  # fmt: skip
+        raise CncGymError(f"time-optimal bound: not a finite time ({result.total_s!r} s)")
     if cache:
         _MEMORY[key] = result
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             tmp = path.with_suffix(f".{os.getpid()}.tmp")
-            tmp.write_text(json.dumps(result.to_dict()))
+            tmp.write_text(json.dumps(cache_record(key, result), allow_nan=False))
             tmp.replace(path)
         except OSError:
             pass
     return result
+
+
+def _refuse_constant(name: str) -> float:
+    raise ValueError(f"holds {name}, not a number")

@@ -13,8 +13,10 @@ runs in, so baselines and agents compare. ``make_policy(spec)`` turns a command-
                        exact env; **an oracle**, not deployable
 a path (``*.zip``)     :class:`~.model.ModelPolicy`, an SB3 model rebuilt without unpickling
 ``module:callable``    your own policy: ``callable`` in importable ``module`` is a Policy, or is
-                       called with no arguments to make one (a class or a factory), or is a plain
-                       function ``act(observation, info) -> action``
+                       called with no arguments to make one (a class or a Python factory
+                       function), or is a plain Python function ``act(observation, info) ->
+                       action``; anything else (a built-in such as ``os:system``, a function of
+                       other arguments, a value) is refused without being called
 =====================  ======================================================================
 """
 

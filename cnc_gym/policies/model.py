@@ -112,17 +112,23 @@ def load_sb3_model(path: str | Path) -> LoadedModel:
     except Exception as exc:  # zipfile.BadZipFile, zlib.error, encrypted or unsupported members, OSError
         raise ModelError(f"{name}: not a readable model zip ({type(exc).__name__}: "
                          f"{escaped(str(exc), 120)})") from None  # fmt: skip
-    try:
-        data = _json(data_bytes)
-        family, algorithm = _family(data)
-        observation_space = _box(data, "observation_space", MAX_OBSERVATION_SIZE, bounds=False)
-        action_space = _box(data, "action_space", MAX_ACTION_SIZE, bounds=True)
-        kwargs = _policy_kwargs(data, family)
-        weights = _weights(weights_bytes, torch)
-        policy = _build(family, observation_space, action_space, kwargs, weights, torch)
-        env_id, env_kwargs = _env(data)
-    except _Refused as exc:
-        raise ModelError(f"{name}: {exc}") from None
+    import warnings
+
+    # Only the one error line, ever: the libraries' warnings about what a crafted file holds (torch's
+    # pickle protocol note, gymnasium's precision note on Box bounds) add nothing to it.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            data = _json(data_bytes)
+            family, algorithm = _family(data)
+            observation_space = _box(data, "observation_space", MAX_OBSERVATION_SIZE, bounds=False)
+            action_space = _box(data, "action_space", MAX_ACTION_SIZE, bounds=True)
+            kwargs = _policy_kwargs(data, family)
+            weights = _weights(weights_bytes, torch)
+            policy = _build(family, observation_space, action_space, kwargs, weights, torch)
+            env_id, env_kwargs = _env(data)
+        except _Refused as exc:
+            raise ModelError(f"{name}: {exc}") from None
     sb3_version = escaped(version.decode("ascii", "replace"), 40)
     return LoadedModel(policy=policy, algorithm=algorithm, observation_space=observation_space,
                        action_space=action_space, sb3_version=sb3_version, env_id=env_id,

@@ -50,7 +50,7 @@ def make_policy(spec: str, *, progress: bool | None = None) -> Policy:
 
 
 class _FunctionPolicy:
-    """A plain ``act(observation, info) -> action`` function as a policy."""
+    """A plain ``act(observation, info) -> action`` function as a policy; what it raises is one line."""
 
     def __init__(self, name: str, function: Any) -> None:
         self.name = name
@@ -60,10 +60,21 @@ class _FunctionPolicy:
         return None
 
     def act(self, observation: Any, info: dict[str, Any]) -> Any:
-        return self._function(observation, info)
+        try:
+            return self._function(observation, info)
+        except Exception as exc:  # the user's code: report it in one line
+            raise CncGymError(f"policy {self.name!r}: act(observation, info) failed: "
+                              f"{type(exc).__name__}: {exc}") from None  # fmt: skip
+
+
+_KINDS = "a policy object, a policy class, a factory function f() or a function act(observation, info)"
 
 
 def _user_policy(spec: str) -> Policy:
+    """``module:callable``: a policy object, a class or a Python function with no arguments that makes
+    one, or a Python function ``act(observation, info)``. Anything else is refused without calling it: a
+    built-in function (``os:system``, ``builtins:exit``, ``os:abort``), a function of the wrong arity
+    (``json:dumps``), a value; a factory that fails, exits or returns something else is one line too."""
     module_name, attr = spec.split(":", 1)
     try:
         target: Any = importlib.import_module(module_name)
@@ -75,19 +86,19 @@ def _user_policy(spec: str) -> Policy:
         target = getattr(target, part)
     if _is_policy(target):
         policy = target
-    elif isinstance(target, type) or _takes_no_arguments(target):
+    elif isinstance(target, type) or (_is_python_function(target) and _binds(target, 0)):
         try:
             policy = target()
-        except Exception as exc:  # the user's code: report it in one line
+        except (Exception, SystemExit) as exc:  # the user's code: report it in one line
             raise CncGymError(f"policy {spec!r}: calling {attr}() failed: "
                               f"{type(exc).__name__}: {exc}") from None
         if not _is_policy(policy):
             raise CncGymError(f"policy {spec!r}: {attr}() returned {type(policy).__name__}, which has no "
                               "reset(env) and act(observation, info)")  # fmt: skip
-    elif callable(target):
+    elif _is_python_function(target) and _binds(target, 2):
         policy = _FunctionPolicy(spec, target)
     else:
-        raise CncGymError(f"policy {spec!r}: {attr} is neither a policy nor callable")
+        raise CncGymError(f"policy {spec!r}: {attr} is {_describe(target)}, not a policy; give {_KINDS}")
     if not getattr(policy, "name", None):
         with contextlib.suppress(AttributeError):
             policy.name = spec
@@ -99,12 +110,35 @@ def _is_policy(obj: Any) -> bool:
     return not isinstance(obj, type) and all(callable(m) for m in methods)
 
 
-def _takes_no_arguments(function: Any) -> bool:
+def _is_python_function(obj: Any) -> bool:
+    """A function or method written in Python (or a ``functools.partial`` of one): something whose
+    signature can be read and which is the user's code, not a built-in such as ``os.system``."""
+    import functools
+    import inspect
+
+    if isinstance(obj, functools.partial):
+        return _is_python_function(obj.func)
+    return inspect.isfunction(obj) or (inspect.ismethod(obj) and inspect.isfunction(obj.__func__))
+
+
+def _binds(function: Any, n_positional: int) -> bool:
+    """Whether ``function`` can be called with ``n_positional`` positional arguments and nothing else."""
     import inspect
 
     try:
-        signature = inspect.signature(function)
+        inspect.signature(function).bind(*([None] * n_positional))
     except (TypeError, ValueError):
         return False
-    return all(p.default is not p.empty or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD)
-               for p in signature.parameters.values())  # fmt: skip
+    return True
+
+
+def _describe(obj: Any) -> str:
+    import inspect
+
+    if _is_python_function(obj):
+        return "a function whose arguments fit neither f() nor act(observation, info)"
+    if inspect.isbuiltin(obj):
+        return "a built-in callable"
+    if callable(obj):
+        return f"a callable {type(obj).__name__}"
+    return f"a {type(obj).__name__} value"

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cnc_gym.errors import CncGymError
 from cnc_gym.toolpath.segments import Plane, SegmentKind
 
 if TYPE_CHECKING:
@@ -39,7 +40,8 @@ def toolpath_records(tp: Toolpath) -> list[dict]:
     """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
     data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
     coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that
-    carry one."""
+    carry one; ``machine_function`` (``"M13"``) on a dwell row that stands for an M code the control hands
+    to the machine."""
     return [_record(tp, i) for i in range(len(tp))]
 
 
@@ -52,6 +54,8 @@ def _record(tp: Toolpath, i: int) -> dict:
         rec["file"] = tp.files[int(tp.file_index[i])]
     if kind == SegmentKind.DWELL:
         rec["seconds"] = _r(tp.dwell_s[i])
+        if i in tp.machine_functions:
+            rec["machine_function"] = tp.machine_functions[i]
     else:
         rec["start"] = [_r(x) for x in tp.start[i]]
         rec["end"] = [_r(x) for x in tp.end[i]]
@@ -112,7 +116,8 @@ def toolpath_jsonl(tp: Toolpath) -> str:
     """The records as JSON Lines: ``"".join(json.dumps(r) + "\\n" for r in toolpath_records(tp))``, built
     without the dicts for rapids, lines, arcs and dwells (the bulk of a program; ``cnc-gym trace``'s hot
     path): each kind's rows are filled into one text template, column by column. Rows with a file, rotary
-    axes, NURBS data, a smoothing tolerance or a number that is not finite go through ``json.dumps``."""
+    axes, NURBS data, a smoothing tolerance or a number that is not finite go through ``json.dumps``
+    (the last: a CncGymError naming the line, since NaN and Infinity are not JSON)."""
     n = len(tp)
     if n == 0:
         return ""
@@ -125,6 +130,8 @@ def toolpath_jsonl(tp: Toolpath) -> str:
     general |= cutting & ~np.isfinite(tp.feed)
     general |= (kind == SegmentKind.ARC) & ~(np.isfinite(tp.radius) & np.isfinite(tp.sweep))
     general |= (kind == SegmentKind.DWELL) & ~np.isfinite(tp.dwell_s)
+    if tp.machine_functions:
+        general[list(tp.machine_functions)] = True
     if tp.rotary_axes:
         general |= (kind == SegmentKind.LINE) | (kind == SegmentKind.RAPID)
     fast = ~general
@@ -164,7 +171,7 @@ def toolpath_jsonl(tp: Toolpath) -> str:
             fields.append(texts(tp.radius[rows]))
         out[rows] = list(map(template.__mod__, zip(*fields, strict=True)))
     for i in np.flatnonzero(general).tolist():
-        out[i] = json.dumps(_record(tp, i))[:-1]
+        out[i] = _json_record(tp, i)[:-1]
     fast_modes = np.flatnonzero((tp.modes != 0) & ~general)
     if fast_modes.size:
         mode_text: dict[int, str] = {}
@@ -173,6 +180,17 @@ def toolpath_jsonl(tp: Toolpath) -> str:
                 mode_text[m] = ', "modes": ' + json.dumps([x.name.lower() for x in type_modes(m)])
             out[i] += mode_text[m]
     return "}\n".join(out.tolist()) + "}\n"
+
+
+def _json_record(tp: Toolpath, i: int) -> str:
+    """Row ``i``'s record as JSON; a number that is not finite (NaN, Infinity: not JSON) is one clear error
+    naming its line, never printed."""
+    record = _record(tp, i)
+    try:
+        return json.dumps(record, allow_nan=False)
+    except ValueError:
+        raise CncGymError(f"line {record.get('line', '?')}: the tool path holds a number that is not finite; "
+                          "it cannot be written as JSON") from None  # fmt: skip
 
 
 _POINT = "%s, %s, %s"

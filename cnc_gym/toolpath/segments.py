@@ -65,6 +65,9 @@ class SegmentMode(IntFlag):
     #: last interpolation cycle keeps the path speed. Recorded for the controller; the motion stage plans
     #: continuous-time profiles, so the last-cycle speed dip G36 avoids does not arise there.
     ROUND_BLOCK_END = 32
+    #: A dwell that stands for a machine function (an M code the control hands to the machine and waits
+    #: for at rest): ``Toolpath.machine_functions`` names its code.
+    MACHINE_FUNCTION = 64
 
 
 _FIELDS = (
@@ -100,6 +103,11 @@ class Toolpath:
     row's ``start``/``end`` are the curve's first/last control points and its ``length`` the curve's arc
     length. A NURBS row is evaluated by arc length like every other row.
 
+    ``machine_functions`` maps the index of a dwell row to the machine function it stands for (``"M13"``):
+    an M code the control hands to the machine (coolant, clamps, conveyors …), which waits for it at rest
+    (a 0 s exact-stop dwell). ``notices``: one-line notes the interpreter made about the program (text it
+    did not run, a setting the program seems to need), ``FILE:LINE: note: … [code]``.
+
     Rotary axes (machines with A/B/C): ``rotary_axes`` names them (``"B"``; ``""`` on a 3-axis path) and
     ``rotary_start``/``rotary_end`` (n, k) hold each row's start and end angle in degrees, machine
     coordinates. Only rapids and lines move them (linearly with the row). ``length`` stays the XYZ length;
@@ -128,6 +136,10 @@ class Toolpath:
     rotary_start: np.ndarray | None = None
     rotary_end: np.ndarray | None = None
     smoothing_tolerance_mm: np.ndarray | None = None
+    #: Dwell rows that stand for a machine function: row index → its M code (``"M13"``).
+    machine_functions: Mapping[int, str] = field(default_factory=dict)
+    #: One-line notes about the program (``FILE:LINE: note: message [code]``), in the order they were made.
+    notices: tuple[str, ...] = ()
     # Derived geometry, filled in __post_init__.
     length: np.ndarray = field(init=False, repr=False)
     planar_length: np.ndarray = field(init=False, repr=False)
@@ -156,6 +168,13 @@ class Toolpath:
                                  f"got {type(curve).__name__}")  # fmt: skip
             length[row] = curve.length
         object.__setattr__(self, "nurbs", FrozenDict(self.nurbs))
+        for row in self.machine_functions:
+            if not 0 <= row < n or self.kind[row] != SegmentKind.DWELL:
+                raise ValueError(f"toolpath row {row}: a machine function stands on a dwell row")
+            if not self.modes[row] & SegmentMode.MACHINE_FUNCTION:
+                raise ValueError(f"toolpath row {row}: a machine function's row carries MACHINE_FUNCTION")
+        object.__setattr__(self, "machine_functions", FrozenDict(self.machine_functions))
+        object.__setattr__(self, "notices", tuple(self.notices))
         k = len(self.rotary_axes)
         for name in ("rotary_start", "rotary_end"):
             arr = getattr(self, name)
@@ -381,14 +400,36 @@ class Toolpath:
 
 
 #: Row fields of :class:`ToolpathBuilder`'s tuples, by position (the order of ``_FIELDS``).
-_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S = (_FIELDS.index(name) for name in (
-    "kind", "start", "end", "radius", "sweep", "feed", "dwell_s"))  # fmt: skip
+_KIND, _START, _END, _RADIUS, _SWEEP, _FEED, _DWELL_S, _TOOL, _LINE, _FILE_INDEX = (
+    _FIELDS.index(name)
+    for name in ("kind", "start", "end", "radius", "sweep", "feed", "dwell_s", "tool", "line", "file_index"))
 _NAN3 = (float("nan"),) * 3
 _RAPID, _LINE_KIND, _ARC, _DWELL, _NURBS = (int(k) for k in SegmentKind)
 _NO_MODES = SegmentMode.NONE
 _DTYPES = {"kind": np.int8, "plane": np.int8, "line": np.int32, "file_index": np.int16, "modes": np.uint8,
            "tool": np.int32}  # fmt: skip
 _POINT_FIELDS = ("start", "end", "center")
+
+
+def _nominal_seconds(row: tuple, rapid_mm_min: float) -> float:
+    """One builder row's seconds at its programmed feed (rapids at ``rapid_mm_min``; no acceleration)."""
+    kind = row[_KIND]
+    if kind == _DWELL:
+        return row[_DWELL_S]
+    start, end = row[_START], row[_END]
+    if kind == _ARC:
+        plane_length = abs(row[_SWEEP]) * row[_RADIUS]
+        chord = math.dist(start, end)
+        length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
+    else:
+        length = math.dist(start, end)
+    speed = rapid_mm_min if kind == _RAPID else row[_FEED]
+    return 60.0 * length / speed if speed and math.isfinite(speed) else 0.0
+
+
+#: Most notes one tool path keeps (a program that repeats one oddity a million times gets one line for it,
+#: and a program with a thousand different ones a bounded list).
+MAX_NOTICES = 50
 
 
 class ToolpathBuilder:
@@ -408,9 +449,31 @@ class ToolpathBuilder:
         # Smoothing tolerances: (first row, {segment kind: tolerance mm}) from that row on (sparse: the
         # rows in between cost nothing while they are appended; build() fills the column).
         self._smoothing: list[tuple[int, dict[int, float]]] = []
+        #: The M codes of the machine-function dwells, in the order they were made (build() pairs them with
+        #: the rows flagged MACHINE_FUNCTION, which a look-ahead stage may append later), and the notes.
+        self.machine_functions: list[str] = []
+        self.notices: list[str] = []
+        self._notices_dropped = 0
+
+    def notice(self, text: str) -> None:
+        """Keep one note about the program (each text once, at most :data:`MAX_NOTICES` of them; the rest
+        are counted in a last line)."""
+        if text in self.notices:
+            return
+        if len(self.notices) >= MAX_NOTICES:
+            self._notices_dropped += 1
+            return
+        self.notices.append(text)
 
     def __len__(self) -> int:
         return len(self._rows)
+
+    def last_source(self) -> tuple[int, int] | None:
+        """(file index, line) of the last row, or None before the first."""
+        if not self._rows:
+            return None
+        row = self._rows[-1]
+        return int(row[_FILE_INDEX]), int(row[_LINE])
 
     def kinds_since(self, first: int) -> list[int]:
         """The :class:`SegmentKind` values of the rows from ``first`` on."""
@@ -421,21 +484,18 @@ class ToolpathBuilder:
         ``rapid_mm_min``, dwells their time; no acceleration): the clock of a controller without a motion
         model."""
         for row in self._rows[first:]:
-            kind = row[_KIND]
-            if kind == _DWELL:
-                total += row[_DWELL_S]
-                continue
-            start, end = row[_START], row[_END]
-            if kind == _ARC:
-                plane_length = abs(row[_SWEEP]) * row[_RADIUS]
-                chord = math.dist(start, end)
-                length = math.hypot(plane_length, chord) if plane_length < chord else plane_length
-            else:
-                length = math.dist(start, end)
-            speed = rapid_mm_min if kind == _RAPID else row[_FEED]
-            if speed and math.isfinite(speed):
-                total += 60.0 * length / speed
+            total += _nominal_seconds(row, rapid_mm_min)
         return total
+
+    def tool_seconds_since(self, first: int, rapid_mm_min: float, totals: dict[int, list[float]]) -> None:
+        """Add to ``totals`` (tool number → [seconds in the spindle, seconds cutting]) the nominal seconds of
+        the rows from ``first`` on (the clock of :meth:`nominal_seconds_since`), by the row's tool."""
+        for row in self._rows[first:]:
+            seconds = _nominal_seconds(row, rapid_mm_min)
+            entry = totals.setdefault(int(row[_TOOL]), [0.0, 0.0])
+            entry[0] += seconds
+            if row[_KIND] not in (_RAPID, _DWELL):
+                entry[1] += seconds
 
     def file_index(self, file: str) -> int:
         if file not in self.files:
@@ -528,6 +588,14 @@ class ToolpathBuilder:
                 arrays[name] = np.fromiter(map(itemgetter(index), rows), dtype, count=n)
         rotary_start, rotary_end = self._rotary_arrays(len(self))
         smoothing = self._smoothing_array(arrays["kind"]) if self._smoothing else None
+        flagged = np.flatnonzero(arrays["modes"] & SegmentMode.MACHINE_FUNCTION).tolist()
+        if len(flagged) != len(self.machine_functions):
+            raise ValueError(f"{len(flagged)} machine-function rows for {len(self.machine_functions)} codes")
+        functions = dict(zip(flagged, self.machine_functions, strict=True))
+        notices = tuple(self.notices)
+        if self._notices_dropped:
+            notices += (f"... and {self._notices_dropped} more notes",)
         return Toolpath(**arrays, files=tuple(self.files), nurbs=dict(self.nurbs_curves),
                         rotary_axes=self.rotary_axes, rotary_start=rotary_start,
-                        rotary_end=rotary_end, smoothing_tolerance_mm=smoothing)  # fmt: skip
+                        rotary_end=rotary_end, smoothing_tolerance_mm=smoothing,
+                        machine_functions=functions, notices=notices)  # fmt: skip

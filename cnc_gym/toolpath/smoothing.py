@@ -382,4 +382,13 @@ def _with_blends(tp: Toolpath, corners: np.ndarray, d: np.ndarray, u: np.ndarray
         modes=tp.modes[origin], tool=tp.tool[origin], spindle_rpm=tp.spindle_rpm[origin], files=tp.files,
         nurbs=nurbs, rotary_axes=tp.rotary_axes, rotary_start=tp.rotary_start[origin],
         rotary_end=tp.rotary_end[origin], smoothing_tolerance_mm=tp.smoothing_tolerance_mm[origin],
+        machine_functions=_moved_rows(tp.machine_functions, origin, kind), notices=tp.notices,
     )  # fmt: skip
+
+
+def _moved_rows(by_row, origin: np.ndarray, kind: np.ndarray) -> dict[int, str]:
+    """A row → value mapping of the dwell rows, carried to their new indices (``origin[new] = old``)."""
+    if not by_row:
+        return {}
+    dwells = np.flatnonzero(kind == SegmentKind.DWELL)
+    return {int(new): by_row[int(origin[new])] for new in dwells if int(origin[new]) in by_row}

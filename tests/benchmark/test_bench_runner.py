@@ -4,6 +4,7 @@ bound never beaten by any policy."""
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -177,3 +178,200 @@ def test_cli_units_reads_user_programs_in_inch(tmp_path, capsys):
     capsys.readouterr()
     assert records["inch"]["units"] == "inch" and records[None]["units"] is None
     assert records["inch"]["cut_length_mm"] == pytest.approx(25.4 * records[None]["cut_length_mm"])
+
+
+def test_cli_setup_applies_the_work_offsets_to_user_programs(tmp_path, capsys):
+    # G54 at X200: the rapid to the start is 200 mm longer, so the bound is longer (the machine's dynamics,
+    # and so its digest, are the same).
+    program = tmp_path / "part.nc"
+    program.write_text("G54 G00 X0 Y0\nG01 X10. Y10. F1000.\n")
+    setup = tmp_path / "job.yaml"
+    setup.write_text("work_offsets:\n  G54: [200.0, 0.0, 0.0]\n")
+    records = {}
+    for name, extra in (("plain", []), ("setup", ["--setup", str(setup)])):
+        out = tmp_path / f"{name}.jsonl"
+        argv = ["bench", "--programs", str(program), "--policy", "bound", "--json", str(out), "--no-progress"]
+        assert main([*argv, *extra]) == 0
+        (records[name],) = read_jsonl([out])
+    capsys.readouterr()
+    assert records["setup"]["machine"] == records["plain"]["machine"] == "vmc-small"
+    assert records["setup"]["machine_sha256"] == records["plain"]["machine_sha256"]
+    assert records["setup"]["bound_s"] > records["plain"]["bound_s"]
+    assert main(["bench", "--programs", str(program), "--policy", "bound", "--no-progress", "--setup",
+                 str(tmp_path / "missing.yaml")]) == 2  # fmt: skip
+    assert "cannot read setup file" in capsys.readouterr().err
+
+
+def test_records_stream_to_the_file_as_tasks_finish(tmp_path):
+    from cnc_gym.benchmark.runner import JsonlAppender
+
+    programs, suite = _tiny(2)
+    out = JsonlAppender(tmp_path / "r.jsonl")
+    sizes = []
+
+    def append(records):
+        out.append(records)
+        lines = (tmp_path / "r.jsonl").read_text().splitlines()
+        sizes.append(len(lines))
+        assert all(json.loads(line)["policy"] for line in lines)  # valid JSON Lines after each task
+
+    records = run_bench(_config(programs, suite), on_records=append)
+    out.finish(records)
+    assert sizes == [2 * k for k in range(1, 7)]  # 2 programs × 3 policies, 2 seeds each, one by one
+    assert read_jsonl([tmp_path / "r.jsonl"]) == records
+
+
+def test_the_final_file_is_in_record_order_whatever_order_the_tasks_finished_in(tmp_path):
+    from cnc_gym.benchmark.runner import JsonlAppender
+
+    records = [{"policy": "p", "score": 0.0, "seed": s} for s in range(4)]
+    out = JsonlAppender(tmp_path / "r.jsonl")
+    out.append(records[2:])
+    out.append(records[:2])
+    assert [r["seed"] for r in read_jsonl([out.path])] == [2, 3, 0, 1]
+    out.finish(records)
+    assert read_jsonl([out.path]) == records
+    assert [p.name for p in tmp_path.iterdir()] == ["r.jsonl"]  # no temporary file left
+
+
+def test_a_record_that_is_not_finite_json_is_one_error_and_never_written(tmp_path):
+    from cnc_gym.benchmark.runner import JsonlAppender, write_jsonl
+    from cnc_gym.errors import CncGymError
+
+    bad = {"program": "p", "policy": "q", "seed": 0, "score": 0.0, "time_ratio": float("inf")}
+    out = JsonlAppender(tmp_path / "r.jsonl")
+    with pytest.raises(CncGymError, match="time_ratio is not a finite number") as err:
+        out.append([{"policy": "q", "score": 1.0}, bad])
+    assert "\n" not in str(err.value) and out.path.read_text() == ""
+    with pytest.raises(CncGymError, match="time_ratio"):
+        write_jsonl([bad], tmp_path / "w.jsonl")
+    # ... nor read: NaN and Infinity are not JSON.
+    (tmp_path / "nan.jsonl").write_text('{"policy": "q", "score": NaN}\n')
+    with pytest.raises(CncGymError, match=r"nan.jsonl:1: not a JSON record \(NaN is not a JSON number\)"):
+        read_jsonl([tmp_path / "nan.jsonl"])
+
+
+def test_an_unwritable_json_path_fails_before_any_work(tmp_path, capsys, monkeypatch):
+    from cnc_gym.benchmark import runner
+
+    monkeypatch.setattr(runner, "run_bench", lambda *a, **k: pytest.fail("work started"))
+    (tmp_path / "file").write_text("")
+    assert main(["bench", "--per-family", "1", "--json", str(tmp_path / "file" / "r.jsonl"),
+                 "--no-progress"]) == 2  # fmt: skip
+    assert "cannot write" in capsys.readouterr().err
+
+
+def test_max_time_cuts_each_episode_and_marks_the_record(tmp_path, capsys):
+    out = tmp_path / "r.jsonl"
+    assert main(["bench", "--programs", str(_star(tmp_path)), "--policy", "constant:1.0", "--policy", "bound",
+                 "--max-time", "0.5", "--json", str(out), "--no-progress"]) == 0  # fmt: skip
+    cut, reference = read_jsonl([out])
+    assert cut["stopped_by"] == "max_time" and cut["finished"] is False and cut["score"] == 0.0
+    assert 0.5 <= cut["cycle_time_s"] < 0.52 and cut["steps"] == 50
+    assert reference["stopped_by"] is None and reference["finished"] is True
+    assert "(1 cut by --max-time/--max-cpu)" in capsys.readouterr().err
+
+
+def test_max_cpu_cuts_an_episode_even_inside_the_policys_planning(tmp_path, monkeypatch):
+    import signal
+
+    from cnc_gym.benchmark.runner import BenchProgram, EpisodeLimits
+    from cnc_gym.policies.oracle import OraclePlanner
+
+    planned = []
+
+    def plan_forever(self, env):  # a planner that never finishes (its planning is Python, as the oracle's)
+        planned.append(True)
+        while True:
+            sum(range(1000))
+
+    monkeypatch.setattr(OraclePlanner, "reset", plan_forever)
+    program = BenchProgram("star", _star(tmp_path).read_text())
+    handler = signal.getsignal(signal.SIGPROF)
+    records = run_bench(BenchConfig(programs=[program], policies=["oracle"], seeds=[0, 1],
+                                    limits=EpisodeLimits(max_cpu_s=0.2)))  # fmt: skip
+    assert planned == [True, True] and [r["stopped_by"] for r in records] == ["max_cpu", "max_cpu"]
+    assert all(r["steps"] == 0 and r["finished"] is False and r["score"] == 0.0 for r in records)
+    assert signal.getsignal(signal.SIGPROF) == handler  # the limit's timer and handler are gone
+    # A limit that is not reached changes nothing.
+    free = run_bench(BenchConfig(programs=[program], policies=["constant:1.0"]))
+    limited = run_bench(BenchConfig(programs=[program], policies=["constant:1.0"],
+                                    limits=EpisodeLimits(max_time_s=1e6, max_cpu_s=1e6)))  # fmt: skip
+    assert limited == free and free[0]["stopped_by"] is None and free[0]["finished"]
+
+
+@pytest.mark.parametrize("bad", ["0", "-1", "nan", "inf"])
+def test_bad_episode_limits_are_one_line(bad, capsys):
+    for option in ("--max-time", "--max-cpu"):
+        assert main(["bench", "--no-progress", option, bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(option) and "\n" not in err
+
+
+def test_a_program_without_a_bound_is_left_out_with_one_line(tmp_path, capsys, monkeypatch):
+    from cnc_gym.errors import CncGymError
+    from cnc_gym.motion import bound
+
+    real = bound.compute_bound
+
+    def fails_on_circles(tp, machine, **kw):  # as TOPP-RA does on a path it cannot parameterize
+        if any(int(k) == 2 for k in tp.kind):  # an arc
+            raise CncGymError("time-optimal bound: TOPP-RA found no parameterization of the cutting moves")
+        return real(tp, machine, **kw)
+
+    monkeypatch.setattr(bound, "compute_bound", fails_on_circles)
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path / "cache"))
+    from cnc_gym.programs import program_path
+
+    (tmp_path / "round.nc").write_text(program_path("circle").read_text())
+    (tmp_path / "empty.nc").write_text("G90 G21\nM30\n")
+    out = tmp_path / "r.jsonl"
+    programs = [str(_star(tmp_path)), str(tmp_path / "round.nc"), str(tmp_path / "empty.nc")]
+    argv = ["bench", "--programs", *programs, "--policy", "constant:1.0", "--json", str(out), "--no-progress"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert lines[0] == ("cnc-gym bench: round: left out: time-optimal bound: TOPP-RA found no "
+                        "parameterization of the cutting moves")  # fmt: skip
+    assert lines[1] == "cnc-gym bench: empty: left out: no motion: nothing to time against the bound"
+    assert len(lines) == 3 and "1 episodes" in lines[2]
+    assert [r["program"] for r in read_jsonl([out])] == ["mine"]
+    assert "1 programs (2 left out)" in captured.out
+
+
+def test_per_family_with_programs_is_an_error(tmp_path, capsys):
+    assert main(["bench", "--programs", str(_star(tmp_path)), "--per-family", "1", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--per-family" in err and "--programs" in err and "\n" not in err
+
+
+def test_user_programs_find_their_subprograms_in_their_folder_as_run_does(tmp_path, capsys):
+    folder = tmp_path / "job"
+    folder.mkdir()
+    (folder / "O1234.nc").write_text("O1234\nG91 G01 X5. F600\nY5.\nX-5.\nY-5.\nG90\nM99\n")
+    (folder / "main.nc").write_text("G90 G21 G00 X0 Y0 Z0\nG01 Z-1. F300\nM98 P1234 L2\nG00 Z5.\nM30\n")
+    out = tmp_path / "r.jsonl"
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    cwd = os.getcwd()
+    os.chdir(elsewhere)  # not the program's folder
+    try:
+        assert main(["bench", "--programs", str(folder / "main.nc"), "--policy", "constant:1.0", "--policy",
+                     "bound", "--workers", "2", "--json", str(out), "--no-progress"]) == 0  # fmt: skip
+        assert main(["run", str(folder / "main.nc"), "--json"]) == 0
+    finally:
+        os.chdir(cwd)
+    run = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    episode, reference = read_jsonl([out])
+    assert episode["cut_length_mm"] == pytest.approx(1.0 + 2 * 20.0)  # the plunge and two squares
+    assert episode["cycle_time_s"] == pytest.approx(run["cycle_time_s"], rel=1e-9)
+    assert reference["bound_s"] > 0
+
+
+def _star(tmp_path):
+    from cnc_gym.programs import program_path
+
+    program = tmp_path / "mine.nc"
+    program.write_text(program_path("star").read_text())
+    return program

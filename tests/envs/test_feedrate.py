@@ -489,3 +489,23 @@ def test_plunge_after_a_rapid_starts_in_position(machine):
         if terminated or truncated:
             break
     assert terminated and info["violations"] == 0 and waited
+
+
+@pytest.mark.parametrize("env_id", ["cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v2"])
+def test_setup_keyword_gives_the_programs_their_offsets(env_id, tmp_path):
+    """``setup=`` (a dict, a YAML path or a SetupConfig) rides in the env's machine record: the programs are
+    interpreted with the operator's tables; a bad setup is one ConfigError line."""
+    text = ProgramText("G54 G00 X0 Y0\nG43 H1 Z10.\nG01 X10. F1000.\n", name="setup-part")
+    setup = {"work_offsets": {"G54": [100.0, 50.0, -200.0]}, "tools": {1: {"length_mm": 120.0}}}
+    path = tmp_path / "job.yaml"
+    path.write_text("work_offsets:\n  G54: [100.0, 50.0, -200.0]\ntools:\n  1: {length_mm: 120.0}\n")
+    for given in (setup, str(path)):
+        env = gym.make(env_id, programs=[text], dialect="fanuc", setup=given)
+        base = env.unwrapped
+        assert base.machine.setup.work_offsets["G54"] == (100.0, 50.0, -200.0)
+        toolpath = base._programs[0][1]
+        assert toolpath.end[-1].tolist() == [110.0, 50.0, -70.0]
+        env.reset(seed=0)
+        env.close()
+    with pytest.raises(ConfigError, match=r"unknown key tools\.1\.length"):
+        gym.make(env_id, programs=[text], dialect="fanuc", setup={"tools": {1: {"length": 1.0}}})

@@ -86,3 +86,25 @@ def test_side_views_for_depth_changes_and_drilling_not_for_a_plunge():
     cutting = np.array([True, False, False, True, False, False])
     assert wants_z_views(drill, cutting)
     assert not wants_z_views(np.zeros((0, 3)), np.zeros(0, dtype=bool))
+
+
+def test_the_path_envelope_keeps_every_maximum_in_at_most_max_bins():
+    from cnc_gym.envs.render import path_envelope
+
+    rng = np.random.default_rng(3)
+    lengths = np.where(rng.random(5000) < 0.01, 0.0, rng.exponential(0.2, 5000))  # some dwells (length 0)
+    edges = np.concatenate(([0.0], np.cumsum(lengths)))
+    error = rng.random(5000)
+    error[4000:] = np.nan  # not reached (a truncated run)
+    x, y = path_envelope(edges, error, max_bins=300)
+    assert len(x) == 301 and len(y) == 300 and x[0] == edges[0] and x[-1] == pytest.approx(edges[-1])
+    assert np.nanmax(y) == np.nanmax(error[lengths > 0])
+    # Each stretch's value is at most the envelope of every bin it overlaps (an upper envelope) ...
+    for k in rng.choice(np.flatnonzero((lengths > 0) & np.isfinite(error)), 200):
+        inside = (x[1:] > edges[k]) & (x[:-1] < edges[k + 1])
+        assert np.all(y[inside] >= error[k])
+    # ... and nothing past the last stretch reached is drawn.
+    assert np.all(np.isnan(y[x[:-1] > edges[4001]]))
+    # Few stretches: drawn as they are.
+    x_few, y_few = path_envelope(edges[:51], error[:50], max_bins=300)
+    assert np.array_equal(x_few, edges[:51]) and np.array_equal(y_few, error[:50], equal_nan=True)

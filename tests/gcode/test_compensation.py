@@ -617,7 +617,7 @@ def test_mirror_image_interchanges_g41_and_g42():
 def test_pure_compensate_function_gives_the_interpreter_path():
     # compensation.compensate() runs the same corner rules on plane elements without the interpreter:
     # the X57 contour as elements (start, end, centre, signed sweep) gives the same tool-centre points.
-    from cnc_gym.gcode.lang.fanuc.compensation import PlaneElement, compensate
+    from cnc_gym.gcode.lang.fanuc.compensation.geometry import PlaneElement, compensate
 
     def arc(start, end, center, ccw):
         a0 = math.atan2(start[1] - center[1], start[0] - center[0])

@@ -31,7 +31,7 @@ from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import get_dialect, interpret
-from cnc_gym.gcode.lang.fanuc.compensation import (
+from cnc_gym.gcode.lang.fanuc.compensation.geometry import (
     CompensationError,
     PlaneElement,
     block_interference,

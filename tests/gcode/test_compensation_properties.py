@@ -16,8 +16,9 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from gcode_helpers import close, success_share, tally
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
@@ -186,8 +187,29 @@ def test_random_programs_give_program_error_or_finite_path(blocks, r1, r2):
     assert np.all(np.diff(toolpath.line) >= 0)
 
 
+_HEPTAGON = ((0.0, 0.0), [(20.0, 0.0), (12.4698, 15.6366), (-4.4504, 19.4986), (-18.0194, 8.6777),
+                          (-18.0194, -8.6777), (-4.4504, -19.4986), (12.4698, -15.6366)])  # fmt: skip
+
+
+@pytest.mark.parametrize(("length", "alarm"), [(2, True), (4, False)])
+def test_a_start_up_at_an_inner_corner_needs_a_first_block_longer_than_r(length, alarm):
+    """The class of the example hypothesis found against the property below: a G41 start-up (+Y) into a
+    left turn (-X) ends where the offset lines cross, r = 3 along the first block; a first block of 2
+    followed by a straight continuation would run backwards on its offset line: alarm 41, check (a). With
+    4 it runs forward from X-3 to X-4."""
+    text = f"G10 L12 P1 R3\nG00 X0 Y-10\nG01 G41 D1 X0 Y0 F500\nG01 X-{length}\nX-10\nG40 X-10 Y-10\n"
+    if alarm:
+        with pytest.raises(ProgramError) as info:
+            interpret(text)
+        assert (info.value.code, info.value.alarm, info.value.line) == ("comp-interference", 41, 4)
+        assert "check (a)" in info.value.message
+    else:
+        assert interpret(text).end[:3, :2].tolist() == [[0.0, -10.0], [-3.0, -3.0], [-4.0, -3.0]]
+
+
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(convex_polygons(), st.sampled_from(["G41", "G42"]), st.floats(0.1, 0.9), st.floats(0.05, 0.45))
+@example(_HEPTAGON, "G41", 0.875, 0.375)
 def test_rounded_convex_polygon_offset_is_the_parallel_curve(polygon, side, rounding, fraction):
     # Every corner of the convex CCW polygon rounded with a tangent CCW arc of radius rho (the tangent
     # length rho / tan(alpha/2) takes at most a third of each edge). The contour is smooth, so the
@@ -220,6 +242,12 @@ def test_rounded_convex_polygon_offset_is_the_parallel_curve(polygon, side, roun
         tangents.append((t_in, t_out))
     # Program: start at the middle of edge 0 (from vertex 0 to 1), go round, back to the middle.
     start = ((arcs[0][1][0] + arcs[1][0][0]) / 2, (arcs[0][1][1] + arcs[1][0][1]) / 2)
+    # The start-up block (from the centre, square onto edge 0) meets the first block at an inner corner
+    # for G41: the start-up ends where the two offset lines cross, r along the first block (§3.5.3). A first
+    # block shorter than r would run backwards on its offset line, which is alarm 41 (check (a)), not a
+    # parallel curve: such a polygon is no example of this property (hypothesis found one: a regular
+    # heptagon of radius 20, rounding 0.875, r = 3.94 against a first block of 3.62).
+    assume(side == "G42" or math.dist(start, arcs[1][0]) > r + 1e-3)
     lines = [
         f"G10 L12 P1 R{r:.6f}",
         f"G00 X{cx:.6f} Y{cy:.6f}",

@@ -16,11 +16,12 @@ import math
 import numpy as np
 import pytest
 from gcode_helpers import close, program_error, success_share, tally
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
+from cnc_gym.gcode.dialects.gsk25i import DIALECT
 from cnc_gym.gcode.dialects.gsk25i.patterns import PATTERN_WORDS, pattern_holes, rectangle_holes
 from cnc_gym.gcode.dialects.gsk25i.pockets import POCKET_WORDS, check_pocket, pocket_steps
 from cnc_gym.toolpath import SegmentKind
@@ -208,17 +209,36 @@ _CODES = ["G73", "G74", "G76", "G81", "G82", "G83", "G84", "G85", "G86", "G87", 
 _num = st.one_of(st.integers(-60, 60).map(str), st.floats(-60, 60, allow_nan=False).map(lambda v: f"{v:.3f}"))
 
 
+#: P2011, G83's clearance d (GSK 25i standard setting).
+G83_CLEARANCE = DIALECT.cycle_params.g83_clearance_mm
+
+
+def test_g83_re_approaches_to_d_above_the_depth_already_cut_after_each_return_to_r():
+    """§3.4.7 (and the Fanuc 0i's G83, d = parameter 5115): "in the second and subsequent cutting feeds,
+    rapid traverse is performed up to a d point just before where the last drilling ended". The return
+    between pecks goes up to R, and the next rapid goes down to d above the last peck's depth, so with
+    R = 0, Q1 and d = 0.5 it ends at -0.5, below R: the case hypothesis once found against a test that
+    forgot the depth already cut when the tool came back up to R."""
+    tp = interpret("M3 S100;\nG00 Z0;\nG98 G90 G83 X0 Y0 Z-2 R0 Q1 F1;\nG80;\n")
+    path = [(int(tp.kind[n]), round(float(tp.end[n][2]), 9)) for n in range(len(tp.kind))]
+    feed, rapid = int(SegmentKind.LINE), int(SegmentKind.RAPID)
+    assert path == [(feed, -1.0), (rapid, 0.0), (rapid, -1.0 + G83_CLEARANCE), (feed, -2.0), (rapid, 0.0)]
+
+
 @success_share(0.08)
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(code=st.sampled_from(_CODES), ret=st.sampled_from(["G98", "G99"]),
        dist=st.sampled_from(["G90", "G91"]), start_z=st.integers(-20, 60),
        words=st.dictionaries(st.sampled_from("XYZRQPKF"), _num, max_size=8),
        more=st.lists(st.dictionaries(st.sampled_from("XYZRQ"), _num, max_size=3), max_size=3))  # fmt: skip
+@example(code="G83", ret="G98", dist="G90", start_z=0,
+         words={"X": "0", "Y": "0", "Z": "-2", "R": "0", "Q": "1", "F": "1"}, more=[])  # fmt: skip
 def test_random_cycle_blocks_give_an_error_or_a_path_that_keeps_the_levels(code, ret, dist, start_z, words,
                                                                            more):  # fmt: skip
     """Any cycle block: a ProgramError, or a finite path where no move goes below the hole
     bottom, feeds stay between R and the bottom, and a downward rapid never ends below R except in
-    G83's re-approach (d above the depth already cut) and G87's drop to R under the part."""
+    G83's re-approach, which ends at least d (P2011) above the deepest point already cut at that hole
+    (the return to R between pecks does not undo the cut: §3.4.7), and G87's drop to R under the part."""
     if "P" in words:
         words["P"] = str(abs(int(float(words["P"]))))
     if "K" in words:
@@ -242,19 +262,18 @@ def test_random_cycle_blocks_give_an_error_or_a_path_that_keeps_the_levels(code,
     if start_z < r:
         return  # an initial level below R: G98 returns down to it by definition (no level rule to check)
     top = max(start_z, r)
-    deepest = r
+    cut: dict[tuple[float, float], float] = {}  # hole position → the deepest point cut there
     for n in range(len(tp.kind)):
         if tp.line[n] < 3:
             continue  # the setup rapid to the initial level
         z0, z1 = float(tp.start[n][2]), float(tp.end[n][2])
+        hole = (round(float(tp.end[n][0]), 6), round(float(tp.end[n][1]), 6))
         assert z1 >= bottom - 1e-6 and z1 <= top + 1e-6
         if tp.kind[n] == SegmentKind.LINE:
             assert bottom - 1e-6 <= min(z0, z1) and max(z0, z1) <= r + 1e-6
-            deepest = min(deepest, z1)
+            cut[hole] = min(cut.get(hole, r), z1)
         elif tp.kind[n] == SegmentKind.RAPID and z1 < z0 - 1e-9 and z1 < r - 1e-6:
-            assert code == "G83" and z1 >= deepest + 0.5 - 1e-6
-        if tp.kind[n] == SegmentKind.RAPID and z1 >= r - 1e-9:
-            deepest = r  # a new hole (or back at R) starts over
+            assert code == "G83" and z1 >= cut.get(hole, r) + G83_CLEARANCE - 1e-6
 
 
 # ------------------------------------------------------------------ X47-X54 as programs (D1 = 5)

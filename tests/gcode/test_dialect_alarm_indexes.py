@@ -31,7 +31,7 @@ from doc_tables import (
 )
 
 #: dialect → (number of error conditions in its manual's catalogue, the index's column of the manual's alarm)
-CATALOGUES = {"syntec": (28, "Syntec alarm"), "h4cm": (33, "H4C-M error"), "azmc1": (22, "AZ-MC1 alarm")}
+CATALOGUES = {"syntec": (28, "Syntec alarm"), "h4cm": (34, "H4C-M error"), "azmc1": (22, "AZ-MC1 alarm")}
 
 
 def _syntec_carried(manual: str, ours: str, kind: str) -> None:

@@ -11,7 +11,9 @@ from __future__ import annotations
 import pytest
 from gcode_helpers import close, moves, program_error, records
 
+from cnc_gym.errors import ConfigError
 from cnc_gym.gcode import get_dialect, interpret
+from cnc_gym.machine import machine_from_dict
 
 FANUC = "fanuc"
 
@@ -108,11 +110,251 @@ def test_m19_oriented_spindle_stop_is_recorded():
     assert program_error("M19\n").code == "not-implemented"  # the GSK 25i
 
 
-def test_machine_specific_m_codes_are_refused_by_name():
-    err = program_error("M88\n", dialect=FANUC)
-    assert err.code == "unknown-code" and "M88" in err.message and "through-spindle coolant" in err.message
-    assert "M97" in program_error("M97 P100\n", dialect=FANUC).message
-    assert program_error("M123\n", dialect=FANUC).message == "unknown M code M123"
+def test_machine_m_codes_are_machine_functions_listed_on_the_tool_path():
+    """An M code the control does not define is handed to the machine: no motion of the program, the block
+    ends at rest when the machine answers (a 0 s exact-stop dwell flagged machine_function, its code in the
+    trace record). One of the usual machine codes (M13, M88 …) passes silently, another (M20) with a note;
+    a preset's machine_functions lists its own codes and its strict setting refuses the rest."""
+    tp = interpret("S1000 M13\nG01 X1. F100.\nM88\nM20\nM30\n", dialect=FANUC)
+    dwells = [r for r in tp.to_records() if r["kind"] == "dwell"]
+    assert [(r["line"], r["machine_function"]) for r in dwells] == [(1, "M13"), (3, "M88"), (4, "M20")]
+    assert all(r["seconds"] == 0.0 and r["modes"] == ["exact_stop", "machine_function"] for r in dwells)
+    assert dict(tp.machine_functions) == {0: "M13", 2: "M88", 3: "M20"}
+    assert len(tp.notices) == 1 and tp.notices[0].startswith("<program>:4: note: M20 is not on this machine")
+    # In cutter compensation the machine function waits in the look-ahead: the contour is unchanged.
+    text = "G41 D1 G01 X10. Y0 F100.\n{m}X20.\nG40 X30. Y-10.\n"
+    plain = [r["end"] for r in records(text.format(m=""), dialect=FANUC, tool_offsets={"D": {1: 2.0}})]
+    with_m = records(text.format(m="M88\n"), dialect=FANUC, tool_offsets={"D": {1: 2.0}})
+    assert [r["end"] for r in with_m if r["kind"] != "dwell"] == plain
+    # The preset's list (any dialect) and its strict setting.
+    shop = machine_from_dict({"machine_functions": {"m_codes": {20: "part counter"}, "strict": True}})
+    listed = interpret("M20\nM88\n", dialect=FANUC, machine=shop).machine_functions
+    assert dict(listed) == {0: "M20", 1: "M88"}
+    assert program_error("M123\n", dialect=FANUC, machine=shop).message.endswith("(machine_functions.strict)")
+    assert dict(interpret("M20\n", machine=shop).machine_functions) == {0: "M20"}  # the GSK 25i too
+    # The GSK 25i refuses the others; Haas's M97 (a call) is refused by name everywhere.
+    assert program_error("M88\n").message == "unknown M code M88"
+    err = program_error("M97 P100\n", dialect=FANUC)
+    assert err.code == "not-implemented" and "M97" in err.message
+
+
+# --------------------------------------------------------------------------- abbreviated macro words
+ABBREVIATED = """#1=0
+#2=0
+WH[#1LT3]DO1
+#1=#1+1
+#2=#2+SQ[16]
+G01 X#2 F100.
+EN1
+IF[#1EQ3]GO20
+G00 Y99.
+N20 #3=#1AN2
+IF[#3EQ2]TH#4=AT[1]/[1]
+G00 Y#4
+"""
+
+
+def test_abbreviated_macro_words_are_the_words():
+    """Fanuc reads the first two letters of a macro word as the word: WH[ is WHILE[, EN1 END1, GO20 GOTO20,
+    TH THEN, SQ[ SQRT[, AT[ ATAN[, AN AND. Three passes add SQRT[16] = 4 to X; GO20 skips Y99; 3 AND 2 = 2,
+    so #4 = ATAN[1]/[1] = 45."""
+    full = ABBREVIATED
+    for short, word in (("WH[", "WHILE["), ("EN1", "END1"), ("GO20", "GOTO20"), ("TH#", "THEN#"),
+                        ("SQ[", "SQRT["), ("AT[", "ATAN["), ("AN2", "AND2")):  # fmt: skip
+        full = full.replace(short, word)
+    assert ends(ABBREVIATED) == ends(full)
+    assert ends(ABBREVIATED) == [[4.0, 0.0, 0.0], [8.0, 0.0, 0.0], [12.0, 0.0, 0.0], [12.0, 45.0, 0.0]]
+    # Never where an address stands or inside a full word: WH without '[' is W and H, AND stays AND.
+    assert program_error("WH2\n", dialect=FANUC).code == "missing-value"  # W without a number
+    assert ends("#1=5AND4\nG00 X#1\n") == [[4.0, 0.0, 0.0]]
+    # The GSK 25i has no abbreviations: WH[ is an error there.
+    err = program_error("#1=0\nWH[#1LT3]DO1\nEND1\n")
+    assert err.code == "missing-value" and "write WHILE[…]DOn in full" in err.message
+
+
+# --------------------------------------------------------------------------- Haas cycle and dwell rules
+def test_haas_cycles_without_r_drill_from_the_initial_level():
+    # No R ever given: the R level is the initial level (Z10): rapid over the hole, feed from Z10 to Z-5,
+    # back to Z10. The GSK 25i needs R in the first drilling block.
+    text = "G00 X0 Y0 Z10.\nG81 X1. Y1. Z-5. F100.\nX2.\nG80\n"
+    assert ends(text) == [[0.0, 0.0, 10.0], [1.0, 1.0, 10.0], [1.0, 1.0, -5.0], [1.0, 1.0, 10.0],
+                          [2.0, 1.0, 10.0], [2.0, 1.0, -5.0], [2.0, 1.0, 10.0]]  # fmt: skip
+    assert program_error(text).code == "cycle-missing-data"
+
+
+def test_haas_l_is_the_cycle_repeat_count():
+    # G91 with L3: three holes 5 apart; R-8 from the initial level 10 is 2, Z-5 from R is -3.
+    holes = [e for e in ends("G00 Z10.\nG91 G81 X5. Z-5. R-8. F100. L3\nG90 G80\n") if e[2] == -3.0]
+    assert holes == [[5.0, 0.0, -3.0], [10.0, 0.0, -3.0], [15.0, 0.0, -3.0]]
+    assert ends("G00 Z10.\nG81 X1. Z-1. R2. F100. L0\n") == [[0.0, 0.0, 10.0]]  # L0 stores the data only
+    assert program_error("G81 X1. Z-1. R2. F100. K2 L2\n", dialect=FANUC).code == "bad-cycle"
+    assert program_error("G81 X1. Z-1. R2. F100. L2\n").code == "unused-word"  # the GSK 25i: K only
+
+
+def test_haas_dwell_p_with_a_decimal_point_is_seconds():
+    # Haas: "P10. is 10 seconds, P10 10 milliseconds" — G04 and a cycle's P alike; the GSK 25i refuses the
+    # point.
+    dwells = [r["seconds"] for r in records("G04 P1.5\nG04 P1500\nG82 X1. Z-1. R2. P0.5 F100.\n",
+                                           dialect=FANUC) if r["kind"] == "dwell"]  # fmt: skip
+    assert dwells == [1.5, 1.5, 0.5]
+    assert program_error("G04 P1.5\n").code == "decimal-point-not-allowed"
+
+
+# --------------------------------------------------------------------------- G47 text engraving (Haas)
+def test_g47_engraves_the_comments_text_in_single_strokes():
+    """G47 P0 (TEXT): each stroke of the font at J/6 per grid unit, from X Y along I degrees: rapid to the
+    stroke's start, to R, plunge to Z at E, cut at F, back to R. "LI" at J6 (1 mm per unit), X10 Y20, I0:
+    L is one stroke (0,6)-(0,0)-(4,0); I three ((1,6)-(3,6), (2,6)-(2,0), (1,0)-(3,0)) 6 units on."""
+    text = "G00 Z5.\nG47 P0 (li) X10. Y20. J6. R2. Z-1. F300. E100.\n"
+    rows = [(r["kind"], r["end"], r.get("feed")) for r in records(text, dialect=FANUC)][1:]
+    expected = [("rapid", [10.0, 26.0, 5.0], None), ("rapid", [10.0, 26.0, 2.0], None),
+                ("line", [10.0, 26.0, -1.0], 100.0), ("line", [10.0, 20.0, -1.0], 300.0),
+                ("line", [14.0, 20.0, -1.0], 300.0)]  # fmt: skip
+    for x0, y0, x1, y1 in ((17, 26, 19, 26), (18, 26, 18, 20), (17, 20, 19, 20)):
+        expected += [("rapid", [expected[-1][1][0], expected[-1][1][1], 2.0], None),
+                     ("rapid", [float(x0), float(y0), 2.0], None),
+                     ("line", [float(x0), float(y0), -1.0], 100.0),
+                     ("line", [float(x1), float(y1), -1.0], 300.0)]  # fmt: skip
+    expected.append(("rapid", [19.0, 20.0, 2.0], None))
+    assert rows == expected
+    # I turns the line of text about X Y: "-" at I90 is the stroke (1,3)-(3,3) turned up: x = 10 - 3.
+    dash = [r["end"] for r in records("G47 P0 (-) X10. Y0 J6. I90. R2. Z-1. F300.\n", dialect=FANUC)]
+    assert [round(c, 9) + 0.0 for c in dash[-2]] == [7.0, 3.0, -1.0]
+
+
+def test_g47_serial_numbers_characters_and_errors():
+    # P1: #599 in as many digits as the comment has '#', then #599 + 1; P32-P126 one character.
+    serial = "#599=41\nG47 P1 (####) X0 Y0 J6. R1. Z-1. F100.\nG47 P1 (####) X0 Y0 J6. R1. Z-1.\n"
+    spelled = "G47 P0 (0041) X0 Y0 J6. R1. Z-1. F100.\nG47 P0 (0042) X0 Y0 J6. R1. Z-1.\n"
+    assert ends(serial) == ends(spelled)
+    assert ends("G47 P45 X0 Y0 J6. R1. Z-1. F100.\n") == ends("G47 P0 (-) X0 Y0 J6. R1. Z-1. F100.\n")
+    assert program_error("G47 P0 X0 Y0 J6. R1. Z-1. F100.\n", dialect=FANUC).code == "engrave-no-text"
+    assert program_error("G47 P0 (a~b) X0 Y0 R1. Z-1. F100.\n", dialect=FANUC).code == "bad-engrave"
+    assert program_error("G47 P0 (A) X0 Y0 R1. F100.\n", dialect=FANUC).code == "missing-value"
+    assert program_error("G91 G47 P0 (A) X0 Y0 R1. Z-1. F100.\n", dialect=FANUC).code == "bad-engrave"
+    # The GSK 25i's G47 is the position offset double increase, never an engraving.
+    assert program_error("G47 P0 (A) X0 Y0 R1. Z-1. F100.\n").code == "unused-word"
+
+
+def test_the_engraving_font_stays_in_its_cell():
+    from cnc_gym.gcode.dialects.fanuc.engraving import ADVANCE, CAP_HEIGHT, FONT
+
+    for char, glyph in FONT.items():
+        for stroke in glyph:
+            assert len(stroke) >= 2, char
+            assert all(0 <= x <= 4 < ADVANCE and -1 <= y <= CAP_HEIGHT for x, y in stroke), char
+
+
+# --------------------------------------------------------------------------- Haas system variables
+def test_haas_tool_life_table_and_timers_are_read_only():
+    """#5400+n / #5500+n: the feed and total seconds of tool n so far (nominal: programmed feed, rapids at
+    6000 mm/min); #5600+n limits 0; #3026 the tool in the spindle, #3027 the spindle speed, #3022 the feed
+    timer. Tool 5 cut 60 mm at 600 mm/min: 6 s. Writing one is alarm 116."""
+    text = ("T5 M06\nG01 X60. F600.\n#1=#5405\n#2=#5505\n#3=#5401\n#4=#3026\nS1200 M03\n#5=#3027\n"
+            "#6=#5605\n#7=#3022\nG00 X#1 Y#2 Z#4\nX#5 Y#6 Z#7\nY#3\n")  # fmt: skip
+    assert ends(text)[1:] == [[6.0, 6.0, 5.0], [1200.0, 0.0, 6.0]]
+    err = program_error("#5405=1\n", dialect=FANUC)
+    assert (err.code, err.alarm) == ("read-only-variable", 116) and "GSK" not in err.message
+    assert program_error("#1=#5405\n").code == "bad-variable"  # not a GSK 25i variable
+    # The Haas tool life check of a shop program: a fresh tool passes (#5405 = 0 < 6000).
+    assert ends("T5 M06\nIF [ #5405 GE 6000 ] THEN #3000= 15 (TOOL LIFE EXPIRED)\nG00 X1.\n") == [
+        [1.0, 0.0, 0.0]]
+
+
+# --------------------------------------------------------------------------- the 4-axis preset
+def test_vmc_4axis_is_vmc_small_with_an_a_table():
+    from cnc_gym.machine import load_machine
+
+    four, small = load_machine("vmc-4axis"), load_machine("vmc-small")
+    assert four.rotary_letters == "A" and four.axes == small.axes and four.controller == small.controller
+    rows = records("G00 X10. A90.\nG01 X20. A180. F1000.\n", dialect=FANUC, machine=four)
+    assert [r["rotary_end"] for r in rows] == [{"A": 90.0}, {"A": 180.0}]
+    err = program_error("G00 X10. A90.\n", dialect=FANUC, machine=small)
+    assert err.code == "unsupported-axis" and "--machine vmc-4axis has A" in err.message
+
+
+# --------------------------------------------------------------------------- calculator-type input
+MIXED = "G00 Z2\nX1.292 Y3.752\nG01 X26.377 Y31 F600\nG03 X26.937 Y30.161 I4.507 J2.402\n"
+
+
+def test_calculator_type_input_reads_integers_as_mm():
+    """Parameter 3401#0 DPI = 1 (calculator_input): X10 is 10 mm, G04 X2 2 s, K3 3 repeats; a preset's
+    calculator_input sets it, the argument rules. Dialects without the setting refuse it."""
+    assert ends("G00 X10 Y2.5\n", calculator_input=True) == [[10.0, 2.5, 0.0]]
+    assert ends("G00 X10 Y2.5\n") == [[0.01, 2.5, 0.0]]
+    assert [r["seconds"] for r in records("G04 X2\n", dialect=FANUC, calculator_input=True)] == [2.0]
+    calculator = machine_from_dict({"calculator_input": True})
+    assert ends("G00 X10\n", machine=calculator) == [[10.0, 0.0, 0.0]]
+    assert ends("G00 X10\n", machine=calculator, calculator_input=False) == [[0.01, 0.0, 0.0]]
+    assert [m["end"] for m in moves("G00 X10\n", calculator_input=True)] == [[10.0, 0.0, 0.0]]  # GSK: as ever
+    with pytest.raises(ConfigError, match="no calculator-type input setting"):
+        interpret("G00 X10\n", dialect="syntec", calculator_input=True)
+
+
+def test_mixed_decimal_points_get_a_warning_and_the_arc_error_names_the_block():
+    # Y31 next to decimal Y words: one warning naming the first integer word. The arc after it fails its
+    # radius check, and the error names Y31's block as the one that set the start point.
+    tp = interpret("G00 Z2\nX1.5 Y3.\nG01 X26 F600\nX4.\n", dialect=FANUC)
+    assert tp.notices == ("<program>:3: warning: X26 has no decimal point and reads 0.026 mm (26 least input "
+                          "increments, parameter 3401#0 DPI = 0), while other X words have one: if the "
+                          "program means X26. (26 mm), trace it with --calculator-input (the machine "
+                          "preset's calculator_input) [mixed-decimal-point]",)  # fmt: skip
+    assert interpret("G00 X10 Y20\nX0 Y5\n", dialect=FANUC).notices == ()  # integers alone: no warning
+    err = program_error(MIXED, dialect=FANUC)
+    assert err.code == "arc-radius-mismatch" and err.line == 4
+    assert err.message.endswith("; Y31 at line 3 (the start point) without a decimal point: least input "
+                                "increments (parameter 3401#0 DPI = 0: Y31 is 0.031 mm); if they mean mm, "
+                                "trace with --calculator-input")  # fmt: skip
+    assert err.notices and "[mixed-decimal-point]" in err.notices[0]  # the warning goes with the error
+    assert ends(MIXED, calculator_input=True)[2] == [26.377, 31.0, 2.0]
+
+
+def test_cnc_gym_trace_prints_the_warning_before_the_error_it_explains(tmp_path, capsys):
+    from cnc_gym.cli import main
+
+    path = tmp_path / "mixed.nc"
+    path.write_text(MIXED)
+    assert main(["trace", str(path), "--dialect", "fanuc"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and lines[0].endswith("[mixed-decimal-point]")
+    assert lines[1].endswith("[arc-radius-mismatch]")
+
+
+# --------------------------------------------------------------------------- the shop example
+def test_the_haas_style_shop_example_traces_with_its_setup():
+    """examples/haas_shop.nc with examples/shop_setup.yaml: coolant through the spindle as machine
+    functions, an abbreviated WH loop of two contour passes in G41, a G82 spot cycle without R repeated by
+    L with a P dwell in seconds, a G47 engraving; every Z carries G54 (-380) and the tool's length."""
+    from pathlib import Path
+
+    from cnc_gym.gcode import interpret_file
+
+    root = Path(__file__).resolve().parents[2] / "examples"
+    tp = interpret_file(root / "haas_shop.nc", dialect=FANUC, setup=root / "shop_setup.yaml")
+    assert tp.notices == ()
+    assert list(tp.machine_functions.values()) == ["M88", "M89"]  # (M08/M09 are the dialect's own)
+    rows = tp.to_records()
+    cut = {round(r["end"][2], 6) for r in rows if r["kind"] == "line" and r["line"] < 27}
+    assert {-380.0 + 112.4 - 4.0, -380.0 + 112.4 - 6.0} <= cut  # the two passes, Z-4 and Z-6 (H1 112.4)
+    spots = [r for r in rows if r["kind"] == "dwell" and r["seconds"] == 0.5]
+    assert len(spots) == 4  # L4
+    engraved = {round(r["end"][2], 6) for r in rows if r["kind"] == "line" and r["line"] == 38}
+    assert engraved == {round(-380.0 + 104.10 - 0.02 - 0.2, 6)}
+
+
+# --------------------------------------------------------------------------- G92 and G54-G59
+def test_g92_shifts_every_work_system_and_stays_across_g54_g59():
+    """Fanuc 0i: G92 sets a shift that applies to all of G54-G59 and stays until reset or reference
+    return; the GSK 25i's G92 replaces the work system until the next G54-G59 (§3.2.13). G55 = (100, 0).
+    At machine (10, 10) in G54, G92 X0 Y0 makes the shift (10, 10): G54 X5 is machine 15; G55 X5 is
+    100 + 10 + 5 = 115; G54 again keeps it (15)."""
+    text = "G10 L2 P2 X100.\nG00 X10. Y10.\nG92 X0 Y0\nG54 X5. Y5.\nG55 X5. Y5.\nG54 X5. Y5.\n"
+    assert ends(text) == [[10.0, 10.0, 0.0], [15.0, 15.0, 0.0], [115.0, 15.0, 0.0], [15.0, 15.0, 0.0]]
+    # The GSK 25i: G54 ends the G92 system, G55 is its own offset only.
+    gsk = [m["end"] for m in moves(text)]
+    assert gsk == [[10.0, 10.0, 0.0], [5.0, 5.0, 0.0], [105.0, 5.0, 0.0], [5.0, 5.0, 0.0]]
+    # A second G92 replaces the shift (from where the tool is): at machine 15, X0 → shift 15.
+    assert ends("G00 X10.\nG92 X0\nG00 X5.\nG92 X0\nG55 X1.\n")[-1] == [16.0, 0.0, 0.0]
 
 
 # --------------------------------------------------------------------------- power-on units

@@ -22,6 +22,8 @@ from cnc_gym.gcode import interpret_file
 ])  # fmt: skip
 @pytest.mark.parametrize("dialect", ["gsk25i", "fanuc"])
 def test_other_languages_syntax_gets_a_hint(line, hint, dialect):
+    if dialect == "fanuc" and line.startswith("WH["):
+        pytest.skip("the fanuc dialect reads Fanuc's abbreviated macro words (test_fanuc.py)")
     err = program_error(f"G00 X1.\n{line}\n", dialect=dialect)
     assert err.line == 2 and hint in err.message
     assert str(err).count("\n") == 0  # still one line

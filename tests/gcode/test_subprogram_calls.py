@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 from gcode_helpers import moves, program_error
 
-from cnc_gym.errors import ConfigError
+from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.gcode import interpret, interpret_file
 
 
@@ -185,13 +185,80 @@ def test_trace_command_finds_subprograms_and_names_their_file(tmp_path, capsys):
 
 
 def test_unreadable_subprogram_file_is_a_program_error(tmp_path, monkeypatch):
-    from pathlib import Path
+    from cnc_gym.gcode.lang.fanuc import flow
 
     (tmp_path / "O0005.nc").write_text("O0005\nM99\n")
 
-    def refuse(self):
+    def refuse(path, **_):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(Path, "read_bytes", refuse)
+    monkeypatch.setattr(flow, "read_regular_file", refuse)
     err = program_error("M98 P5\n", program_dir=tmp_path)
     assert err.alarm == 59 and "cannot read" in err.message and "Permission denied" in err.message
+
+
+# --------------------------------------------------------------------------- links out of the folder
+def _outside(tmp_path):
+    """A main program in ``tmp_path/job`` and O0005 in ``tmp_path/elsewhere``."""
+    job, elsewhere = tmp_path / "job", tmp_path / "elsewhere"
+    job.mkdir()
+    elsewhere.mkdir()
+    (elsewhere / "O0005.nc").write_text("O0005\nG00 X5\nM99\n")
+    main = job / "main.nc"
+    main.write_text("M98 P5\nM30\n")
+    return job, elsewhere, main
+
+
+@pytest.mark.parametrize("link", ["absolute", "dotdot"])
+def test_a_called_program_may_not_lead_out_of_the_folder_through_a_link(tmp_path, link):
+    job, elsewhere, main = _outside(tmp_path)
+    target = elsewhere / "O0005.nc" if link == "absolute" else "../elsewhere/O0005.nc"
+    (job / "O0005.nc").symlink_to(target)
+    with pytest.raises(ProgramError) as info:
+        interpret_file(main)
+    err = info.value
+    assert (err.code, err.alarm, err.file, err.line) == ("program-not-found", 59, str(main), 1)
+    assert "leads out of the folder" in err.message and str(elsewhere / "O0005.nc") in err.message
+    # The user may allow it.
+    assert interpret_file(main, follow_links=True).end.tolist() == [[5.0, 0.0, 0.0]]
+
+
+def test_a_link_inside_the_folder_and_a_folder_reached_through_a_link_are_fine(tmp_path):
+    job, elsewhere, main = _outside(tmp_path)
+    (job / "O0006.nc").write_text("O0006\nG00 Y6\nM99\n")
+    (job / "O0005.nc").symlink_to(job / "O0006.nc")  # O0005 is O0006's text: the file holds no O0005
+    main.write_text("M98 P6\nM30\n")
+    assert interpret_file(main).end.tolist() == [[0.0, 6.0, 0.0]]
+    linked = tmp_path / "linked"
+    linked.symlink_to(elsewhere)  # the whole folder through a link: its files are inside it
+    assert ends("M98 P5\nM30\n", program_dir=linked) == [(5.0, 0.0, 0.0)]
+
+
+def test_program_dir_is_the_boundary_too_and_trace_has_the_option(tmp_path, capsys):
+    from cnc_gym.cli import main as cli
+
+    _, elsewhere, main = _outside(tmp_path)
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    (subs / "O0005.nc").symlink_to(elsewhere / "O0005.nc")
+    err = program_error("M98 P5\n", program_dir=subs)
+    assert err.code == "program-not-found" and "leads out of the folder" in err.message
+    assert cli(["trace", str(main), "--program-dir", str(subs)]) == 2
+    out = capsys.readouterr()
+    assert out.out == "" and out.err.count("\n") == 1 and "--follow-links" in out.err
+    assert cli(["trace", str(main), "--program-dir", str(subs), "--follow-links"]) == 0
+
+
+def test_the_din_family_takes_the_same_rule(tmp_path):
+    job, elsewhere = tmp_path / "job", tmp_path / "elsewhere"
+    job.mkdir()
+    elsewhere.mkdir()
+    (elsewhere / "100").write_text("%100\nN1 G1 X5 F100\nN9 M29\n")
+    (job / "100").symlink_to(elsewhere / "100")
+    main = job / "333"
+    main.write_text("%333\nN100 G0 X0\nN200 L100\nN300 M30\n")
+    with pytest.raises(ProgramError) as info:
+        interpret(main.read_text(), dialect="azmc1", file=str(main))
+    assert info.value.code == "program-not-found" and "leads out of the folder" in info.value.message
+    tp = interpret(main.read_text(), dialect="azmc1", file=str(main), follow_links=True)
+    assert tp.end.tolist()[-1] == [5.0, 0.0, 0.0]

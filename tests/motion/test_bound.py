@@ -171,3 +171,94 @@ def test_no_baseline_beats_the_bound_on_pecking_cycles(name):
     # ... and stays close to the fastest of them: the bound is not loose by a whole grid interval per peck.
     fastest = min(r["cycle_time_s"] for r in records if r["finished"] and not r["reference"])
     assert fastest / bound[0]["bound_s"] < 1.5
+
+
+BAD_CACHE_FILES = {
+    "a list": "[]",
+    "null": "null",
+    "a string": '"fast"',
+    "a number": "1.5",
+    "NaN": None,  # the stored record with total_s NaN (json.dumps writes it by default)
+    "Infinity": None,
+    "a negative time": None,
+    "a forged total_s": None,  # a plausible number, the digest left as it was
+    "a forged total_s with the parts changed to match": None,
+    "another version": None,
+    "another key": None,
+    "a bool for gridpoints": None,
+    "an extra field": None,
+    "deep nesting": "[" * 5000,
+    "too large": " " * 10_000 + "{}",
+}
+
+
+def _tampered(record: dict, case: str) -> str:
+    import json
+
+    r = dict(record)
+    if case == "NaN":
+        r["total_s"] = math.nan
+    elif case == "Infinity":
+        r["total_s"] = math.inf
+    elif case == "a negative time":
+        r["rapid_s"] = -1.0
+    elif case == "a forged total_s":
+        r["total_s"] = record["total_s"] * 0.5
+    elif case == "a forged total_s with the parts changed to match":
+        r["total_s"] = record["total_s"] * 0.5
+        r["cutting_s"] = record["cutting_s"] - 0.5 * record["total_s"]
+    elif case == "another version":
+        r["version"] = r["version"] + 1
+    elif case == "another key":
+        r["key"] = "0" * 64
+    elif case == "a bool for gridpoints":
+        r["gridpoints"] = True
+    elif case == "an extra field":
+        r["note"] = "hi"
+    return json.dumps(r)
+
+
+@pytest.mark.parametrize("case", sorted(BAD_CACHE_FILES))
+def test_a_bad_cache_file_is_recomputed_with_one_notice(tmp_path, monkeypatch, case):
+    import json
+
+    from cnc_gym.motion import bound
+
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    tp = interpret("G90 G21\nG01 X10 Y2 F1200\nG00 Z5\nG04 P200\nM30\n")
+    first = time_optimal_bound(tp, VMC)
+    (path,) = (tmp_path / "bound").glob("*.json")
+    record = json.loads(path.read_text())
+    assert record["key"] == path.stem and bound.check_cache_record(record, path.stem) == first
+    text = BAD_CACHE_FILES[case]
+    path.write_text(text if text is not None else _tampered(record, case))
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    notices: list[str] = []
+    again = time_optimal_bound(tp, VMC, notice=notices.append)
+    assert again.total_s == pytest.approx(first.total_s, rel=1e-9)
+    assert len(notices) == 1 and str(path) in notices[0] and "\n" not in notices[0], notices
+    # ... and the file is rewritten: the next read uses it, silently.
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    notices.clear()
+    monkeypatch.setattr(bound, "compute_bound", lambda *a, **k: pytest.fail("not read from the cache"))
+    assert time_optimal_bound(tp, VMC, notice=notices.append) == again and notices == []
+
+
+def test_a_cache_file_under_another_programs_key_is_not_used(tmp_path, monkeypatch):
+    from cnc_gym.motion import bound
+
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    short, long = interpret("G01 X10 F1200\nM30\n"), interpret("G01 X100 F1200\nM30\n")
+    time_optimal_bound(short, VMC)
+    (short_file,) = (tmp_path / "bound").glob("*.json")
+    # The short program's valid record, copied under the long program's key.
+    long_file = short_file.with_name(f"{bound.bound_key(long, VMC)}.json")
+    long_file.write_text(short_file.read_text())
+    monkeypatch.setattr(bound, "_MEMORY", {})
+    notices: list[str] = []
+    result = time_optimal_bound(long, VMC, notice=notices.append)
+    assert result.total_s == pytest.approx(compute_bound(long, VMC).total_s, rel=1e-9)
+    assert result.total_s > 2 * time_optimal_bound(short, VMC).total_s
+    assert len(notices) == 1 and "another program or machine" in notices[0]

@@ -54,3 +54,45 @@ def test_override_action_clips_to_the_action_box():
     assert override_action(2.0)[0] == 1.0
     assert override_action(5.0)[0] == 1.0  # beyond 200 %: clipped to the box
     assert override_action(1.5)[0] == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize(("spec", "message"), [
+    ("os:system", "built-in callable"),  # would run a shell command with the observation
+    ("json:dumps", "arguments fit neither"),
+    ("builtins:exit", "callable Quitter"),  # called as a factory, it exited 0 with no word
+    ("os:abort", "built-in callable"),  # a factory call would kill the process
+    ("builtins:input", "built-in callable"),  # ... or wait on stdin
+    ("math:pi", "float value"),
+    ("json:JSONEncoder", "returned JSONEncoder"),  # a class that makes no policy
+])  # fmt: skip
+def test_a_module_callable_of_the_wrong_kind_is_refused_without_running_it(spec, message):
+    with pytest.raises(CncGymError, match=message) as err:
+        make_policy(spec)
+    assert "\n" not in str(err.value) and len(str(err.value)) < 300
+
+
+def test_a_factory_that_exits_or_fails_and_an_act_function_that_raises_are_one_line(tmp_path, monkeypatch):
+    (tmp_path / "odd_policies.py").write_text(
+        "import sys\n"
+        "def leaves():\n    sys.exit(0)\n"
+        "def breaks():\n    raise RuntimeError('no model here')\n"
+        "def act(observation, info):\n    return observation['knob']\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(CncGymError, match=r"calling leaves\(\) failed: SystemExit"):
+        make_policy("odd_policies:leaves")
+    with pytest.raises(CncGymError, match="calling breaks\\(\\) failed: RuntimeError: no model here"):
+        make_policy("odd_policies:breaks")
+    with pytest.raises(CncGymError, match=r"act\(observation, info\) failed: IndexError"):
+        make_policy("odd_policies:act").act(np.zeros(3), {})
+
+
+def test_the_cli_refuses_a_wrong_kind_of_callable_in_one_line():
+    import subprocess
+    import sys
+
+    for spec in ("os:system", "builtins:exit"):
+        result = subprocess.run([sys.executable, "-m", "cnc_gym.cli", "run", "circle", "--policy", spec],
+                                capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+        assert result.returncode == 2 and result.stdout == "", (spec, result)
+        assert len(result.stderr.splitlines()) == 1 and "not a policy" in result.stderr, result.stderr

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from cnc_gym.errors import CncGymError
 from cnc_gym.gcode import interpret
 from cnc_gym.machine import load_machine
 from cnc_gym.programs import BUILTIN_PROGRAMS, load_program
@@ -30,7 +31,7 @@ def test_builtins(name):
 
 def test_random_rows_of_every_kind_mode_and_awkward_number():
     # Values that print differently (1e-05, -0.0, ties at the 6th decimal, large coordinates), every
-    # mode flag, rows from a second file, NURBS rows, non-finite numbers: the writer takes each row either
+    # mode flag, rows from a second file, NURBS rows: the writer takes each row either
     # way and the text must not change.
     rng = np.random.default_rng(4)
     awkward = [0.0, -0.0, 1e-5, -1e-7, 0.1234565, 2.5e-6, 123456.7890125, 1e-4, 0.5, 1 / 3, -2 / 3]
@@ -62,9 +63,12 @@ def test_random_rows_of_every_kind_mode_and_awkward_number():
             builder.nurbs(curve, feed=900.0, **extra)
             there = tuple(ctrl[-1])
         here = np.array(there)
-    builder.line(tuple(here), (1.0, 2.0, 3.0), feed=math.inf, line=999)
     tp = builder.build()
     assert toolpath_jsonl(tp) == reference_text(tp)
+    # A number that is not finite has no JSON form: one error naming the line, nothing printed.
+    builder.line(tuple(here), (1.0, 2.0, 3.0), feed=math.inf, line=999)
+    with pytest.raises(CncGymError, match=r"^line 999: the tool path holds a number that is not finite"):
+        toolpath_jsonl(builder.build())
 
 
 def test_rotary_axes_and_interpreted_programs():

@@ -200,6 +200,21 @@ def test_tro_rules():
     assert (err.code, err.line) == ("comp-arc-startup", 3)
 
 
+@pytest.mark.parametrize("radius", [0.0, 2.0])
+def test_tro_selection_or_withdrawal_on_a_circle_is_refused_whatever_the_radius(radius):
+    """§11.3.1: "Selection of the TRO with a contour combination Circle - Straight line, Circle - Circle
+    leads to an error message" — the D record's radius does not enter the rule, so a D with radius 0 is
+    refused too (the Fanuc family's stage, which only starts up with a radius, would let it pass); the same
+    for the withdrawal after G40 (§11.3.4). A straight travel in the plane first, then circles are fine."""
+    offsets = {"D": {1: radius}}
+    for text, line in (("G0 D1\nG41\nG2 X10 Y0 I5 F100\n", 3), ("G0 D1\nG41 G2 X10 Y0 I5 F100\n", 2),
+                       ("G0 D1\nG41 G1 Z-1 F100\nG3 X10 Y0 I5\n", 3),
+                       ("G0 D1\nG41 G1 X10 F100\nG40 G2 X20 Y0 I5\n", 3)):
+        err = error(text, tool_offsets=offsets)
+        assert (err.code, err.line) == ("comp-arc-startup", line), (text, str(err))
+    run("G0 D1\nG41 G1 X10 F100\nG2 X20 Y0 I5\nG40 G1 X30 Y-10\nG2 X40 Y-10 I5\nM30\n", tool_offsets=offsets)
+
+
 def test_g138_direct_and_g139_transition_approach():
     # Start-up from (0, -10) along +Y to (0, 0), then +X: a right turn, outside for G41 (r 2). G138 (direct,
     # §11.3.1): the approach block runs to the point perpendicular to the next block's start, (0, 0) +

@@ -49,6 +49,8 @@ CASES: dict[str, list[tuple]] = {
     "A31": [("G91\nG22 X0 Y0 Z-1. R1. I5. J0 F100\n", "groove-absolute-only", None, 2)],
     "A32": [("G65 L08 P#1 A1\n", "unknown-code", 13, 1)],
     "A33": [("M98 P1000\n", "bad-call", None, 1)],
+    "A34": [("M98 P1 X5.\nM30\nO1\nM99\n", "call-with-position", None, 1),
+            ("G90\nM98 P1 U5.\nM30\nO1\nM99\n", "call-with-position", None, 2)],
 }  # fmt: skip
 
 

@@ -20,7 +20,6 @@ CASES: dict[str, list[tuple[str, str, int | None, int]]] = {
     "A2": [("G05 P10000\nG01 X1. F100\nM08\n", "hshp-m-code", None, 3)],
     "A3": [("G05 P10000\nG43 H1 Z0\nG05 P0\n", "hshp-compensation", None, 3)],
     "A4": [("G05 P10000\nG01 X1. F100\n", "hshp-no-end", None, 1)],  # at the G05 block
-    "A5": [("G05.1 E0.01\n", "bad-smoothing", None, 1), ("G05.1 Q1\n", "bad-smoothing", None, 1)],
     "A6": [("G61\nG05.1 Q1 E0.01\n", "smoothing-in-exact-stop", None, 2),
            ("G63\nG05.1 Q1 E0.01\n", "smoothing-in-exact-stop", None, 2)],
     "A7": [("G06.2 P3 K0 X0 Y0 Z0 F100\n", "nurbs-outside-hpcc", None, 1)],

@@ -543,13 +543,15 @@ def test_e22_g52_cross_pocket():
 
 
 def test_e23_g53_machine_positioning_is_one_shot():
-    """§G53 example: G92 X-200 Y-100 at the machine origin puts the work zero at machine (200, 100); G54
-    (its offset 0) ends the G92 system (our reading: the manual does not describe the interaction); G53
-    X300 Y100 is machine (300, 100) for its block only; N004 X300 Y0 is G54 again (machine (300, 0));
-    G52 X300 Y200 then X0 Y0 is machine (300, 200). The motion mode is the power-on G00."""
+    """§G53 example: G92 X-200 Y-100 at the machine origin shifts the work systems by (200, 100) (the Fanuc
+    0M rule: the G92 shift applies to G54-G59 and stays when one is selected — the example's N001 "specify
+    to basic coordinate system" would do nothing if G54 dropped it); N002 G54 X100 Y200 is machine
+    (300, 300); G53 X300 Y100 is machine (300, 100) for its block only; N004 X300 Y0 is G54 again, shifted
+    (machine (500, 100)); G52 X300 Y200 then X0 Y0 is machine (500, 300). The motion mode is the power-on
+    G00."""
     text = ("N001 G92 X-200.0 Y-100.0 ;\nN002 G54 G90 X100.0 Y200.0 ;\nN003 G53 X300.0 Y100.0 ;\n"
             "N004 X300.0 Y0 ;\nN005 G52 X300.0 Y200.0 ;\nN006 X0.0 Y0.0 ;\n")  # fmt: skip
-    assert [r[1][:2] for r in path(text)] == [(100.0, 200.0), (300.0, 100.0), (300.0, 0.0), (300.0, 200.0)]
+    assert [r[1][:2] for r in path(text)] == [(300.0, 300.0), (300.0, 100.0), (500.0, 100.0), (500.0, 300.0)]
 
 
 MIRROR_EX1 = """N001 T1 S1000 M03 ;

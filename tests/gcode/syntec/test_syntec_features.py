@@ -127,9 +127,21 @@ def test_g05_parameter_sets_and_its_rules():
     assert error("G06.2 P3 K0 X0 Y0 Z0\n").code == "nurbs-outside-hpcc"
 
 
+def test_g05_1_without_q_or_e_is_ineffective_with_a_note():
+    """§G05.1 description 1: "If command is inadequate (ex: Q or E unspecified), it will be ineffective":
+    the block changes nothing (smoothing stays off, or stays at the tolerance in force), and the tool path
+    carries a note naming the block."""
+    for text in ("G05.1 Q1\nG01 X1. F100\n", "G05.1 E0.01\nG01 X1. F100\n"):
+        tp = run(text)
+        assert tp.smoothing_tolerance_mm.tolist() == [0.0]
+        assert len(tp.notices) == 1 and tp.notices[0].startswith("<program>:1: note: G05.1")
+        assert tp.notices[0].endswith("[smoothing-ineffective]")
+    kept = run("G05.1 Q1 E0.01\nG01 X1. F100\nG05.1 Q1\nG01 X2.\n")
+    assert kept.smoothing_tolerance_mm.tolist() == [0.01, 0.01]
+    assert kept.notices[0].startswith("<program>:3: note:")
+
+
 def test_g05_1_smoothing_rules():
-    assert error("G05.1 E0.01\n").code == "bad-smoothing"  # the manual ignores it; we refuse
-    assert error("G05.1 Q1\n").code == "bad-smoothing"
     assert error("G05.1 Q1 E0\n").code == "bad-smoothing"
     assert error("G61\nG05.1 Q1 E0.01\n").code == "smoothing-in-exact-stop"
     assert error("G63\nG05.1 Q1 E0.01\n").code == "smoothing-in-exact-stop"
@@ -324,7 +336,13 @@ def test_each_g68_replaces_the_rotation():
     assert [round(c, 9) + 0.0 for c in a[-1]] == [0.0, 10.0, 0.0]
     b = ends("G68 X0 Y0 R90000\nG01 X10. F100\n")  # 90000 × 0.001°
     assert [round(c, 9) + 0.0 for c in b[-1]] == [0.0, 10.0, 0.0]
-    assert error("G91 G68 X5. Y5. R10.\n").code == "bad-rotation-centre"
+    # G91: "if all command is increment, the actual rotation center is the starting point" (§G68/G69):
+    # the centre words are not used, and a note says so; (15, 5) about the start (5, 5) by 90° is (5, 15)
+    tp = run("G00 X5. Y5.\nG91 G68 X20. Y20. R90.\nG90 G01 X15. Y5. F100\n")
+    assert [round(c, 9) + 0.0 for c in tp.end[-1]] == [5.0, 15.0, 0.0]
+    assert tp.notices == ("<program>:2: note: G68 XY in G91: the centre words are not used, the rotation "
+                          "centre is the start point (Syntec 8.20 mill programming manual §G68/G69) "
+                          "[rotation-centre-ignored]",)
     assert error("G68 X0 Y0\n").code == "missing-value"
     assert ends("G68 X0 Y0 R90.\nG01 X10. F100\nG69\nG91 X1.\n")[-1] == [1.0, 10.0, 0.0]
 
@@ -332,6 +350,23 @@ def test_each_g68_replaces_the_rotation():
 def test_scaling_factor_without_a_decimal_point_is_thousandths():
     assert ends("G51 X0 Y0 P500\nG01 X10. F100\n") == ends("G51 X0 Y0 P0.5\nG01 X10. F100\n") == [
         [5.0, 0.0, 0.0]]
+
+
+def test_one_mirrored_axis_reverses_the_rotation():
+    """§G51.1: with one axis of the plane mirrored "the direction of coordinate rotation … execute reverse":
+    the path is the mirror image of the rotated one, whichever of G51.1 and G68 comes first. (10, 0)
+    rotated 30° is (8.660, 5); mirrored about X = 0, (-8.660, 5). Two mirrored axes are a half turn, which
+    keeps the direction: (-8.660, -5). G50.1 restores the rotation's own direction."""
+    for text in ("G51.1 X0\nG68 X0 Y0 R30.\n", "G68 X0 Y0 R30.\nG51.1 X0\n"):
+        end = ends(text + "G01 X10. Y0 F100\n")[-1]
+        assert end == pytest.approx([-10 * math.cos(math.radians(30)), 5.0, 0.0], abs=1e-6)
+    both = ends("G51.1 X0 Y0\nG68 X0 Y0 R30.\nG01 X10. Y0 F100\n")[-1]
+    assert both == pytest.approx([-10 * math.cos(math.radians(30)), -5.0, 0.0], abs=1e-6)
+    # about another centre: the image of R_(20,0),90°(30, 0) = (20, 10), mirrored about Y = 0, is (20, -10)
+    off = ends("G51.1 Y0\nG68 X20. Y0 R90.\nG01 X30. Y0 F100\n")[-1]
+    assert off == pytest.approx([20.0, -10.0, 0.0], abs=1e-6)
+    back = ends("G51.1 X0\nG68 X0 Y0 R30.\nG50.1\nG01 X10. Y0 F100\n")[-1]
+    assert back == pytest.approx([10 * math.cos(math.radians(30)), 5.0, 0.0], abs=1e-6)
 
 
 def test_a_mirror_switched_in_compensation_interchanges_g41_and_g42():

@@ -79,6 +79,9 @@ class AzData:
     spindle2: int = 0
     #: The last H word sent to the PLC (kept until the next H, §4.3), None before the first.
     h_word: int | None = None
+    #: A TRO selection (``"selection"``) or withdrawal (``"withdrawal"``) whose first travel in the plane
+    #: is still to come: it may not be a circle, whatever the radius (§11.3.1, §11.3.4); None: none.
+    tro_transition: str | None = None
 
 
 def data(core: Seam) -> AzData:

@@ -32,6 +32,7 @@ from cnc_gym.gcode.codes import CodeSpec
 from cnc_gym.gcode.dialects.azmc1.options import AzOptions, ToolRecord, data
 from cnc_gym.gcode.lang.din import DinReader, ParameterStore
 from cnc_gym.gcode.lang.fanuc import arcs, compensation
+from cnc_gym.gcode.lang.fanuc.motion import motion as family_motion
 from cnc_gym.toolpath import PLANE_AXES
 
 if TYPE_CHECKING:
@@ -75,16 +76,41 @@ def cutter(core: Seam, spec: CodeSpec, values: dict) -> None:
     elif comp.side and _LETTERS[u] not in values and _LETTERS[v] not in values:
         raise core.error("G40: the deselection block must travel in the plane (AMK AZ-MC1 programming manual "
                          "§11.3.4)", "tro-deselect-no-travel")  # fmt: skip
+    before = comp.side
     core.run_action("family_cutter_comp", spec, values)
     if comp.stage is not None:
         comp.stage.startup_type = data(core).approach
+    if bool(side) != bool(before):
+        data(core).tro_transition = "selection" if side else "withdrawal"
+
+
+def motion(core: Seam, spec: CodeSpec | None, values: dict) -> None:
+    """The family's motion; the first straight travel in the plane after a TRO selection or withdrawal
+    completes it (a circle there is refused by :func:`arc`)."""
+    d = core.state.dialect_data
+    if d is not None and d.tro_transition is not None and values:
+        st = core.state
+        mode = spec.value if spec is not None and spec.value is not None else st.motion
+        u, v, _ = PLANE_AXES[st.plane]
+        if mode in (0, 1) and (_LETTERS[u] in values or _LETTERS[v] in values):
+            d.tro_transition = None
+    family_motion(core, spec, values)
 
 
 # --------------------------------------------------------------------------- arcs
 def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
-    """G02/G03 by I/J/K: G162 relative to the start, G161 absolute (module docstring)."""
+    """G02/G03 by I/J/K: G162 relative to the start, G161 absolute (module docstring). A circle may not be
+    the selection or the withdrawal block of the TRO, whatever the radius of the D record (§11.3.1:
+    "Selection of the TRO with a contour combination Circle - Straight line, Circle - Circle leads to an
+    error message"; §11.3.4)."""
     st = core.state
     name = "G02" if motion == 2 else "G03"
+    transition = st.dialect_data.tro_transition if st.dialect_data is not None else None
+    if transition is not None:
+        section = "§11.3.1" if transition == "selection" else "§11.3.4"
+        raise core.error(f"{name}: the TRO {transition} block must be a straight line, not a circle, "
+                         f"whatever the tool radius (AMK AZ-MC1 programming manual {section})",
+                         "comp-arc-startup")  # fmt: skip
     u, v, w = PLANE_AXES[st.plane]
     lu, lv, lw = _IJK[u], _IJK[v], _IJK[w]
     if lw in values:
@@ -141,4 +167,5 @@ class AzReader(DinReader):
     PROCEDURES = frozenset({"TRESDEL"})
 
 
-ACTIONS = {"tool_offset": tool_offset, "cutter_comp": cutter, "family_cutter_comp": compensation.cutter}
+ACTIONS = {"tool_offset": tool_offset, "cutter_comp": cutter, "family_cutter_comp": compensation.cutter,
+           "motion": motion}

@@ -12,9 +12,17 @@ from cnc_gym.gcode.lang.fanuc.codes import BIG, g, m, table, unbuilt
 
 G_CODES = table([
     *family.G_CODES,
+    # The canned cycles also take L, the repeat count (Haas; cycles.py, CycleParameters.l_repeats).
+    *[g(n, 9, "cycle", kind, step="motion", uses_axes=True, words=words + "L")
+      for n, (kind, words) in family.CYCLE_CODES.items()],
     # G94/G95: feed per minute / per revolution (F × S), group 05.
     g(94, 5, "feed_mode", "minute", step="feed_mode"),
     g(95, 5, "feed_mode", "revolution", step="feed_mode"),
+    # G47: Haas's text engraving (engraving.py), not Fanuc's position offset double increase. I is an
+    # angle, J the text height, E the plunge feed; the text is the block's comment.
+    g(47, 0, "engrave", step="motion", uses_axes=True, words="PIJRE",
+      address_rules={"I": AddressRule(-360.0, 360.0, "plain"), "P": AddressRule(0.0, 126.0, "plain"),
+                     "E": AddressRule(0.0, 1000000.0, "feed")}),
     unbuilt(5.1, 0, "AI contour control G05.1"),
     unbuilt(7.1, 0, "cylindrical interpolation G07.1"),
     unbuilt(33, 1, "thread cutting G33"),
@@ -25,22 +33,26 @@ POWER_ON = family.POWER_ON
 M_CODES = table([
     *family.M_CODES,
     m(19, "spindle_orient", step="spindle"),  # oriented spindle stop, recorded
+    # Haas's local subprogram call: a call, not a machine function, so never run as one.
+    m(97, "not_implemented", step="stop", words="PL", implemented=False,
+      note="the Haas local subprogram call M97 P<N number> is not built: write the section as an O program "
+           "called with M98"),
 ])
 
-#: M codes that shop programs for such machines often carry but whose meaning the machine builder sets:
-#: refused by name (an unknown M code would be ignored by no real controller either), with what they
-#: usually do so the message helps.
+#: M codes that shop programs for such machines often carry but whose meaning the machine builder sets,
+#: with what they usually do: run as machine functions (no motion; listed on the tool path), as the
+#: control hands them to the machine.
 MACHINE_MCODES = {
     gkey(n): what for n, what in {
         7: "mist coolant on", 10: "rotary axis brake on", 11: "rotary axis brake off",
-        12: "rotary axis brake on", 13: "rotary axis brake off", 21: "optional user M code",
+        12: "rotary axis brake on (Haas)", 13: "spindle CW with coolant on (Haas: rotary axis brake off)",
+        14: "spindle CCW with coolant on", 21: "optional user M code",
         31: "chip conveyor forward", 33: "chip conveyor stop", 34: "coolant spigot position",
         35: "coolant spigot position", 41: "low gear", 42: "high gear", 50: "pallet change",
         51: "optional user M code", 52: "optional user M code", 53: "optional user M code",
         59: "output relay", 69: "output relay", 75: "set the G35/G136 reference point",
         82: "tool unclamp", 83: "air blast on", 84: "air blast off", 86: "tool clamp",
         88: "through-spindle coolant on", 89: "through-spindle coolant off",
-        97: "local subprogram call on Haas (M97 P<N number>): write it as an O program called with M98",
         109: "interactive user input",
     }.items()
 }  # fmt: skip

@@ -60,6 +60,9 @@ DIALECT = Dialect(
     least_increment_mm=0.0001,  # §3.2.19
     least_increment_inch=0.0001,
     arc_radius_tolerance_mm=0.01,  # P1810
+    arc_tolerance_parameter="P1810",
+    family_manual="GSK 25i",  # the family's messages cite its sections
+    external_work_offset=True,  # G10 L2 P0 (§3.2.10)
     cycle_params=CycleParameters(),  # P2010/P2011 = 0.5 mm, P2000 = 0, P2141/2142 = 1000 r/min
     max_words_per_block=32,  # alarm 12
     max_m_per_block=3,  # 1803#6 M3B standard 1

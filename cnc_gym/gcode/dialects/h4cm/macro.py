@@ -84,6 +84,10 @@ def _trunc_div(a: int, b: int) -> int:
     return q if (a >= 0) == (b >= 0) else -q
 
 
+#: The position codes an M98 block may not hold (§3.39.2; §2.3.6: "The position codes are X, Y, Z, U, V, I W,
+#: J and R"; U/V/W reach the block as X/Y/Z, the word normaliser's work).
+POSITION_CODES = "XYZIJKR"
+
 class HustRunner(FlowRunner):
     """The family's program-counter loop with G65 instructions, string labels, M98 P L and the part counter
     (module docstring)."""
@@ -218,6 +222,11 @@ class HustRunner(FlowRunner):
         """``M98 P<program> [L<repeats>]`` (§3.39): no other position words in the block."""
         if "P" not in values:
             raise self.dialect.error("M98 needs P (the program number)", "missing-program-number")
+        named = [letter for letter in POSITION_CODES if letter in values]
+        if named:
+            raise self.dialect.error(f"M98 with {', '.join(named)}: the M98 block can not contain any "
+                                     "position code (HUST H4C-M manual §3.39.2); move in a block of its own",
+                                     "call-with-position")  # fmt: skip
         p = values["P"]
         if p != int(p) or not 0 <= p <= MAX_PROGRAM:
             raise self.dialect.error(f"M98 P{p:g}: P is a program number 0-{MAX_PROGRAM} (repeats: L)",

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 from cnc_gym.gcode.lang.fanuc import least_units
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate as family_evaluate
 from cnc_gym.gcode.lang.fanuc.least_units import LeastUnitReader
-from cnc_gym.gcode.program import SpecialBlock
+from cnc_gym.gcode.program import PlainBlock, SpecialBlock
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -45,6 +45,7 @@ _G65 = re.compile(r"G0*65(?![0-9.])")
 _HEAD = re.compile(r"((?:/[0-9]?)*)(?:N([0-9]+))?")
 _WORD = re.compile(r"([A-Z])([^A-Z]*)")
 _OPERAND = re.compile(r"([+-]?)(#?)([0-9]+)")
+_DIGITS = re.compile(r"[0-9]+")
 
 
 def label_key(digits: str) -> int:
@@ -103,15 +104,22 @@ class HustReader(LeastUnitReader):
             return self._g65(text, line)
         block = super()._plain_block(text, line)
         # A plain block keeps its (letter, digits) pairs, N included; a rescanned one got its key in _head.
-        if block.number is not None and len(block.words[0]) == 2:
-            block.number = next(label_key(w[1]) for w in block.words if w[0] == "N")
+        if isinstance(block, PlainBlock) and block.number is not None:
+            block.number = self._label(next(w[1] for w in block.words if w[0] == "N"), line)
         return block
 
     def _head(self, words: list, line: int) -> tuple[list, int | None]:
         rest, number = super()._head(words, line)
         if number is not None:
-            number = label_key(next(w[2] for w in words if w[0] == "N"))
+            number = self._label(next(w[2] for w in words if w[0] == "N"), line)
         return rest, number
+
+    def _label(self, digits: str, line: int) -> int:
+        """An N label's key; the label is its digits as written, so a sign (``N+1``, ``N-0``) is refused."""
+        if not _DIGITS.fullmatch(digits):
+            raise self.error(f"N{digits}: a block label is digits only, as written (no sign, no point)",
+                             "bad-sign" if digits[:1] in "+-" else "bad-number", line)  # fmt: skip
+        return label_key(digits)
 
     # ------------------------------------------------------------------ G65
     def _g65(self, text: str, line: int) -> Block:
@@ -138,7 +146,7 @@ class HustReader(LeastUnitReader):
             words[letter] = value
         if "L" not in words:
             raise self.error("G65 needs L (the operation number 1-99)", "bad-macro-command", line)
-        if not words["L"].isdigit() or not 1 <= int(words["L"]) <= 99:
+        if not _DIGITS.fullmatch(words["L"]) or not 1 <= int(words["L"]) <= 99:
             raise self.error(f"G65 L{words['L']}: the operation number is 1-99 (no sign, no point)",
                              "bad-macro-command", line)  # fmt: skip
         op = int(words["L"])
@@ -151,13 +159,13 @@ class HustReader(LeastUnitReader):
         if text is None:
             return None
         if op in BRANCHES:
-            if not text.isdigit():
+            if not _DIGITS.fullmatch(text):
                 raise self.error(f"G65 L{op:02d} P{text}: a branch target is a block label, digits as "
                                  "written "
                                  "on the N (P0010 finds N0010)", "bad-macro-command", line)  # fmt: skip
             return ("label", label_key(text))
         if op == USER_ALARM:
-            if not text.isdigit():
+            if not _DIGITS.fullmatch(text):
                 raise self.error(f"G65 L99 P{text}: the alarm number is a plain number 1-49",
                                  "bad-macro-command", line)  # fmt: skip
             return ("const", int(text))

@@ -70,6 +70,9 @@ DIALECT = Dialect(
     # The manual's own G68 example needs a tolerance: its R8 half circles have chords 0.18 µm longer than
     # 16 mm. A 10 µm radius difference is allowed on I/J/K arcs.
     arc_radius_tolerance_mm=0.01,
+    # G92 shifts every work system (the Fanuc 0M rule the manual claims; its own §G53 example sets G92
+    # and then selects G54, which would be pointless if G54 dropped it; docs/syntec.md).
+    g92_shifts_work_systems=True,
     # Pr4002 peck return d (G73, G83, peck tapping), Pr4020 shift direction 0 (+ first axis of the plane),
     # the drilling axis normal to the plane (G17 Z, G18 Y, G19 X).
     cycle_params=CycleParameters(g73_retract_mm=0.5, g83_clearance_mm=0.5, drilling_axis_follows_plane=True,

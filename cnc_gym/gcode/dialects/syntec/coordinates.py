@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.canonical import PolarState, rotation_stage
 from cnc_gym.gcode.dialects.syntec.modes import angle, skip_next_line, spindle_clamp
-from cnc_gym.gcode.dialects.syntec.options import options
+from cnc_gym.gcode.dialects.syntec.options import data, options
 from cnc_gym.gcode.lang.fanuc import compensation, coordinates, corners, reference, transforms
 from cnc_gym.gcode.lang.fanuc.least_units import is_whole, whole_count
 from cnc_gym.gcode.lang.fanuc.transforms import check_coordinate_command
@@ -106,15 +106,18 @@ def _mirror_changed(core: Seam) -> None:
 
 
 def mirror(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G51.1 (the family's programmable mirror); compensation follows the new handedness."""
+    """G51.1 (the family's programmable mirror); compensation and a G68 in force follow the new
+    handedness."""
     transforms.mirror(core, spec, values)
     _mirror_changed(core)
+    _install_rotation(core)
 
 
 def mirror_cancel(core: Seam, spec: CodeSpec, values: dict) -> None:
-    """G50.1 (the family's mirror cancel); compensation follows the new handedness."""
+    """G50.1 (the family's mirror cancel); compensation and a G68 in force follow the new handedness."""
     transforms.mirror_cancel(core, spec, values)
     _mirror_changed(core)
+    _install_rotation(core)
 
 
 # ---------------------------------------------------------------------- G15/G16
@@ -156,9 +159,10 @@ def polar(core: Seam, spec: CodeSpec, values: dict) -> None:
 def rotation(core: Seam, spec: CodeSpec, values: dict) -> None:
     """``G68 α_ β_ R_`` (§G68/G69): rotate the program by R degrees (0.001° without a decimal point)
     about the centre (α, β in the plane). Each G68 replaces the rotation in force: the manual's examples
-    issue R90, R180, R270 in turn without G69. The centre is absolute ("only effective in absolute
-    command"); in G91 "the actual rotation centre is the starting point", so centre words in G91 are
-    refused rather than ignored."""
+    issue R90, R180, R270 in turn without G69. The centre is absolute: "Rotation center only effective in
+    absolute command, if all command is increment, the actual rotation center is the starting point of
+    path" — in G91 the centre words are not used (a note says so) and the centre is the start point.
+    While one axis of the plane is mirrored (G51.1) the rotation turns the other way (§G51.1)."""
     st = core.state
     u, v, w = PLANE_AXES[st.plane]
     letters = core.dialect.axes
@@ -167,8 +171,9 @@ def rotation(core: Seam, spec: CodeSpec, values: dict) -> None:
                          f"{letters[w]} has no meaning", "unused-word")  # fmt: skip
     named = [letters[a] for a in (u, v) if letters[a] in values]
     if named and st.incremental:
-        raise core.error(f"G68 {''.join(named)} in G91: the centre is absolute and takes effect in G90 only "
-                         "(in G91 the rotation centre is the start point)", "bad-rotation-centre")
+        core.notice(f"G68 {''.join(named)} in G91: the centre words are not used, the rotation centre is the "
+                    "start point (Syntec 8.20 mill programming manual §G68/G69)", "rotation-centre-ignored")
+        values = {k: v for k, v in values.items() if k not in named}
     if "R" not in values:
         raise core.error("G68 needs R, the angle of rotation", "missing-value")
     degrees = angle(core, "R", values)
@@ -178,7 +183,24 @@ def rotation(core: Seam, spec: CodeSpec, values: dict) -> None:
     s = st.scale
     centre = tuple(values[letters[a]] * s if a in (u, v) and letters[a] in values else p[a] for a in range(3))
     st.rotation_deg = round(degrees * 1000.0) / 1000.0
-    st.chain.set("rotation", rotation_stage(st.plane, centre, st.rotation_deg))  # type: ignore[arg-type]
+    data(core).rotation = ((centre[0], centre[1], centre[2]), st.rotation_deg)
+    _install_rotation(core)
+
+
+def _install_rotation(core: Seam) -> None:
+    """The chain's rotation stage for the G68 in force: the programmed angle, reversed while exactly one
+    axis of the plane is mirrored (§G51.1: with one mirrored axis "the direction of coordinate rotation …
+    execute reverse"). The chain applies the mirror first and carries the centre through it, so the path is
+    the mirror image of the rotated one."""
+    rotation = data(core).rotation
+    if rotation is None:
+        return
+    st = core.state
+    centre, degrees = rotation
+    u, v, _ = PLANE_AXES[st.plane]
+    if (u in st.mirror_axes) != (v in st.mirror_axes):
+        degrees = -degrees
+    st.chain.set("rotation", rotation_stage(st.plane, centre, degrees))
     core.set_transform_state()
 
 
@@ -189,6 +211,7 @@ def rotation_cancel(core: Seam, spec: CodeSpec, values: dict) -> None:
         return
     st.chain.set("rotation", None)
     st.rotation_deg = 0.0
+    data(core).rotation = None
     core.resync_program_position()
     core.set_transform_state()
 

@@ -192,12 +192,15 @@ def contour_control(core: Seam, spec: CodeSpec, values: dict) -> None:
 
 def smoothing(core: Seam, spec: CodeSpec, values: dict) -> None:
     """``G05.1 Q1 E_`` path smoothing of G01 blocks within E (mm, inch in G70), ``G05.1 Q0`` off (§G05.1).
-    The manual lets a G05.1 without Q or E do nothing; we refuse it (a lost tolerance is never silent).
-    Starting it under G61/G63 is the manual's alarm."""
+    "If command is inadequate (ex: Q or E unspecified), it will be ineffective" (§G05.1 description 1): a
+    G05.1 without Q, or Q1 without E, changes nothing, and a note on the tool path says so (the tolerance
+    the program meant is lost, so the user hears of it). Starting it under G61/G63 is the manual's alarm."""
     d = data(core)
     q = values.get("Q")
     if q is None:
-        raise core.error("G05.1 needs Q1 E_ (smoothing on) or Q0 (off)", "bad-smoothing")
+        core.notice("G05.1 without Q is ineffective (Syntec 8.20 mill programming manual §G05.1): path "
+                    "smoothing is unchanged; write G05.1 Q1 E_ (on) or Q0 (off)", "smoothing-ineffective")
+        return
     q = whole_count(core, "Q", q)
     if q == 0:
         if "E" in values:
@@ -205,7 +208,10 @@ def smoothing(core: Seam, spec: CodeSpec, values: dict) -> None:
         d.smoothing_mm = None
     elif q == 1:
         if "E" not in values:
-            raise core.error("G05.1 Q1 needs E, the largest path error allowed (mm)", "bad-smoothing")
+            core.notice("G05.1 Q1 without E is ineffective (Syntec 8.20 mill programming manual §G05.1): "
+                        "path smoothing is unchanged; E is the largest path error allowed (mm)",
+                        "smoothing-ineffective")  # fmt: skip
+            return
         e = values["E"] * core.state.scale
         if not e > 0.0:
             raise core.error(f"G05.1 E{values['E']:g}: the allowed path error must be positive",

@@ -90,6 +90,9 @@ class SyntecData:
     nurbs_feed: float | None = None
     #: M99 ended the main program (a program in G05 mode must end with M30 or M99).
     ended_by_code: bool = False
+    #: G68 in force as programmed: (centre, program mm; angle, degrees), None: G69. The chain's rotation
+    #: stage turns the other way while one axis of the plane is mirrored (§G51.1).
+    rotation: tuple[tuple[float, float, float], float] | None = None
 
 
 def data(core: Seam) -> SyntecData:

@@ -37,7 +37,8 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.codes import round_to
 from cnc_gym.gcode.lang.din import control
 from cnc_gym.gcode.lang.din.expressions import ExpressionSyntaxError, Parser, literal_number
-from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block, split_words
+from cnc_gym.gcode.program import Block, Program, SpecialBlock, WordBlock, literal_block, split_words
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import AddressRule
@@ -120,6 +121,8 @@ class DinReader:
         # Literal words already read in this file: text → (letter, value, digits); block numbers: text → n.
         self._seen: dict[str, tuple[str, float, str]] = {}
         self._numbers: dict[str, int] = {}
+        #: Most blocks a program text may hold (the run's ``max_blocks``; ``interpret`` sets it).
+        self.max_blocks = DEFAULT_MAX_BLOCKS
 
     # ------------------------------------------------------------------ the file
     def read(self, text: str, file: str = "<program>") -> DinProgram:
@@ -136,6 +139,8 @@ class DinReader:
         comments = "(" in text or ")" in text
         self._seen, self._numbers = {}, {}
         for lineno, raw in enumerate(lines, 1):
+            if not lineno & 0xFFFF and len(blocks) > self.max_blocks:
+                raise self._too_many_blocks(len(blocks), file, lineno)
             try:
                 if not ascii_text and not raw.isascii():
                     bad = next(c for c in raw if not c.isascii())
@@ -160,6 +165,8 @@ class DinReader:
             except ProgramError as err:
                 raise self._hinted(err, raw).located(file, lineno) from None
         self._seen, self._numbers = {}, {}
+        if len(blocks) > self.max_blocks:
+            raise self._too_many_blocks(len(blocks), file, blocks[self.max_blocks].line)
         main_start = next((start for kind, _, start, _ in headers if kind == "main"), None)
         program_number = next((number for kind, number, _, _ in headers if kind == "main"), None)
         # Units: each %L runs to the next header; the main program from its header (or the file's start)
@@ -176,11 +183,17 @@ class DinReader:
             main = (0, len(blocks))
         else:
             main = (main_start, len(blocks))
-        program = DinProgram(blocks, file, program_number, {}, {}, main, local_units,
+        program = DinProgram(blocks, file, program_number, {}, {}, main, local_units=local_units,
                              has_main_header=main_start is not None)  # fmt: skip
         for start, end in (main, *local_units.values()):
             control.compile_unit(program, start, end)
         return program
+
+    def _too_many_blocks(self, count: int, file: str, line: int) -> ProgramError:
+        """A program text of more blocks than a run may execute (``max_blocks``), refused while it is read."""
+        return ProgramError(f"the program holds more than {self.max_blocks} blocks ({count} read so far), "
+                            "more than a run may execute (max_blocks)", code="too-many-blocks", file=file,
+                            line=line)  # fmt: skip
 
     def _hinted(self, err: ProgramError, raw: str) -> ProgramError:
         """A syntax error with a hint when the line looks like another language's (``hints.py``)."""
@@ -291,7 +304,7 @@ class DinReader:
                     has_expr: bool) -> Block:  # fmt: skip
         if not has_expr:
             split_words(words)  # a repeated address is an error at read time
-        return Block(lineno, tuple(words), skip=skip, has_expr=has_expr, number=number)
+        return WordBlock(lineno, tuple(words), skip=skip, has_expr=has_expr, number=number)
 
     @staticmethod
     def _number_kind(letter: str, rule: AddressRule) -> str:

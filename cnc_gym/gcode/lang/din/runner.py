@@ -20,7 +20,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from cnc_gym.errors import ProgramError
+from cnc_gym.errors import ConfigError, ProgramError
+from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.lang.din.expressions import truth, value
 from cnc_gym.gcode.settings import FlowOptions
 
@@ -306,13 +307,19 @@ class DinRunner:
             where = self.options.program_dir or "the main program's folder"
             raise self.dialect.error(f"L{number}: no program file named {number} in {where}",
                                      "program-not-found")  # fmt: skip
+        outside = self.options.leaves_folder(path, self.main.file)
+        if outside is not None:
+            raise self.dialect.error(f"L{number}: {outside}", "program-not-found")
         try:
-            raw = path.read_bytes()
+            raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="a called program")
         except OSError as exc:
             raise self.dialect.error(f"L{number}: cannot read {path} ({exc.strerror or exc})",
                                      "program-not-found") from None  # fmt: skip
+        except ConfigError as exc:  # not a regular file, or over the size limit
+            raise self.dialect.error(f"L{number}: {exc}", "program-not-found") from None
         text = raw.decode("latin-1")
         reader = self.dialect.language.reader(self.dialect, None)
+        reader.max_blocks = self.options.max_blocks
         program = cast("DinProgram", reader.read(text, str(path)))
         self._files[number] = program
         return program

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from cnc_gym.gcode.lang.fanuc import least_units
 from cnc_gym.gcode.lang.fanuc.modal import missing_feed
 from cnc_gym.toolpath import PLANE_AXES
 
@@ -109,9 +110,12 @@ def arc(core: Seam, motion: int, x, y, z, values: dict) -> None:
         else:
             r_end = math.hypot(end[u] - center[u], end[v] - center[v])
             if tol > 0 and abs(r_end - r_start) > tol:
+                parameter = core.dialect.arc_tolerance_parameter
+                hint = least_units.integer_words_hint(core, core.dialect.axes[u] + core.dialect.axes[v])
                 raise core.error(f"{name}: radius at the start {r_start / s:.4f} and at the end "
                                  f"{r_end / s:.4f} differ by {abs(r_end - r_start) / s:.4f}, more than "
-                                 f"the tolerance {tol:g} mm (P1810)", "arc-radius-mismatch")  # fmt: skip
+                                 f"the tolerance {tol:g} mm{f' ({parameter})' if parameter else ''}{hint}",
+                                 "arc-radius-mismatch")  # fmt: skip
             if r_end < SAME_POINT_MM:
                 raise core.error(f"{name}: the centre is the end point", "arc-impossible")
             # Within tolerance: keep the centre and the radius, move the end point radially onto the

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate
 from cnc_gym.gcode.lang.fanuc.units import Frame, ModalCall, Unit
-from cnc_gym.gcode.program import Block
+from cnc_gym.gcode.program import Block, WordBlock
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
@@ -256,7 +256,7 @@ class CallConvention:
         if not kept:
             return pc
         core = self.core
-        core.execute(Block(block.line, kept, skip=0, has_expr=True, number=block.number))
+        core.execute(WordBlock(block.line, kept, skip=0, has_expr=True, number=block.number))
         if core.state.ended:
             self._count_part()
             return -1

@@ -328,25 +328,35 @@ def times(repeats: int, holes: int) -> str:
 
 
 def _dwell_from_p(core: Seam, values: dict) -> float:
-    """Cycle P: dwell in ms, an integer like G04 P (§3.4)."""
+    """Cycle P: dwell in ms, an integer like G04 P (§3.4); with a decimal point in seconds where the dialect
+    says so (``Dialect.dwell_p_decimal_seconds``, Haas)."""
     text = core.word_text("P")
-    if text is not None and "." in text:
-        raise core.error(f"P{text}: the cycle dwell P is in milliseconds and takes no decimal point",
-                         "decimal-point-not-allowed")  # fmt: skip
     if values["P"] < 0:
         raise core.error(f"P{values['P']:g}: negative dwell", "bad-dwell")
+    if text is not None and "." in text:
+        if core.dialect.dwell_p_decimal_seconds:
+            return float(text)
+        raise core.error(f"P{text}: the cycle dwell P is in milliseconds and takes no decimal point",
+                         "decimal-point-not-allowed")  # fmt: skip
     return round(values["P"]) / 1000.0
 
 
 def _repeats(core: Seam, values: dict) -> int:
     """K: repeat count of this block only; default 1, |K| for a negative K, K0 stores data only (§3.4).
-    A count, not a length, where numbers without a decimal point are least units (``K3`` is 3)."""
-    if "K" not in values:
+    A count, not a length, where numbers without a decimal point are least units (``K3`` is 3). Where the
+    dialect says so, L is the repeat count too (``CycleParameters.l_repeats``: Haas ``L3``)."""
+    letter = "K"
+    if "L" in values and core.dialect.cycle_params.l_repeats:
+        if "K" in values:
+            raise core.error("K and L both give the repeat count: give one", "bad-cycle")
+        letter = "L"
+    if letter not in values:
         return 1
-    k = values["K"] if core.dialect.integer_is_unit else least_units.whole_count(core, "K", values["K"])
+    raw = values[letter]
+    k = raw if core.dialect.integer_is_unit or letter == "L" else least_units.whole_count(core, "K", raw)
     k = abs(k)
     if k != int(k) or k > 99999:
-        raise core.error(f"K{values['K']:g}: the repeat count must be a whole number 0..99999", "bad-cycle")
+        raise core.error(f"{letter}{raw:g}: the repeat count must be a whole number 0..99999", "bad-cycle")
     return int(k)
 
 
@@ -446,11 +456,13 @@ def cycle_block(core: Seam, spec: CodeSpec | None, values: dict,
         _store_shift_ij(core, spec, values, s)
     else:
         for letter in "IJLWVUE":
-            if letter in values:
+            if letter in values and not (letter == "L" and core.dialect.cycle_params.l_repeats):
                 state.words[letter] = values[letter] * (s if letter != "E" else 1.0)
     repeats = _repeats(core, values)
     if not drills or repeats == 0:
         return
+    if state.r is None and core.dialect.cycle_params.r_defaults_to_initial:
+        state.r = state.initial  # no R: the cycle drills from the initial level (Haas)
     if state.r is None or state.z is None:
         missing = " and ".join(n for n, val in (("R", state.r), (bottom_letter, state.z)) if val is None)
         raise core.error(f"{spec.name} needs {missing}: the first drilling block gives all the hole data",

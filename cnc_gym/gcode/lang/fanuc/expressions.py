@@ -209,7 +209,7 @@ class ExpressionParser:
         text = self.text
         start = self.pos
         end = start
-        while end < len(text) and (text[end].isdigit() or text[end] == "."):
+        while end < len(text) and ("0" <= text[end] <= "9" or text[end] == "."):
             end += 1
         literal = text[start:end]
         if literal.count(".") > 1 or literal == ".":
@@ -233,9 +233,9 @@ class ExpressionParser:
         """After '#': ``#123`` or ``#[expr]``."""
         self.pos += 1
         c = self._peek()
-        if c.isdigit():
+        if _is_digit(c):
             start = self.pos
-            while self._peek().isdigit():
+            while _is_digit(self._peek()):
                 self.pos += 1
             if self._peek() == ".":
                 raise self._fail("a variable number must be an integer", "bad-variable")
@@ -246,7 +246,7 @@ class ExpressionParser:
 
     def primary(self) -> Node:
         c = self._peek()
-        if c.isdigit() or c == ".":
+        if _is_digit(c) or c == ".":
             return ("num", self.number())
         if c == "#":
             return self.variable()
@@ -342,6 +342,11 @@ def evaluate_condition(node: Node, variables: VariableStore, dialect: Dialect) -
     if op == "LT":
         return b - a > margin
     return b - a >= -margin  # LE
+
+
+def _is_digit(c: str) -> bool:
+    """An ASCII digit (str.isdigit also takes '²' and '١', which are not program text)."""
+    return len(c) == 1 and "0" <= c <= "9"
 
 
 def _binary(op: str, a: float, b: float, dialect: Dialect) -> float:

@@ -23,7 +23,8 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from cnc_gym.errors import ProgramError
+from cnc_gym.errors import ConfigError, ProgramError, notice_line
+from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.codes import gkey
 from cnc_gym.gcode.lang.fanuc.calls import CallConvention
 from cnc_gym.gcode.lang.fanuc.expressions import evaluate, evaluate_condition
@@ -72,6 +73,27 @@ class FlowRunner(CallConvention):
 
     # ------------------------------------------------------------------ the loop
     def run(self) -> None:
+        """Run the main program (:meth:`_loop`), then note the programs of its file that never ran."""
+        self._loop()
+        self._note_uncalled()
+
+    def _note_uncalled(self) -> None:
+        """A note for each ``O`` program of the main file that was never called: the run ends with the main
+        program, so text after an ``O`` boundary runs only when called (nothing is dropped unsaid)."""
+        program = self.main_program
+        first, last = program.main
+        ran = f"the main program (lines {program.blocks[first].line}-{program.blocks[last - 1].line})" if (
+            last > first) else "the main program (no block)"  # fmt: skip
+        for number, (start, end) in program.units.items():
+            if number in self.units or start == first or end <= start:
+                continue
+            blocks = program.blocks
+            self.core.notice(f"program O{number:04d} (lines {blocks[start].line}-{blocks[end - 1].line}, "
+                             f"{end - start} blocks) in this file was never called: the run ended with "
+                             f"{ran}; call it with M98 P or G65 P, or make it the first program of the file",
+                             "uncalled-program", line=blocks[start].line)  # fmt: skip
+
+    def _loop(self) -> None:
         """The program-counter loop. Plain blocks take the fast path (straight to ``execute``); the budget
         of ``max_blocks`` is charged in bulk whenever control leaves the fast path (a straight run through
         a program is finite, so only jumps, loops and calls need the check)."""
@@ -327,20 +349,29 @@ class FlowRunner(CallConvention):
                 f"or {number}.nc in {where})",
                 "program-not-found",
             )
+        outside = self.options.leaves_folder(path, self.main_program.file)
+        if outside is not None:
+            raise self.dialect.error(f"program O{number:04d}: {outside}", "program-not-found")
         try:
-            raw = path.read_bytes()
+            raw = read_regular_file(path, limit=MAX_PROGRAM_BYTES, what="a called program")
         except OSError as exc:
             raise self.dialect.error(
                 f"program O{number:04d}: cannot read {path} ({exc.strerror or exc})", "program-not-found"
             ) from None
+        except ConfigError as exc:  # not a regular file, or over the size limit
+            raise self.dialect.error(f"program O{number:04d}: {exc}", "program-not-found") from None
         try:
             text = raw.decode("utf-8-sig")
         except UnicodeDecodeError:
             text = raw.decode("latin-1")
         if self.reader is None:
             self.reader = self.dialect.language.reader(self.dialect, self.calls)
+            self.reader.max_blocks = self.options.max_blocks
         program = self.reader.read(text, str(path))
-        file_index = self.core.state.builder.file_index(str(path))
+        builder = self.core.state.builder
+        for line, level, message, code in program.notices:
+            builder.notice(notice_line(str(path), line, message, code, level))
+        file_index = builder.file_index(str(path))
         span = program.units.get(number)
         if span is None:
             if program.units:

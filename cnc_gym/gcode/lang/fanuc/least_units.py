@@ -31,7 +31,7 @@ from cnc_gym.gcode.lang.fanuc.reader import Reader
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect, Seam
-    from cnc_gym.gcode.program import Block
+    from cnc_gym.gcode.program import Block, Program
 
 
 class _Rescan(Exception):
@@ -84,6 +84,39 @@ def whole_count(core: Seam, letter: str, value: float) -> float:
     return value
 
 
+def integer_words_hint(core: Seam, letters: str) -> str:
+    """For an arc error where numbers without a decimal point are least units and the dialect has the
+    calculator-type setting: which of the arc block's and the start point's block's ``letters`` words have
+    no decimal point (``; X26 at line 12, which set the start point, has no decimal point …``), else ""."""
+    dialect = core.dialect
+    runner = core.state.flow
+    if dialect.integer_is_unit or not dialect.calculator_input_parameter or runner is None:
+        return ""
+    unit = runner.frames[-1].unit
+    here = core.state.out.line
+    start = core.state.builder.last_source()
+    found: list[str] = []
+    example = ""
+    for what, line in (("the end point", here), ("the start point", start[1] if start else None)):
+        if line is None:
+            continue
+        block = next((b for b in unit.blocks[unit.start : unit.end] if b.line == line), None)
+        words: list[tuple[str, int]] = []
+        for word in block.words if block is not None else ():
+            count = least_units(word[1]) if word[0] in letters and isinstance(word[1], tuple) else None
+            if count:
+                words.append((word[0], count))
+        if words:
+            found.append(f"{' '.join(f'{a}{n}' for a, n in words)} at line {line} ({what})")
+            letter, count = words[0]
+            example = example or f"{letter}{count} is {count * core.state.increment:g} mm"
+    if not found:
+        return ""
+    return (f"; {' and '.join(found)} without a decimal point: least input increments "
+            f"({dialect.calculator_input_parameter} = 0: {example}); if they mean mm, trace with "
+            "--calculator-input")
+
+
 def _unit_code_pattern(dialect: Dialect) -> re.Pattern[str] | None:
     """The dialect's inch/metric codes (G20/G21, Syntec's G70/G71) in a block's text, as the code itself
     (not G200 or G20.1); group 1 is the inch code's number when it matched."""
@@ -94,13 +127,53 @@ def _unit_code_pattern(dialect: Dialect) -> re.Pattern[str] | None:
 
 
 class LeastUnitReader(Reader):
-    """The Fanuc family's reader with least-unit literals (module docstring)."""
+    """The Fanuc family's reader with least-unit literals (module docstring). With ``integer_is_unit`` (the
+    dialect's calculator-type input, :func:`~cnc_gym.gcode.dialect.calculator_input`) it reads numbers as
+    the family's reader does.
+
+    Where the dialect has a calculator-type input setting and the program reads in least units, a program
+    whose coordinates of one axis come both with and without a decimal point gets a warning (``X10`` next
+    to ``X10.5`` is 0.01 mm next to 10.5 mm: usually a program written for the other setting)."""
 
     def __init__(self, dialect: Dialect, macro_calls=None) -> None:
         super().__init__(dialect, macro_calls)
         self._mode = "off"  # "plain": a plain block is being read; "scan": an ordinary block is scanned
         self._unit: float | None = None  # the least unit of a block that holds its own G20/G21
         self._unit_code = _unit_code_pattern(dialect)
+        self._watch = not dialect.integer_is_unit and bool(dialect.calculator_input_parameter)
+        self._axes = frozenset(dialect.axes)
+        self._with_point: set[str] = set()  # axes with a literal that has a decimal point
+        self._without_point: dict[str, tuple[int, str]] = {}  # axis → (line, digits) of its first integer
+
+    def read(self, text: str, file: str = "<program>") -> Program:
+        self._with_point, self._without_point = set(), {}
+        program = super().read(text, file)
+        mixed = [a for a in self.dialect.axes if a in self._with_point and a in self._without_point]
+        if mixed:
+            axis = mixed[0]
+            line, digits = self._without_point[axis]
+            count = int(digits)
+            mm = count * self.dialect.least_increment_mm
+            program.notices.append((line, "warning", (
+                f"{axis}{digits} has no decimal point and reads {mm:g} mm ({count} least input increments, "
+                f"{self.dialect.calculator_input_parameter} = 0), while other {axis} words have one: if the "
+                f"program means {axis}{count}. ({count} mm), trace it with --calculator-input (the machine "
+                "preset's calculator_input)"), "mixed-decimal-point"))  # fmt: skip
+        return program
+
+    def _note_format(self, letter: str, digits: str | None, line: int) -> None:
+        """Whether an axis word is written with a decimal point (the mixed-format warning)."""
+        if not self._watch or digits is None or letter not in self._axes:
+            return
+        if "." in digits:
+            self._with_point.add(letter)
+        elif digits.strip("+-0") and letter not in self._without_point:
+            self._without_point[letter] = (line, digits.lstrip("+"))
+
+    def _plain_value(self, pair: tuple[str, str], text: str, line: int) -> float | None:
+        if self._watch and not self._mentions_call(text):  # (a macro call's words are arguments)
+            self._note_format(pair[0], pair[1], line)
+        return super()._plain_value(pair, text, line)
 
     def _plain_block(self, text: str, line: int) -> Block:
         self._mode = "plain"
@@ -127,13 +200,15 @@ class LeastUnitReader(Reader):
 
     def _value(self, letter: str, text: str, pos: int, line: int, rule: tuple):
         value, digits, end = super()._value(letter, text, pos, line, rule)
+        if self._mode == "scan":
+            self._note_format(letter, digits, line)
         if digits is not None and isinstance(value, tuple):
             return value, None, end  # a node: evaluated when the block runs, in the unit in force
         return value, digits, end
 
     def _literal(self, letter: str, digits: str, rule: tuple, line: int):
         _, _, point_allowed, is_length = rule
-        if is_length and self._mode != "off":
+        if is_length and self._mode != "off" and not self.dialect.integer_is_unit:
             point = digits.find(".")
             whole = point < 0
             finer = point_allowed and len(digits) - point - 1 > self._decimals

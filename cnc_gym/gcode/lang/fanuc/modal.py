@@ -68,8 +68,9 @@ def units(core: Seam, spec: CodeSpec, values: dict | None = None) -> None:
             len(st.builder) or st.offsets.floating is not None or any(st.offsets.local)):  # fmt: skip
         # §3.2.19: G20/G21 go at the start, before the work coordinate system is set, and must not
         # switch in the middle of a program (positions and offsets already given would change meaning).
-        raise core.error(f"{spec.name}: inch/metric input cannot switch after the program has moved or "
-                         "set a coordinate system (give it alone at the start, GSK 25i §3.2.19)",
+        where = core.dialect.cite("§3.2.19")
+        raise core.error(f"{spec.name}: inch/metric input cannot switch after the program has moved or set a "
+                         f"coordinate system (give it alone at the start{', ' + where if where else ''})",
                          "units-switch")  # fmt: skip
     st.inch = bool(spec.value)
     st.scale = INCH_MM if spec.value else 1.0
@@ -186,11 +187,13 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
     out = core.state.out
     if "P" in values:
         text = core.word_text("P")
-        if text is not None and "." in text:
-            raise core.error(f"G04 P{text}: P is in milliseconds and takes no decimal point (use X for "
-                             "seconds)", "decimal-point-not-allowed")  # fmt: skip
         raw = values["P"]
         seconds = round(raw) / 1000.0
+        if text is not None and "." in text:
+            if not core.dialect.dwell_p_decimal_seconds:
+                raise core.error(f"G04 P{text}: P is in milliseconds and takes no decimal point (use X for "
+                                 "seconds)", "decimal-point-not-allowed")  # fmt: skip
+            seconds = float(text)  # Haas: P10. is 10 seconds
     elif "X" in values:
         raw = values["X"]
         whole = not core.dialect.integer_is_unit and least_units.is_whole(core, "X")
@@ -203,9 +206,19 @@ def dwell(core: Seam, spec: CodeSpec, values: dict) -> None:
     out.dwell(seconds)
 
 
+def machine_function(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """An M code the control hands to the machine (coolant variants, clamps, conveyors …; the machine
+    builder's list): no motion of the program, the block ends when the machine answers — a 0 s exact-stop
+    dwell flagged MACHINE_FUNCTION, its code on the tool path (``Toolpath.machine_functions``)."""
+    st = core.state
+    st.out.dwell(0.0, SegmentMode.EXACT_STOP | SegmentMode.MACHINE_FUNCTION)
+    st.builder.machine_functions.append(spec.name)
+
+
 ACTIONS = {
     "record": record, "plane": plane, "distance": distance, "units": units, "path_mode": path_mode,
     "exact_stop_once": exact_stop_once, "feed": feed, "spindle_speed": spindle_speed, "tool": tool,
     "tool_change": tool_change, "spindle": spindle, "coolant": coolant, "stop": stop, "dwell": dwell,
     "cycle_return": record, "feed_mode": feed_mode, "spindle_orient": spindle_orient,
+    "machine_function": machine_function,
 }  # fmt: skip

@@ -145,7 +145,7 @@ def block_hook(core: Seam, block) -> bool:
     if block.has_expr:
         gs, ms, values = split_words(core.evaluate_words(block.words))
     else:
-        gs, ms, values = block.gs, block.ms, block.values
+        gs, ms, values = block.split()
     gcodes = core.dialect.gcodes
     if gs:
         keys = [gkey(g) for g in gs]

@@ -4,7 +4,8 @@ default :attr:`Language.reader <cnc_gym.gcode.dialect.Language.reader>`).
 Lexical rules (GSK 25i, §1.2.3; the dialect supplies the number formats):
 
 * a line is a block; ``;`` also ends a block (EOB, §1.2); a line holding only ``%`` is a tape mark and a
-  second one ends the tape (text after it is not read);
+  second one ends the tape (text after it is not read, and a note says so); text before a first ``%``
+  that has program text after it is the leader section, skipped with a note;
 * ``( … )`` is a comment; upper and lower case are the same; spaces and tabs are ignored;
 * ``/`` or ``/n`` (n = 1..9, several as ``/1/3``) at the head of a block marks it for optional block
   skip; a ``/`` later in the block discards the rest of the block (§1.3.4);
@@ -31,9 +32,11 @@ import re
 from typing import TYPE_CHECKING
 
 from cnc_gym.errors import ProgramError
+from cnc_gym.gcode.lang.fanuc.abbreviations import expand as expand_abbreviations
 from cnc_gym.gcode.lang.fanuc.expressions import ExpressionParser
 from cnc_gym.gcode.lang.fanuc.hints import SEMICOLON_COMMENT
-from cnc_gym.gcode.program import Block, Program, SpecialBlock, literal_block
+from cnc_gym.gcode.program import Block, CommentedBlock, LiteralStore, Program, SpecialBlock, WordBlock
+from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.dialect import Dialect
@@ -62,6 +65,27 @@ _CODE_WORD = re.compile(r"([GMT])([0-9.]+)")
 _CALL_CONTROL = "GNOPL"
 #: The alarm condition of a misplaced decimal point (a second point, a point without digits).
 DECIMAL_POINT = "bad-number/decimal-point"
+#: Most distinct plain words whose checked values the reader keeps at once (then it starts over).
+_SEEN_WORDS = 1 << 14
+#: About how many characters of the text are split into lines at once (a list of all the lines of a 1M-line
+#: program would cost 80 bytes a line on top of the blocks).
+_CHUNK_CHARS = 1 << 20
+
+
+def text_lines(text: str):
+    """The lines of ``text`` (a block ends at CR, LF or CRLF only), a chunk of about ``_CHUNK_CHARS``
+    characters split at a time: the same lines as splitting the whole text, without a list of them all."""
+    split = _LINE_BREAK.split if _OTHER_BREAKS.search(text) else str.splitlines
+    size = len(text)
+    start = 0
+    while start < size:
+        end = text.find("\n", start + _CHUNK_CHARS)
+        end = size if end < 0 else end + 1  # a chunk ends after an LF, so no CRLF is cut in two
+        lines = split(text[start:end])
+        if split is not str.splitlines and end < size and lines and lines[-1] == "":
+            lines.pop()  # re.split leaves an empty last piece after the chunk's final LF
+        yield from lines
+        start = end
 
 
 class Reader:
@@ -80,6 +104,10 @@ class Reader:
         self._o_blocks: list[Block] = []
         # Plain words already checked in this file: (letter, digits) → value.
         self._seen: dict[tuple[str, str], float] = {}
+        # The numbers of this program's plain blocks.
+        self._store = LiteralStore()
+        #: Most blocks a program text may hold (the run's ``max_blocks``; ``interpret`` sets it).
+        self.max_blocks = DEFAULT_MAX_BLOCKS
         rules = dialect.addresses
         self._rules = rules
         self._length_letters = frozenset(a for a, r in rules.items() if r.unit == "length")
@@ -129,6 +157,12 @@ class Reader:
             self._deferred_letters |= {"R"}
         self._lenient_rules = lenient
 
+    def too_many_blocks(self, count: int) -> ProgramError:
+        """A program text of more blocks than a run may execute (``max_blocks``): refused while it is read,
+        so that a huge file of short lines costs a bounded amount of memory."""
+        return self.error(f"the program holds more than {self.max_blocks} blocks ({count} read so far), more "
+                          "than a run may execute (max_blocks)", "too-many-blocks", 0)  # fmt: skip
+
     def _hinted(self, exc: ProgramError, raw: str) -> ProgramError:
         """The error with a hint when the line looks like another language's syntax (hints.py)."""
         hint = self.dialect.language.hint
@@ -147,6 +181,8 @@ class Reader:
             text = self._strip_comments(raw, 0).translate(_NO_BLANKS).upper()
         except ProgramError:
             return False
+        if not text.isascii():
+            return False  # the line's error is its illegal character (read_line), whatever follows a ';'
         try:
             for index, part in enumerate(text.split(";")):
                 try:
@@ -172,21 +208,39 @@ class Reader:
         program_number = None
         seen_percent = False
         colon = ":" in self.dialect.program_number_marks
-        lines = _LINE_BREAK.split(text) if _OTHER_BREAKS.search(text) else text.splitlines()
+        self._store = LiteralStore()
         # No line has a comment, ';' or a non-ASCII character: checked once for the whole text.
         simple = text.isascii() and "(" not in text and ")" not in text and ";" not in text
-        for line_no, raw in enumerate(lines, start=1):
+        notices: list[tuple[int, str, str, str]] = []
+        leader = _leader_lines(text)
+        if leader:
+            lines_ = (f"lines 1-{leader} before the tape start '%' (line {leader + 1}) are" if leader > 1
+                      else "line 1 before the tape start '%' (line 2) is")  # fmt: skip
+            notices.append((1, "note", f"{lines_} the leader section, not read (the control skips what comes "
+                            "before the first '%' of a file)", "leader-skipped"))  # fmt: skip
+        numbered = enumerate(text_lines(text), start=1)
+        for line_no, raw in numbered:
+            if line_no <= leader:
+                continue
+            if not line_no & 0xFFFF and len(blocks) > self.max_blocks:
+                raise self.too_many_blocks(len(blocks)).located(file, line_no)
             stripped = raw.strip(_BLANKS)
             if not stripped:
                 continue
             if colon and stripped[0] == ":":
                 stripped = "O" + stripped[1:]  # ``:1234`` is the program number O1234 (ISO code)
             if stripped.startswith("%"):
-                if stripped.strip("%").strip() and not stripped[1:].lstrip().startswith("("):
+                if not _is_tape_mark(stripped):
                     error = self.error("'%' must stand alone on its line (tape start/end mark)",
                                        "bad-character", line_no)  # fmt: skip
                     raise self._hinted(error, raw).located(file, line_no)
                 if seen_percent:
+                    rest = [n for n, r in numbered if r.strip(_BLANKS)]  # the lines after it
+                    if rest:
+                        notices.append((line_no, "note", f"line{'s' if len(rest) > 1 else ''} {rest[0]}"
+                                        f"{f'-{rest[-1]}' if len(rest) > 1 else ''} after the end-of-tape "
+                                        f"'%' (line {line_no}) {'are' if len(rest) > 1 else 'is'} not read",
+                                        "after-end-of-tape"))  # fmt: skip
                     break  # second '%': end of tape
                 seen_percent = True
                 continue
@@ -203,8 +257,11 @@ class Reader:
                 blocks.extend(self.read_line(stripped, line_no))
             except ProgramError as exc:
                 raise self._hinted(exc, raw).located(file, line_no) from None
+        if len(blocks) > self.max_blocks:
+            raise self.too_many_blocks(len(blocks)).located(file, blocks[self.max_blocks].line)
         self._seen = {}
-        program = Program(blocks, file=file)
+        self._store = LiteralStore()  # the blocks keep the program's store; the reader lets go of it
+        program = Program(blocks, file=file, notices=notices)
         for index, block in enumerate(blocks):
             if block.number is not None:
                 program.sequence_index.setdefault(block.number, []).append(index)
@@ -264,7 +321,15 @@ class Reader:
             for block in blocks:
                 if block.assign is not None:
                     block.message = self._last_comment
+            if self.dialect.comment_codes:  # a code that takes the comment as its argument (Haas G47)
+                blocks = [CommentedBlock.of(b, self._last_comment) if self._takes_comment(b) else b
+                          for b in blocks]  # fmt: skip
         return blocks
+
+    def _takes_comment(self, block: Block) -> bool:
+        codes = self.dialect.comment_codes
+        return any(word[0] == "G" and isinstance(word[1], str | float)
+                   and round(float(word[1]) * 10) in codes for word in block.words)  # fmt: skip
 
     def _strip_comments(self, text: str, line: int) -> str:
         out = []
@@ -311,6 +376,8 @@ class Reader:
                 value = self._plain_value(pair, text, line)
                 if value is None:
                     return self._rescan(text, line)
+                if len(seen) >= _SEEN_WORDS:
+                    seen.clear()  # bounded: a program of all-different coordinates must not grow it per line
                 seen[pair] = value
             if letter == "G":
                 if gs is None:
@@ -344,7 +411,7 @@ class Reader:
                 if not (head == "N" or (head == "O" and pairs[1][0] == "N")):
                     raise self.error("N must be at the head of the block", "misplaced-word", line)
                 number = int(values.pop("N"))
-        block = literal_block(line, pairs, gs, ms, values, number)
+        block = self._store.add(line, text, gs, ms, values, number)
         if has_o:
             self._o_blocks.append(block)
         return block
@@ -353,9 +420,13 @@ class Reader:
         """A plain word's value after its address's rule; None: the block needs the scanner after all (macro
         arguments, a code's own number formats)."""
         letter, digits = pair
-        rule = self._fast_rules[letter]
+        rule = self._fast_rules.get(letter)
+        if rule is None:
+            raise self._unknown_address(letter, line)
         low, high, point_allowed, is_length = rule
         try:
+            if digits[0] == "-" and low >= 0:
+                self._literal(letter, digits, rule, line)  # raises bad-sign, also for "-0"
             if "." in digits:
                 fraction = len(digits) - digits.index(".") - 1
                 if not point_allowed or (is_length and fraction > self._decimals):
@@ -407,6 +478,8 @@ class Reader:
         value = float(digits)
         if is_length and not has_point and not self.dialect.integer_is_unit:
             value *= self._increment
+        if digits[0] == "-" and low >= 0:  # "N-0", "S-0": a minus sign where the address has none
+            raise self.error(f"{letter}{digits}: {letter} cannot be negative", "bad-sign", line)
         if not low <= value <= high:
             if value < 0 <= low:
                 raise self.error(f"{letter}{digits}: {letter} cannot be negative", "bad-sign", line)
@@ -414,6 +487,10 @@ class Reader:
             raise self.error(f"{letter}{digits}: out of range {low:g} to {high:g}", "value-out-of-range",
                              line, alarm=alarm)  # fmt: skip
         return value
+
+    def _unknown_address(self, letter: str, line: int, column: int | None = None) -> ProgramError:
+        """A letter that is no address of this controller (the H4C-M has no E: ``E1``, ``X1E3``)."""
+        return self.error(f"{letter} is not an address of this controller", "unknown-address", line, column)
 
     def _head(self, words: list, line: int) -> tuple[list, int | None]:
         """Take O (program number) and N (sequence number) off the head of a block."""
@@ -459,6 +536,8 @@ class Reader:
 
     def _scan_block(self, text: str, line: int) -> Block | None:
         """Everything that is not plain: block skip, expressions, variables, assignments, keywords, calls."""
+        if self.dialect.macro_abbreviations:
+            text = expand_abbreviations(text, self.dialect.macro_abbreviations)  # WH[ … is WHILE[ …
         code_rules = self._code_rules(text)
         if not self._mentions_call(text):
             try:
@@ -498,7 +577,7 @@ class Reader:
         # Optional block skip: /, /n, /1/3 at the head (§1.3.4).
         while pos < len(text) and text[pos] == "/":
             pos += 1
-            if pos < len(text) and text[pos].isdigit():
+            if pos < len(text) and "0" <= text[pos] <= "9":
                 n = int(text[pos])
                 if n == 0:
                     raise self.error("block skip switch must be 1 to 9", "bad-block-skip", line, pos + 1)
@@ -515,7 +594,7 @@ class Reader:
                 n = 1
             skip |= 1 << n
         if pos >= len(text):
-            return Block(line, (), skip=skip) if skip else None
+            return WordBlock(line, (), skip=skip) if skip else None
         words: list = []
         has_expr = False
         assign = None
@@ -541,7 +620,7 @@ class Reader:
                 words.append((letter, value, text_digits))
                 continue
             if not ("A" <= c <= "Z"):
-                if c.isdigit() or c == ".":  # alarm 4 ADDRESS NOT FOUND
+                if _is_digit(c) or c == ".":  # alarm 4 ADDRESS NOT FOUND
                     raise self.error(f"a number without an address at {text[pos:pos + 8]!r}",
                                      "missing-address", line, pos + 1)  # fmt: skip
                 if c in "+-":  # alarm 6 ILLEGAL USE OF NEGATIVE SIGN
@@ -555,8 +634,11 @@ class Reader:
                 stmt, pos = self._statement(keyword, text, pos, line)
                 break
             letter = c
+            rule = rules.get(letter)
+            if rule is None:
+                raise self._unknown_address(letter, line, pos + 1)
             pos += 1
-            value, text_digits, pos = self._value(letter, text, pos, line, rules[letter])
+            value, text_digits, pos = self._value(letter, text, pos, line, rule)
             if text_digits is None:
                 has_expr = True
             words.append((letter, value, text_digits))
@@ -593,7 +675,7 @@ class Reader:
         if relaxed and self._is_call(words):
             # Words stay in order for the arguments; split at run time if the block turns out ordinary.
             return SpecialBlock(line, tuple(words), skip=skip, number=number, kind="call")
-        return Block(line, tuple(words), skip=skip, has_expr=has_expr, assign=assign, number=number)
+        return WordBlock(line, tuple(words), skip=skip, has_expr=has_expr, assign=assign, number=number)
 
     def _is_call(self, words: list) -> bool:
         for letter, value, digits in words:
@@ -654,9 +736,9 @@ class Reader:
 
     def _goto_target(self, parser: ExpressionParser, line: int) -> tuple:
         c = parser._peek()
-        if c.isdigit():
+        if _is_digit(c):
             start = parser.pos
-            while parser._peek().isdigit():
+            while _is_digit(parser._peek()):
                 parser.pos += 1
             if parser._peek() == ".":
                 raise self.error("a GOTO sequence number is an integer", "bad-number", line, parser.pos + 1)
@@ -670,7 +752,7 @@ class Reader:
 
     def _loop_number(self, parser: ExpressionParser, word: str, line: int) -> int:
         start = parser.pos
-        while parser._peek().isdigit():
+        while _is_digit(parser._peek()):
             parser.pos += 1
         digits = parser.text[start : parser.pos]
         if not digits:
@@ -700,7 +782,7 @@ class Reader:
         match = _NUMBER_AT.match(text, pos)
         if match:
             end = match.end()
-            if end < len(text) and (text[end] == "." or text[end].isdigit()):
+            if end < len(text) and (text[end] == "." or _is_digit(text[end])):
                 bad = _NUMBER_AT.match(text, end)
                 tail = text[end : (bad.end() if bad else end + 1)]
                 # a second point (GSK/Fanuc alarm 7 ILLEGAL USE OF DECIMAL POINT), else bad-number's
@@ -724,7 +806,7 @@ class Reader:
             return node, None, parser.pos
         if sign:
             raise self.error(f"{letter}{sign}: sign without a number", "bad-sign", line, start)  # alarm 6
-        if c == "." or c.isdigit():
+        if c == "." or _is_digit(c):
             raise self.error(f"bad number after {letter}", "bad-number", line, start,
                              alarm=DECIMAL_POINT if c == "." else None)  # fmt: skip
         raise self.error(f"address {letter} has no value", "missing-value", line, start)
@@ -741,6 +823,42 @@ class Reader:
             raise self.error(f"unexpected {text[parser.pos:]!r} after the expression", "bad-expression", line,
                              parser.pos + 1)  # fmt: skip
         return (target, value), len(text)
+
+
+def _is_tape_mark(stripped: str) -> bool:
+    """A ``%`` line: the tape start or end mark, alone or with an end of block or a comment after it."""
+    rest = stripped.strip("%").strip(_BLANKS + ";")
+    return stripped.startswith("%") and (not rest or stripped[1:].lstrip().startswith("("))
+
+
+def _leader_lines(text: str) -> int:
+    """How many lines come before the tape start: the first ``%`` line when text before it is not blank and
+    program text follows it (a ``%`` with nothing after it is the end of the tape); else 0."""
+    if "%" not in text:
+        return 0
+    first_text = None
+    leader = None
+    for index, raw in enumerate(text_lines(text)):
+        stripped = raw.strip(_BLANKS)
+        if not stripped:
+            continue
+        if leader is not None:  # text before the first mark: is there program text after it?
+            if not stripped.startswith("%"):
+                return leader
+            continue
+        if stripped.startswith("%") and _is_tape_mark(stripped):
+            if first_text is None:
+                return 0  # the file starts with its tape start
+            leader = index
+            continue
+        if first_text is None:
+            first_text = index
+    return 0
+
+
+def _is_digit(c: str) -> bool:
+    """An ASCII digit (str.isdigit also takes '²' and '١', which are not program text)."""
+    return len(c) == 1 and "0" <= c <= "9"
 
 
 def _log10(x: float) -> float:

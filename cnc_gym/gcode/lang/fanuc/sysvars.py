@@ -29,6 +29,14 @@ like every value a program sees; the interpreter stores mm.
 #5061-#5065             R      G31 skip position (work coordinates), null before any G31
 #5081-#5083             R      tool length offset vector in use
 #5101-#5105             R      servo position deviation: 0 (the interpreter runs before the servo)
+#3020-#3027             R      Haas timers and spindle (a dialect that has them, ``fanuc``): #3020
+                               power-on, #3021 cycle start, #3023 present part timer, the nominal
+                               seconds so far; #3022 feed timer, those cutting; #3024/#3025 last and
+                               previous part, 0; #3026 tool in the spindle; #3027 spindle r/min
+#5401-#6000             R      Haas tool life table of tools 1-100 (the ``fanuc`` dialect): #5400+n
+                               feed time and #5500+n total time of tool n in seconds (nominal, this
+                               run); #5600+n life limit, #5700+n life counter, #5800+n and #5900+n
+                               load monitor: 0 (the simulated machine starts with new, unmonitored tools)
 ======================  =====  ================================================================
 
 The clocks: the interpreter runs before any motion, so #3001/#3002 give the *nominal* time of the path
@@ -93,6 +101,8 @@ class SystemVariables:
         self.parts_required = 0.0
         self._clock_rows = 0
         self._clock_s = 0.0
+        self._tool_rows = 0
+        self._tool_seconds: dict[int, list[float]] = {}  # tool → [in the spindle, cutting], nominal s
         self._ms_offset = 0.0
         self._hours_offset = 0.0
         now = time.localtime()
@@ -150,7 +160,38 @@ class SystemVariables:
             return self._last_value(_LAST_VALUE[index])
         if 5001 <= index <= 5105:
             return self._position(index)
+        if 3020 <= index <= 3027:
+            return self._haas_timer(index)
+        if 5401 <= index <= 6000:
+            return self._tool_life(index)
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
+
+    def _haas_timer(self, index: int) -> float:
+        """#3020-#3027 (module docstring): the nominal clock of the run, by what it counts."""
+        if index in (3020, 3021, 3023):
+            return self._nominal_seconds()
+        if index == 3022:
+            return sum(cutting for _, cutting in self._tools_so_far().values())
+        if index in (3024, 3025):
+            return 0.0
+        if index == 3026:
+            return float(self.core.state.tool)
+        return abs(self.core.state.spindle_speed) if index == 3027 else self._missing(index)
+
+    def _tool_life(self, index: int) -> float:
+        """#5401-#6000 (module docstring): tools 1-100's timers from this run's path; limits, counters and
+        load monitoring 0."""
+        block, tool = divmod(index - 5401, 100)
+        if block >= 2:
+            return 0.0
+        spindle, cutting = self._tools_so_far().get(tool + 1, (0.0, 0.0))
+        return cutting if block == 0 else spindle
+
+    def _tools_so_far(self) -> dict[int, list[float]]:
+        builder = self.core.state.builder
+        builder.tool_seconds_since(self._tool_rows, NOMINAL_RAPID_MM_MIN, self._tool_seconds)
+        self._tool_rows = len(builder)
+        return self._tool_seconds
 
     def _offset_number(self, number: int) -> int:
         count = self._tool_offsets().count
@@ -313,8 +354,11 @@ class SystemVariables:
             else:
                 self.parts_required = value
             return
-        if index in (3011, 3012) or 1000 <= index <= 1035 or 4001 <= index <= 5105:
-            raise self._error(f"system variable #{index} is read-only (GSK 25i §3.7.3)", "read-only-variable")
+        if (index in (3011, 3012) or 1000 <= index <= 1035 or 4001 <= index <= 5105 or 3020 <= index <= 3027
+                or 5401 <= index <= 6000):  # fmt: skip
+            where = self.dialect.cite("§3.7.3")
+            raise self._error(f"system variable #{index} is read-only" + (f" ({where})" if where else ""),
+                              "read-only-variable")  # fmt: skip
         raise self._error(f"system variable #{index} does not exist", "bad-variable")
 
     def _small_int(self, index: int, value: float | None, high: int) -> float:

@@ -1,0 +1,90 @@
+"""``cnc-gym bench`` under Ctrl-C: a real SIGINT to a running ``--workers 2`` bench, judged by the work it
+kept and left undone (never by the clock): every finished record is in the file, valid JSON Lines, the
+pending work is cancelled, no worker process is left, and the exit status is 130."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="reads /proc for the worker processes")
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                out.append(int(entry))
+    return out
+
+
+def _running(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
+    except OSError:
+        return False
+
+
+def _records(path: Path) -> list[dict]:
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        return []
+    assert text == "" or text.endswith("\n"), "a partly written record"
+    return [json.loads(line) for line in text.splitlines()]  # valid JSON Lines at every moment
+
+
+@pytest.mark.parametrize("to", ["the command", "its process group"])
+def test_ctrl_c_keeps_every_finished_record_cancels_the_rest_and_leaves_no_worker(tmp_path, to):
+    out = tmp_path / "records.jsonl"
+    # 7 programs (one per family) × 3 policies = 21 tasks; the bounds are cached in a fresh folder.
+    command = [sys.executable, "-m", "cnc_gym.cli", "bench", "--per-family", "1", "--workers", "2",
+               "--policy", "constant:1.0", "--policy", "classical", "--policy", "oracle", "--json", str(out),
+               "--no-progress"]  # fmt: skip
+    env = {**os.environ, "CNC_GYM_CACHE_DIR": str(tmp_path / "cache")}
+    process = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)  # fmt: skip
+    try:
+        seen: list[dict] = []
+        while not seen and process.poll() is None:  # streamed: a record appears long before the end
+            time.sleep(0.05)
+            seen = _records(out)
+        assert process.poll() is None, process.communicate()
+        workers = _children(process.pid)
+        assert len(workers) >= 2
+        if to == "the command":  # the workers ignore SIGINT: the command must end them itself
+            os.kill(process.pid, signal.SIGINT)
+        else:  # what a terminal's Ctrl-C does
+            os.killpg(process.pid, signal.SIGINT)
+        stdout, stderr = process.communicate(timeout=600)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    kept = _records(out)
+    assert process.returncode == 130, stderr
+    assert stdout == "" and "Traceback" not in stderr, stderr
+    assert stderr.strip().splitlines()[-1].endswith(f"kept {len(kept)} finished episode record(s) in {out}")
+    assert len(stderr.strip().splitlines()) == 1, stderr
+    # Every record seen before the interrupt is kept, whole; the pending work was cancelled, not finished.
+    assert [r for r in kept if r in seen] == seen
+    assert len(seen) <= len(kept) < 21
+    assert all(r["finished"] in (True, False) and "score" in r for r in kept)
+    deadline = time.monotonic() + 30  # (a bound on the test, not a measurement)
+    while any(_running(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not [pid for pid in workers if _running(pid)], "a worker process outlived the command"
