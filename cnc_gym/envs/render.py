@@ -17,26 +17,11 @@ from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 import numpy as np
 
 from cnc_gym.errors import ConfigError
+from cnc_gym.toolpath import Toolpath
 
 if TYPE_CHECKING:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
-
-    from cnc_gym.toolpath import Toolpath
-
-
-class RenderedEnv(Protocol):
-    """What the renderers read of the env they draw (the Feedrate env; the env imports them, not the
-    other way round)."""
-
-    @property
-    def toolpath(self) -> Toolpath: ...
-
-    @property
-    def interpolation_period_s(self) -> float: ...
-
-    @property
-    def program_name(self) -> str: ...
 
 _FIG_SIZE_IN = (8.0, 4.0)
 _DPI = 80  # 640 × 320 pixels
@@ -45,6 +30,18 @@ _DPI = 80  # 640 × 320 pixels
 DEFAULT_MAX_BINS = 4096
 
 _REDUCTIONS = ("max", "min", "mean", "last")  # the op codes 0..3 of BinnedSeries
+
+
+class RenderedEpisode(Protocol):
+    """What a renderer reads of the env whose episode it draws (:class:`~cnc_gym.envs.feedrate.FeedrateEnv`
+    has it): the program's tool path and name, and the servo sample period."""
+
+    @property
+    def toolpath(self) -> Toolpath: ...
+    @property
+    def program_name(self) -> str: ...
+    @property
+    def interpolation_period_s(self) -> float: ...
 
 
 class BinnedSeries:
@@ -166,7 +163,7 @@ class EpisodeRenderer:
     def clear(self) -> None:
         self._samples.clear()
 
-    def start(self, env: RenderedEnv) -> None:
+    def start(self, env: RenderedEpisode) -> None:
         self.clear()
         if self._path_key != id(env.toolpath):
             _, points = env.toolpath.sample(0.5)
@@ -176,7 +173,7 @@ class EpisodeRenderer:
     def record(self, actual: np.ndarray, error: np.ndarray) -> None:
         self._samples.extend(np.column_stack((actual, error)).tolist())
 
-    def draw(self, env: RenderedEnv) -> np.ndarray:
+    def draw(self, env: RenderedEpisode) -> np.ndarray:
         """The current episode as an (H, W, 3) uint8 image."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.collections import LineCollection
@@ -246,12 +243,12 @@ class MachineRenderer(EpisodeRenderer):
         self._view: Any = None
         self._path_xyz: np.ndarray | None = None
 
-    def start(self, env: RenderedEnv) -> None:
+    def start(self, env: RenderedEpisode) -> None:
         if self._path_key != id(env.toolpath) or self._path_xyz is None:
             self._path_xyz = env.toolpath.sample(0.5)[1]
         super().start(env)
 
-    def draw(self, env: RenderedEnv) -> np.ndarray:
+    def draw(self, env: RenderedEpisode) -> np.ndarray:
         if self._view is None:
             import gymnasium
 

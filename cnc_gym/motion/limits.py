@@ -42,7 +42,7 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion import kernel as K
 from cnc_gym.toolpath import SegmentKind, SegmentMode, Toolpath
-from cnc_gym.toolpath.segments import PLANE_AXES, Plane
+from cnc_gym.toolpath.kinds import PLANE_AXES, Plane
 from cnc_gym.toolpath.smoothing import BlendCurve, SmoothingRules, blend_tables, smooth_corners
 
 #: Motion segments shorter than this are ignored (their modes still apply), mm.

@@ -46,11 +46,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from cnc_gym.toolpath.kinds import PLANE_AXES_TABLE, SegmentKind
 from cnc_gym.toolpath.nearest import helix_nearest, nurbs_search, nurbs_table, nurbs_work_size
-from cnc_gym.toolpath.segments import PLANE_AXES, Plane, SegmentKind, Toolpath
-
-_PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
-
+from cnc_gym.toolpath.segments import Toolpath
 
 # Segment classes of the kernel: dwells (and rapids under the cuts-only rule) are SKIP; the cutting classes
 # are LINE..NURBS; RAPID is a rapid line, a candidate only behind the point's own segment.
@@ -329,7 +327,7 @@ def pack_contour(tp: Toolpath, window_back: int, window_back_mm: float,
     """
     n = len(tp)
     kind = np.asarray(tp.kind)
-    axes = np.ascontiguousarray(_PLANE_AXES_TABLE[np.asarray(tp.plane).astype(np.int64)], dtype=np.int64)
+    axes = np.ascontiguousarray(PLANE_AXES_TABLE[np.asarray(tp.plane).astype(np.int64)], dtype=np.int64)
     seg_class = np.full(n, SKIP, dtype=np.int64)
     geometry = np.zeros((n, N_GEOMETRY))
     nurbs_i = np.zeros((n, 5), dtype=np.int64)

@@ -18,15 +18,11 @@ Numba is imported with this module, which :meth:`~cnc_gym.toolpath.Toolpath.near
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
-from cnc_gym.toolpath.segments import _PLANE_AXES_TABLE, SegmentKind
-
-if TYPE_CHECKING:
-    from cnc_gym.toolpath.segments import Toolpath
+from cnc_gym.toolpath.kinds import PLANE_AXES_TABLE, SegmentKind, ToolpathRows
 
 _TWO_PI = 2.0 * np.pi
 #: The helix search's Newton iteration ends on a step of at most this much sweep fraction (a few units in
@@ -35,7 +31,7 @@ _HELIX_STEP_TOLERANCE = 1e-15
 
 
 def nearest_on_segments(
-    tp: Toolpath, points: np.ndarray, first: int, last: int, cutting_only: bool
+    tp: ToolpathRows, points: np.ndarray, first: int, last: int, cutting_only: bool
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     m = len(points)
     best_d = np.full(m, np.inf)
@@ -63,7 +59,7 @@ def nearest_on_segments(
     return best_d, best_i, best_s
 
 
-def _nearest_lines(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
+def _nearest_lines(tp: ToolpathRows, points: np.ndarray, seg: np.ndarray):
     """(segments, distance (m, k), local arc length (m, k)) for straight segments."""
     if seg.size == 0:
         return seg, None, None
@@ -78,7 +74,7 @@ def _nearest_lines(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
     return seg, dist, t * np.sqrt(ln2)[None, :]
 
 
-def _nearest_nurbs(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
+def _nearest_nurbs(tp: ToolpathRows, points: np.ndarray, seg: np.ndarray):
     """(segments, distance (m, k), local arc length (m, k)) for NURBS segments (cutting moves)."""
     if seg.size == 0:
         return seg, None, None
@@ -89,10 +85,10 @@ def _nearest_nurbs(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
     return seg, dist, local
 
 
-def _nearest_arcs(tp: Toolpath, points: np.ndarray, seg: np.ndarray):
+def _nearest_arcs(tp: ToolpathRows, points: np.ndarray, seg: np.ndarray):
     if seg.size == 0:
         return seg, None, None
-    axes = _PLANE_AXES_TABLE[tp.plane[seg].astype(np.int64)]  # (k, 3)
+    axes = PLANE_AXES_TABLE[tp.plane[seg].astype(np.int64)]  # (k, 3)
     k = len(seg)
     cols = np.arange(k)
     u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]

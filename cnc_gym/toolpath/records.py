@@ -9,15 +9,11 @@ from __future__ import annotations
 
 import json
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cnc_gym.errors import CncGymError
-from cnc_gym.toolpath.segments import Plane, SegmentKind
-
-if TYPE_CHECKING:
-    from cnc_gym.toolpath.segments import Toolpath
+from cnc_gym.toolpath.kinds import Plane, SegmentKind, SegmentMode, ToolpathRows
 
 _KIND_NAMES = {k: k.name.lower() for k in SegmentKind}
 _PLANE_NAMES = {p: p.name for p in Plane}
@@ -36,7 +32,7 @@ def _g(x: float) -> float:
     return 0.0 if y == 0 else y
 
 
-def toolpath_records(tp: Toolpath) -> list[dict]:
+def toolpath_records(tp: ToolpathRows) -> list[dict]:
     """One dict per row. Extra keys beyond the contract: ``start``, ``radius``, ``file``, ``modes``, NURBS
     data, and on paths with rotary axes ``rotary_end`` (every rapid and line: ``{"B": deg}``, machine
     coordinates) with ``rotary_start`` on the rows that move them; ``smoothing_tolerance_mm`` on rows that
@@ -45,7 +41,7 @@ def toolpath_records(tp: Toolpath) -> list[dict]:
     return [_record(tp, i) for i in range(len(tp))]
 
 
-def _record(tp: Toolpath, i: int) -> dict:
+def _record(tp: ToolpathRows, i: int) -> dict:
     """The record of row i (see :func:`toolpath_records`)."""
     rotary = tp.rotary_axes
     kind = SegmentKind(int(tp.kind[i]))
@@ -112,7 +108,7 @@ def rounded(values: np.ndarray) -> list[float]:
     return out
 
 
-def toolpath_jsonl(tp: Toolpath) -> str:
+def toolpath_jsonl(tp: ToolpathRows) -> str:
     """The records as JSON Lines: ``"".join(json.dumps(r) + "\\n" for r in toolpath_records(tp))``, built
     without the dicts for rapids, lines, arcs and dwells (the bulk of a program; ``cnc-gym trace``'s hot
     path): each kind's rows are filled into one text template, column by column. Rows with a file, rotary
@@ -182,7 +178,7 @@ def toolpath_jsonl(tp: Toolpath) -> str:
     return "}\n".join(out.tolist()) + "}\n"
 
 
-def _json_record(tp: Toolpath, i: int) -> str:
+def _json_record(tp: ToolpathRows, i: int) -> str:
     """Row ``i``'s record as JSON; a number that is not finite (NaN, Infinity: not JSON) is one clear error
     naming its line, never printed."""
     record = _record(tp, i)
@@ -208,6 +204,4 @@ _TEMPLATES = {
 
 
 def type_modes(value: int):
-    from cnc_gym.toolpath.segments import SegmentMode
-
     return [m for m in SegmentMode if m and value & m]

@@ -17,58 +17,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import IntEnum, IntFlag
 from itertools import chain
 from operator import itemgetter
 
 import numpy as np
 
 from cnc_gym.frozen import FrozenDict
+from cnc_gym.toolpath.kinds import PLANE_AXES, PLANE_AXES_TABLE, Plane, SegmentKind, SegmentMode
 from cnc_gym.toolpath.nurbs import NurbsCurve
-
-
-class SegmentKind(IntEnum):
-    RAPID = 0
-    LINE = 1
-    ARC = 2
-    DWELL = 3
-    NURBS = 4
-
-
-class Plane(IntEnum):
-    """Arc planes. The value indexes :data:`PLANE_AXES`."""
-
-    XY = 0
-    ZX = 1
-    YZ = 2
-
-
-#: (u, v, w) axis indices per plane, with u × v = w (w is the plane normal).
-PLANE_AXES: dict[Plane, tuple[int, int, int]] = {
-    Plane.XY: (0, 1, 2),
-    Plane.ZX: (2, 0, 1),
-    Plane.YZ: (1, 2, 0),
-}
-_PLANE_AXES_TABLE = np.array([PLANE_AXES[p] for p in Plane], dtype=np.int64)
-
-
-class SegmentMode(IntFlag):
-    """Per-block modes the controller must honour."""
-
-    NONE = 0
-    EXACT_STOP = 1  # G09 one-shot or G61 modal: stop with in-position check at the block end
-    OVERRIDE_LOCKED = 2  # feed override fixed at 100 % (G63, tapping cycles, G31, #3004 bit 1)
-    AUTO_CORNER = 4  # G62 automatic corner override
-    INCH_PROGRAM = 8  # programmed in G20 (values already converted to mm)
-    TAPPING_MODE = 16  # G63 tapping mode: no deceleration at block end (with OVERRIDE_LOCKED)
-    #: A DIN controller's G36 "rounding of linear blocks": the block may end a little short or long so the
-    #: last interpolation cycle keeps the path speed. Recorded for the controller; the motion stage plans
-    #: continuous-time profiles, so the last-cycle speed dip G36 avoids does not arise there.
-    ROUND_BLOCK_END = 32
-    #: A dwell that stands for a machine function (an M code the control hands to the machine and waits
-    #: for at rest): ``Toolpath.machine_functions`` names its code.
-    MACHINE_FUNCTION = 64
-
 
 _FIELDS = (
     "kind", "start", "end", "center", "plane", "radius", "start_angle", "sweep", "feed",
@@ -242,7 +198,7 @@ class Toolpath:
 
     def _rise(self) -> np.ndarray:
         """Helix rise along the plane normal (0 for flat arcs and non-arcs)."""
-        w = _PLANE_AXES_TABLE[self.plane.astype(np.int64), 2]
+        w = PLANE_AXES_TABLE[self.plane.astype(np.int64), 2]
         rows = np.arange(len(self.kind))
         rise = self.end[rows, w] - self.start[rows, w]
         return np.where(self.kind == SegmentKind.ARC, rise, 0.0)
@@ -261,7 +217,7 @@ class Toolpath:
         arcs = rows[self.kind[rows] == SegmentKind.ARC]
         if not len(arcs):
             return out
-        axes = _PLANE_AXES_TABLE[self.plane[arcs].astype(np.int64)]
+        axes = PLANE_AXES_TABLE[self.plane[arcs].astype(np.int64)]
         k = np.arange(len(arcs))
         start_angle, sweep = self.start_angle[arcs], self.sweep[arcs]
         radius, center = self.radius[arcs], self.center[arcs]
@@ -338,7 +294,7 @@ class Toolpath:
 
     def _arc_geometry(self, i: np.ndarray, frac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Point, unit tangent and curvature on arcs ``i`` at fraction ``frac`` of their sweep."""
-        axes = _PLANE_AXES_TABLE[self.plane[i].astype(np.int64)]
+        axes = PLANE_AXES_TABLE[self.plane[i].astype(np.int64)]
         u, v, w = axes[:, 0], axes[:, 1], axes[:, 2]
         rows = np.arange(len(i))
         radius = self.radius[i]

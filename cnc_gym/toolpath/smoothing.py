@@ -25,8 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from cnc_gym.toolpath.kinds import SegmentKind, SegmentMode
 from cnc_gym.toolpath.nurbs import NurbsCurve
-from cnc_gym.toolpath.segments import SegmentKind, SegmentMode, Toolpath
+from cnc_gym.toolpath.segments import Toolpath
 
 #: Knots of the blend (clamped cubic, one interior knot).
 BLEND_KNOTS = np.array([0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0, 1.0])
