@@ -35,6 +35,14 @@ def _ramp_length(v0: float, v: float, accel: float, jerk: float) -> float:
     return 0.5 * (v0 + v) * t
 
 
+@njit(cache=True)
+def _ramp_time(dv: float, accel: float, jerk: float) -> float:
+    """Duration of the jerk-limited S-curve changing the speed by ``dv`` (zero acceleration at both ends)."""
+    if dv <= 0:
+        return 0.0
+    return 2.0 * math.sqrt(dv / jerk) if dv <= accel * accel / jerk else dv / accel + accel / jerk
+
+
 def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float,
                        decel_share: float = 1.0) -> np.ndarray:  # fmt: skip
     """Largest speed profile ≤ ``cap`` whose rises and falls are reachable under (A, J).
@@ -293,6 +301,17 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         if per_speed <= 1e-12:
             continue
         v_c = min(corner_target / per_speed, piece_cap[q - 1], piece_cap[q])
+        # Where the controller's own junction limit is lower, the corner is taken at that speed: left to
+        # the controller where even its own hard braking into the corner keeps within the budget, else
+        # held at that speed (an acceleration out of the corner during its transient adds to the error).
+        hard = pt_f[q, K.P_HARD]
+        if 0.0 < hard < v_c:
+            v_c = hard
+            if math.isfinite(piece_cap[q - 1]):
+                fall = max(piece_cap[q - 1] - hard, 0.0)
+                if corner_approach_error(u_in, u_out, hard, fall, _ramp_time(fall, accel, jerk), 0.0, ramp_t,
+                                         ramp_e, excess_int, lag) <= target:  # fmt: skip
+                    continue
         # The approach: from the incoming move's cap down to v_c, a ramp at the path acceleration (the
         # override's slew bounds it too), then a hold at v_c of the shortest length that keeps the error
         # within the budget.
@@ -302,7 +321,7 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         if drop > 1e-9:
             a_full = max(min(accel, slew_per_s * feed[q - 1]) if feed[q - 1] > 0 else accel, 1e-3)
             a_eff = DECEL_SHARE * a_full
-            ramp = drop / a_eff + a_eff / jerk
+            ramp = _ramp_time(drop, a_eff, jerk)
             steps = int(HOLD_MAX / HOLD_STEP)
             for m in range(steps + 1):
                 hold = m * HOLD_STEP * time_constant
