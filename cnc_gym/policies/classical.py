@@ -28,6 +28,10 @@ class ClassicalPlanner:
     own); ``reaction_time_s``: how far ahead (in time) the knob anticipates the schedule (default: the
     planner's reaction lead, two control periods + 10 ms); ``version``: the planner version (default the
     live one; 1 is the frozen planner of Feedrate-v1 and v2, :data:`cnc_gym.motion.planner.PLANNERS`).
+
+    ``nominal_machine``: the machine the planner plans with (None: the env's). The benchmark's tracks
+    whose plant differs from the machine's parameter table set it to the nominal machine: a deployed
+    planner knows the table, not the true plant.
     """
 
     deterministic = True
@@ -42,12 +46,13 @@ class ClassicalPlanner:
         self.version = self._planner.version
         self._max_override = 2.0
         self._lead_s = reaction_lead_s(0.01)
+        self.nominal_machine: MachineConfig | None = None
 
     def reset(self, env: Any) -> None:
         base, toolpath, machine, _ = knob_setup(self, env)
         # The controller's static tables (what its look-ahead knows); never the env's dynamics.
         limits = getattr(getattr(base, "controller", None), "limits", None)
-        self.schedule = self._planner.schedule(toolpath, machine, limits)
+        self.schedule = self._planner.schedule(toolpath, self.nominal_machine or machine, limits)
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         return override_action(override_at(self.schedule, float(info.get("path_s", 0.0)),
