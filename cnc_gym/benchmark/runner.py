@@ -319,6 +319,8 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                                      machine=true_machine, units=units)  # fmt: skip
                     if hasattr(policy, "nominal_machine"):
                         policy.nominal_machine = nominal
+                    if hasattr(env.unwrapped, "plan_on"):  # the env's own planner entries and residual mode
+                        env.unwrapped.plan_on(nominal)
                     if getattr(policy, "plans_on_nominal", False):
                         if planning_env is None:
                             planning_env = policy_env(policy, programs=[program.source()], dialect=dialect,

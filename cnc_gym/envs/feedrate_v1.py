@@ -321,6 +321,15 @@ class FeedrateEnvV1(FeedrateEnv):
             return self.pack_program(self._batch, name, scaled_feed(toolpath, self.feed_scale))
         return self.program_slot(self._batch, choice)
 
+    def plan_on(self, machine: MachineConfig | None) -> None:
+        """The deployable planner behind the planner entries and ``residual`` mode plans with ``machine``
+        from the next reset on (None: with the env's own). The benchmark's tracks whose plant differs from
+        the machine's parameter table give it the nominal machine, as they give the ``classical`` policy.
+        The engine is rebuilt (its programs were packed with the old schedules): call it before a reset."""
+        if machine is not self._planner.nominal_machine:
+            self._planner.nominal_machine = machine
+            self._start()
+
     # --------------------------------------------------------------------------------------------- step
     def _parse_action(self, action: Any) -> float:
         a = super()._parse_action(action)

@@ -39,10 +39,14 @@ class PlannerPrior:
         #: The planner version (:data:`cnc_gym.motion.planner.PLANNERS`) and its margin.
         self.version = self._planner.version
         self.margin = self._planner.margin
+        #: The machine the planner plans with in place of the env's (None: the env's): the benchmark's
+        #: tracks whose plant differs from the parameter table give the nominal machine.
+        self.nominal_machine: MachineConfig | None = None
 
     def schedule(self, toolpath: Toolpath, machine: MachineConfig, limits: PathLimits | None) -> Schedule:
-        """The planner's schedule of ``toolpath`` on ``machine`` (planned, or recalled)."""
-        return self._planner.schedule(toolpath, machine, limits)
+        """The planner's schedule of ``toolpath`` on ``machine`` (or on :attr:`nominal_machine` when
+        set), planned or recalled."""
+        return self._planner.schedule(toolpath, self.nominal_machine or machine, limits)
 
     def schedule_table(self, toolpath: Toolpath, machine: MachineConfig,
                        limits: PathLimits | None) -> np.ndarray:  # fmt: skip

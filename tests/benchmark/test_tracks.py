@@ -158,3 +158,37 @@ def test_cli_refuses_plant_with_another_track(capsys):
 
     assert main(["bench", "--track", "mujoco", "--plant", "lti", "--per-family", "1"]) == 2
     assert "--plant sets the nominal track's plant" in capsys.readouterr().err
+
+
+def test_residual_env_plans_on_the_machine_it_is_told():
+    # The env's own planner (its planner entries, residual mode) must not learn the true plant on a track:
+    # told the nominal machine, residual 0 on the true plant is the classical policy told the same.
+    from cnc_gym.envs.feedrate import FeedrateEnv
+    from cnc_gym.envs.feedrate_v1 import FeedrateEnvV1
+    from cnc_gym.policies.classical import ClassicalPlanner
+    from cnc_gym.rollout import run_episode
+
+    nominal = load_machine("vmc-small")
+    slow = dataclasses.replace(nominal, axes=tuple(dataclasses.replace(a, kv_1_s=0.6 * a.kv_1_s)
+                                                   for a in nominal.axes))  # fmt: skip
+
+    class Zero:
+        def reset(self, env):
+            return None
+
+        def act(self, observation, info):
+            return 0.0
+
+    def outcome(info):
+        return info["cycle_time_s"], info["contour_error_max_mm"]
+
+    planner = ClassicalPlanner()
+    planner.nominal_machine = nominal
+    classical = outcome(run_episode(FeedrateEnv(programs=[PROGRAM], machine=slow), planner).info)
+    results = []
+    for told in (nominal, None):
+        env = FeedrateEnvV1(programs=[PROGRAM], machine=slow, action_mode="residual", planner_version=2)
+        env.plan_on(told)
+        results.append(outcome(run_episode(env, Zero()).info))
+    assert results[0] == classical
+    assert results[1] != classical
