@@ -45,6 +45,8 @@ from cnc_gym.config import (
 from cnc_gym.envs.feedrate_v1 import ACTION_MODE_V1, RESIDUAL_RANGE, RankingReward
 from cnc_gym.envs.options import (
     CONTROL_PERIOD,
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
     DIALECT,
     MACHINE_NAME,
     MAX_EPISODE_STEPS,
@@ -53,6 +55,8 @@ from cnc_gym.envs.options import (
 )
 from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.programs import DEFAULT_DIALECT
 
 #: The env versions a training config may name.
 ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
@@ -76,11 +80,11 @@ class EnvSettings:
                             "`suite:<name>/<split>` (train or val)", as_tuple=False),
         default_factory=lambda: ["star", "pocket", "freeform"],
     )
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str = declared(MACHINE_NAME, "vmc-small")
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
     action_mode: str = declared(dataclasses.replace(ACTION_MODE_V1, doc="what the action sets (`residual`: "
-                                                    "Feedrate-v1 only)"), "override")  # fmt: skip
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+                                                    "Feedrate-v1 only)"), DEFAULT_ACTION_MODE)  # fmt: skip
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RewardWeights | None = section(  # noqa: RUF009
         RewardWeights, optional=True, doc="Feedrate-v0's reward weights (null: configs/tasks/default.yaml)")
     reward_v1: RankingReward | None = section(  # noqa: RUF009

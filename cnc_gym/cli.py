@@ -37,13 +37,14 @@ from typing import NoReturn
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
+from cnc_gym.gcode.dialect import DEFAULT_DIALECT, DIALECT_MODULES
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-from cnc_gym.machine import INPUT_UNITS
+from cnc_gym.machine import DEFAULT_MACHINE, INPUT_UNITS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
-DIALECTS = ("gsk25i", "fanuc", "h4cm", "syntec", "azmc1")
+DIALECTS = tuple(DIALECT_MODULES)
 
 
 EXIT_STATUS_HELP = """exit status:
@@ -134,10 +135,11 @@ def add_command(sub: argparse._SubParsersAction, name: str, help_text: str) -> a
 
 
 def _common(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--dialect", default="gsk25i", help=f"controller dialect: {', '.join(DIALECTS)}")
+    parser.add_argument("--dialect", default=DEFAULT_DIALECT,
+                        help=f"controller dialect: {', '.join(DIALECTS)}")  # fmt: skip
     parser.add_argument("--machine", default=None,
                         help="machine preset name (configs/machines) or YAML path; default: none for trace, "
-                             "the runner's default for run")  # fmt: skip
+                             f"{DEFAULT_MACHINE} for run")  # fmt: skip
     parser.add_argument("--units", choices=INPUT_UNITS, default=None, help=UNITS_HELP)
     parser.add_argument("--setup", metavar="FILE", default=None, help=SETUP_HELP)
     parser.add_argument("--calculator-input", action="store_true", help=CALCULATOR_HELP)
@@ -202,7 +204,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.setup is not None or args.calculator_input:  # both travel inside the machine record
         from cnc_gym.machine import machine_with_options
 
-        args.machine = machine_with_options(args.machine or "vmc-small", args.setup, args.calculator_input)
+        machine = args.machine or DEFAULT_MACHINE
+        args.machine = machine_with_options(machine, args.setup, args.calculator_input)
     try:
         from cnc_gym.runner import run_cli
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import re
 
+from cnc_gym import error_codes
+
 #: Most characters of a message that reach the user (a 10 MB program word must not make a 10 MB line).
 MAX_MESSAGE_CHARS = 400
 #: Most characters of a file name in a ``FILE:LINE:`` prefix.
@@ -44,7 +46,8 @@ def _escape(match: re.Match) -> str:
 
 def notice_line(file: str, line: int, message: str, code: str, level: str = "note") -> str:
     """A note about a program, one line as an error's: ``FILE:LINE: note: message [code]`` (``level``:
-    ``note``, or ``warning`` for what is probably a mistake)."""
+    ``note``, or ``warning`` for what is probably a mistake; ``code``: one of :mod:`cnc_gym.error_codes`)."""
+    error_codes.check(code)
     return f"{printable(str(file), MAX_FILE_CHARS)}:{line}: {level}: {printable(message)} [{code}]"
 
 
@@ -56,7 +59,8 @@ class CncGymError(Exception):
 
 
 class ProgramError(CncGymError):
-    """A G-code program cannot be run: names file, line (1-based), a stable code and the controller alarm.
+    """A G-code program cannot be run: names file, line (1-based), a stable code (one of
+    :mod:`cnc_gym.error_codes`) and the controller alarm.
 
     ``str(err)`` is the contract line ``FILE:LINE: message [code]`` (file and message through
     :func:`printable`); ``err.message`` keeps the message as raised; ``err.notices`` the notes about the
@@ -75,6 +79,7 @@ class ProgramError(CncGymError):
         column: int | None = None,
         alarm: int | None = None,
     ) -> None:
+        error_codes.check(code)
         super().__init__(message)
         self.message = message
         self.code = code

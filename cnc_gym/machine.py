@@ -68,11 +68,13 @@ from cnc_gym.config import (
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
-__all__ = ["INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig", "MachineConfig",
-           "MachineFunctionsConfig", "PlantConfig", "RotaryAxisConfig", "SetupConfig", "ToolSetup",
-           "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names", "merge_setups",
-           "with_setup"]  # fmt: skip
+__all__ = ["DEFAULT_MACHINE", "INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig", "ControllerConfig",
+           "MachineConfig", "MachineFunctionsConfig", "PlantConfig", "RotaryAxisConfig", "SetupConfig",
+           "ToolSetup", "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names",
+           "merge_setups", "with_setup"]  # fmt: skip
 
+#: The machine preset used where none is named (``cnc-gym run``, the envs, ``bench``, ``load_machine()``).
+DEFAULT_MACHINE = "vmc-small"
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
 
@@ -88,6 +90,8 @@ _TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double 
 #: The input units a controller can be in at power-on (a preset's ``power_on_units``,
 #: ``interpret(units=)``, ``--units``): G21 millimetres or G20 inches.
 INPUT_UNITS = ("mm", "inch")
+#: Millimetres in an inch (the interpreter's G20 scale, a setup in inch, the rotary feed rule in G20).
+INCH_MM = 25.4
 
 _ROTARY_WHY = "as the linear axes', degrees counting as mm (the GSK rotary feed rule)."
 
@@ -407,7 +411,7 @@ class SetupConfig:
         """The same tables with every length in mm."""
         if self.units == "mm":
             return self
-        k = 25.4
+        k = INCH_MM
         offsets = FrozenDict({key: tuple(c * k for c in xyz) for key, xyz in self.work_offsets.items()})
         tools = FrozenDict({n: ToolSetup(*(getattr(t, f.name) * k for f in dataclasses.fields(ToolSetup)))
                             for n, t in self.tools.items()})  # fmt: skip
@@ -517,7 +521,7 @@ def machine_names() -> list[str]:
     return sorted(p.stem for p in (configs_dir() / "machines").glob("*.yaml"))
 
 
-def load_machine(name_or_path: str | Path | MachineConfig = "vmc-small") -> MachineConfig:
+def load_machine(name_or_path: str | Path | MachineConfig = DEFAULT_MACHINE) -> MachineConfig:
     """Load a preset by name (``vmc-small``, ``gsk25i``, ``p-loop-30`` …) or from a YAML path; a
     ``MachineConfig`` built in Python is checked against the same schema and returned."""
     if isinstance(name_or_path, MachineConfig):

@@ -30,6 +30,8 @@ import numpy as np
 
 from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries, range_indices
 from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.programs import DEFAULT_DIALECT
 from cnc_gym.rollout import play, policy_env
 
 #: Keys of the ``--json`` object (the contract of docs/cli.md, "What `run` prints").
@@ -126,7 +128,7 @@ class RunResult:
         return min(self.last_path_s / self.path_length_mm, 1.0)
 
 
-def program_env(program: Any, policy: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
+def program_env(program: Any, policy: Any, *, dialect: str = DEFAULT_DIALECT, machine: str = DEFAULT_MACHINE,
                 max_blocks: int | None = None, units: str | None = None,
                 plant: str | None = None) -> Any:  # fmt: skip
     """The env ``policy`` runs one program in (:func:`cnc_gym.rollout.policy_env`: the env version and
@@ -357,7 +359,7 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.0f} s"
 
 
-def simulate(program: Any, *, dialect: str = "gsk25i", machine: str = "vmc-small",
+def simulate(program: Any, *, dialect: str = DEFAULT_DIALECT, machine: str = DEFAULT_MACHINE,
              policy: str | Any = "constant:1.0", progress: bool = False, max_time_s: float | None = None,
              max_blocks: int | None = None, log: TextIO | None = None,
              units: str | None = None, plant: str | None = None) -> RunResult:  # fmt: skip
@@ -412,7 +414,7 @@ def run_cli(args: Any) -> int:
     """
     progress = not getattr(args, "no_progress", False) and sys.stderr.isatty()
     # The CLI leaves --machine unset (None) when not given: the runner's default is vmc-small.
-    machine = args.machine if getattr(args, "machine", None) is not None else "vmc-small"
+    machine = args.machine if getattr(args, "machine", None) is not None else DEFAULT_MACHINE
     plot = plot_target(args.plot) if getattr(args, "plot", None) is not None else None
     result = simulate(args.program, dialect=args.dialect, machine=machine, policy=args.policy,
                       progress=progress, max_time_s=getattr(args, "max_time", None),

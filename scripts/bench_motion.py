@@ -28,7 +28,7 @@ import time
 
 import numpy as np
 
-from cnc_gym.machine import load_machine
+from cnc_gym.machine import DEFAULT_MACHINE, load_machine
 from cnc_gym.motion import Controller
 from cnc_gym.toolpath import Plane, Toolpath, ToolpathBuilder
 
@@ -103,7 +103,7 @@ def bench(name: str, tp: Toolpath, machine_name: str, calls: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--random", type=int, default=0, help="bench a random program of N blocks instead")
-    parser.add_argument("--machine", default="vmc-small")
+    parser.add_argument("--machine", default=DEFAULT_MACHINE)
     parser.add_argument("--calls", type=int, default=20000, help="advance(5)/lookahead calls to time")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()

@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from cnc_gym.machine import load_machine
+from cnc_gym.machine import DEFAULT_MACHINE, load_machine
 from cnc_gym.plant import ContourErrorMeter, ServoPlant
 from cnc_gym.toolpath import Plane, Toolpath, ToolpathBuilder
 
@@ -49,7 +49,7 @@ def zigzag_with_arcs(passes: int = 20) -> Toolpath:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--machine", default="vmc-small")
+    parser.add_argument("--machine", default=DEFAULT_MACHINE)
     parser.add_argument("--ticks", type=int, default=5, help="samples per call (control period / IPO)")
     parser.add_argument("--envs", type=int, nargs="+", default=[1, 64])
     parser.add_argument("--repeat", type=int, default=20000)

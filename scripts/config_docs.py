@@ -61,8 +61,10 @@ TABLES: dict[str, tuple[type, str]] = {
     "reward.v1": (RankingReward, ""),
     "randomize": (DomainRandomization, ""),
 }
-#: Tables written by a function instead of from a schema: Feedrate-v1's observation, from its spec.
-GENERATED = {"env.v1.observation": observation.markdown_table}
+#: Tables written by a function instead of from a schema: the observations of Feedrate-v1 and -v0, from
+#: their declarations.
+GENERATED = {"env.v1.observation": observation.markdown_table,
+             "env.v0.observation": lambda: observation.markdown_table(observation.OBSERVATION_V0)}
 #: Files that hold tables.
 DOCS = ("docs/configs.md", "docs/env.md")
 _BLOCK = re.compile(r"(<!-- config-table ([\w.]+) -->\n)(.*?)(<!-- end config-table -->)", re.S)

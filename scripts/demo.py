@@ -21,12 +21,14 @@ from cnc_gym.errors import CncGymError
 
 
 def main(argv: list[str] | None = None) -> int:
+    from cnc_gym.gcode.dialect import DEFAULT_DIALECT
+    from cnc_gym.machine import DEFAULT_MACHINE
     from cnc_gym.programs import program_names
     from cnc_gym.runner import default_plot_name, feed_limits, format_table, plot_run, simulate
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--machine", default="vmc-small")
-    parser.add_argument("--dialect", default="gsk25i")
+    parser.add_argument("--machine", default=DEFAULT_MACHINE)
+    parser.add_argument("--dialect", default=DEFAULT_DIALECT)
     parser.add_argument("--programs", nargs="+", default=None, help="default: the built-in suite")
     parser.add_argument("--policies", nargs="+", default=["constant:1.0", "classical"])
     parser.add_argument("--out", default="out/demo", help="folder for the plots")

@@ -11,7 +11,7 @@ Every program ends in one outcome class:
 ``error:CODE``     a ``ProgramError``, its line ``FILE:LINE: message [CODE]`` one bounded line
 ``crash:TYPE``     any other exception, a tool path with NaN/inf (``crash:non-finite``), or an error line that
                    breaks the contract (``crash:bad-error-line``: not one bounded line naming the file and
-                   a line ≥ 1)
+                   a line ≥ 1; ``crash:unregistered-code``: a code not in ``cnc_gym/error_codes.py``)
 ``over-time``      more than ``--time-limit`` CPU seconds in ``interpret`` (default 10), though ``interpret``
                    runs with ``max_seconds`` = half of it: the interpreter missed its own time bound
 ``over-memory``    a ``MemoryError`` under ``--memory-limit`` (MiB above the worker's start), or the
@@ -634,6 +634,7 @@ def _classify(text: str, time_limit: float, dialect: str = "gsk25i") -> tuple[st
     CPU-time alarm at ``time_limit`` catches a program that gets past that bound."""
     import numpy as np
 
+    from cnc_gym.error_codes import CODES
     from cnc_gym.errors import MAX_LINE_CHARS, ProgramError
     from cnc_gym.gcode import interpret
 
@@ -648,6 +649,8 @@ def _classify(text: str, time_limit: float, dialect: str = "gsk25i") -> tuple[st
         good = (bool(err.code) and "\n" not in line and len(line) <= MAX_LINE_CHARS and err.line >= 1
                 and line.startswith("fuzz.nc:"))  # fmt: skip
         outcome = f"error:{err.code}" if good else "crash:bad-error-line"
+        if good and err.code not in CODES:  # every code is declared in cnc_gym/error_codes.py
+            outcome = "crash:unregistered-code"
         return outcome, time.process_time() - start, line[:300]
     except MemoryError:
         return "over-memory", time.process_time() - start, ""

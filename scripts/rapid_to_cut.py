@@ -27,11 +27,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 def main(argv: list[str] | None = None) -> int:
     from cnc_gym.envs.feedrate import FeedrateEnv
     from cnc_gym.errors import CncGymError
+    from cnc_gym.machine import DEFAULT_MACHINE
     from cnc_gym.toolpath import SegmentKind
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("program", nargs="?", default="circle")
-    parser.add_argument("--machine", default="vmc-small")
+    parser.add_argument("--machine", default=DEFAULT_MACHINE)
     parser.add_argument("--before", type=int, default=5, help="control steps shown before the first cut")
     parser.add_argument("--after", type=int, default=4, help="control steps shown after it")
     args = parser.parse_args(argv)

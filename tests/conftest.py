@@ -7,6 +7,11 @@ draw. Run ``pytest`` locally (or ``HYPOTHESIS_PROFILE=explore``) to keep searchi
 
 import os
 
+# Every code raised or noted during the tests must be in cnc_gym/error_codes.py (tests/test_error_codes.py):
+# set before cnc_gym is imported, and inherited by the subprocesses the tests start, so an unregistered code
+# fails at once.
+os.environ["CNC_GYM_STRICT_CODES"] = "1"
+
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, database=None, print_blob=True)

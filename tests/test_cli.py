@@ -374,3 +374,19 @@ def test_help_still_shows_the_whole_usage(capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["bench", "--help"])
     assert exit_.value.code == 0 and "--per-family N" in capsys.readouterr().out
+
+
+def test_docs_state_the_defaults_the_code_names():
+    # The defaults live once, as DEFAULT_DIALECT (cnc_gym/gcode/dialect.py) and DEFAULT_MACHINE
+    # (cnc_gym/machine.py); docs/cli.md's option table states them.
+    from cnc_gym.cli import DIALECTS
+    from cnc_gym.gcode.dialect import DEFAULT_DIALECT, DIALECT_MODULES
+    from cnc_gym.machine import DEFAULT_MACHINE, machine_names
+
+    rows = {line.split("|")[1].strip(): line for line in
+            (Path(__file__).resolve().parent.parent / "docs" / "cli.md").read_text().splitlines()
+            if line.startswith("| `--")}  # fmt: skip
+    assert f"`{DEFAULT_DIALECT}` (default)" in rows["`--dialect D`"]
+    assert f"`run` defaults to `{DEFAULT_MACHINE}`" in rows["`--machine M`"]
+    assert DEFAULT_MACHINE in machine_names()
+    assert DEFAULT_DIALECT in DIALECT_MODULES and tuple(DIALECT_MODULES) == DIALECTS

@@ -108,3 +108,14 @@ def test_a_long_targeted_run_over_every_dialect_finds_nothing():
     report = fuzz.fuzz(seed=2, programs_budget=10_000, time_limit=10.0, cli_every=1000, dialects=built)
     bad = [(index, outcome, detail) for index, _, outcome, detail, _ in report.bad]
     assert not bad, f"seed {report.seed}: {bad}"
+
+
+def test_an_unregistered_code_is_a_finding(monkeypatch):
+    # Outside the test suite's strict mode nothing stops an unregistered code at run time: the fuzzer
+    # reports one as a crash (here: every code, with the registry emptied).
+    from cnc_gym import error_codes
+
+    assert fuzz._classify("G01 X F100\n", 4.0)[0] == "error:missing-value"
+    monkeypatch.setattr(error_codes, "_STRICT", False)
+    monkeypatch.setattr(error_codes, "CODES", frozenset())
+    assert fuzz._classify("G01 X F100\n", 4.0)[0] == "crash:unregistered-code"

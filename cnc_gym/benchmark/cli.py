@@ -30,6 +30,7 @@ tolerance, 0 otherwise (docs/benchmark.md)."""
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``bench`` to the ``cnc-gym`` subcommands."""
+    from cnc_gym.gcode.dialect import DEFAULT_DIALECT
     from cnc_gym.machine import INPUT_UNITS
 
     bench = subparsers.add_parser("bench", help="benchmark policies on a suite split or your own programs",
@@ -51,7 +52,8 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
     bench.add_argument("--plant", metavar="lti|mujoco", default=None,
                        help="servo plant for the episodes on the nominal track (default: the machine "
                             "preset's)")
-    bench.add_argument("--dialect", default=None, help="program dialect (default: the suite's, gsk25i)")
+    bench.add_argument("--dialect", default=None,
+                       help=f"program dialect (default: the suite's, {DEFAULT_DIALECT})")  # fmt: skip
     bench.add_argument("--units", choices=INPUT_UNITS, default=None,
                        help="input unit at power-on for programs without G20/G21 (default: the machine "
                             "preset's power_on_units, else the dialect's G21)")  # fmt: skip
@@ -107,7 +109,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     )
     from cnc_gym.benchmark.suites import DEFAULT_SUITE
     from cnc_gym.errors import CncGymError
-    from cnc_gym.machine import machine_with_options
+    from cnc_gym.gcode.dialect import DEFAULT_DIALECT
+    from cnc_gym.machine import DEFAULT_MACHINE, machine_with_options
 
     if args.plant is not None and args.track != "nominal":
         raise CncGymError(f"--plant sets the nominal track's plant; the {args.track} track has its own")
@@ -122,7 +125,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         if args.per_family is not None:
             raise CncGymError("--per-family picks programs of a suite's split; with --programs, name the "
                               "files to run")  # fmt: skip
-        machine, dialect = args.machine or "vmc-small", args.dialect or "gsk25i"
+        machine, dialect = args.machine or DEFAULT_MACHINE, args.dialect or DEFAULT_DIALECT
         if args.setup is not None or args.calculator_input:  # they travel inside the machine record
             machine = machine_with_options(machine, args.setup, args.calculator_input)
         programs = user_programs(args.programs, machine, dialect, args.units)

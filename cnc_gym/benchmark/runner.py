@@ -36,6 +36,8 @@ from typing import Any
 
 from cnc_gym.benchmark.metrics import RECORD_VERSION, episode_score, is_feasible
 from cnc_gym.errors import CncGymError
+from cnc_gym.gcode.dialect import DEFAULT_DIALECT
+from cnc_gym.machine import DEFAULT_MACHINE
 from cnc_gym.rollout import CONTOUR_RULE, play, policy_env
 
 #: The baselines ``cnc-gym bench`` runs when no ``--policy`` is given.
@@ -88,8 +90,8 @@ class BenchConfig:
     programs: list[BenchProgram]
     policies: list[str]
     seeds: list[int] = field(default_factory=lambda: [0])
-    machine: str = "vmc-small"
-    dialect: str = "gsk25i"
+    machine: str = DEFAULT_MACHINE
+    dialect: str = DEFAULT_DIALECT
     #: Input unit at power-on ("mm"/"inch"); None: the machine preset's, else the dialect's.
     units: str | None = None
     #: Servo plant backend (``lti`` or ``mujoco``); None: the machine preset's.

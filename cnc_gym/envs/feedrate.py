@@ -11,34 +11,30 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from cnc_gym.envs.fused import FeedrateBatch, ObservationSpec, RewardSpec
-from cnc_gym.envs.options import EnvNotReset, control_ticks, env_arguments, parse_action, reset_choice
+from cnc_gym.envs.fused import FeedrateBatch, RewardSpec
+from cnc_gym.envs.observation import OBSERVATION_V0, ObservationLayout, markdown_table
+from cnc_gym.envs.options import (
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
+    DEFAULT_LOOKAHEAD_MM,
+    DEFAULT_LOOKAHEAD_POINTS,
+    EnvNotReset,
+    control_ticks,
+    env_arguments,
+    parse_action,
+    reset_choice,
+)
 from cnc_gym.envs.task import RewardWeights, load_task, resolve_reward
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig, load_machine, with_plant_backend, with_setup
+from cnc_gym.machine import DEFAULT_MACHINE, MachineConfig, load_machine, with_plant_backend, with_setup
 from cnc_gym.motion import ActionError  # noqa: F401  (one error type for bad actions, env and controller alike)
 from cnc_gym.plant import make_plant
-from cnc_gym.programs import PROGRAM_TYPES, ProgramLike, load_program
+from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
-#: Scalar observation entries, in order (the look-ahead block follows them).
-SCALAR_FEATURES = (
-    "speed",
-    "accel",
-    "override",
-    "knob",
-    "following_error",
-    "contour_error_step",
-    "contour_error_now",
-    "progress",
-    "distance_to_stop",
-)
-#: Per-point look-ahead entries; each is a block of ``lookahead_points`` values.
-LOOKAHEAD_FEATURES = ("speed_limit", "curvature", "turn_angle", "programmed_feed")
-
-# Normalisation constants (documented in the class docstring).
-_CURVATURE_LENGTH_MM = 10.0  # curvature κ is observed as κL/(1 + κL): R 50 mm → 0.17, R 1 mm → 0.91
-_FOLLOWING_ERROR_REF_MM = 1.0
+#: Feedrate-v0's scalar observation entries, in order (the look-ahead blocks, one per
+#: :data:`~cnc_gym.envs.fused.LOOKAHEAD_ROWS` row, follow them); the entries are :data:`OBSERVATION_V0`.
+SCALAR_FEATURES = tuple(e.name for e in OBSERVATION_V0 if e.source == "signal")
 
 
 def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
@@ -68,29 +64,13 @@ def nominal_time_s(toolpath: Toolpath, machine: MachineConfig) -> float:
     return max(cut_s + rapid_s + dwell_s + rotary_s, 1e-3)
 
 
-def observation_spec_v0(lookahead_points: int, v_ref: float, a_ref: float, max_override: float,
-                        tolerance_mm: float, lookahead_mm: float) -> ObservationSpec:
-    """Feedrate-v0's observation (the table in :class:`FeedrateEnv`'s docstring), entry by entry."""
-    scalars = {  # feature: signal, scale, low, high
-        "speed": ("speed", 1 / v_ref, 0, 2),
-        "accel": ("accel", 1 / a_ref, -2, 2),
-        "override": ("override", 1 / max_override, 0, 1),
-        "knob": ("knob", 1.0, -1, 1),
-        "following_error": ("following_error", 1 / _FOLLOWING_ERROR_REF_MM, 0, 5),
-        "contour_error_step": ("contour_error_step", 1 / tolerance_mm, 0, 5),
-        "contour_error_now": ("contour_error_now", 1 / tolerance_mm, 0, 5),
-        "progress": ("path_fraction", 1.0, 0, 1),
-        "distance_to_stop": ("distance_to_stop", 1 / lookahead_mm, 0, 1),
-    }
-    blocks = {  # look-ahead row: transform, parameter, scale, high (low 0)
-        "speed_limit": ("none", 0.0, 1 / v_ref, 2),
-        "curvature": ("saturate", _CURVATURE_LENGTH_MM, 1.0, 1),
-        "turn_angle": ("none", 0.0, 1 / math.pi, 1),
-        "programmed_feed": ("none", 0.0, 1 / v_ref, 2),
-    }
-    signals = tuple(scalars[feature] for feature in SCALAR_FEATURES)
-    lookahead = tuple((row, *blocks[row][:3], 0.0, blocks[row][3]) for row in LOOKAHEAD_FEATURES)
-    return ObservationSpec(signals, lookahead, lookahead_points)
+def observation_layout_v0(lookahead_points: int, v_ref: float, a_ref: float, max_override: float,
+                          tolerance_mm: float, lookahead_mm: float) -> ObservationLayout:
+    """Feedrate-v0's observation (:data:`OBSERVATION_V0`, the table in :class:`FeedrateEnv`'s docstring)
+    resolved for one env's references."""
+    references = {"v_ref": v_ref, "a_ref": a_ref, "tol": tolerance_mm, "H": lookahead_mm,
+                  "ov_max": max_override}  # fmt: skip
+    return ObservationLayout(OBSERVATION_V0, lookahead_points, references)
 
 
 def reward_spec_v0(weights: RewardWeights) -> RewardSpec:
@@ -134,23 +114,11 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     ``Box(low, high, (9 + 4·N,), float32)`` with ``N = lookahead_points`` (default 8, so 41 entries),
     clipped to the bounds below. ``v_ref = max_feed_mm_min / 60`` (250 mm/s on vmc-small),
     ``a_ref`` = the largest axis acceleration, ``tol`` = the machine's contour tolerance, ``H`` =
-    ``lookahead_mm`` (default 24 mm), ``L_k`` = 10 mm.
+    ``lookahead_mm`` (default 24 mm), ``L_k`` = 10 mm; declared once in
+    :data:`cnc_gym.envs.observation.OBSERVATION_V0` (this table, the bounds, the scaling and
+    :attr:`observation_structure` come from it).
 
-    | index | observation | formula | range |
-    |---|---|---|---|
-    | 0 | path speed | ``v / v_ref`` | [0, 2] |
-    | 1 | path acceleration | ``a / a_ref`` | [-2, 2] |
-    | 2 | applied override | ``override / max_override`` | [0, 1] |
-    | 3 | last action (knob) | ``a`` | [-1, 1] |
-    | 4 | following error | ``‖reference − actual‖ / 1 mm`` | [0, 5] |
-    | 5 | contour error, max over the last step | ``e_max / tol`` | [0, 5] |
-    | 6 | contour error, last servo sample | ``e / tol`` | [0, 5] |
-    | 7 | progress | ``s / L`` (path length done) | [0, 1] |
-    | 8 | distance to the next stop | ``min(d_stop / H, 1)`` | [0, 1] |
-    | 9 … 8+N | speed limit ahead | controller's limit at N points over the next H mm, ``/ v_ref`` | [0, 2] |
-    | 9+N … 8+2N | curvature ahead | ``κ L_k / (1 + κ L_k)`` | [0, 1] |
-    | 9+2N … 8+3N | turning angle ahead | ``θ / π``, the largest junction turn in each bin | [0, 1] |
-    | 9+3N … 8+4N | programmed feed ahead | ``F / 60 / v_ref`` | [0, 2] |
+    {observation_table}
 
     The look-ahead block describes the path, not the program, so one policy can run any program.
 
@@ -225,7 +193,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     A step is one compiled call (:mod:`cnc_gym.envs.fused`): the controller's periods, the servo plant,
     the contour error, the statistics, the reward and the observation, on state held in arrays. The
-    observation and the reward are declared (:func:`observation_spec_v0`, :func:`reward_spec_v0`). The
+    observation and the reward are declared (:data:`~cnc_gym.envs.observation.OBSERVATION_V0`,
+    :func:`reward_spec_v0`). The
     vector env (:class:`~cnc_gym.envs.vector.FeedrateVectorEnv`) runs N episodes in one such call.
 
     ## Version History
@@ -243,15 +212,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def __init__(
         self,
         programs: Sequence[ProgramLike] | ProgramLike | None = None,
-        dialect: str = "gsk25i",
-        machine: str | Path | MachineConfig = "vmc-small",
-        action_mode: str = "override",
-        control_period_s: float = 0.01,
+        dialect: str = DEFAULT_DIALECT,
+        machine: str | Path | MachineConfig = DEFAULT_MACHINE,
+        action_mode: str = DEFAULT_ACTION_MODE,
+        control_period_s: float = DEFAULT_CONTROL_PERIOD_S,
         reward: str | Path | dict | RewardWeights | None = None,
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
-        lookahead_mm: float = 24.0,
-        lookahead_points: int = 8,
+        lookahead_mm: float = DEFAULT_LOOKAHEAD_MM,
+        lookahead_points: int = DEFAULT_LOOKAHEAD_POINTS,
         units: str | None = None,
         plant: str | None = None,
         contour_rule: str = "cuts",
@@ -265,13 +234,16 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
                              units=units, plant=plant, contour_rule=contour_rule, setup=setup)  # fmt: skip
         self._configure(args)
         self.reward_weights = resolve_reward(args.reward)
-        # Observation and reward: declared once (observation_spec_v0, reward_spec_v0), assembled by the
+        # Observation and reward: declared once (OBSERVATION_V0, reward_spec_v0), assembled by the
         # compiled step.
-        self._obs_spec = observation_spec_v0(self.lookahead_points, self._v_ref, self._a_ref,
-                                             self.max_override, self.tolerance_mm,
-                                             self.lookahead_mm)  # fmt: skip
+        self.layout = observation_layout_v0(self.lookahead_points, self._v_ref, self._a_ref,
+                                            self.max_override, self.tolerance_mm,
+                                            self.lookahead_mm)  # fmt: skip
+        self._obs_spec = self.layout.kernel_spec
         self._reward_spec = reward_spec_v0(self.reward_weights)
         self.observation_space = spaces.Box(self._obs_spec.low, self._obs_spec.high, dtype=np.float32)
+        #: Entry name → indices in the observation (as Gymnasium's MuJoCo envs' observation_structure).
+        self.observation_structure = {name: idx.tolist() for name, idx in self.layout.structure.items()}
         self._start()
 
     def _configure(self, args: Any) -> None:
@@ -450,3 +422,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def close(self) -> None:
         if self._renderer is not None:
             self._renderer.close()
+
+
+FeedrateEnv.__doc__ = (FeedrateEnv.__doc__ or "").replace(
+    "{observation_table}", markdown_table(OBSERVATION_V0).replace("\n", "\n    "))

@@ -17,26 +17,31 @@ from cnc_gym.envs.feedrate import FeedrateEnv
 from cnc_gym.envs.fused import F_SIGNAL, SIG_PLANNER_OVERRIDE, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V1, ObservationLayout, markdown_table
 from cnc_gym.envs.options import (
+    ACTION_MODES,
     CONTROL_PERIOD,
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
+    DEFAULT_LOOKAHEAD_MM,
+    DEFAULT_LOOKAHEAD_POINTS,
     DIALECT,
     MAX_EPISODE_STEPS,
     RENDER_MODES,
+    WEIGHT_WHY,
     EnvArguments,
     MachineRef,
 )
 from cnc_gym.envs.planner_prior import PlannerPrior
 from cnc_gym.envs.randomization import DomainRandomization, MachineDraw, draw_machine
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import MachineConfig
+from cnc_gym.machine import DEFAULT_MACHINE, MachineConfig
 from cnc_gym.plant import make_plant
-from cnc_gym.programs import ProgramLike
+from cnc_gym.programs import DEFAULT_DIALECT, ProgramLike
 from cnc_gym.toolpath import Toolpath
 
 #: Action modes of v1: v0's two, and ``residual`` (the agent scales the deployable planner's knob).
-ACTION_MODES_V1 = ("override", "feed", "residual")
+ACTION_MODES_V1 = (*ACTION_MODES, "residual")
 #: Where v1's argument errors come from, in their messages.
 SOURCE_V1 = "FeedrateEnv-v1"
-_WHY = "keeps every step's reward finite, and a return within float32 precision."
 
 
 @dataclass(frozen=True)
@@ -44,13 +49,13 @@ class RankingReward:
     """Weights of Feedrate-v1's reward (the class docstring of :class:`FeedrateEnvV1`). Any values in range
     keep the ranking rules: time and finish weights are positive, the others non-negative."""
 
-    time: float = number(1.0, 0, 1e6, low_open=True, why=_WHY,
+    time: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
                          doc="w_time: the episode's time cost per nominal time (> 0: faster ranks higher)")
-    progress: float = number(1.0, 0, 1e6, why=_WHY,
+    progress: float = number(1.0, 0, 1e6, why=WEIGHT_WHY,
                              doc="w_progress: paid over the whole path, in proportion to progress")
-    violation: float = number(10.0, 0, 1e6, why=_WHY,
+    violation: float = number(10.0, 0, 1e6, why=WEIGHT_WHY,
                               doc="w_violation: per mm of path cut with contour error over tolerance")
-    finish: float = number(1.0, 0, 1e6, low_open=True, why=_WHY,
+    finish: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
                            doc="w_finish: paid, with the step budget's time, on a violation-free finish")
 
 
@@ -75,10 +80,10 @@ class EnvArgumentsV1:
     """The keyword arguments of ``cnc_gym/Feedrate-v1``, checked."""
 
     programs: tuple[ProgramLike, ...] | None = declared(spec_of(EnvArguments, "programs"))
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str | Path | MachineConfig = declared(MACHINE_V1, "vmc-small")  # noqa: RUF009
-    action_mode: str = declared(ACTION_MODE_V1, "override")
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str | Path | MachineConfig = declared(MACHINE_V1, DEFAULT_MACHINE)  # noqa: RUF009
+    action_mode: str = declared(ACTION_MODE_V1, DEFAULT_ACTION_MODE)
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RankingReward | None = section(  # noqa: RUF009
         RankingReward, optional=True, doc="reward weights (null: the defaults)")
     randomize: DomainRandomization | None = section(  # noqa: RUF009
@@ -86,8 +91,8 @@ class EnvArgumentsV1:
     residual_range: float = declared(RESIDUAL_RANGE, 2.0)
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
-    lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), 24.0)
-    lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), 8)
+    lookahead_mm: float = declared(spec_of(EnvArguments, "lookahead_mm"), DEFAULT_LOOKAHEAD_MM)
+    lookahead_points: int = declared(spec_of(EnvArguments, "lookahead_points"), DEFAULT_LOOKAHEAD_POINTS)
     units: str | None = declared(spec_of(EnvArguments, "units"))
     setup: Any = declared(spec_of(EnvArguments, "setup"))  # noqa: RUF009
     plant: str | None = declared(spec_of(EnvArguments, "plant"))
@@ -239,17 +244,17 @@ class FeedrateEnvV1(FeedrateEnv):
     def __init__(
         self,
         programs: Sequence[ProgramLike] | ProgramLike | None = None,
-        dialect: str = "gsk25i",
-        machine: str | Path | MachineConfig = "vmc-small",
-        action_mode: str = "override",
-        control_period_s: float = 0.01,
+        dialect: str = DEFAULT_DIALECT,
+        machine: str | Path | MachineConfig = DEFAULT_MACHINE,
+        action_mode: str = DEFAULT_ACTION_MODE,
+        control_period_s: float = DEFAULT_CONTROL_PERIOD_S,
         reward: dict | RankingReward | None = None,
         randomize: dict | DomainRandomization | None = None,
         residual_range: float = 2.0,
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
-        lookahead_mm: float = 24.0,
-        lookahead_points: int = 8,
+        lookahead_mm: float = DEFAULT_LOOKAHEAD_MM,
+        lookahead_points: int = DEFAULT_LOOKAHEAD_POINTS,
         units: str | None = None,
         plant: str | None = None,
         contour_rule: str = "cuts",

@@ -1,6 +1,7 @@
-"""``cnc_gym/Feedrate-v1``'s observation, declared once: each entry's name, source, formula, scale, bounds.
+"""The Feedrate envs' observations, declared once: each entry's name, source, formula, scale, bounds.
 
-:data:`OBSERVATION_V1` is the one declaration. From it come
+:data:`OBSERVATION_V1` (Feedrate-v1 and -v2) and :data:`OBSERVATION_V0` (Feedrate-v0) are the declarations.
+From each come
 
 - the Box bounds (:meth:`ObservationLayout.low`, :meth:`ObservationLayout.high`);
 - the compiled step's :class:`~cnc_gym.envs.fused.ObservationSpec` (:attr:`ObservationLayout.kernel_spec`),
@@ -11,7 +12,7 @@
   equal to it);
 - ``observation_structure``: entry name → the indices it occupies, as Gymnasium's MuJoCo envs expose it.
 
-No entry identifies a position in a particular program (v0's ``progress = s / L`` is gone): every entry
+In v1 no entry identifies a position in a particular program (v0's ``progress = s / L`` is gone): every entry
 is the machine's state, the path ahead within a fixed horizon, the controller's limits there, the
 machine's own parameters, whether the episode is still violation-free (so a value function can tell
 whether the finish bonus is still to be had), or what the deployable planner would command now. A policy
@@ -69,6 +70,35 @@ class Entry:
     saturate: float = 0.0
 
 
+#: Feedrate-v0's observation (unchanged since it was published: its ``progress`` is ``s / L``). The
+#: bounds keep the types v0 was published with (int, and 0.0 below the look-ahead blocks) so that its
+#: kernel spec is the same record, ``repr`` included.
+OBSERVATION_V0: tuple[Entry, ...] = (
+    Entry("speed", "signal", "speed", "v / v_ref", "path speed", 0, 2, "v_ref"),
+    Entry("accel", "signal", "accel", "a / a_ref", "path acceleration", -2, 2, "a_ref"),
+    Entry("override", "signal", "override", "override / max_override", "applied override", 0, 1, "ov_max"),
+    Entry("knob", "signal", "knob", "a", "last action (knob)", -1, 1),
+    Entry("following_error", "signal", "following_error", "‖reference − actual‖ / 1 mm", "following error",
+          0, 5, "following_ref"),
+    Entry("contour_error_step", "signal", "contour_error_step", "e_max / tol",
+          "contour error, max over the last step", 0, 5, "tol"),
+    Entry("contour_error_now", "signal", "contour_error_now", "e / tol", "contour error, last servo sample",
+          0, 5, "tol"),
+    Entry("progress", "signal", "path_fraction", "s / L", "progress (path length done)", 0, 1),
+    Entry("distance_to_stop", "signal", "distance_to_stop", "min(d_stop / H, 1)",
+          "distance to the next stop", 0, 1, "H"),
+    Entry("speed_limit", "lookahead", "speed_limit", "v_lim / v_ref",
+          "speed limit ahead: the controller's limit at N points over the next H mm", 0.0, 2,
+          "v_ref"),
+    Entry("curvature", "lookahead", "curvature", "κ L_k / (1 + κ L_k)", "curvature ahead (L_k = 10 mm)",
+          0.0, 1, saturate=CURVATURE_LENGTH_MM),
+    Entry("turn_angle", "lookahead", "turn_angle", "θ / π",
+          "turning angle ahead, the largest junction turn in each bin", 0.0, 1,
+          "pi"),
+    Entry("programmed_feed", "lookahead", "programmed_feed", "F / 60 / v_ref", "programmed feed ahead",
+          0.0, 2, "v_ref"),
+)  # fmt: skip
+
 OBSERVATION_V1: tuple[Entry, ...] = (
     Entry("speed", "signal", "speed", "v / v_ref", "path speed of the reference", 0, 2, "v_ref"),
     Entry("accel", "signal", "accel", "a / a_ref", "path acceleration of the reference", -2, 2, "a_ref"),
@@ -103,8 +133,8 @@ OBSERVATION_V1: tuple[Entry, ...] = (
 )  # fmt: skip
 
 
-__all__ = ["MACHINE_QUANTITIES", "OBSERVATION_V1", "Entry", "ObservationLayout", "kernel_signal",
-           "machine_quantities", "markdown_table"]  # fmt: skip
+__all__ = ["MACHINE_QUANTITIES", "OBSERVATION_V0", "OBSERVATION_V1", "Entry", "ObservationLayout",
+           "kernel_signal", "machine_quantities", "markdown_table"]  # fmt: skip
 
 
 def kernel_signal(entry: Entry) -> str:

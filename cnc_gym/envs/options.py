@@ -37,9 +37,9 @@ from cnc_gym.config import (
     shown,
 )
 from cnc_gym.errors import CncGymError, ConfigError
-from cnc_gym.machine import INPUT_UNITS, PLANT_BACKENDS
+from cnc_gym.machine import DEFAULT_MACHINE, INPUT_UNITS, PLANT_BACKENDS
 from cnc_gym.motion import ActionError
-from cnc_gym.programs import PROGRAM_TYPES, ProgramLike
+from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig
@@ -55,7 +55,14 @@ RENDER_MODES = (None, "rgb_array")
 #: Where argument errors come from, in their messages.
 SOURCE = "FeedrateEnv"
 
-_WEIGHT_WHY = "keeps every step's reward finite, and a return within float32 precision."
+#: Defaults of the arguments every env version shares (the envs' signatures and the config schemas use them).
+DEFAULT_ACTION_MODE = "override"
+DEFAULT_CONTROL_PERIOD_S = 0.01
+DEFAULT_LOOKAHEAD_MM = 24.0
+DEFAULT_LOOKAHEAD_POINTS = 8
+
+#: Why a reward weight is bounded (every reward weight of every version).
+WEIGHT_WHY = "keeps every step's reward finite, and a return within float32 precision."
 
 
 @dataclass(frozen=True)
@@ -65,20 +72,20 @@ class RewardWeights:
     (Δp: path progress in the step as a fraction of the program's length; see FeedrateEnv's docstring).
     """
 
-    time: float = number(10.0, 0, 1e6, why=_WEIGHT_WHY,
+    time: float = number(10.0, 0, 1e6, why=WEIGHT_WHY,
                          doc="w_time: the whole episode's time cost at nominal (100 %) speed")  # fmt: skip
-    contour_error: float = number(0.05, 0, 1e6, why=_WEIGHT_WHY,
+    contour_error: float = number(0.05, 0, 1e6, why=WEIGHT_WHY,
                                   doc="w_error: per step, per (e_max / tol)²")  # fmt: skip
     violation: float = number(
-        1.0, 0, 1e6, why=_WEIGHT_WHY, doc="w_violation: per control step whose contour error exceeds tol")
+        1.0, 0, 1e6, why=WEIGHT_WHY, doc="w_violation: per control step whose contour error exceeds tol")
     error_ratio_cap: float = number(
-        10.0, 0, 1e6, low_open=True, why=_WEIGHT_WHY,
+        10.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
         doc="c: e_max / tol is capped here so that one bad step cannot dominate a return")  # fmt: skip
     # Paid per unit of path progress; sums to exactly this over a finished episode whatever the policy,
     # so it leaves the undiscounted ranking of finishing policies unchanged but pays for progress when it
     # happens, which a discounted (γ < 1) learner needs to see that slow costs (see docs/env.md).
     progress: float = number(
-        10.0, 0, 1e6, why=_WEIGHT_WHY, doc="w_progress: paid over the whole path, in proportion to progress")
+        10.0, 0, 1e6, why=WEIGHT_WHY, doc="w_progress: paid over the whole path, in proportion to progress")
 
 
 # Specs shared by the env's arguments, the task file and the training config's env section.
@@ -180,23 +187,25 @@ class EnvArguments:
         optional=True, doc="programs of the episodes: built-in names, `.nc` paths, G-code text, "
                            "`ProgramText` or interpreted `Program`s (None: the default task's set)",
     ))  # fmt: skip
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), "vmc-small")  # noqa: RUF009
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str | Path | MachineConfig = declared(MachineRef(doc="the machine"), DEFAULT_MACHINE)  # noqa: RUF009
     units: str | None = declared(UNITS)
     setup: Any = declared(SETUP)  # noqa: RUF009
     plant: str | None = declared(Choice(choices=(None, *PLANT_BACKENDS), doc="servo plant: `lti` (the exact "
                                         "linear model) or `mujoco` (masses, friction, compliance, backlash); "
                                         "null: the machine preset's `plant.backend`"))  # fmt: skip
-    action_mode: str = declared(ACTION_MODE, "override")
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    action_mode: str = declared(ACTION_MODE, DEFAULT_ACTION_MODE)
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: Any = declared(RewardRef(doc="reward weights (None: configs/tasks/default.yaml)"))  # noqa: RUF009
     max_episode_steps: int | None = declared(MAX_EPISODE_STEPS)
     render_mode: str | None = declared(Choice(choices=RENDER_MODES, doc="`rgb_array` draws frames"))
     lookahead_mm: float = number(
-        24.0, 0, 10_000, low_open=True, unit="mm", doc="how far ahead the observation's look-ahead reads",
+        DEFAULT_LOOKAHEAD_MM, 0, 10_000, low_open=True, unit="mm",
+        doc="how far ahead the observation's look-ahead reads",
         why="the look-ahead scans the path this far every step; no machine brakes over 10 m.")  # fmt: skip
     lookahead_points: int = number(
-        8, 1, 256, integer=True, doc="look-ahead points in the observation (4 entries each)",
+        DEFAULT_LOOKAHEAD_POINTS, 1, 256, integer=True,
+        doc="look-ahead points in the observation (4 entries each)",
         why="the observation has 9 + 4 × this entries.")  # fmt: skip
     contour_rule: str = declared(CONTOUR_RULE, "cuts")
 

@@ -20,6 +20,8 @@ from cnc_gym.envs.options import (
     ACTION_MODE,
     ACTION_MODES,
     CONTROL_PERIOD,
+    DEFAULT_ACTION_MODE,
+    DEFAULT_CONTROL_PERIOD_S,
     DIALECT,
     MACHINE_NAME,
     PROGRAM_NAMES,
@@ -27,6 +29,8 @@ from cnc_gym.envs.options import (
     RewardWeights,
 )
 from cnc_gym.errors import ConfigError
+from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.programs import DEFAULT_DIALECT
 
 __all__ = ["ACTION_MODES", "RewardWeights", "TaskConfig", "load_task", "resolve_reward", "reward_from_dict",
            "task_from_dict", "task_path"]  # fmt: skip
@@ -40,10 +44,10 @@ class TaskConfig:
     description: str = text("", max_length=4096, doc="one paragraph for people")
     programs: tuple[str, ...] = declared(PROGRAM_NAMES, default_factory=lambda: ("circle", "star", "freeform",
                                                                                   "pocket"))  # fmt: skip
-    dialect: str = declared(DIALECT, "gsk25i")
-    machine: str = declared(MACHINE_NAME, "vmc-small")
-    action_mode: str = declared(ACTION_MODE, "override")
-    control_period_s: float = declared(CONTROL_PERIOD, 0.01)
+    dialect: str = declared(DIALECT, DEFAULT_DIALECT)
+    machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
+    action_mode: str = declared(ACTION_MODE, DEFAULT_ACTION_MODE)
+    control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RewardWeights = section(RewardWeights, doc="reward weights (docs/env.md, Reward)")  # noqa: RUF009
     source: str = "<defaults>"
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
-from cnc_gym.gcode.dialect import DIALECT_MODULES, Dialect, get_dialect
+from cnc_gym.gcode.dialect import DEFAULT_DIALECT, DIALECT_MODULES, Dialect, get_dialect
 from cnc_gym.gcode.dialect import calculator_input as calculator_dialect
 from cnc_gym.gcode.interpreter import Interpreter
 from cnc_gym.gcode.program import Program
@@ -51,7 +51,7 @@ def _skip_switches(block_skip) -> frozenset[int]:
     return switches
 
 
-def read_program(text: str, *, dialect: str | Dialect = "gsk25i", file: str = "<program>") -> Program:
+def read_program(text: str, *, dialect: str | Dialect = DEFAULT_DIALECT, file: str = "<program>") -> Program:
     """Read phase only: text → blocks (syntax errors raise ProgramError)."""
     spec = get_dialect(dialect)
     return spec.language.reader(spec, None).read(text, file)
@@ -60,7 +60,7 @@ def read_program(text: str, *, dialect: str | Dialect = "gsk25i", file: str = "<
 def interpret(
     text: str,
     *,
-    dialect: str | Dialect = "gsk25i",
+    dialect: str | Dialect = DEFAULT_DIALECT,
     file: str = "<program>",
     machine: MachineConfig | None = None,
     block_skip: frozenset[int] = frozenset(),
@@ -171,7 +171,7 @@ def _setup(machine: MachineConfig | None, setup) -> SetupConfig | None:
 def interpret_file(
     path: str | Path,
     *,
-    dialect: str | Dialect = "gsk25i",
+    dialect: str | Dialect = DEFAULT_DIALECT,
     machine: MachineConfig | None = None,
     block_skip: frozenset[int] = frozenset(),
     **options,
@@ -235,11 +235,11 @@ def _macro_calls(value: MacroCalls | dict | None, dialect: Dialect) -> MacroCall
 
 def _reserved_codes(dialect: Dialect) -> dict[str, set[int]]:
     """Codes that cannot call a program: G00 and the macro-call codes (G65-G67); the stop and call M codes
-    (M00-M02, M30, M98, M99). Found in the dialect's tables by action."""
+    (M00-M02, M30, M98, M99, the Haas M97). Found in the dialect's tables by action."""
     g_codes = {key // 10 for key, spec in dialect.gcodes.items() if key % 10 == 0 and (
         spec.action in ("macro_call", "modal_call_cancel") or (spec.action == "motion" and spec.value == 0))}
-    m_codes = {key // 10 for key, spec in dialect.mcodes.items()
-               if spec.action in ("stop", "subprogram_call", "subprogram_return")}  # fmt: skip
+    calls = ("stop", "subprogram_call", "subprogram_return", "local_subprogram_call")
+    m_codes = {key // 10 for key, spec in dialect.mcodes.items() if spec.action in calls}
     return {"g_macro": g_codes, "m_macro": m_codes, "m_sub": m_codes}
 
 

@@ -30,6 +30,7 @@ action, never a literal GSK number.
 from __future__ import annotations
 
 import importlib
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
@@ -133,13 +134,15 @@ class Seam(Protocol):
 Action = Callable[..., None]
 
 
-@dataclass
+@dataclass(slots=True)
 class BlockPlan:
     """One block after its codes are looked up, as the block checks see it (:attr:`BlockHooks.checks`).
 
     ``by_group``: modal group → the block's code of that group; ``motion``: the block's motion code (or
     None); ``axis_owner``: the one-shot code that takes the axis words (G04 X, G92 …) or None; ``items``:
-    the codes to execute (a check may remove one it takes over); ``values``: the block's words.
+    the codes to execute (a check may remove one it takes over); ``values``: the block's words; ``keys``:
+    modal group → the key of the block's code of that group; ``g53``: the block holds G53. The
+    interpreter's check phase builds it (``Interpreter.check_block``) and its execute phase runs it.
     """
 
     by_group: dict[int, CodeSpec]
@@ -147,6 +150,8 @@ class BlockPlan:
     axis_owner: CodeSpec | None
     items: list[CodeSpec]
     values: dict[str, float]
+    keys: dict[int, int] = field(default_factory=dict)
+    g53: bool = False
 
 
 @dataclass
@@ -492,13 +497,32 @@ class Dialect:
     def error(self, message: str, code: str, *, alarm: str | int | None = None, column: int | None = None,
               ) -> ProgramError:  # fmt: skip
         """A ProgramError with this dialect's alarm number for ``code`` or for the condition ``alarm``
-        (:meth:`alarm`); file and line are filled in later."""
+        (:meth:`alarm`); file and line are filled in later. In a dialect whose manual is not the family's
+        (:attr:`family_manual` empty), the family's section citations are left out of the message."""
+        if not self.family_manual and "GSK 25i §" in message:
+            message = drop_family_citations(message)
         return ProgramError(message, code=code, alarm=self.alarm(code, alarm), column=column)
 
 
+#: A citation of the Fanuc family's manual (the GSK 25i programming manual) inside a message.
+_CITATION = re.compile(r"GSK 25i §\d+(?:\.\d+)*")
+
+
+def drop_family_citations(message: str) -> str:
+    """``message`` without its "GSK 25i §n" citations (and the brackets or separators left empty), for a
+    dialect whose own manual numbers its sections otherwise: "(GSK 25i §3.2.5)" goes, "(only jumps out
+    of one are allowed, GSK 25i §3.7.5)" keeps its words."""
+    out = re.sub(r"\s*\(" + _CITATION.pattern + r"\)", "", message)
+    out = re.sub(r"[,;]\s*" + _CITATION.pattern + r"(?=\))", "", out)
+    out = re.sub(_CITATION.pattern + r"(?:[:;]\s*|\s+)", "", out)
+    return _CITATION.sub("", out)
+
+
+#: The dialect a program is read in when none is named (``interpret``, ``cnc-gym``, the envs, ``bench``).
+DEFAULT_DIALECT = "gsk25i"
 #: Dialect names → module under cnc_gym.gcode.dialects, or None where not built yet.
 DIALECT_MODULES: dict[str, str | None] = {
-    "gsk25i": "cnc_gym.gcode.dialects.gsk25i",
+    DEFAULT_DIALECT: "cnc_gym.gcode.dialects.gsk25i",
     "fanuc": "cnc_gym.gcode.dialects.fanuc",
     "h4cm": "cnc_gym.gcode.dialects.h4cm",
     "syntec": "cnc_gym.gcode.dialects.syntec",

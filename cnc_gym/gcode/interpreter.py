@@ -31,7 +31,7 @@ from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.settings import FlowOptions, ToolMeasurement, skip_signal_surfaces
 from cnc_gym.gcode.setup import apply_setup
 from cnc_gym.gcode.state import CompensationState, State
-from cnc_gym.machine import INPUT_UNITS
+from cnc_gym.machine import INCH_MM, INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
 
 if TYPE_CHECKING:
@@ -39,7 +39,6 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.program import Block, Program
     from cnc_gym.machine import MachineConfig, SetupConfig
 
-INCH_MM = 25.4
 #: Pseudo-spec of an axis-only block: the modal motion.
 IMPLICIT_MOTION = CodeSpec("(modal motion)", -1, "motion", None, step="motion")
 
@@ -238,17 +237,42 @@ class Interpreter:
         self._execute_general(gs or (), ms or (), values, block)
 
     def _execute_general(self, gs, ms, values: dict[str, float], block: Block) -> None:
-        dialect = self.dialect
-        st = self.state
-        items: list[CodeSpec] = []
-        by_group: dict[int, CodeSpec] = {}
-        keys: dict[int, int] = {}
-        axis_owner: CodeSpec | None = None
-        motion_spec: CodeSpec | None = None
-        g53 = False
+        """A block off the hot path: read → check (:meth:`check_block` builds its plan) → execute
+        (:meth:`execute_plan`)."""
+        self.execute_plan(self.check_block(gs, ms, values), block)
+
+    # ------------------------------------------------------------------ check: a block's plan
+    def check_block(self, gs, ms, values: dict[str, float]) -> BlockPlan:
+        """The block's codes looked up and checked (unknown or unimplemented codes, one code per modal
+        group, who owns the axis words, which words the block may hold) into the plan that
+        :meth:`execute_plan` runs; nothing of the state changes here."""
+        plan = BlockPlan({}, None, None, [], values)
+        self._plan_g_codes(gs, plan)
+        if ms:
+            self._plan_m_codes(ms, plan)
+        # Who owns the axis words: a one-shot code that uses them (G04 X, G10, G52, G92) or the motion;
+        # the dialect's block checks may hand them to another code (a pattern taking the cycle's).
+        for check in self._checks:
+            plan.axis_owner = check(self, plan)
+        axis_owner, motion_spec = plan.axis_owner, plan.motion
+        if axis_owner is not None and motion_spec is not None and not self._axis_letters.isdisjoint(values):
+            raise self.error(f"{axis_owner.name} and {motion_spec.name} both use the axis words of the block",
+                             "axis-word-conflict")  # fmt: skip
+        if plan.g53 and motion_spec is not None and motion_spec.value not in (0, 1):
+            raise self.error(f"G53 positions at rapid; it cannot be combined with {motion_spec.name}",
+                             "bad-combination")  # fmt: skip
+        allowed = self._allowed_words(plan)
+        if not values.keys() <= allowed:
+            self._reject_words(values, allowed, axis_owner)
+        return plan
+
+    def _plan_g_codes(self, gs, plan: BlockPlan) -> None:
+        """The block's G codes into ``plan``: one per modal group, the motion, G53, the axis-word owner."""
+        gcodes = self.dialect.gcodes
+        by_group, keys, items = plan.by_group, plan.keys, plan.items
         for number in gs:
             key = gkey(number)
-            spec = dialect.gcodes.get(key)
+            spec = gcodes.get(key)
             if spec is None:
                 raise self.error(f"unknown G code {code_name('G', key)}", "unknown-code")
             if not spec.implemented:
@@ -260,82 +284,83 @@ class Interpreter:
             by_group[spec.group] = spec
             keys[spec.group] = key
             if spec.action == "motion":
-                motion_spec = spec
+                plan.motion = spec
             elif spec.action == "machine_move":
-                g53 = True
+                plan.g53 = True
             if spec.uses_axes:
-                axis_owner = spec
+                plan.axis_owner = spec
             items.append(spec)
-        if ms:
-            if len(ms) > dialect.max_m_per_block:
-                raise self.error(f"{len(ms)} M codes in one block (at most {dialect.max_m_per_block})",
-                                 "too-many-m-codes")  # fmt: skip
-            m_seen: dict[str, CodeSpec] = {}
-            for number in ms:
-                key = gkey(number)
-                spec = dialect.mcodes.get(key)
-                if spec is None:
-                    spec = self._machine_function(key)  # or the error of an unknown M code
-                if not spec.implemented:
-                    raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented",
-                                     alarm=dialect.addresses["M"].alarm)  # fmt: skip
-                for group, members in dialect.m_groups.items():
-                    if key in members:
-                        if group in m_seen:
-                            raise self.error(f"{m_seen[group].name} and {spec.name} conflict (both {group} "
-                                             "codes)", "group-conflict")  # fmt: skip
-                        m_seen[group] = spec
-                items.append(spec)
 
-        # Who owns the axis words: a one-shot code that uses them (G04 X, G10, G52, G92) or the motion;
-        # the dialect's block checks may hand them to another code (a pattern taking the cycle's).
-        has_axes = not self._axis_letters.isdisjoint(values)
-        if self._checks:
-            from_checks = BlockPlan(by_group, motion_spec, axis_owner, items, values)
-            for check in self._checks:
-                from_checks.axis_owner = check(self, from_checks)
-            axis_owner = from_checks.axis_owner
-            motion_spec = from_checks.motion
-        if axis_owner is not None and motion_spec is not None and has_axes:
-            raise self.error(f"{axis_owner.name} and {motion_spec.name} both use the axis words of the block",
-                             "axis-word-conflict")  # fmt: skip
-        if g53 and motion_spec is not None and motion_spec.value not in (0, 1):
-            raise self.error(f"G53 positions at rapid; it cannot be combined with {motion_spec.name}",
-                             "bad-combination")  # fmt: skip
+    def _plan_m_codes(self, ms, plan: BlockPlan) -> None:
+        """The block's M codes into ``plan``: how many a block may hold, one per M group, machine
+        functions."""
+        dialect = self.dialect
+        if len(ms) > dialect.max_m_per_block:
+            raise self.error(f"{len(ms)} M codes in one block (at most {dialect.max_m_per_block})",
+                             "too-many-m-codes")  # fmt: skip
+        m_seen: dict[str, CodeSpec] = {}
+        for number in ms:
+            key = gkey(number)
+            spec = dialect.mcodes.get(key)
+            if spec is None:
+                spec = self._machine_function(key)  # or the error of an unknown M code
+            if not spec.implemented:
+                raise self.error(f"{spec.name} is not implemented: {spec.note}", "not-implemented",
+                                 alarm=dialect.addresses["M"].alarm)  # fmt: skip
+            for group, members in dialect.m_groups.items():
+                if key in members:
+                    if group in m_seen:
+                        raise self.error(f"{m_seen[group].name} and {spec.name} conflict (both {group} "
+                                         "codes)", "group-conflict")  # fmt: skip
+                    m_seen[group] = spec
+            plan.items.append(spec)
+
+    def _allowed_words(self, plan: BlockPlan) -> frozenset:
+        """The addresses the planned block may hold: the base words, the axis words of whoever owns them,
+        and the words of each of its codes (the modal motion's when the block has no code of its own)."""
         base = self._base_words
-        modal_item = st.modal_item
+        axis_owner = plan.axis_owner
+        modal_item = self.state.modal_item
         if axis_owner is not None:
             allowed = base | self._axis_letters | frozenset(axis_owner.words)
             if axis_owner.action in self._rotary_owner_actions:
                 allowed = allowed | self._rotary_letters
-        elif g53:
+        elif plan.g53:
             allowed = base | self._axis_letters | self._rotary_letters
-        elif motion_spec is None and modal_item is not None:
+        elif plan.motion is None and modal_item is not None:
             allowed = base | self._axis_letters | frozenset(modal_item.words)
         else:
-            allowed = self._allowed_with_motion[keys[1] if motion_spec is not None else st.motion_key]
-        for spec in items:
+            motion_key = plan.keys[1] if plan.motion is not None else self.state.motion_key
+            allowed = self._allowed_with_motion[motion_key]
+        for spec in plan.items:
             if spec.words:
                 allowed = allowed | frozenset(spec.words)
-        if not values.keys() <= allowed:
-            self._reject_words(values, allowed, axis_owner)
+        return allowed
 
-        # Modal table (raw), then the items in the dialect's order of execution.
-        for modal_group, modal_key in keys.items():
+    # ------------------------------------------------------------------ execute: run a checked plan
+    def execute_plan(self, plan: BlockPlan, block: Block) -> None:
+        """Run a plan :meth:`check_block` made: the modal table (raw), then the items (codes, words with
+        actions, the modal motion of a block without a code of its own) in the dialect's order."""
+        st = self.state
+        values = plan.values
+        for modal_group, modal_key in plan.keys.items():
             if modal_group > 0:
                 st.modal[modal_group] = modal_key
+        motion_spec = plan.motion
         if motion_spec is not None:
-            st.motion_key = keys[motion_spec.group]
+            st.motion_key = plan.keys[motion_spec.group]
+        items = plan.items
         for letter, spec in self._word_specs:
             if letter in values:
                 items.append(spec)
-        if motion_spec is None and axis_owner is None and not g53:
+        if motion_spec is None and plan.axis_owner is None and not plan.g53:
+            modal_item = st.modal_item
             items.append(modal_item if modal_item is not None else IMPLICIT_MOTION)
         order = self._order
         items.sort(key=lambda s: order[s.step])
         st.block_words = block.words
         st.block = block
-        st.g53 = g53
+        st.g53 = plan.g53
         actions = self._actions
         for spec in items:
             actions[spec.action](self, spec, values)

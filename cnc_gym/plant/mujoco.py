@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import AXIS_NAMES, MachineConfig
+from cnc_gym.machine import AXIS_NAMES, DEFAULT_MACHINE, MachineConfig
 from cnc_gym.plant.mjcf import axis_names, machine_mjcf
 from cnc_gym.plant.servo import checked_kv_scale, plant_machine, reference_rows
 
@@ -154,7 +154,7 @@ class MujocoPlant:
 
     def __init__(
         self,
-        machine: MachineConfig | str = "vmc-small",
+        machine: MachineConfig | str = DEFAULT_MACHINE,
         n_envs: int = 1,
         kv_scale: np.ndarray | None = None,
     ) -> None:

@@ -39,7 +39,7 @@ from numba import njit
 from scipy.linalg import expm
 
 from cnc_gym.errors import ConfigError
-from cnc_gym.machine import AXIS_NAMES, MachineConfig, load_machine
+from cnc_gym.machine import AXIS_NAMES, DEFAULT_MACHINE, MachineConfig, load_machine
 
 #: Longest block of ticks handled by one lifted matrix; longer steps are split into chunks.
 MAX_LIFTED_TICKS = 64
@@ -277,7 +277,7 @@ class ServoPlant:
 
     def __init__(
         self,
-        machine: MachineConfig | str = "vmc-small",
+        machine: MachineConfig | str = DEFAULT_MACHINE,
         n_envs: int = 1,
         kv_scale: np.ndarray | None = None,
     ) -> None:

@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Literal, NamedTuple
 
 from cnc_gym.errors import ConfigError
+from cnc_gym.gcode.dialect import DEFAULT_DIALECT
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
 from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import Toolpath
@@ -132,7 +133,7 @@ def resolve_program(program: str | os.PathLike | ProgramText) -> ProgramSource:
     return ProgramSource("text", _text_name(program), text=program)
 
 
-def load_program(program: ProgramLike, dialect: str = "gsk25i",
+def load_program(program: ProgramLike, dialect: str = DEFAULT_DIALECT,
                  machine: MachineConfig | None = None, *,
                  max_blocks: int = DEFAULT_MAX_BLOCKS, units: str | None = None) -> Program:  # fmt: skip
     """Interpret a program once and cache it. Returns :class:`Program` ``(name, toolpath)``.
@@ -203,6 +204,7 @@ def _load_text(text: str, name: str, dialect: str, machine: MachineConfig | None
 
 __all__ = [
     "BUILTIN_PROGRAMS",
+    "DEFAULT_DIALECT",
     "PROGRAMS_DIR",
     "PROGRAM_SUFFIXES",
     "PROGRAM_TYPES",

@@ -23,6 +23,7 @@ from operator import itemgetter
 import numpy as np
 
 from cnc_gym.frozen import FrozenDict
+from cnc_gym.machine import INCH_MM
 from cnc_gym.toolpath.kinds import PLANE_AXES, PLANE_AXES_TABLE, Plane, SegmentKind, SegmentMode
 from cnc_gym.toolpath.nurbs import NurbsCurve
 
@@ -177,7 +178,7 @@ class Toolpath:
         """The rotary travel as the feed counts it: degrees as mm, or as inch in a G20 program (so 25.4 mm
         per degree there), mm. F covers √(length² + rotary_length²) per minute (§3.2.2)."""
         inch = (self.modes & SegmentMode.INCH_PROGRAM) != 0
-        return self.rotary_travel * np.where(inch, 25.4, 1.0)
+        return self.rotary_travel * np.where(inch, INCH_MM, 1.0)
 
     @property
     def path_feed(self) -> np.ndarray:

@@ -10,7 +10,15 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
-from cnc_gym.envs.feedrate import SCALAR_FEATURES, ActionError, FeedrateEnv, nominal_time_s
+from cnc_gym.envs.feedrate import (
+    SCALAR_FEATURES,
+    ActionError,
+    FeedrateEnv,
+    nominal_time_s,
+    observation_layout_v0,
+)
+from cnc_gym.envs.fused import LOOKAHEAD_ROWS, ObservationSpec
+from cnc_gym.envs.observation import OBSERVATION_V0, markdown_table
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.programs import BUILTIN_PROGRAMS, ProgramText, load_program
 
@@ -88,6 +96,36 @@ def test_spaces():
     assert env.observation_space.shape == (9 + 4 * 6,)
     assert env.observation_space.dtype == np.float32
     assert np.all(np.isfinite(env.observation_space.low)) and np.all(np.isfinite(env.observation_space.high))
+
+
+def test_observation_is_declared_once_with_structure_and_table():
+    env = FeedrateEnv(programs=["circle"], lookahead_points=6)
+    structure = env.observation_structure
+    assert list(structure) == [e.name for e in OBSERVATION_V0]
+    assert [i for idx in structure.values() for i in idx] == list(range(9 + 4 * 6))
+    for entry in OBSERVATION_V0:
+        assert np.all(env.observation_space.low[structure[entry.name]] == entry.low)
+        assert np.all(env.observation_space.high[structure[entry.name]] == entry.high)
+    assert tuple(name for name, idx in structure.items() if len(idx) == 1) == SCALAR_FEATURES
+    assert [e.quantity for e in OBSERVATION_V0 if e.source == "lookahead"] == list(LOOKAHEAD_ROWS)
+    assert markdown_table(OBSERVATION_V0) in (env.__doc__ or "").replace("\n    ", "\n")
+
+
+def test_observation_spec_is_the_published_one():
+    # Feedrate-v0's compiled observation, as published (a registered env's observation never changes):
+    # written out here, not from OBSERVATION_V0, so an edit of the declaration that changes it fails.
+    v, a, ov, tol, h = 250.0, 3000.0, 2.0, 0.02, 24.0
+    published = ObservationSpec(
+        (("speed", 1 / v, 0, 2), ("accel", 1 / a, -2, 2), ("override", 1 / ov, 0, 1), ("knob", 1.0, -1, 1),
+         ("following_error", 1.0, 0, 5), ("contour_error_step", 1 / tol, 0, 5),
+         ("contour_error_now", 1 / tol, 0, 5), ("path_fraction", 1.0, 0, 1),
+         ("distance_to_stop", 1 / h, 0, 1)),
+        (("speed_limit", "none", 0.0, 1 / v, 0.0, 2), ("curvature", "saturate", 10.0, 1.0, 0.0, 1),
+         ("turn_angle", "none", 0.0, 1 / math.pi, 0.0, 1), ("programmed_feed", "none", 0.0, 1 / v, 0.0, 2)),
+        8,
+    )  # fmt: skip
+    spec = observation_layout_v0(8, v, a, ov, tol, h).kernel_spec
+    assert spec == published and repr(spec) == repr(published)
 
 
 # ------------------------------------------------------------------------------------------- episodes

@@ -81,6 +81,19 @@ def test_every_argument_of_the_env_is_in_the_schema():
         env_arguments(speed=1)
 
 
+@pytest.mark.parametrize("version", ["v0", "v1"])
+def test_the_env_signature_defaults_are_the_schema_defaults(version):
+    import inspect
+
+    from cnc_gym.envs.feedrate_v1 import EnvArgumentsV1, FeedrateEnvV1
+
+    env, schema = {"v0": (FeedrateEnv, EnvArguments), "v1": (FeedrateEnvV1, EnvArgumentsV1)}[version]
+    defaults = {name: p.default for name, p in inspect.signature(env.__init__).parameters.items()
+                if name != "self"}  # fmt: skip
+    declared = {f.name: f.default for f in dataclasses.fields(schema) if f.default is not dataclasses.MISSING}
+    assert {name: defaults[name] for name in declared} == declared
+
+
 def test_a_bad_machine_config_object_is_refused_by_key():
     machine = MachineConfig(name="py", controller=ControllerConfig(post_filter_s=1e6), source="<python>")
     with pytest.raises(ConfigError, match=r"^<python>: controller\.post_filter_s must be in \[0, 0\.5\] s"):

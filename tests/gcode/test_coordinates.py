@@ -128,7 +128,7 @@ def test_worked_example_x29_g29_in_g91_is_relative_to_the_intermediate_point():
     # G29 X30 (G91): via (30, 30) to X = 30 + 30 = 60 ("the vector of X axial direction is 60"). Y is not
     # commanded but has an intermediate point: it returns to it and has no further move amount, so the
     # end is the manual's printed (60, 30) (§3.3.3's "other axes remain still" is the minority reading; see
-    # transforms.do_g29 and tests/gcode/test_manual_examples.py).
+    # transforms.do_g29 and tests/gcode/dialects/gsk25i/test_manual_examples.py).
     out = ends("G90 G0 X10 Y10\nG91 G28 X20 Y20\nG29 X30\n")
     assert out == [[10.0, 10.0, 0.0], [30.0, 30.0, 0.0], [0.0, 0.0, 0.0], [30.0, 30.0, 0.0],
                    [60.0, 30.0, 0.0]]  # fmt: skip

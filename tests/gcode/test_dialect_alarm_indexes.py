@@ -2,7 +2,8 @@
 and true, by one set of checks for all. They fail when a row is missing, doubled or out of order, when a test
 a row names disappears or is renamed, when a code in "Our code" is raised nowhere in cnc_gym/gcode, when a
 row's codes and alarms differ from its minimal programs (``CASES`` of
-``tests/gcode/<dialect>/test_<dialect>_alarms.py``), or when the counts under the table no longer add up.
+``tests/gcode/dialects/<dialect>/test_<dialect>_alarms.py``), or when the counts under the table no longer
+add up.
 
 What differs per manual is how it numbers its alarms, and so which number "Our alarm" must carry: one small
 rule per dialect (``CARRIED``). GSK 25i's index has its own tests in ``test_alarms_index.py``; the examples
@@ -64,7 +65,7 @@ def _doc(dialect: str):
 
 
 def _alarm_tests(dialect: str) -> str:
-    return f"tests/gcode/{dialect}/test_{dialect}_alarms.py"
+    return f"tests/gcode/dialects/{dialect}/test_{dialect}_alarms.py"
 
 
 @functools.cache

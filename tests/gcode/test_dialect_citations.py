@@ -28,3 +28,32 @@ def test_the_units_switch_cites_the_gsk_manual_only_in_the_gsk_dialect(dialect):
     err = program_error("G21\nG01 X1. F100.\nG20\n", dialect=dialect)
     assert err.code == "units-switch" and err.line == 3
     assert ("GSK 25i §3.2.19" in err.message) == (dialect == "gsk25i"), err.message
+
+
+#: Errors of the family's language parts whose messages cite a GSK 25i section: DO loops nested too
+#: deep, END without DO, a jump into a DO range (§3.7.5).
+FAMILY_RULES = [
+    pytest.param("WHILE[1 LT 2] DO1\nWHILE[1 LT 2] DO2\nWHILE[1 LT 2] DO3\nWHILE[1 LT 2] DO1\n"
+                 "END1\nEND3\nEND2\nEND1\nM30\n", "§3.7.5", id="do-nesting"),
+    pytest.param("G01 X1. F100.\nEND1\nM30\n", "§3.7.5", id="end-without-do"),
+    pytest.param("GOTO5\nWHILE[#1 LT 2] DO1\nN5 #1=#1+1\nEND1\nM30\n", "§3.7.5", id="goto-into-do"),
+]
+
+
+@pytest.mark.parametrize(("text", "section"), FAMILY_RULES)
+@pytest.mark.parametrize("dialect", ["gsk25i", "fanuc", "syntec"])
+def test_family_rules_cite_gsk_sections_only_in_the_gsk_dialect(text, section, dialect):
+    err = program_error(text, dialect=dialect)
+    assert (f"GSK 25i {section}" in err.message) == (dialect == "gsk25i"), err.message
+    if dialect != "gsk25i":
+        assert "§" not in err.message and "()" not in err.message and " ," not in err.message, err.message
+
+
+def test_dropping_a_citation_keeps_the_rest_of_the_message():
+    from cnc_gym.gcode.dialect import drop_family_citations as drop
+
+    assert drop("no M codes in NURBS mode (GSK 25i §3.2.5)") == "no M codes in NURBS mode"
+    assert drop("a jump into a DO range (only jumps out are allowed, GSK 25i §3.7.5)") == (
+        "a jump into a DO range (only jumps out are allowed)")
+    assert drop("a G06.2 block (GSK 25i §3.2.5: only X Y Z)") == "a G06.2 block (only X Y Z)"
+    assert drop("start (GSK 25i §3.2.5; in G91 write G06.2 X0)") == "start (in G91 write G06.2 X0)"

@@ -22,7 +22,7 @@ def _doc(dialect: str):
 
 
 def _golden_tests(dialect: str) -> str:
-    return f"tests/gcode/{dialect}/test_{dialect}_examples.py"
+    return f"tests/gcode/dialects/{dialect}/test_{dialect}_examples.py"
 
 
 @functools.cache

@@ -12,7 +12,7 @@ import pytest
 from cnc_gym.errors import ConfigError
 from cnc_gym.gcode import interpret
 from cnc_gym.machine import machine_from_dict
-from tests.gcode.test_fanuc import HAAS_INCH
+from tests.gcode.dialects.fanuc.test_fanuc import HAAS_INCH
 
 INCH = machine_from_dict({"power_on_units": "inch"}, source="inch.yaml")
 METRIC = machine_from_dict({"power_on_units": "mm"}, source="metric.yaml")

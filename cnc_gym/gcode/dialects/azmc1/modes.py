@@ -10,13 +10,13 @@ from typing import TYPE_CHECKING
 from cnc_gym.gcode.canonical import scaling_stage
 from cnc_gym.gcode.dialects.azmc1.options import data, options
 from cnc_gym.gcode.lang.fanuc.modal import spindle_speed as family_spindle_speed
+from cnc_gym.machine import INCH_MM
 from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Seam
 
-INCH_MM = 25.4
 #: M codes whose S word is theirs, not a spindle speed (§4.2: the PLC parameter index).
 _S_TAKERS = frozenset({25.0, 112.0})
 _SPINDLE_ACTIONS = frozenset({"spindle", "spindle_2", "spindle_orient"})

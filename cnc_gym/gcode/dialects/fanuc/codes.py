@@ -33,10 +33,8 @@ POWER_ON = family.POWER_ON
 M_CODES = table([
     *family.M_CODES,
     m(19, "spindle_orient", step="spindle"),  # oriented spindle stop, recorded
-    # Haas's local subprogram call: a call, not a machine function, so never run as one.
-    m(97, "not_implemented", step="stop", words="PL", implemented=False,
-      note="the Haas local subprogram call M97 P<N number> is not built: write the section as an O program "
-           "called with M98"),
+    # Haas's local subprogram call: the blocks from N<P> of the same program up to M99, L times.
+    m(97, "local_subprogram_call", step="stop", words="PL"),
 ])
 
 #: M codes that shop programs for such machines often carry but whose meaning the machine builder sets,

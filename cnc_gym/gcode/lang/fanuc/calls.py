@@ -82,6 +82,9 @@ class CallConvention:
     def _sequence_number(self, value: float | None, what: str) -> int:
         raise NotImplementedError
 
+    def _find_in(self, unit: Unit, number: int, after: int) -> int:
+        raise NotImplementedError
+
     def subprogram_call(self, values: dict) -> None:
         """M98 P[count]oooo [L count]: called after the block's other commands (§3.7.6)."""
         if "P" not in values:
@@ -149,6 +152,34 @@ class CallConvention:
                 by_code=by_code or caller.by_code,
             )
         )
+
+    def local_subprogram_call(self, values: dict) -> None:
+        """Haas M97 P<n> [L count]: the blocks from sequence number Nn of the running program on, up to an
+        M99, as a subprogram (called after the block's other commands, like M98), L times."""
+        if "P" not in values:
+            raise self.dialect.error("M97 needs P (the sequence number where the local subprogram starts)",
+                                     "bad-call")  # fmt: skip
+        number = self._sequence_number(values["P"], "M97 P")
+        count = values.get("L", 1.0)
+        if count != int(count) or not 0 <= count <= 9999:
+            raise self.dialect.error(f"M97 L{count:g}: the repeat count is 0..9999", "bad-call")
+        self.core.state.flow_request = ("local", number, int(count))
+
+    def _push_local_subprogram(self, number: int, count: int, pc: int) -> int:
+        """Enter the local subprogram at Nn of the running unit (M97): a frame over the same blocks from
+        that block on; its M99 returns after the calling block."""
+        if count == 0:
+            return pc  # L0: not called
+        if self._sub_depth >= self.dialect.max_subprogram_nesting:
+            raise self.dialect.error(
+                f"M97 P{number}: subprograms nest at most {self.dialect.max_subprogram_nesting} levels",
+                "nesting",
+            )
+        caller = self.frames[-1]
+        start = self._find_in(caller.unit, number, caller.unit.start)
+        self._sub_depth += 1
+        return self._enter(Frame(caller.unit.local(start), pc, count - 1, macro=False, subprogram=True,
+                                 modal_limit=caller.modal_limit, by_code=caller.by_code))  # fmt: skip
 
     def subprogram_return(self, values: dict) -> None:
         """M99 [P n]: back to the caller (to its block Nn with P); in the main program see FlowOptions."""
@@ -359,6 +390,11 @@ def subprogram_call(core: Seam, spec: CodeSpec, values: dict) -> None:
     core.state.flow.subprogram_call(values)
 
 
+def local_subprogram_call(core: Seam, spec: CodeSpec, values: dict) -> None:
+    """M97 (Haas): a local subprogram call, run after the block's other commands."""
+    core.state.flow.local_subprogram_call(values)
+
+
 def subprogram_return(core: Seam, spec: CodeSpec, values: dict) -> None:
     """M99: back to the caller."""
     core.state.flow.subprogram_return(values)
@@ -376,4 +412,5 @@ def modal_call_cancel(core: Seam, spec: CodeSpec, values: dict | None = None) ->
 
 
 ACTIONS = {"subprogram_call": subprogram_call, "subprogram_return": subprogram_return,
+           "local_subprogram_call": local_subprogram_call,
            "macro_call": macro_call, "modal_call_cancel": modal_call_cancel}  # fmt: skip

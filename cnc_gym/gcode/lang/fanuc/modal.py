@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from cnc_gym.gcode.lang.fanuc import compensation, corners, least_units, transforms
+from cnc_gym.machine import INCH_MM
 from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:
@@ -19,7 +20,6 @@ if TYPE_CHECKING:
     from cnc_gym.gcode.codes import CodeSpec
     from cnc_gym.gcode.dialect import Seam
 
-INCH_MM = 25.4
 #: Path modes (group 15) → the flags every segment carries for the controller.
 PATH_MODES = {
     "exact_stop": SegmentMode.EXACT_STOP,

@@ -102,6 +102,16 @@ class Unit:
     def name(self) -> str:
         return "the main program" if self.number is None else f"O{self.number:04d}"
 
+    def local(self, start: int) -> Unit:
+        """The same program from block ``start`` on: the unit a local subprogram call (Haas M97) runs."""
+        out = Unit.__new__(Unit)
+        out.blocks, out.number, out.end = self.blocks, self.number, self.end
+        out.file, out.file_index = self.file, self.file_index
+        out.start = start
+        out._loops = None
+        out._sequence = None
+        return out
+
     def loops(self, dialect: Dialect) -> LoopTable:
         if self._loops is None:
             self._loops = LoopTable(self, dialect.max_loop_nesting, dialect)

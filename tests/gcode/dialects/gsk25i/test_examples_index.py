@@ -101,6 +101,6 @@ def test_counts_under_the_table_add_up():
 
 def test_every_new_example_test_is_indexed():
     """Each test in test_manual_examples.py is there for an example, so the table must name it."""
-    path = "tests/gcode/test_manual_examples.py"
+    path = "tests/gcode/dialects/gsk25i/test_manual_examples.py"
     named = {name for row in rows() for p, name in NODE.findall(row["Status"]) if p == path}
     assert set(module_tests(path)) <= named, sorted(set(module_tests(path)) - named)

@@ -11,7 +11,8 @@ Conditions the manual says are alarms and the interpreter does not check are the
 at the end ("missing check" in the index): when the check is built they XPASS, strict xfail turns that into a
 failure, and the marker and the index row are updated together.
 
-tests/gcode/test_alarms_index.py checks that every key of ``CASES`` is a row of the index that cites
+tests/gcode/dialects/gsk25i/test_alarms_index.py checks that every key of ``CASES`` is a row of the index
+that cites
 ``test_manual_alarm`` (and the other way round), and that the row's codes and alarms are those of its cases.
 
 Sections (§n) are those of the GSK 25i programming manual.

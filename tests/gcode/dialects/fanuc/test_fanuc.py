@@ -132,10 +132,53 @@ def test_machine_m_codes_are_machine_functions_listed_on_the_tool_path():
     assert dict(listed) == {0: "M20", 1: "M88"}
     assert program_error("M123\n", dialect=FANUC, machine=shop).message.endswith("(machine_functions.strict)")
     assert dict(interpret("M20\n", machine=shop).machine_functions) == {0: "M20"}  # the GSK 25i too
-    # The GSK 25i refuses the others; Haas's M97 (a call) is refused by name everywhere.
+    # The GSK 25i refuses the others, and its M97 (a macro interrupt) by name; Haas's M97 is a call
+    # (below), never a machine function.
     assert program_error("M88\n").message == "unknown M code M88"
-    err = program_error("M97 P100\n", dialect=FANUC)
+    err = program_error("M97 P100\n")
     assert err.code == "not-implemented" and "M97" in err.message
+
+
+# --------------------------------------------------------------------------- Haas M97 local subprograms
+LOCAL = """G90 G00 X0 Y0 Z5.
+G01 Z-1. F200.
+M97 P100 L2
+G00 X50. Y0.
+M97 P100{third}
+G00 Z5.
+M30
+N100 G91 G01 X10. F500.
+Y10.
+X-10.
+Y-10.
+G90
+M99
+"""
+
+
+def test_m97_runs_the_local_subprogram_l_times_and_returns_after_the_call():
+    ends = [r["end"][:2] for r in records(LOCAL.format(third=""), dialect=FANUC) if r["kind"] == "line"]
+    square = [[10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]]
+    shifted = [[x + 50.0, y] for x, y in square]
+    assert ends == [[0.0, 0.0], *square, *square, *shifted]
+    tp = interpret(LOCAL.format(third=""), dialect=FANUC)
+    assert list(tp.line[tp.kind == 0][-2:]) == [4, 6]  # the rapids after each call: the calls returned
+    # L0 does not call; a local subprogram may call another one.
+    zero = records(LOCAL.format(third=" L0"), dialect=FANUC)
+    assert len([r for r in zero if r["kind"] == "line"]) == 9
+    nested = "M97 P10\nM30\nN10 G91 G01 X1. F100.\nM97 P20\nM99\nN20 Y1.\nM99\n"
+    assert [r["end"][:2] for r in records(nested, dialect=FANUC)] == [[1.0, 0.0], [1.0, 1.0]]
+
+
+@pytest.mark.parametrize(("text", "code", "words"), [
+    ("M97\nM30\n", "bad-call", "needs P"),
+    ("M97 P200\nM30\nN100 X1.\nM99\n", "sequence-not-found", "N200"),
+    ("M97 P100 L10000\nM30\nN100 X1.\nM99\n", "bad-call", "repeat count"),
+    ("M97 P1\nM30\nN1 M97 P1\nM99\n", "nesting", "nest at most"),
+])
+def test_m97_errors_are_one_line(text, code, words):
+    err = program_error(text, dialect=FANUC)
+    assert err.code == code and words in err.message, err.message
 
 
 # --------------------------------------------------------------------------- abbreviated macro words
@@ -329,7 +372,7 @@ def test_the_haas_style_shop_example_traces_with_its_setup():
 
     from cnc_gym.gcode import interpret_file
 
-    root = Path(__file__).resolve().parents[2] / "examples"
+    root = Path(__file__).resolve().parents[4] / "examples"
     tp = interpret_file(root / "haas_shop.nc", dialect=FANUC, setup=root / "shop_setup.yaml")
     assert tp.notices == ()
     assert list(tp.machine_functions.values()) == ["M88", "M89"]  # (M08/M09 are the dialect's own)

@@ -10,7 +10,7 @@ import pytest
 from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 
-_PATH = Path(__file__).resolve().parents[2] / "scripts" / "bench_macros.py"
+_PATH = Path(__file__).resolve().parents[4] / "scripts" / "bench_macros.py"
 
 
 @pytest.fixture(scope="module")

@@ -421,7 +421,7 @@ def test_g39_outside_offset_mode_is_an_error():
         # +y tangentially, r = 5 on its centre side. Both joins are smooth, one vector each, so the single
         # pair cannot be corrected (§3.5.3). (A half-circle dip R 5 with r = 6 used to be here: its 90°
         # corners give two vectors each and the manual's correction now runs the tool straight over it,
-        # tests/gcode/test_compensation_interference.py.)
+        # tests/gcode/lang/fanuc/test_compensation_interference.py.)
         ("G10 L12 P1 R5\nG00 X-20\nG01 G41 D1 X-10 Y0 F100\nX10\nG03 X11 Y1 I0 J1\nG01 Y10\nG40 X0\n",
          "comp-interference", 41),
         # T6: a groove narrower than the tool diameter (§3.5.3): 4 mm wide, r = 3.

@@ -12,7 +12,7 @@ from cnc_gym.cli import main
 from cnc_gym.envs import FeedrateEnv
 from cnc_gym.machine import load_machine
 
-ROOT = Path(__file__).resolve().parents[3]
+ROOT = Path(__file__).resolve().parents[4]
 #: A small H4C-M program: integer words in µm, U/V incremental in G90, a G65 loop.
 PROGRAM = "G00 X0 Y0\nG65 L01 P#1 A0\nN1 G01 U2000 F600\nV2000\nG65 L02 P#1 A#1 B1\nG65 L84 P1 A#1 B2\nM02\n"
 

@@ -6,7 +6,8 @@ when a row is missing, doubled or out of order; when a test the table names disa
 "missing check" row's test is no longer a strict xfail (the check was built: update the row) or a strict xfail
 is not indexed; when a rejected code is not refused by name; when a code in "Our code" is raised nowhere in
 cnc_gym/gcode; when a row's codes and alarms differ from the minimal programs of
-tests/gcode/test_manual_alarms.py's ``CASES``; or when the counts under the table no longer add up. Test nodes
+tests/gcode/dialects/gsk25i/test_manual_alarms.py's ``CASES``; or when the counts under the table no
+longer add up. Test nodes
 are found by parsing the test files (no pytest subprocess, no imports of test modules).
 
 Sections (§n) are those of the GSK 25i programming manual.
@@ -25,7 +26,7 @@ from cnc_gym.errors import ProgramError
 from cnc_gym.gcode import interpret
 
 INDEX = ROOT / "docs" / "gsk25i_alarms.md"
-MANUAL_ALARMS = "tests/gcode/test_manual_alarms.py"
+MANUAL_ALARMS = "tests/gcode/dialects/gsk25i/test_manual_alarms.py"
 CASES_TEST = "test_manual_alarm"
 # The row ids of the conditions the manual states in its text, then the alarm-list rows.
 CONDITIONS = [f"{prefix}{n}" for prefix, count in (("E", 11), ("M", 23), ("D", 7), ("C", 10), ("T", 12),
