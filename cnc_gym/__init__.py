@@ -1,6 +1,6 @@
 """cnc-gym: Gymnasium environments for CNC feed-rate control on real G-code.
 
-Importing the package registers ``cnc_gym/Feedrate-v0``, ``-v1`` and ``-v2`` with Gymnasium: at once
+Importing the package registers ``cnc_gym/Feedrate-v0``, ``-v1``, ``-v2`` and ``-v3`` with Gymnasium: at once
 when Gymnasium is already imported, otherwise the moment it is (a post-import hook on
 ``gymnasium.envs.registration``). So ``import cnc_gym`` stays cheap for interpreter-only users:
 ``cnc-gym trace`` never loads Gymnasium, numba or scipy. The env module itself is imported by
@@ -34,11 +34,16 @@ def _register() -> None:
     if "cnc_gym/Feedrate-v2" not in registry:
         register(id="cnc_gym/Feedrate-v2", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
                  kwargs={"contour_rule": "path"})  # fmt: skip
+    # v3 is v2 with the live deployable planner (planner version 2) behind its planner entry and residual
+    # mode; v1 and v2 keep the frozen planner version 1.
+    if "cnc_gym/Feedrate-v3" not in registry:
+        register(id="cnc_gym/Feedrate-v3", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
+                 kwargs={"contour_rule": "path", "planner_version": 2})  # fmt: skip
     import warnings
 
-    # v0 and v1 stay supported beside v2 (the benchmark runs its baselines in v0, with the path meter; the
-    # published models act in v1): no "out of date" warning.
-    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[01] is out of date",
+    # v0, v1 and v2 stay supported beside v3 (the benchmark runs its baselines in v0, with the path meter;
+    # the published models act in v1): no "out of date" warning.
+    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[012] is out of date",
                             category=DeprecationWarning)  # fmt: skip
 
 

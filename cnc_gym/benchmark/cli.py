@@ -1,7 +1,8 @@
 """``cnc-gym bench``: benchmark policies on a suite split or on your own programs.
 
     cnc-gym bench [--suite NAME | --programs FILE ...] [--split train|val|test] [--policy P ...]
-                  [--per-family N] [--seeds 0,1,2] [--machine M] [--dialect D] [--units mm|inch]
+                  [--per-family N] [--seeds 0,1,2] [--track nominal|perturbed|mujoco]
+                  [--machine M] [--plant lti|mujoco] [--dialect D] [--units mm|inch]
                   [--setup FILE] [--calculator-input] [--max-time SECONDS] [--max-cpu SECONDS]
                   [--workers N] [--ray [ADDRESS]]
                   [--json OUT.jsonl] [--plot DIR] [--no-progress]
@@ -20,6 +21,7 @@ import sys
 from typing import Any
 
 EPILOG = """policies: constant:<x>, classical (deployable planner), oracle (simulate-and-correct, an oracle),
+nominal-oracle (the oracle simulating the nominal machine, run on the track's plant),
 bound (the time-optimal reference, no episode), a trained model (.zip), or module:callable.
 Default: the default suite's test split with constant:1.0, classical, oracle and bound.
 Score: 100 x the mean over programs of bound/cycle for finished episodes with no path cut over
@@ -44,8 +46,12 @@ def register(subparsers: Any) -> argparse.ArgumentParser:
                        help="at most N programs of each family of the split (a quick look)")  # fmt: skip
     bench.add_argument("--seeds", default="0", help="comma-separated episode seeds (default 0)")
     bench.add_argument("--machine", default=None, help="machine preset or YAML (default: the suite's)")
+    bench.add_argument("--track", default="nominal", choices=("nominal", "perturbed", "mujoco"),
+                       help="the plant the episodes run on: the nominal machine (default), its MuJoCo plant, "
+                            "or that plant with parameters drawn per program (docs/benchmark.md, Tracks)")
     bench.add_argument("--plant", metavar="lti|mujoco", default=None,
-                       help="servo plant for the episodes (default: the machine preset's)")
+                       help="servo plant for the episodes on the nominal track (default: the machine "
+                            "preset's)")
     bench.add_argument("--dialect", default=None,
                        help=f"program dialect (default: the suite's, {DEFAULT_DIALECT})")  # fmt: skip
     bench.add_argument("--units", choices=INPUT_UNITS, default=None,
@@ -107,6 +113,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from cnc_gym.machine import DEFAULT_MACHINE, machine_with_options
     from cnc_gym.rollout import announce_compiling
 
+    if args.plant is not None and args.track != "nominal":
+        raise CncGymError(f"--plant sets the nominal track's plant; the {args.track} track has its own")
     if args.workers < 1:
         raise CncGymError(f"--workers must be at least 1, got {args.workers}")
     seeds = _seeds(args.seeds)
@@ -148,6 +156,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
             config.machine = machine_with_options(config.machine, args.setup, args.calculator_input)
     config.workers = args.workers
     config.plant = args.plant
+    config.track = args.track
     config.limits = limits
     if args.ray is not None:
         config.use_ray, config.ray_address = True, args.ray or None
@@ -183,7 +192,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
     left_out = len(config.programs) - ran
     machine_name = records[0]["machine"] if records else config.machine
     counted = f"{ran} programs" + (f" ({left_out} left out)" if left_out else "")
-    print(f"{title}: {counted}, machine {machine_name}, seeds {','.join(map(str, seeds))}, "
+    print(f"{title}: {counted}, track {config.track}, machine {machine_name}, "
+          f"seeds {','.join(map(str, seeds))}, "
           f"commit {records[0]['commit'] if records else '?'}")  # fmt: skip
     print(format_table(summarize(records)), flush=True)
     cut = sum(1 for r in records if r.get("stopped_by") in ("max_time", "max_cpu"))

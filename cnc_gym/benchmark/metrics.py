@@ -27,11 +27,13 @@ from typing import Any
 #: Version of what a record's metrics mean; records of different versions never share a leaderboard.
 #: 1 (records without the key): contour error on cutting moves only. 2: the programmed-path contour meter
 #: (``contour_rule`` "path": rapids the reference has left are part of the path) and bound version 2.
-RECORD_VERSION = 2
+#: 3: the deployable planner's version 2 behind ``classical`` (it holds tolerance), and the benchmark
+#: track (``track``, ``plant_parameters``) in every record.
+RECORD_VERSION = 3
 
 #: Record keys every ``cnc-gym bench`` JSON Lines record carries (more may follow).
 RECORD_KEYS = (
-    "record_version", "contour_rule",
+    "record_version", "contour_rule", "track", "plant_parameters",
     "suite", "suite_version", "suite_sha256", "split", "program", "program_sha256", "family", "tier",
     "machine", "machine_sha256", "plant", "dialect", "units", "policy", "seed", "commit", "cnc_gym_version",
     "bound_s", "bound_version", "cycle_time_s", "time_ratio", "violation_length_mm", "violation_time_s",

@@ -10,7 +10,20 @@ from cnc_gym.errors import CncGymError
 
 
 def write_plots(records: list[dict[str, Any]], folder: str | Path, title: str = "") -> list[Path]:
-    """``pareto.png`` and ``families.png`` in ``folder``; returns their paths."""
+    """``pareto.png`` and ``families.png`` in ``folder`` for the nominal track's records, and
+    ``pareto-<track>.png``, ``families-<track>.png`` for each other track's (records of different tracks
+    never share a plot); returns their paths."""
+    from cnc_gym.benchmark.leaderboard import track_of
+
+    paths = []
+    for track in sorted({track_of(r) for r in records}, key=lambda t: (t != "nominal", t)):
+        suffix = "" if track == "nominal" else f"-{track}"
+        label = title if track == "nominal" else f"{title} ({track} track)".strip()
+        paths += _write_track_plots([r for r in records if track_of(r) == track], Path(folder), label, suffix)
+    return paths
+
+
+def _write_track_plots(records: list[dict[str, Any]], folder: Path, title: str, suffix: str) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -43,7 +56,7 @@ def write_plots(records: list[dict[str, Any]], folder: str | Path, title: str = 
     ax.set_ylabel("mean time ratio (cycle ÷ time-optimal bound), finished episodes")
     ax.set_title(title or "policies: time against contour violations")
     ax.grid(alpha=0.3)
-    paths.append(_save(fig, folder / "pareto.png"))
+    paths.append(_save(fig, folder / f"pareto{suffix}.png"))
     plt.close(fig)
 
     # Per-family bars of the primary score.
@@ -60,7 +73,7 @@ def write_plots(records: list[dict[str, Any]], folder: str | Path, title: str = 
     ax.set_title((title + ": " if title else "") + "score per family")
     ax.legend(fontsize=8, ncols=min(len(policies), 4), loc="upper center", bbox_to_anchor=(0.5, -0.08))
     ax.grid(axis="y", alpha=0.3)
-    paths.append(_save(fig, folder / "families.png"))
+    paths.append(_save(fig, folder / f"families{suffix}.png"))
     plt.close(fig)
     return paths
 

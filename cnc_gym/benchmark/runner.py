@@ -96,6 +96,8 @@ class BenchConfig:
     units: str | None = None
     #: Servo plant backend (``lti`` or ``mujoco``); None: the machine preset's.
     plant: str | None = None
+    #: The benchmark track (:mod:`cnc_gym.benchmark.tracks`): which plant the episodes run on.
+    track: str = "nominal"
     suite: str | None = None
     suite_version: int | None = None
     suite_sha256: str | None = None
@@ -270,10 +272,19 @@ def _limited_episode(env: Any, policy: Any, seed: int, limits: EpisodeLimits) ->
 def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int], machine: str,
                   dialect: str, units: str | None, bound: dict[str, Any], common: dict[str, Any],
                   progress: bool, plant: str | None = None,
-                  limits: EpisodeLimits | None = None) -> list[dict[str, Any]]:  # fmt: skip
-    """Every seed of one (program, policy): records in seed order."""
+                  limits: EpisodeLimits | None = None,
+                  track: str = "nominal") -> list[dict[str, Any]]:  # fmt: skip
+    """Every seed of one (program, policy): records in seed order. On a track other than ``nominal`` the
+    episodes run on the track's plant for this program, and planners that plan on the nominal machine
+    (``classical``, ``nominal-oracle``) are given it (:mod:`cnc_gym.benchmark.tracks`)."""
+    from cnc_gym.benchmark.tracks import track_plant
+    from cnc_gym.machine import load_machine, with_plant_backend
+
     limits = limits or EpisodeLimits()
-    base = {**common, "split": program.split, "program": program.name,
+    nominal = with_plant_backend(load_machine(machine), plant)
+    true_machine, plant_parameters = track_plant(track, nominal, str(common.get("suite")), program.name)
+    base = {**common, "plant": true_machine.plant.backend, "plant_parameters": plant_parameters,
+            "split": program.split, "program": program.name,
             "program_sha256": _sha(program.text), "family": program.family, "tier": program.tier,
             "policy": policy_spec, "bound_s": bound["total_s"], "bound_version": bound["version"],
             "cut_length_mm": program.cut_length_mm}  # fmt: skip
@@ -292,7 +303,7 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
     # policy_env).
     from cnc_gym.policies import make_policy
 
-    policy = env = None
+    policy = env = planning_env = None
     try:
         for seed in seeds:
             if policy is None or env is None or "{seed}" in policy_spec:
@@ -302,8 +313,21 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                 if policy is None or "{seed}" in policy_spec:
                     policy = make_policy(policy_spec.replace("{seed}", str(seed)),
                                          progress=None if progress else False)  # fmt: skip
-                env = policy_env(policy, programs=[program.source()], dialect=dialect, machine=machine,
-                                 units=units, plant=plant)  # fmt: skip
+                if track == "nominal":
+                    env = policy_env(policy, programs=[program.source()], dialect=dialect, machine=machine,
+                                     units=units, plant=plant)  # fmt: skip
+                else:
+                    env = policy_env(policy, programs=[program.source()], dialect=dialect,
+                                     machine=true_machine, units=units)  # fmt: skip
+                    if hasattr(policy, "nominal_machine"):
+                        policy.nominal_machine = nominal
+                    if hasattr(env.unwrapped, "plan_on"):  # the env's own planner entries and residual mode
+                        env.unwrapped.plan_on(nominal)
+                    if getattr(policy, "plans_on_nominal", False):
+                        if planning_env is None:
+                            planning_env = policy_env(policy, programs=[program.source()], dialect=dialect,
+                                                      machine=nominal, units=units)  # fmt: skip
+                        policy.nominal_env = planning_env
             info, total_return, steps, finished, stopped_by = _limited_episode(env, policy, seed, limits)
             if stopped_by == MAX_CPU:  # cut at any point of a step: the env starts afresh for the next seed
                 with contextlib.suppress(Exception):
@@ -324,8 +348,9 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
                             "score": episode_score(finished, length, ratio),
                             "total_return": total_return, "reference": False})  # fmt: skip
     finally:
-        if env is not None:
-            env.close()
+        for opened in (env, planning_env):
+            if opened is not None:
+                opened.close()
     return records
 
 
@@ -473,8 +498,11 @@ def run_bench(config: BenchConfig, *, on_records: RecordsHook | None = None,
             for seed in config.seeds if "{seed}" in spec else [None]:
                 make_policy(spec.replace("{seed}", str(seed)), progress=False)
     mach = with_plant_backend(load_machine(config.machine), config.plant)
+    from cnc_gym.benchmark.tracks import check_track
+
     common = {"record_version": RECORD_VERSION, "contour_rule": CONTOUR_RULE,
-              "suite": config.suite or "user", "suite_version": config.suite_version,
+              "track": check_track(config.track), "suite": config.suite or "user",
+              "suite_version": config.suite_version,
               "suite_sha256": config.suite_sha256, "machine": mach.name,
               "machine_sha256": machine_digest(mach), "plant": mach.plant.backend,
               "dialect": config.dialect, "units": config.units, "commit": current_commit(),
@@ -514,7 +542,7 @@ def run_bench(config: BenchConfig, *, on_records: RecordsHook | None = None,
             raise CncGymError("nothing to benchmark: no program has a bound (each one's reason is above)")
         episode_tasks = [functools.partial(_episode_task, program, spec, tuple(config.seeds), config.machine,
                                            config.dialect, config.units, bound, common, serial_progress,
-                                           config.plant, config.limits)
+                                           config.plant, config.limits, config.track)
                          for program, bound in kept for spec in config.policies]  # fmt: skip
 
         def episodes_done(index: int, records: list[dict[str, Any]]) -> None:

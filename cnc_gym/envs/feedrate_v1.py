@@ -68,6 +68,9 @@ MACHINE_V1 = MachineRef(doc="the machine (of every episode, or the centre of the
 RESIDUAL_RANGE = Number(low=1, high=10, low_open=True, doc="residual mode: the override is the planner's "
                         "× residual_range^a", why="a factor above 1; 10 spans 0.1 to 10 times the "
                         "planner's override.")  # fmt: skip
+PLANNER_VERSION_V1 = Number(low=1, high=2, integer=True, doc="the deployable planner's version behind the "
+                            "`planner_override` entry and the residual mode: 1 (v1, v2; frozen), 2 (v3)",
+                            why="the planner versions there are (motion.planner.PLANNERS).")  # fmt: skip
 ACTION_MODE_V1 = Choice(choices=ACTION_MODES_V1, doc="what the action sets: the override knob, the feed, or "
                         "a factor on the deployable planner's override")
 
@@ -94,6 +97,7 @@ class EnvArgumentsV1:
     setup: Any = declared(spec_of(EnvArguments, "setup"))  # noqa: RUF009
     plant: str | None = declared(spec_of(EnvArguments, "plant"))
     contour_rule: str = declared(spec_of(EnvArguments, "contour_rule"), "cuts")
+    planner_version: int = declared(PLANNER_VERSION_V1, 1)
 
 
 def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
@@ -202,11 +206,13 @@ class FeedrateEnvV1(FeedrateEnv):
 
     v0's (``programs``, ``dialect``, ``machine``, ``control_period_s``, ``max_episode_steps``,
     ``render_mode``, ``lookahead_mm``, ``lookahead_points``, ``units``, ``setup``, ``plant``,
-    ``contour_rule``: ``"cuts"`` for v1, ``"path"`` for v2), and ``action_mode``
+    ``contour_rule``: ``"cuts"`` for v1, ``"path"`` for v2 and v3), and ``action_mode``
     (with ``residual``),
     ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
     (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
-    ``residual_range``. ``reset(seed=..., options={{"program": ...}})`` as v0.
+    ``residual_range``, ``planner_version`` (the deployable planner behind ``planner_override`` and the
+    ``residual`` mode: 1 for v1 and v2, 2 for v3; :data:`cnc_gym.motion.planner.PLANNERS`).
+    ``reset(seed=..., options={{"program": ...}})`` as v0.
 
     ## Info
 
@@ -215,6 +221,12 @@ class FeedrateEnvV1(FeedrateEnv):
 
     ## Version History
 
+    - v3: v2 with the live deployable planner (planner version 2, ``planner_version=2``): the
+      ``planner_override`` observation entry and info key, and the knob the ``residual`` mode scales, are
+      the ``classical`` baseline's of today, which holds the contour tolerance on every program of
+      ``cnc-bench-v1`` (docs/baselines.md). Dynamics, reward and the other entries are v2's. v1 and v2
+      keep planner version 1, frozen bit for bit, so that their published results and the models trained
+      on them reproduce.
     - v2: v1 with the programmed-path contour meter (``contour_rule="path"``): the rapids the reference
       has left are part of the path the tool is measured against, so the in-position residual at a
       rapid → cut junction (about 4 µm on vmc-small, at every cut that follows a rapid) is no longer
@@ -247,13 +259,15 @@ class FeedrateEnvV1(FeedrateEnv):
         plant: str | None = None,
         contour_rule: str = "cuts",
         setup: Any = None,
+        planner_version: int = 1,
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                                 control_period_s=control_period_s, reward=reward, randomize=randomize,
                                 residual_range=residual_range, max_episode_steps=max_episode_steps,
                                 render_mode=render_mode, lookahead_mm=lookahead_mm,
                                 lookahead_points=lookahead_points, units=units, plant=plant,
-                                contour_rule=contour_rule, setup=setup)  # fmt: skip
+                                contour_rule=contour_rule, setup=setup,
+                                planner_version=planner_version)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
         self.reward_weights = args.reward or RankingReward()
@@ -275,7 +289,8 @@ class FeedrateEnvV1(FeedrateEnv):
         self.observation_space = spaces.Box(self.layout.low, self.layout.high, dtype=np.float32)
         #: Entry name → indices in the observation (as Gymnasium's MuJoCo envs' observation_structure).
         self.observation_structure = {name: idx.tolist() for name, idx in self.layout.structure.items()}
-        self._planner = PlannerPrior(self.control_period_s, self.max_override)
+        self.planner_version = int(args.planner_version)
+        self._planner = PlannerPrior(self.control_period_s, self.max_override, self.planner_version)
         #: The current episode's machine draw and feed scale (None and 1 without randomisation).
         self.episode_draw: MachineDraw | None = None
         self.feed_scale = 1.0
@@ -310,6 +325,15 @@ class FeedrateEnvV1(FeedrateEnv):
             self.plant = plant
             return self.pack_program(self._batch, name, scaled_feed(toolpath, self.feed_scale))
         return self.program_slot(self._batch, choice)
+
+    def plan_on(self, machine: MachineConfig | None) -> None:
+        """The deployable planner behind the planner entries and ``residual`` mode plans with ``machine``
+        from the next reset on (None: with the env's own). The benchmark's tracks whose plant differs from
+        the machine's parameter table give it the nominal machine, as they give the ``classical`` policy.
+        The engine is rebuilt (its programs were packed with the old schedules): call it before a reset."""
+        if machine is not self._planner.nominal_machine:
+            self._planner.nominal_machine = machine
+            self._start()
 
     # --------------------------------------------------------------------------------------------- step
     def _parse_action(self, action: Any) -> float:

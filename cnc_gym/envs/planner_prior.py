@@ -1,5 +1,6 @@
-"""The deployable planner as a part of ``cnc_gym/Feedrate-v1``: its override as an observation entry and,
-in the ``residual`` action mode, the knob the agent scales.
+"""The deployable planner as a part of ``cnc_gym/Feedrate-v1``, ``-v2`` and ``-v3``: its override as an
+observation entry and, in the ``residual`` action mode, the knob the agent scales. Each env id names its
+planner version (v1 and v2 planner version 1, frozen; v3 the live planner, version 2).
 
 The planner is the motion stage's service (:mod:`cnc_gym.motion.planner`), the one the ``classical``
 baseline policy follows: it reads the program, the machine parameters and the controller's static
@@ -21,7 +22,7 @@ import numpy as np
 from cnc_gym.envs.options import knob_of_override
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion.limits import PathLimits
-from cnc_gym.motion.planner import MARGIN, Schedule, SchedulePlanner, reaction_lead_s
+from cnc_gym.motion.planner import Schedule, SchedulePlanner, reaction_lead_s
 from cnc_gym.toolpath import Toolpath
 
 #: Schedules kept (by tool path and machine); a randomised machine makes a new one every episode.
@@ -31,15 +32,21 @@ _CACHE_SIZE = 64
 class PlannerPrior:
     """The planner's schedules, for the compiled step (:class:`~cnc_gym.envs.fused.Planner`)."""
 
-    def __init__(self, control_period_s: float, max_override: float) -> None:
-        self.margin = MARGIN
+    def __init__(self, control_period_s: float, max_override: float, version: int) -> None:
         self.max_override = float(max_override)
         self.lead_s = reaction_lead_s(control_period_s)
-        self._planner = SchedulePlanner(self.margin, cache_size=_CACHE_SIZE)
+        self._planner = SchedulePlanner(cache_size=_CACHE_SIZE, version=version)
+        #: The planner version (:data:`cnc_gym.motion.planner.PLANNERS`) and its margin.
+        self.version = self._planner.version
+        self.margin = self._planner.margin
+        #: The machine the planner plans with in place of the env's (None: the env's): the benchmark's
+        #: tracks whose plant differs from the parameter table give the nominal machine.
+        self.nominal_machine: MachineConfig | None = None
 
     def schedule(self, toolpath: Toolpath, machine: MachineConfig, limits: PathLimits | None) -> Schedule:
-        """The planner's schedule of ``toolpath`` on ``machine`` (planned, or recalled)."""
-        return self._planner.schedule(toolpath, machine, limits)
+        """The planner's schedule of ``toolpath`` on ``machine`` (or on :attr:`nominal_machine` when
+        set), planned or recalled."""
+        return self._planner.schedule(toolpath, self.nominal_machine or machine, limits)
 
     def schedule_table(self, toolpath: Toolpath, machine: MachineConfig,
                        limits: PathLimits | None) -> np.ndarray:  # fmt: skip

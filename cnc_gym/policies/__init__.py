@@ -11,6 +11,8 @@ runs in, so baselines and agents compare. ``make_policy(spec)`` turns a command-
                        never runs the env)
 ``oracle``             :class:`~.oracle.OraclePlanner`: simulate-and-correct on copies of the
                        exact env; **an oracle**, not deployable
+``nominal-oracle``     the same planner simulating the **nominal** machine, its schedule then run
+                       open loop on the true plant (the benchmark's non-nominal tracks)
 a path (``*.zip``)     :class:`~.model.ModelPolicy`, an SB3 model rebuilt without unpickling
 ``module:callable``    your own policy: ``callable`` in importable ``module`` is a Policy, or is
                        called with no arguments to make one (a class or a Python factory

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from cnc_gym.machine import MachineConfig
-from cnc_gym.motion.planner import MARGIN, Schedule, SchedulePlanner, override_at, reaction_lead_s
+from cnc_gym.motion.planner import PLANNER_VERSION, Schedule, SchedulePlanner, override_at, reaction_lead_s
 from cnc_gym.policies.base import override_action, require_override_mode
 from cnc_gym.toolpath import Toolpath
 
@@ -24,27 +24,35 @@ from cnc_gym.toolpath import Toolpath
 class ClassicalPlanner:
     """The deployable planner as a feed-override policy, named ``classical``.
 
-    ``margin``: the fraction of the contour tolerance the schedule aims at; ``reaction_time_s``: how far
-    ahead (in time) the knob anticipates the schedule (default: the planner's reaction lead, two control
-    periods + 10 ms).
+    ``margin``: the fraction of the contour tolerance the schedule aims at (None: the planner version's
+    own); ``reaction_time_s``: how far ahead (in time) the knob anticipates the schedule (default: the
+    planner's reaction lead, two control periods + 10 ms); ``version``: the planner version (default the
+    live one; 1 is the frozen planner of Feedrate-v1 and v2, :data:`cnc_gym.motion.planner.PLANNERS`).
+
+    ``nominal_machine``: the machine the planner plans with (None: the env's). The benchmark's tracks
+    whose plant differs from the machine's parameter table set it to the nominal machine: a deployed
+    planner knows the table, not the true plant.
     """
 
     deterministic = True
 
-    def __init__(self, margin: float = MARGIN, reaction_time_s: float | None = None) -> None:
+    def __init__(self, margin: float | None = None, reaction_time_s: float | None = None,
+                 version: int = PLANNER_VERSION) -> None:  # fmt: skip
         self.name = "classical"
-        self.margin = float(margin)
         self.reaction_time_s = reaction_time_s
         self.schedule: Schedule | None = None
-        self._planner = SchedulePlanner(self.margin)
+        self._planner = SchedulePlanner(margin, version=version)
+        self.margin = self._planner.margin
+        self.version = self._planner.version
         self._max_override = 2.0
         self._lead_s = reaction_lead_s(0.01)
+        self.nominal_machine: MachineConfig | None = None
 
     def reset(self, env: Any) -> None:
         base, toolpath, machine, _ = knob_setup(self, env)
         # The controller's static tables (what its look-ahead knows); never the env's dynamics.
         limits = getattr(getattr(base, "controller", None), "limits", None)
-        self.schedule = self._planner.schedule(toolpath, machine, limits)
+        self.schedule = self._planner.schedule(toolpath, self.nominal_machine or machine, limits)
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         return override_action(override_at(self.schedule, float(info.get("path_s", 0.0)),

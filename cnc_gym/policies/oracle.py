@@ -73,7 +73,9 @@ class OraclePlanner:
 
     ``margin`` is the fraction of the contour tolerance the schedule aims at; ``refine_iterations`` the
     number of simulate-and-correct rounds (0 = model only); ``reaction_time_s`` how far ahead (in time)
-    the knob anticipates the schedule; ``progress`` shows a planning bar (None: when stderr is a TTY).
+    the knob anticipates the schedule; ``progress`` shows a planning bar (None: when stderr is a TTY);
+    ``plans_on_nominal``: the ``nominal-oracle`` (the same planner, told to simulate an env of the
+    nominal machine, :attr:`nominal_env`, which the benchmark builds on tracks whose plant differs).
     See the module docstring for the method.
     """
 
@@ -88,8 +90,14 @@ class OraclePlanner:
         min_override: float = 0.05,
         raise_rounds: int = 3,
         progress: bool | None = None,
+        plans_on_nominal: bool = False,
     ) -> None:
-        self.name = "oracle"
+        self.name = "nominal-oracle" if plans_on_nominal else "oracle"
+        self.plans_on_nominal = bool(plans_on_nominal)
+        #: An env of the same program on the nominal machine: set, the schedule is planned by simulating
+        #: it and then run open loop on the env ``reset`` gets (``nominal-oracle``: simulation with the
+        #: wrong model). None: the env ``reset`` gets is simulated (the oracle).
+        self.nominal_env: Any = None
         self.progress = progress
         self._bar: Any = None
         self.margin = float(margin)
@@ -106,6 +114,10 @@ class OraclePlanner:
     # ------------------------------------------------------------------ policy protocol
     def reset(self, env: Any) -> None:
         base, toolpath, machine, period = knob_setup(self, env)
+        if self.nominal_env is not None:  # plan on the nominal machine's env, run on ``env``
+            self.nominal_env.reset(seed=0)
+            base = self.nominal_env.unwrapped
+            toolpath, machine = base.toolpath, base.machine
         key = (id(toolpath), machine, period, self.margin, self.refine_iterations, self.raise_rounds)
         cached = self._cache.get(key)
         if cached is not None and cached[0] is toolpath:

@@ -36,6 +36,8 @@ def make_policy(spec: str, *, progress: bool | None = None) -> Policy:
         return ClassicalPlanner()
     if spec == "oracle":
         return OraclePlanner(progress=progress)
+    if spec == "nominal-oracle":
+        return OraclePlanner(progress=progress, plans_on_nominal=True)
     path = Path(spec)
     if path.suffix == ".zip" or path.exists():
         from cnc_gym.policies.model import ModelPolicy
@@ -45,7 +47,7 @@ def make_policy(spec: str, *, progress: bool | None = None) -> Policy:
         return _user_policy(spec)
     raise CncGymError(
         f"unknown policy {spec!r}: use constant:<override> (e.g. constant:1.0), classical, oracle, "
-        "the path of a trained model (.zip), or module:callable"
+        "nominal-oracle, the path of a trained model (.zip), or module:callable"
     )
 
 

@@ -180,18 +180,21 @@ def test_reward_weights_that_would_break_the_ranking_are_refused(kwargs):
 
 
 # ---------------------------------------------------------------------------------- residual and v0 parity
-def test_residual_zero_is_the_classical_planner():
+@pytest.mark.parametrize("version", [1, 2])
+def test_residual_zero_is_the_classical_planner(version):
+    # Feedrate-v1/v2 residual mode follows the frozen planner version 1; Feedrate-v3's the live version 2.
     from cnc_gym.policies.classical import ClassicalPlanner
 
     v0 = FeedrateEnv(programs=["star"])
-    planner = ClassicalPlanner()
+    planner = ClassicalPlanner(version=version)
     obs, info = v0.reset(seed=0)
     planner.reset(v0)
     done, steps = False, 0
     while not done:
         obs, _, terminated, truncated, info = v0.step(planner.act(obs, info))
         done, steps = terminated or truncated, steps + 1
-    _, steps1, _, _, info1, _ = run_episode(FeedrateEnvV1(programs=["star"], action_mode="residual"), 0.0)
+    _, steps1, _, _, info1, _ = run_episode(FeedrateEnvV1(programs=["star"], action_mode="residual",
+                                                       planner_version=version), 0.0)
     assert (steps1, info1["cycle_time_s"], info1["violation_length_mm"], info1["contour_error_max_mm"]) == (
         steps, info["cycle_time_s"], info["violation_length_mm"], info["contour_error_max_mm"])
 

@@ -190,3 +190,89 @@ def _corner_errors(u_in: np.ndarray, u_out: np.ndarray, t: np.ndarray, e: np.nda
                 worst = d
         out[j] = worst
     return out
+
+
+# ----------------------------------------------------------------------- planner version 2's models
+# servo_tables, arc_caps and corner_error_per_speed above are also planner version 1's (frozen, see
+# planner/v1.py): add models below, never change those.
+@dataclass(frozen=True)
+class ApproachTables:
+    """What the corner-with-approach model needs beyond :class:`ServoTables`: the cumulative excess lag.
+
+    A velocity step of −Δv along the incoming tangent τ seconds before a corner leaves axis k behind
+    its constant-speed state by ``Δv·(L_k − E_k(τ))`` (the loop's ramp-error response E_k tends to its
+    steady lag L_k); a linear deceleration ramp of duration T that ended τ ago leaves
+    ``Δv·(C_k(τ + T) − C_k(τ))/T``, with ``C_k(τ) = ∫₀^τ (L_k − E_k)``, tabulated here on ``ramp_t``.
+    """
+
+    excess_integral: np.ndarray  # (k, 3) C_k on ServoTables.ramp_t, s²
+    ramp_error: np.ndarray  # (k, 3) E_k, time-major (ServoTables.ramp_error transposed), s
+
+
+@lru_cache(maxsize=256)
+def approach_tables(machine: MachineConfig) -> ApproachTables:
+    """:class:`ApproachTables` of ``machine`` (cached, like :func:`servo_tables`)."""
+    tables = servo_tables(machine)
+    e = np.ascontiguousarray(tables.ramp_error.T)
+    gap = np.maximum(tables.lag_s[None, :] - e, 0.0)  # L − E ≥ 0 (E rises to L; overshoot counts as 0)
+    dt = np.diff(tables.ramp_t)
+    c = np.zeros_like(gap)
+    c[1:] = np.cumsum(0.5 * (gap[1:] + gap[:-1]) * dt[:, None], axis=0)
+    return ApproachTables(excess_integral=c, ramp_error=e)
+
+
+@njit(cache=True, inline="always")
+def _on_grid(table: np.ndarray, t: np.ndarray, x: float, c: int) -> float:
+    """Column ``c`` of ``table`` at time ``x`` on the uniform grid ``t`` (held at its last value beyond)."""
+    if x <= 0.0:
+        return table[0, c]
+    step = t[1] - t[0]
+    f = x / step
+    i = int(f)
+    if i >= t.shape[0] - 1:
+        return table[t.shape[0] - 1, c]
+    w = f - i
+    return table[i, c] * (1.0 - w) + table[i + 1, c] * w
+
+
+@njit(cache=True)
+def corner_approach_error(u_in: np.ndarray, u_out: np.ndarray, speed: float, drop: float, ramp_s: float,
+                          hold_s: float, t: np.ndarray, e: np.ndarray, c_int: np.ndarray,
+                          lag: np.ndarray) -> float:  # fmt: skip
+    """Largest contour error (mm) of a corner (unit tangents ``u_in`` → ``u_out``) taken at ``speed`` after
+    slowing down by ``drop`` (mm/s) along ``u_in``: a linear ramp of ``ramp_s`` seconds that ended
+    ``hold_s`` seconds before the corner (:class:`ApproachTables`). With ``drop = 0`` it is the
+    constant-speed corner model (``speed × corner_error_per_speed``).
+
+    The servo axes are linear, so the tool's deviation is the constant-speed corner's,
+    ``v·(t·u_out − L∘u_in − (u_out − u_in)∘E(t))``, plus the excess lag the faster approach left along
+    ``u_in``, still decaying after the corner; the error is its distance from the corner's two legs.
+    """
+    worst = 0.0
+    y = np.zeros(3)
+    for k in range(t.shape[0]):
+        tk = t[k]
+        along_in = 0.0
+        along_out = 0.0
+        for a in range(3):
+            y[a] = speed * (tk * u_out[a] - lag[a] * u_in[a] - (u_out[a] - u_in[a]) * e[k, a])
+            if drop > 0.0:
+                tau = tk + hold_s
+                if ramp_s > 0.0:
+                    excess = (_on_grid(c_int, t, tau + ramp_s, a) - _on_grid(c_int, t, tau, a)) / ramp_s
+                else:
+                    excess = max(lag[a] - _on_grid(e, t, tau, a), 0.0)
+                y[a] -= drop * excess * u_in[a]
+            along_in += y[a] * u_in[a]
+            along_out += y[a] * u_out[a]
+        along_in = min(along_in, 0.0)
+        along_out = max(along_out, 0.0)
+        d_in = 0.0
+        d_out = 0.0
+        for a in range(3):
+            d_in += (y[a] - along_in * u_in[a]) ** 2
+            d_out += (y[a] - along_out * u_out[a]) ** 2
+        d = math.sqrt(min(d_in, d_out))
+        if d > worst:
+            worst = d
+    return worst

@@ -8,8 +8,6 @@ they loop over the path.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -19,11 +17,12 @@ from cnc_gym.motion import kernel as K
 from cnc_gym.motion.limits import PathLimits, build_limits
 from cnc_gym.motion.planner.error_model import (
     SPEED_CEILING_MM_S,
-    arc_caps,
-    corner_error_per_speed,
+    approach_tables,
+    corner_approach_error,
     servo_tables,
 )
-from cnc_gym.toolpath import SegmentKind, Toolpath
+from cnc_gym.motion.planner.record import Schedule
+from cnc_gym.toolpath import Toolpath
 
 
 @njit(cache=True)
@@ -37,104 +36,81 @@ def _ramp_length(v0: float, v: float, accel: float, jerk: float) -> float:
 
 
 @njit(cache=True)
-def jerk_limited_reach(v0: float, distance_mm: float, accel: float, jerk: float) -> float:
-    """Highest speed reachable from ``v0`` (at zero acceleration) within ``distance_mm``.
-
-    S-curve with jerk ``jerk`` and acceleration capped at ``accel``: a change Δv ≤ A²/J takes
-    T = 2·√(Δv/J) over L = (v0 + v)·√(Δv/J), i.e. ``(v − v0)(v + v0)² = J·L²`` (solved by Newton in
-    w = v + v0 from the right, where the cubic is increasing and convex); a larger change takes
-    T = Δv/A + A/J over L = (v0 + v)/2·T, a quadratic in v.
-
-    The controller solves the same reach (:func:`cnc_gym.motion.kernel.reach_speed`, another Newton start
-    and stop); the two agree to the last bit or two. The scan keeps this one because the planner's
-    override is part of Feedrate-v1 and v2's observation and info: solving with the controller's would
-    move those values in their last bits (``scripts/fingerprint_env.py`` changes on every v1 case), an
-    observation change that the project answers with a new env version.
-    """
-    if distance_mm <= 0:
-        return v0
-    dv_full = accel * accel / jerk
-    if distance_mm > _ramp_length(v0, v0 + dv_full, accel, jerk):
-        b = dv_full  # v² + (A²/J)·v + (v0·A²/J − v0² − 2·A·L) = 0
-        c = v0 * dv_full - v0 * v0 - 2.0 * accel * distance_mm
-        return 0.5 * (-b + math.sqrt(b * b - 4.0 * c))
-    target = jerk * distance_mm * distance_mm
-    w = 2.0 * v0 + dv_full
-    for _ in range(60):
-        f = (w - 2.0 * v0) * w * w - target
-        step = f / (w * (3.0 * w - 4.0 * v0))
-        w -= step
-        if abs(step) < 1e-9 * max(w, 1.0):
-            break
-    return max(w - v0, v0)
+def _ramp_time(dv: float, accel: float, jerk: float) -> float:
+    """Duration of the jerk-limited S-curve changing the speed by ``dv`` (zero acceleration at both ends)."""
+    if dv <= 0:
+        return 0.0
+    return 2.0 * math.sqrt(dv / jerk) if dv <= accel * accel / jerk else dv / accel + accel / jerk
 
 
-def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float) -> np.ndarray:
+def bidirectional_scan(s: np.ndarray, cap: np.ndarray, accel: float | np.ndarray, jerk: float,
+                       decel_share: float = 1.0) -> np.ndarray:  # fmt: skip
     """Largest speed profile ≤ ``cap`` whose rises and falls are reachable under (A, J).
 
     Backward pass (can we slow down in time for every later cap?) then forward pass (can we speed up
     that fast?). Each pass keeps one anchor, the last point where the cap itself was binding; ``accel``
-    may vary along the path (one value per point): a ramp uses the lowest value of the points it spans.
-    Compiled (:func:`_scan`): O(n).
+    may vary along the path (one value per point): a ramp uses the lowest value of the points it spans;
+    decelerations use ``decel_share`` of it. Compiled (:func:`_scan`): O(n).
     """
     s = np.ascontiguousarray(s, dtype=np.float64)
     out = np.array(cap, dtype=np.float64)
     accel_at = np.ascontiguousarray(np.broadcast_to(np.asarray(accel, dtype=np.float64), out.shape))
-    _scan(s, out, accel_at, float(jerk))
+    _scan(s, out, accel_at, float(jerk), float(decel_share))
     return out
 
 
 @njit(cache=True)
-def _scan(s: np.ndarray, out: np.ndarray, accel_at: np.ndarray, jerk: float) -> None:
+def _scan(s: np.ndarray, out: np.ndarray, accel_at: np.ndarray, jerk: float, decel_share: float) -> None:
     n = len(s)
     for backward in (True, False):
         have = False
         anchor_s = anchor_v = anchor_a = 0.0
+        share = decel_share if backward else 1.0
         for k in range(n):
             i = n - 1 - k if backward else k
             if have:
                 # The ramp from the anchor crosses every point since: the lowest acceleration among them.
-                anchor_a = min(anchor_a, accel_at[i])
+                anchor_a = min(anchor_a, share * accel_at[i])
                 distance = abs(anchor_s - s[i])
                 # Cheap test first: is the cap itself reachable from the anchor?
                 if _ramp_length(anchor_v, out[i], anchor_a, jerk) > distance:
-                    out[i] = jerk_limited_reach(anchor_v, distance, anchor_a, jerk)
+                    out[i] = K.reach_speed(anchor_v, distance, anchor_a, jerk)
                     continue
             have = True
-            anchor_s, anchor_v, anchor_a = s[i], out[i], accel_at[i]
-
-
-@dataclass
-class Schedule:
-    """The planner's result for one program: override to command at each path position."""
-
-    s: np.ndarray  # grid of path positions, mm
-    cap_mm_s: np.ndarray  # tolerance speed cap (after refinement)
-    speed_mm_s: np.ndarray  # scheduled (reachable) speed
-    override: np.ndarray  # speed / programmed feed, clipped to [0, max_override]; max_override on rapids
-    iterations: int = 0
-    predicted_violations: int = 0
-
-    @cached_property
-    def table(self) -> np.ndarray:
-        """(n, 2) rows of path position and override: the table the compiled rule reads
-        (:func:`~cnc_gym.motion.planner.rule.planner_override`)."""
-        return np.column_stack((np.asarray(self.s, dtype=np.float64),
-                                np.asarray(self.override, dtype=np.float64)))  # fmt: skip
+            anchor_s, anchor_v, anchor_a = s[i], out[i], share * accel_at[i]
 
 
 # --------------------------------------------------------------------------------------------- planner
-#: Fraction of the contour tolerance the schedule aims at. Chosen on the val split of cnc-bench-v1 (score
-#: 44.5 / 47.0 / 49.5 / 49.2 / 47.0 / 48.7 at 0.4 / 0.45 / 0.5 / 0.55 / 0.6 / 0.7), never on test.
-MARGIN = 0.5
-#: Junctions turning at least this much are corners (corner model); smaller turns make chain curvature.
-CORNER_DEG = 10.0
+# --------------------------------------------------------------------------------------------- planner
+#: Fraction of the contour tolerance the schedule aims at (every model's error, corners with their
+#: approach included). The models are exact on their closed forms (tests/motion/planner), so the margin
+#: only has to cover what they leave out (superposed transients, the controller's own jerk-limited
+#: response to the knob). Chosen on the train and val splits of cnc-bench-v1, never on test.
+MARGIN = 0.85
+#: Share of a corner's budget its constant-speed error may take; the rest is left to the excess lag of
+#: the deceleration into it (the hold before the corner is as long as that needs).
+CORNER_SHARE = 0.85
+#: Junctions turning less than this are left to the window models (their single-corner error is nil).
+MIN_TURN_DEG = 0.1
 #: Longest distance between two schedule points inside a move, mm.
 NODE_SPACING_MM = 0.5
-
-
 #: How long after a corner its cap holds, in loop time constants 1/Kv (the transient's peak comes later).
 HOLD_TIME_CONSTANTS = 3.0
+#: Holds before a corner are searched in steps of this many loop time constants, up to HOLD_MAX.
+HOLD_STEP = 0.25
+HOLD_MAX = 8.0
+#: Windows of the net-turn analysis (mm): the path's change of direction over each, centred on every
+#: schedule point, is a corner of that net turn where the servo sees the window as a point (at speeds
+#: above window × Kv / RESPONSE_TIME_CONSTANTS) and an arc of curvature turn / window below.
+WINDOWS_MM = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
+#: The servo's response time in loop time constants 1/Kv (what "sees as a point" means above).
+RESPONSE_TIME_CONSTANTS = 1.0
+#: A window is an arc only where no single junction in it makes this share of its net turn.
+SPREAD_SHARE = 0.5
+CONTROLLER_LIMITS = True
+#: Decelerations are scheduled at this share of the acceleration the path and the override's slew allow:
+#: the controller follows the knob with its jerk limit, and lags a steep ramp by ~a²/J.
+DECEL_SHARE = 0.5
 
 
 @njit(cache=True)
@@ -153,15 +129,8 @@ def _piece_tangents(seg_f: np.ndarray, seg_i: np.ndarray,
                 t0[k, a] = curve_f[first, 3 + a]
                 t1[k, a] = curve_f[last, 3 + a]
         elif seg_i[k, K.I_KIND] == K.KIND_ARC:
-            r, sweep, rise = seg_f[k, K.F_RADIUS], seg_f[k, K.F_SWEEP], seg_f[k, K.F_RISE]
-            u, v, w = seg_i[k, K.I_PU], seg_i[k, K.I_PV], seg_i[k, K.I_PW]
-            theta = seg_f[k, K.F_ANG0]
-            du, dv = -r * math.sin(theta) * sweep, r * math.cos(theta) * sweep
-            norm = math.sqrt(du * du + dv * dv + rise * rise)
-            t0[k, u], t0[k, v], t0[k, w] = du / norm, dv / norm, rise / norm
-            theta += sweep
-            du, dv = -r * math.sin(theta) * sweep, r * math.cos(theta) * sweep
-            t1[k, u], t1[k, v], t1[k, w] = du / norm, dv / norm, rise / norm
+            _arc_tangent(seg_f, seg_i, k, 0.0, t0[k])
+            _arc_tangent(seg_f, seg_i, k, 1.0, t1[k])
         else:
             dx = seg_f[k, K.F_EX] - seg_f[k, K.F_SX]
             dy = seg_f[k, K.F_EY] - seg_f[k, K.F_SY]
@@ -172,12 +141,62 @@ def _piece_tangents(seg_f: np.ndarray, seg_i: np.ndarray,
     return t0, t1
 
 
-def _signed_turn(u_in: np.ndarray, u_out: np.ndarray) -> np.ndarray:
-    """Turn at junctions: signed (counter-clockwise +) where both tangents lie in XY, else unsigned."""
-    dot = np.clip(np.sum(u_in * u_out, axis=1), -1.0, 1.0)
-    cross_z = u_in[:, 0] * u_out[:, 1] - u_in[:, 1] * u_out[:, 0]
-    flat = (np.abs(u_in[:, 2]) < 1e-9) & (np.abs(u_out[:, 2]) < 1e-9)
-    return np.where(flat, np.arctan2(cross_z, dot), np.arccos(dot))
+@njit(cache=True)
+def _arc_tangent(seg_f: np.ndarray, seg_i: np.ndarray, k: int, frac: float, out: np.ndarray) -> None:
+    """Unit tangent of arc (or helix) piece ``k`` at fraction ``frac`` of its length, into ``out``."""
+    r, sweep, rise = seg_f[k, K.F_RADIUS], seg_f[k, K.F_SWEEP], seg_f[k, K.F_RISE]
+    u, v, w = seg_i[k, K.I_PU], seg_i[k, K.I_PV], seg_i[k, K.I_PW]
+    theta = seg_f[k, K.F_ANG0] + sweep * frac
+    du, dv = -r * math.sin(theta) * sweep, r * math.cos(theta) * sweep
+    norm = max(math.sqrt(du * du + dv * dv + rise * rise), 1e-300)
+    out[u], out[v], out[w] = du / norm, dv / norm, rise / norm
+
+
+@njit(cache=True)
+def _tangent_at(seg_f: np.ndarray, seg_i: np.ndarray, t0: np.ndarray, t1: np.ndarray, k: int, s: float,
+                out: np.ndarray) -> None:  # fmt: skip
+    """Unit tangent of piece ``k`` at path position ``s`` (NURBS pieces: between their end tangents)."""
+    length = seg_f[k, K.F_LEN]
+    frac = min(max((s - seg_f[k, K.F_S0]) / length, 0.0), 1.0) if length > 0 else 0.0
+    if seg_i[k, K.I_TABLE] < 0 and seg_i[k, K.I_KIND] == K.KIND_ARC:
+        _arc_tangent(seg_f, seg_i, k, frac, out)
+        return
+    norm = 0.0
+    for a in range(3):
+        out[a] = t0[k, a] * (1.0 - frac) + t1[k, a] * frac
+        norm += out[a] * out[a]
+    norm = max(math.sqrt(norm), 1e-300)
+    for a in range(3):
+        out[a] /= norm
+
+
+@njit(cache=True, inline="always")
+def _plane_of(normal_axis: int) -> int:
+    """The arc-table plane (Plane value: XY 0, ZX 1, YZ 2) whose normal is ``normal_axis``."""
+    return 2 - normal_axis
+
+
+@njit(cache=True)
+def _arc_cap(radius: float, turn_axis: np.ndarray, arc_omega: np.ndarray, arc_table: np.ndarray,
+             target: float) -> float:  # fmt: skip
+    """Largest speed on a circle of ``radius`` (mm) turning about ``turn_axis`` (unit, or zero for "any
+    plane") whose steady error (:func:`servo_tables`' arc table) is at most ``target``: the lowest over
+    the coordinate planes the turn has a share in."""
+    cap = SPEED_CEILING_MM_S
+    per_mm = target / radius
+    biggest = max(abs(turn_axis[0]), abs(turn_axis[1]), abs(turn_axis[2]))
+    for axis in range(3):
+        if biggest > 0.0 and abs(turn_axis[axis]) < 0.2 * biggest:
+            continue
+        table = arc_table[_plane_of(axis)]
+        if per_mm >= table[-1]:
+            continue
+        if per_mm < table[0]:  # below the table the error grows at least linearly with ω
+            omega = arc_omega[0] * per_mm / max(table[0], 1e-300)
+        else:
+            omega = np.interp(per_mm, table, arc_omega)
+        cap = min(cap, omega * radius)
+    return cap
 
 
 def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLimits | None = None,
@@ -189,129 +208,234 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLim
     """
     lim = limits if limits is not None else build_limits(toolpath, machine)
     tables = servo_tables(machine)
+    approach = approach_tables(machine)
     ctl = machine.controller
     top = float(ctl.max_override if max_override is None else max_override)
     target = margin * float(ctl.contour_tolerance_mm)
-    seg_f, seg_i, pt_f = lim.seg_f, lim.seg_i, lim.pt_f
-    n = len(seg_f)
-    if n == 0:
+    seg_f, seg_i = lim.seg_f, lim.seg_i
+    if len(seg_f) == 0:
         return Schedule(s=np.zeros(1), cap_mm_s=np.full(1, np.inf), speed_mm_s=np.zeros(1),
                         override=np.full(1, top))  # fmt: skip
-    s0, length = seg_f[:, K.F_S0], seg_f[:, K.F_LEN]
-    cutting = seg_i[:, K.I_RAPID] == 0
-    feed = np.where(cutting, seg_f[:, K.F_BASE], 0.0)
-    locked = seg_i[:, K.I_LOCKED] != 0
-    # ---- caps per move: the knob's range (programmed feed × max override) and the servo model. The
-    # controller's own limits (its caps, corner speeds, stops) are left to the controller: putting them in
-    # the knob would only make it slower to come back up (the applied override slews).
-    piece_cap = np.where(cutting, feed * np.where(locked, 1.0, top), np.inf)
-    kind = seg_i[:, K.I_KIND]
-    straight = cutting & (kind == SegmentKind.LINE)
-    if np.any(straight):
-        tangent = (seg_f[straight, K.F_EX : K.F_EX + 3] - seg_f[straight, K.F_SX : K.F_SX + 3])
-        tangent /= np.maximum(np.linalg.norm(tangent, axis=1), 1e-12)[:, None]
-        lag = tangent * tables.lag_s[None, :]
-        lateral = np.linalg.norm(lag - np.sum(lag * tangent, axis=1, keepdims=True) * tangent, axis=1)
-        piece_cap[straight] = np.minimum(piece_cap[straight], np.where(lateral > 1e-12, target / np.maximum(
-            lateral, 1e-12), SPEED_CEILING_MM_S))  # fmt: skip
-    curved = cutting & (seg_f[:, K.F_CURV] > 1e-9)
-    if np.any(curved):
-        plane = np.where(kind[curved] == SegmentKind.ARC, toolpath.plane[seg_i[curved, K.I_TP]], 0)
-        piece_cap[curved] = np.minimum(piece_cap[curved],
-                                       arc_caps(tables, 1.0 / seg_f[curved, K.F_CURV], plane, target))
-    # ---- junctions between cutting moves: the corner model
-    junction = np.zeros(n + 1, dtype=bool)
-    junction[1:n] = cutting[:-1] & cutting[1:]
-    q = np.flatnonzero(junction)
-    point_cap = np.full(n + 1, np.inf)
-    turn = np.zeros(n + 1)
-    if len(q):
-        t_start, t_end = _piece_tangents(seg_f, seg_i, lim.curve_f)
-        u_in, u_out = t_end[q - 1], t_start[q]
-        turn[q] = _signed_turn(u_in, u_out)
-        corner = np.abs(turn[q]) >= math.radians(CORNER_DEG)
-        c = corner_error_per_speed(tables, u_in[corner], u_out[corner])
-        point_cap[q[corner]] = np.where(c > 1e-12, target / np.maximum(c, 1e-12), SPEED_CEILING_MM_S)
-        turn[q[corner]] = 0.0  # corners are the corner model's: leave them out of the chain curvature
-    # ---- schedule points, corner holds, chain curvature, the scan and the knob: one compiled pass
-    hold_s = HOLD_TIME_CONSTANTS / float(min(machine.axis_array("kv_1_s")))
+    kv_min = float(min(machine.axis_array("kv_1_s")))
     accel = float(min(machine.axis_array("max_accel_mm_s2")))
     jerk = float(min(machine.axis_array("max_jerk_mm_s3")))
-    node_s, node_cap, speed, override = _schedule_nodes(
-        s0, length, cutting, feed, piece_cap, point_cap, turn, np.ascontiguousarray(pt_f[:, K.P_S]), hold_s,
-        tables.arc_omega, tables.arc_error[0], target, top, accel, jerk, float(ctl.override_slew_per_s))
+    node_s, node_cap, speed, override = _plan(
+        seg_f, seg_i, lim.pt_f, np.ascontiguousarray(lim.pt_f[:, K.P_S]), lim.curve_f, tables.lag_s,
+        tables.arc_omega, tables.arc_error, tables.ramp_t, approach.ramp_error, approach.excess_integral,
+        target, top, 1.0 / kv_min, accel, jerk, float(ctl.override_slew_per_s),
+        K.TRACK_PERIODS * float(ctl.interpolation_period_s), np.array(WINDOWS_MM))
     return Schedule(s=node_s, cap_mm_s=node_cap, speed_mm_s=speed, override=override)
 
 
 @njit(cache=True)
-def _schedule_nodes(s0, length, cutting, feed, piece_cap, point_cap, turn, point_s, hold_s, arc_omega,
-                    arc_table, target, top, accel, jerk, slew_per_s):  # fmt: skip
-    """Schedule points (every junction, and inside moves every NODE_SPACING_MM at most) with their caps:
-    the move's cap, the junction's corner cap (held over ``cap·hold_s`` of travel after it), the chain
-    curvature's arc cap (XY plane model); then the jerk-limited scan and the knob per point."""
-    n = len(s0)
-    count = np.empty(n, dtype=np.int64)
-    total = 1
+def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ramp_e, excess_int, target,
+          top, time_constant, accel, jerk, slew_per_s, settle_s, windows):  # fmt: skip
+    """The schedule (node positions, caps, speeds, overrides): piece caps, junction corners with their
+    approach holds, the net-turn windows, the jerk-limited scan and the knob per node."""
+    n = seg_f.shape[0]
+    cutting = np.zeros(n, dtype=np.bool_)
+    feed = np.zeros(n)
     for k in range(n):
-        count[k] = max(math.ceil(length[k] / NODE_SPACING_MM), 1)
+        cutting[k] = seg_i[k, K.I_RAPID] == 0
+        feed[k] = seg_f[k, K.F_BASE] if cutting[k] else 0.0
+    t0, t1 = _piece_tangents(seg_f, seg_i, curve_f)
+    axis = np.zeros(3)
+    # ---- caps per move: the knob's range (programmed feed × max override), the line's lateral lag, the
+    # arc's steady error. The controller's own limits are left to the controller.
+    piece_cap = np.full(n, np.inf)
+    for k in range(n):
+        if not cutting[k]:
+            continue
+        piece_cap[k] = feed[k] * (1.0 if seg_i[k, K.I_LOCKED] != 0 else top)
+        if seg_i[k, K.I_KIND] == K.KIND_LINE and seg_i[k, K.I_TABLE] < 0:
+            along = 0.0
+            for a in range(3):
+                along += t0[k, a] * lag[a] * t0[k, a]
+            lateral = 0.0
+            for a in range(3):
+                lateral += (t0[k, a] * lag[a] - along * t0[k, a]) ** 2
+            lateral = math.sqrt(lateral)
+            if lateral > 1e-12:
+                piece_cap[k] = min(piece_cap[k], target / lateral)
+        curvature = seg_f[k, K.F_CURV]
+        if curvature > 1e-9:
+            for a in range(3):
+                axis[a] = 0.0
+            if seg_i[k, K.I_TABLE] < 0 and seg_i[k, K.I_KIND] == K.KIND_ARC:
+                axis[seg_i[k, K.I_PW]] = 1.0
+            piece_cap[k] = min(piece_cap[k], _arc_cap(1.0 / curvature, axis, arc_omega, arc_table, target))
+    # ---- the run of cutting moves each move is in (holds and windows never reach across a rapid)
+    run_lo = np.empty(n)
+    run_hi = np.empty(n)
+    start = 0
+    for k in range(n + 1):
+        if k == n or not cutting[k]:
+            for j in range(start, k):
+                run_lo[j] = seg_f[start, K.F_S0]
+                run_hi[j] = seg_f[k - 1, K.F_S0] + seg_f[k - 1, K.F_LEN]
+            if k < n:
+                run_lo[k] = seg_f[k, K.F_S0]
+                run_hi[k] = seg_f[k, K.F_S0] + seg_f[k, K.F_LEN]
+            start = k + 1
+    # ---- junctions between cutting moves: the corner model, held after the corner, and held before it
+    # as long as the excess lag of the deceleration into it needs
+    hold_after = HOLD_TIME_CONSTANTS * time_constant
+    corner_target = CORNER_SHARE * target
+    corner_v = np.full(n + 1, np.inf)
+    hold_lo = np.zeros(n + 1)
+    hold_hi = np.zeros(n + 1)
+    u_in = np.zeros(3)
+    u_out = np.zeros(3)
+    extra = 0
+    for q in range(1, n):
+        if not (cutting[q - 1] and cutting[q]):
+            continue
+        dot = 0.0
+        for a in range(3):
+            u_in[a] = t1[q - 1, a]
+            u_out[a] = t0[q, a]
+            dot += u_in[a] * u_out[a]
+        if dot > math.cos(math.radians(MIN_TURN_DEG)):
+            continue
+        per_speed = corner_approach_error(u_in, u_out, 1.0, 0.0, 0.0, 0.0, ramp_t, ramp_e, excess_int, lag)
+        if per_speed <= 1e-12:
+            continue
+        v_c = min(corner_target / per_speed, piece_cap[q - 1], piece_cap[q])
+        # Where the controller's own junction limit is lower, the corner is taken at that speed: left to
+        # the controller where even its own hard braking into the corner keeps within the budget, else
+        # held at that speed (an acceleration out of the corner during its transient adds to the error).
+        hard = pt_f[q, K.P_HARD]
+        if 0.0 < hard < v_c:
+            v_c = hard
+            if math.isfinite(piece_cap[q - 1]):
+                fall = max(piece_cap[q - 1] - hard, 0.0)
+                if corner_approach_error(u_in, u_out, hard, fall, _ramp_time(fall, accel, jerk), 0.0, ramp_t,
+                                         ramp_e, excess_int, lag) <= target:  # fmt: skip
+                    continue
+        # The approach: from the incoming move's cap down to v_c, a ramp at the path acceleration (the
+        # override's slew bounds it too), then a hold at v_c of the shortest length that keeps the error
+        # within the budget.
+        v_b = piece_cap[q - 1]
+        drop = v_b - v_c if math.isfinite(v_b) else 0.0
+        hold = 0.0
+        if drop > 1e-9:
+            a_full = max(min(accel, slew_per_s * feed[q - 1]) if feed[q - 1] > 0 else accel, 1e-3)
+            a_eff = DECEL_SHARE * a_full
+            ramp = _ramp_time(drop, a_eff, jerk)
+            steps = int(HOLD_MAX / HOLD_STEP)
+            for m in range(steps + 1):
+                hold = m * HOLD_STEP * time_constant
+                if corner_approach_error(u_in, u_out, v_c, drop, ramp, hold, ramp_t, ramp_e, excess_int,
+                                         lag) <= target:  # fmt: skip
+                    break
+            # The controller reaches the knob's speed later than the scan's profile: it turns an
+            # acceleration (up to the full one) into the deceleration and ends that with the jerk limit,
+            # and settles on the target over a few periods, twice (the override, then the speed).
+            hold += (a_full + a_eff) / jerk + 2.0 * settle_s
+        corner_v[q] = v_c
+        hold_lo[q] = max(seg_f[q, K.F_S0] - v_c * hold, run_lo[q - 1])
+        hold_hi[q] = min(seg_f[q, K.F_S0] + v_c * hold_after, run_hi[q])
+        extra += 2
+    # ---- nodes: every junction, inside moves every NODE_SPACING_MM at most, and the ends of the holds
+    count = np.empty(n, dtype=np.int64)
+    total = 1 + extra
+    for k in range(n):
+        count[k] = max(math.ceil(seg_f[k, K.F_LEN] / NODE_SPACING_MM), 1)
         total += count[k]
     node_s = np.empty(total)
-    piece = np.empty(total, dtype=np.int64)
-    point = np.full(total, -1, dtype=np.int64)  # the junction a point sits on, -1 inside a move
     i = 0
     for k in range(n):
         for j in range(count[k]):
-            node_s[i] = s0[k] + j * length[k] / count[k]
-            piece[i] = k
-            if j == 0:
-                point[i] = k
+            node_s[i] = seg_f[k, K.F_S0] + j * seg_f[k, K.F_LEN] / count[k]
             i += 1
-    node_s[i], piece[i], point[i] = s0[n - 1] + length[n - 1], n - 1, n
+    node_s[i] = seg_f[n - 1, K.F_S0] + seg_f[n - 1, K.F_LEN]
+    i += 1
+    for q in range(1, n):
+        if math.isfinite(corner_v[q]):
+            node_s[i], node_s[i + 1] = hold_lo[q], hold_hi[q]
+            i += 2
+    node_s = np.sort(node_s)
+    piece = np.empty(total, dtype=np.int64)
+    point = np.full(total, -1, dtype=np.int64)  # the junction a node sits on, -1 inside a move
+    k = 0
+    for i in range(total):
+        while k < n - 1 and node_s[i] >= point_s[k + 1]:
+            k += 1
+        piece[i] = k
+        if node_s[i] == point_s[k] and (i == 0 or node_s[i - 1] != node_s[i]):
+            point[i] = k
+    point[total - 1] = n
     cap = np.empty(total)
     for i in range(total):
         cap[i] = piece_cap[piece[i]]
         q = point[i]
-        if q >= 0:
-            cap[i] = min(cap[i], point_cap[q])
-            if q > 0:
-                cap[i] = min(cap[i], piece_cap[q - 1])
-    # Corner holds.
-    start = 0
-    for q in range(n + 1):
-        if not math.isfinite(point_cap[q]):
+        if 0 < q < n:
+            cap[i] = min(cap[i], piece_cap[q - 1])
+        if CONTROLLER_LIMITS and cutting[piece[i]]:
+            cap[i] = min(cap[i], seg_f[piece[i], K.F_CAP])
+            if 0 < q < n and cutting[q - 1] and pt_f[q, K.P_HARD] > 0.0:
+                cap[i] = min(cap[i], pt_f[q, K.P_HARD])
+    j0 = 0
+    for q in range(1, n):
+        if not math.isfinite(corner_v[q]):
             continue
-        while start < total and node_s[start] < point_s[q] - 1e-9:
-            start += 1
-        k = start
-        while k < total and node_s[k] <= point_s[q] + point_cap[q] * hold_s:
-            cap[k] = min(cap[k], point_cap[q])
-            k += 1
-    # Chain curvature: net turn over a window around each point.
-    cum = np.cumsum(turn)
+        while j0 < total and node_s[j0] < hold_lo[q] - 1e-9:
+            j0 += 1
+        j = j0
+        while j < total and node_s[j] <= hold_hi[q] + 1e-9:
+            cap[j] = min(cap[j], corner_v[q])
+            j += 1
+    # ---- net-turn windows: clusters of junctions seen as one corner, chains of short moves as arcs
+    junction_turn = np.zeros(n + 1)
+    for q in range(1, n):
+        if cutting[q - 1] and cutting[q]:
+            dot = t1[q - 1, 0] * t0[q, 0] + t1[q - 1, 1] * t0[q, 1] + t1[q - 1, 2] * t0[q, 2]
+            junction_turn[q] = math.acos(min(max(dot, -1.0), 1.0))
+    ta = np.zeros(3)
+    tb = np.zeros(3)
     for i in range(total):
-        if not cutting[piece[i]]:
+        k = piece[i]
+        if not cutting[k]:
             continue
-        q = point[i]
-        if q >= 0:
-            near = length[0] if q == 0 else (length[n - 1] if q == n else max(length[q - 1], length[q]))
-        else:
-            near = length[piece[i]]
-        window = max(1.0, 2.5 * near)
-        lo = np.searchsorted(point_s, node_s[i] - window / 2, side="left") - 1
-        hi = np.searchsorted(point_s, node_s[i] + window / 2, side="right") - 1
-        net = abs(cum[min(max(hi, 0), n)] - (cum[min(lo, n)] if lo >= 0 else 0.0))
-        if net <= 1e-9:
-            continue
-        radius = window / net
-        per_mm = target / radius
-        if per_mm >= arc_table[-1]:
-            continue
-        if per_mm < arc_table[0]:  # below the table the error grows at least linearly with ω
-            omega = arc_omega[0] * per_mm / max(arc_table[0], 1e-300)
-        else:
-            omega = np.interp(per_mm, arc_table, arc_omega)
-        cap[i] = min(cap[i], omega * radius)
-    # Reachable speeds, then the knob.
+        s = node_s[i]
+        for w in windows:
+            a_s = max(s - 0.5 * w, run_lo[k])
+            b_s = min(s + 0.5 * w, run_hi[k])
+            if b_s - a_s < 0.25 * w:
+                continue
+            ka = max(min(np.searchsorted(point_s, a_s, side="right") - 1, n - 1), 0)
+            kb = max(min(np.searchsorted(point_s, b_s, side="left") - 1, n - 1), 0)
+            if ka == kb:  # inside one move: its own cap covers it
+                continue
+            _tangent_at(seg_f, seg_i, t0, t1, ka, a_s, ta)
+            _tangent_at(seg_f, seg_i, t0, t1, kb, b_s, tb)
+            dot = ta[0] * tb[0] + ta[1] * tb[1] + ta[2] * tb[2]
+            dot = min(max(dot, -1.0), 1.0)
+            turn = math.acos(dot)
+            if turn < math.radians(MIN_TURN_DEG):
+                continue
+            axis[0] = ta[1] * tb[2] - ta[2] * tb[1]
+            axis[1] = ta[2] * tb[0] - ta[0] * tb[2]
+            axis[2] = ta[0] * tb[1] - ta[1] * tb[0]
+            span = b_s - a_s
+            v_point = span / (RESPONSE_TIME_CONSTANTS * time_constant)  # above it, the window is a point
+            # Seen as an arc only where the turn is spread over the window: a turn most of which is one
+            # junction's is that junction's corner (the corner model has it, at the speed at the corner).
+            sharpest = 0.0
+            for q in range(ka + 1, kb + 1):
+                sharpest = max(sharpest, junction_turn[q])
+            v_arc = SPEED_CEILING_MM_S
+            if sharpest < SPREAD_SHARE * turn:
+                v_arc = _arc_cap(span / turn, axis, arc_omega, arc_table, target)
+            if v_arc < v_point:
+                cap_w = v_arc
+            else:
+                if kb - ka == 1:  # a single junction: the corner model above has it
+                    continue
+                per_speed = corner_approach_error(ta, tb, 1.0, 0.0, 0.0, 0.0, ramp_t, ramp_e, excess_int, lag)
+                cap_w = max(v_point, target / per_speed) if per_speed > 1e-12 else SPEED_CEILING_MM_S
+            cap[i] = min(cap[i], cap_w)
+    # ---- reachable speeds, then the knob
     accel_at = np.empty(total)
     finite = np.empty(total)
     for i in range(total):
@@ -319,41 +443,21 @@ def _schedule_nodes(s0, length, cutting, feed, piece_cap, point_cap, turn, point
         accel_at[i] = max(min(accel, slew_per_s * f) if f > 0 else accel, 1e-3)
         finite[i] = cap[i] if math.isfinite(cap[i]) else SPEED_CEILING_MM_S
     speed = finite.copy()
-    _scan(node_s, speed, accel_at, jerk)
+    _scan(node_s, speed, accel_at, jerk, DECEL_SHARE)
     override = np.full(total, top)
     for i in range(total):
         f = feed[piece[i]]
         if cutting[piece[i]] and f > 0:
             override[i] = min(max(speed[i] / f, 0.0), top)
+    # On rapids (and before the first cut) the knob moves nothing (rapids run at their own override), so
+    # it already asks for the next cut's override: the applied override slews there during the rapid.
+    following = top
+    for i in range(total - 1, -1, -1):
+        if cutting[piece[i]] and feed[piece[i]] > 0:
+            following = override[i]
+        else:
+            override[i] = following
     return node_s, cap, speed, override
-
-
-class SchedulePlanner:
-    """The planner as a service: the schedule of a (tool path, machine), planned once and recalled after.
-
-    ``margin``: the fraction of the contour tolerance the schedules aim at; ``cache_size``: schedules
-    kept (a randomised machine makes a new one every episode). A tool path is recognised by identity
-    (they are immutable): the cache holds it, so its id stays unique while its schedule is kept.
-    """
-
-    def __init__(self, margin: float = MARGIN, cache_size: int = 64) -> None:
-        self.margin = float(margin)
-        self.cache_size = int(cache_size)
-        self._cache: dict[tuple[int, MachineConfig], tuple[Toolpath, Schedule]] = {}
-
-    def schedule(self, toolpath: Toolpath, machine: MachineConfig,
-                 limits: PathLimits | None = None) -> Schedule:  # fmt: skip
-        """The schedule of ``toolpath`` on ``machine`` (planned, or recalled). ``limits``: the controller's
-        static tables when the caller has them (what a controller's look-ahead knows), else built."""
-        key = (id(toolpath), machine)
-        cached = self._cache.get(key)
-        if cached is not None and cached[0] is toolpath:
-            return cached[1]
-        schedule = plan_schedule(toolpath, machine, limits=limits, margin=self.margin)
-        if len(self._cache) >= self.cache_size:
-            self._cache.pop(next(iter(self._cache)))
-        self._cache[key] = (toolpath, schedule)
-        return schedule
 
 
 def _dependencies() -> None:
