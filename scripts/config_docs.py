@@ -16,6 +16,9 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from doc_blocks import update_docs
 
 from cnc_gym.config import markdown_table
 from cnc_gym.envs import observation
@@ -92,16 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="report differences instead of writing")
     args = parser.parse_args(argv)
-    stale, found = [], []
-    for doc in DOCS:
-        path = REPO / doc
-        text = path.read_text()
-        new, names = render(text)
-        found += names
-        if new != text:
-            stale.append(doc)
-            if not args.check:
-                path.write_text(new)
+    stale, found = update_docs(REPO, DOCS, render, args.check)
     missing = sorted((set(TABLES) | set(GENERATED)) - set(found))
     if missing:
         where = ", ".join(DOCS)

@@ -16,6 +16,9 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from doc_blocks import update_docs
 
 from cnc_gym.error_codes import Scope, markdown_table
 
@@ -51,16 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="report differences instead of writing")
     args = parser.parse_args(argv)
-    stale, found = [], []
-    for doc in DOCS:
-        path = REPO / doc
-        text = path.read_text()
-        new, names = render(text)
-        found += names
-        if new != text:
-            stale.append(doc)
-            if not args.check:
-                path.write_text(new)
+    stale, found = update_docs(REPO, DOCS, render, args.check)
     missing = sorted(set(TABLES) - set(found))
     if missing:
         print(f"error_code_docs: no block for table(s) {', '.join(missing)} in {', '.join(DOCS)}",
