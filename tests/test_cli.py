@@ -125,14 +125,20 @@ def test_machine_travel_limits_are_checked(tmp_path, capsys):
     assert status == 0 and out
 
 
-def test_run_dispatches_to_the_runner(tmp_path, capsys, monkeypatch):
-    seen = {}
+def _stub_runner(monkeypatch) -> dict:
+    """Replace the runner with one that records the parsed arguments (returned, filled when it runs)."""
+    seen: dict = {}
 
     def run_cli(args):
         seen.update(vars(args))
         return 0
 
     monkeypatch.setitem(sys.modules, "cnc_gym.runner", types.SimpleNamespace(run_cli=run_cli))
+    return seen
+
+
+def test_run_dispatches_to_the_runner(tmp_path, capsys, monkeypatch):
+    seen = _stub_runner(monkeypatch)
     program = write(tmp_path, "G00 X1\n")
     assert main(["run", program, "--json", "--plot", "p.png", "--no-progress"]) == 0
     assert seen["program"] == program and seen["policy"] == "constant:1.0" and seen["json"] is True
@@ -188,13 +194,7 @@ def test_trace_calculator_input(tmp_path, capsys):
 
 
 def test_run_setup_travels_in_the_machine_record(tmp_path, capsys, monkeypatch):
-    seen = {}
-
-    def run_cli(args):
-        seen.update(vars(args))
-        return 0
-
-    monkeypatch.setitem(sys.modules, "cnc_gym.runner", types.SimpleNamespace(run_cli=run_cli))
+    seen = _stub_runner(monkeypatch)
     program = write(tmp_path, "G00 X1\n")
     assert main(["run", program, "--setup", write(tmp_path, SETUP_FILE, "job.yaml")]) == 0
     machine = seen["machine"]
