@@ -129,17 +129,24 @@ class CallConvention:
             raise self.dialect.error(f"{what} P{p}: at most 999 repeats (GSK 25i §1.3)", "bad-call")
         return number, max(count, 1)
 
-    def _push_subprogram(self, number: int, count: int, pc: int, *, by_code: bool) -> int:
+    def _push_subprogram(self, number: int, count: int, pc: int, *, by_code: bool,
+                         local: bool = False) -> int:  # fmt: skip
+        """Enter program O``number`` (M98), or with ``local`` the running program from its block N``number``
+        on (Haas M97: a frame over the same blocks; its M99 returns after the calling block), ``count``
+        times."""
         if count == 0:
             return pc  # L0: not called
         if self._sub_depth >= self.dialect.max_subprogram_nesting:
             raise self.dialect.error(
-                f"M98 P{number}: subprograms nest at most "
+                f"{'M97' if local else 'M98'} P{number}: subprograms nest at most "
                 f"{self.dialect.max_subprogram_nesting} levels (GSK 25i §1.3)",
                 "nesting",
             )
-        unit = self.unit(number)
         caller = self.frames[-1]
+        if local:
+            unit = caller.unit.local(self._find_in(caller.unit, number, caller.unit.start))
+        else:
+            unit = self.unit(number)
         self._sub_depth += 1
         return self._enter(
             Frame(
@@ -164,22 +171,6 @@ class CallConvention:
         if count != int(count) or not 0 <= count <= 9999:
             raise self.dialect.error(f"M97 L{count:g}: the repeat count is 0..9999", "bad-call")
         self.core.state.flow_request = ("local", number, int(count))
-
-    def _push_local_subprogram(self, number: int, count: int, pc: int) -> int:
-        """Enter the local subprogram at Nn of the running unit (M97): a frame over the same blocks from
-        that block on; its M99 returns after the calling block."""
-        if count == 0:
-            return pc  # L0: not called
-        if self._sub_depth >= self.dialect.max_subprogram_nesting:
-            raise self.dialect.error(
-                f"M97 P{number}: subprograms nest at most {self.dialect.max_subprogram_nesting} levels",
-                "nesting",
-            )
-        caller = self.frames[-1]
-        start = self._find_in(caller.unit, number, caller.unit.start)
-        self._sub_depth += 1
-        return self._enter(Frame(caller.unit.local(start), pc, count - 1, macro=False, subprogram=True,
-                                 modal_limit=caller.modal_limit, by_code=caller.by_code))  # fmt: skip
 
     def subprogram_return(self, values: dict) -> None:
         """M99 [P n]: back to the caller (to its block Nn with P); in the main program see FlowOptions."""

@@ -240,7 +240,7 @@ class FlowRunner(CallConvention):
             if request[0] == "call":
                 return self._push_subprogram(request[1], request[2], pc, by_code=False)
             if request[0] == "local":
-                return self._push_local_subprogram(request[1], request[2], pc)
+                return self._push_subprogram(request[1], request[2], pc, by_code=False, local=True)
             return self._return(pc, request[1])
         if moved and self.modal_calls:
             level = min(self.frames[-1].modal_limit, len(self.modal_calls)) - 1
