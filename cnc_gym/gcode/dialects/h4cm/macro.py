@@ -236,12 +236,13 @@ class HustRunner(FlowRunner):
             raise self.dialect.error(f"M98 L{count:g}: the repeat count is 1-9999", "bad-call")
         self.core.state.flow_request = ("call", int(p), int(count))
 
-    def _push_subprogram(self, number: int, count: int, pc: int, *, by_code: bool) -> int:
+    def _push_subprogram(self, number: int, count: int, pc: int, *, by_code: bool,
+                         local: bool = False) -> int:  # fmt: skip
         limit = self.dialect.max_subprogram_nesting
         if self._sub_depth >= limit:
             raise self.dialect.error(f"M98 P{number}: subprograms nest at most {limit} levels (HUST H4C-M "
                                      "manual §3.39.2)", "nesting")  # fmt: skip
-        return super()._push_subprogram(number, count, pc, by_code=by_code)
+        return super()._push_subprogram(number, count, pc, by_code=by_code, local=local)
 
     def _return(self, pc: int, target: int | None) -> int:
         if len(self.frames) == 1:  # M99 in the main program: one part made
