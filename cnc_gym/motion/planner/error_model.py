@@ -235,10 +235,116 @@ def _on_grid(table: np.ndarray, t: np.ndarray, x: float, c: int) -> float:
     return table[i, c] * (1.0 - w) + table[i + 1, c] * w
 
 
+@njit(cache=True, inline="always")
+def _approach_error_at(k: int, u_in: np.ndarray, u_out: np.ndarray, speed: float, drop: float, ramp_s: float,
+                       hold_s: float, t: np.ndarray, e: np.ndarray, c_int: np.ndarray,
+                       lag: np.ndarray) -> float:  # fmt: skip
+    """The error of :func:`corner_approach_error` at time ``t[k]`` after the corner.
+
+    The planner's innermost loop, so written out in scalars: the table look-ups are :func:`_on_grid`'s
+    (the same operations, one grid place per time shared by the three axes).
+    """
+    tk = t[k]
+    i0, i1, i2 = u_in[0], u_in[1], u_in[2]
+    o0, o1, o2 = u_out[0], u_out[1], u_out[2]
+    y0 = speed * (tk * o0 - lag[0] * i0 - (o0 - i0) * e[k, 0])
+    y1 = speed * (tk * o1 - lag[1] * i1 - (o1 - i1) * e[k, 1])
+    y2 = speed * (tk * o2 - lag[2] * i2 - (o2 - i2) * e[k, 2])
+    if drop > 0.0:
+        n = t.shape[0]
+        step = t[1] - t[0]
+        tau = tk + hold_s
+        row, w = -1, 0.0  # the grid place of τ: row −1 before the grid, n − 1 beyond it
+        if tau > 0.0:
+            f = tau / step
+            row = int(f)
+            if row >= n - 1:
+                row = n - 1
+            else:
+                w = f - row
+        row_end, w_end = row, w  # ... and of τ + T
+        if ramp_s > 0.0:
+            row_end, w_end = -1, 0.0
+            if tau + ramp_s > 0.0:
+                f = (tau + ramp_s) / step
+                row_end = int(f)
+                if row_end >= n - 1:
+                    row_end = n - 1
+                else:
+                    w_end = f - row_end
+        x0 = x1 = x2 = 0.0
+        for a in range(3):
+            if ramp_s > 0.0:  # the ramp's mean excess lag: (C(τ + T) − C(τ))/T
+                if row_end < 0:
+                    c_end = c_int[0, a]
+                elif row_end >= n - 1:
+                    c_end = c_int[n - 1, a]
+                else:
+                    c_end = c_int[row_end, a] * (1.0 - w_end) + c_int[row_end + 1, a] * w_end
+                if row < 0:
+                    c_start = c_int[0, a]
+                elif row >= n - 1:
+                    c_start = c_int[n - 1, a]
+                else:
+                    c_start = c_int[row, a] * (1.0 - w) + c_int[row + 1, a] * w
+                x = (c_end - c_start) / ramp_s
+            else:  # a step: L − E(τ)
+                if row < 0:
+                    e_at = e[0, a]
+                elif row >= n - 1:
+                    e_at = e[n - 1, a]
+                else:
+                    e_at = e[row, a] * (1.0 - w) + e[row + 1, a] * w
+                x = max(lag[a] - e_at, 0.0)
+            if a == 0:
+                x0 = x
+            elif a == 1:
+                x1 = x
+            else:
+                x2 = x
+        y0 -= drop * x0 * i0
+        y1 -= drop * x1 * i1
+        y2 -= drop * x2 * i2
+    along_in = min(0.0 + y0 * i0 + y1 * i1 + y2 * i2, 0.0)  # nearest point of the incoming leg
+    along_out = max(0.0 + y0 * o0 + y1 * o1 + y2 * o2, 0.0)  # ... and of the outgoing leg
+    g0, g1, g2 = y0 - along_in * i0, y1 - along_in * i1, y2 - along_in * i2
+    d_in = 0.0 + g0 * g0 + g1 * g1 + g2 * g2
+    g0, g1, g2 = y0 - along_out * o0, y1 - along_out * o1, y2 - along_out * o2
+    d_out = 0.0 + g0 * g0 + g1 * g1 + g2 * g2
+    return math.sqrt(min(d_in, d_out))
+
+
+@njit(cache=True)
+def corner_error_unit(u_in: np.ndarray, u_out: np.ndarray, t: np.ndarray, e: np.ndarray,
+                      lag: np.ndarray) -> float:  # fmt: skip
+    """:func:`corner_approach_error` at unit speed with no approach (``drop = 0``): the constant-speed
+    corner's error per mm/s. The same operations, in a loop of its own (the planner calls it for every
+    junction and window)."""
+    i0, i1, i2 = u_in[0], u_in[1], u_in[2]
+    o0, o1, o2 = u_out[0], u_out[1], u_out[2]
+    l0, l1, l2 = lag[0], lag[1], lag[2]
+    worst = 0.0
+    for k in range(t.shape[0]):
+        tk = t[k]
+        y0 = 1.0 * (tk * o0 - l0 * i0 - (o0 - i0) * e[k, 0])
+        y1 = 1.0 * (tk * o1 - l1 * i1 - (o1 - i1) * e[k, 1])
+        y2 = 1.0 * (tk * o2 - l2 * i2 - (o2 - i2) * e[k, 2])
+        along_in = min(0.0 + y0 * i0 + y1 * i1 + y2 * i2, 0.0)
+        along_out = max(0.0 + y0 * o0 + y1 * o1 + y2 * o2, 0.0)
+        g0, g1, g2 = y0 - along_in * i0, y1 - along_in * i1, y2 - along_in * i2
+        d_in = 0.0 + g0 * g0 + g1 * g1 + g2 * g2
+        g0, g1, g2 = y0 - along_out * o0, y1 - along_out * o1, y2 - along_out * o2
+        d_out = 0.0 + g0 * g0 + g1 * g1 + g2 * g2
+        d = math.sqrt(min(d_in, d_out))
+        if d > worst:
+            worst = d
+    return worst
+
+
 @njit(cache=True)
 def corner_approach_error(u_in: np.ndarray, u_out: np.ndarray, speed: float, drop: float, ramp_s: float,
                           hold_s: float, t: np.ndarray, e: np.ndarray, c_int: np.ndarray,
-                          lag: np.ndarray) -> float:  # fmt: skip
+                          lag: np.ndarray, stop_above: float = np.inf) -> float:  # fmt: skip
     """Largest contour error (mm) of a corner (unit tangents ``u_in`` → ``u_out``) taken at ``speed`` after
     slowing down by ``drop`` (mm/s) along ``u_in``: a linear ramp of ``ramp_s`` seconds that ended
     ``hold_s`` seconds before the corner (:class:`ApproachTables`). With ``drop = 0`` it is the
@@ -247,32 +353,30 @@ def corner_approach_error(u_in: np.ndarray, u_out: np.ndarray, speed: float, dro
     The servo axes are linear, so the tool's deviation is the constant-speed corner's,
     ``v·(t·u_out − L∘u_in − (u_out − u_in)∘E(t))``, plus the excess lag the faster approach left along
     ``u_in``, still decaying after the corner; the error is its distance from the corner's two legs.
+
+    ``stop_above``: return as soon as the error passes it (a value above it, not the maximum): what a
+    caller that only compares the error with a budget needs, at a fraction of the cost when it fails.
     """
     worst = 0.0
-    y = np.zeros(3)
     for k in range(t.shape[0]):
-        tk = t[k]
-        along_in = 0.0
-        along_out = 0.0
-        for a in range(3):
-            y[a] = speed * (tk * u_out[a] - lag[a] * u_in[a] - (u_out[a] - u_in[a]) * e[k, a])
-            if drop > 0.0:
-                tau = tk + hold_s
-                if ramp_s > 0.0:
-                    excess = (_on_grid(c_int, t, tau + ramp_s, a) - _on_grid(c_int, t, tau, a)) / ramp_s
-                else:
-                    excess = max(lag[a] - _on_grid(e, t, tau, a), 0.0)
-                y[a] -= drop * excess * u_in[a]
-            along_in += y[a] * u_in[a]
-            along_out += y[a] * u_out[a]
-        along_in = min(along_in, 0.0)
-        along_out = max(along_out, 0.0)
-        d_in = 0.0
-        d_out = 0.0
-        for a in range(3):
-            d_in += (y[a] - along_in * u_in[a]) ** 2
-            d_out += (y[a] - along_out * u_out[a]) ** 2
-        d = math.sqrt(min(d_in, d_out))
+        d = _approach_error_at(k, u_in, u_out, speed, drop, ramp_s, hold_s, t, e, c_int, lag)
         if d > worst:
             worst = d
+            if worst > stop_above:
+                break
     return worst
+
+
+@njit(cache=True)
+def corner_approach_exceeds(u_in: np.ndarray, u_out: np.ndarray, speed: float, drop: float, ramp_s: float,
+                            hold_s: float, t: np.ndarray, e: np.ndarray, c_int: np.ndarray, lag: np.ndarray,
+                            limit: float, first: int) -> int:  # fmt: skip
+    """Whether :func:`corner_approach_error` passes ``limit``: the index of a time on ``t`` where it does,
+    or −1 when it never does. The scan starts at ``first`` and wraps round: a search over holds passes
+    the previous hold's index, where a too-short hold usually fails again at once."""
+    n = t.shape[0]
+    for j in range(n):
+        k = first + j if first + j < n else first + j - n
+        if _approach_error_at(k, u_in, u_out, speed, drop, ramp_s, hold_s, t, e, c_int, lag) > limit:
+            return k
+    return -1

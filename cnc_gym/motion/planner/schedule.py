@@ -19,6 +19,8 @@ from cnc_gym.motion.planner.error_model import (
     SPEED_CEILING_MM_S,
     approach_tables,
     corner_approach_error,
+    corner_approach_exceeds,
+    corner_error_unit,
     servo_tables,
 )
 from cnc_gym.motion.planner.record import Schedule
@@ -199,6 +201,23 @@ def _arc_cap(radius: float, turn_axis: np.ndarray, arc_omega: np.ndarray, arc_ta
     return cap
 
 
+@njit(cache=True, inline="always")
+def _window_max(values: np.ndarray, queue: np.ndarray, head: np.ndarray, tail: np.ndarray,
+                pushed: np.ndarray, w: int, lo: int, hi: int) -> float:  # fmt: skip
+    """max(values[lo..hi]) (0 when empty) by the monotone queue ``queue`` of window ``w``: ``lo`` and
+    ``hi`` never decrease from one call to the next, so the cost is O(1) per call on average."""
+    while pushed[w] <= hi:
+        q = pushed[w]
+        while tail[w] > head[w] and values[queue[tail[w] - 1]] <= values[q]:
+            tail[w] -= 1
+        queue[tail[w]] = q
+        tail[w] += 1
+        pushed[w] += 1
+    while tail[w] > head[w] and queue[head[w]] < lo:
+        head[w] += 1
+    return values[queue[head[w]]] if tail[w] > head[w] and lo <= hi else 0.0
+
+
 def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLimits | None = None,
                   margin: float = MARGIN, max_override: float | None = None) -> Schedule:  # fmt: skip
     """The deployable schedule of ``toolpath`` on ``machine`` (:mod:`cnc_gym.motion.planner`'s docstring).
@@ -239,6 +258,23 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         cutting[k] = seg_i[k, K.I_RAPID] == 0
         feed[k] = seg_f[k, K.F_BASE] if cutting[k] else 0.0
     t0, t1 = _piece_tangents(seg_f, seg_i, curve_f)
+    piece_cap = _piece_caps(seg_f, seg_i, t0, cutting, feed, lag, arc_omega, arc_table, target, top)
+    run_lo, run_hi = _runs(seg_f, cutting)
+    corner_v, hold_lo, hold_hi, extra = _corners(
+        seg_f, pt_f, t0, t1, cutting, feed, piece_cap, run_lo, run_hi, lag, ramp_t, ramp_e, excess_int,
+        target, time_constant, accel, jerk, slew_per_s, settle_s)
+    node_s, piece, point = _nodes(seg_f, point_s, corner_v, hold_lo, hold_hi, extra)
+    cap = _node_caps(seg_f, pt_f, cutting, piece_cap, corner_v, hold_lo, hold_hi, node_s, piece, point)
+    _window_caps(seg_f, seg_i, point_s, t0, t1, cutting, run_lo, run_hi, node_s, piece, cap, lag, arc_omega,
+                 arc_table, ramp_t, ramp_e, excess_int, target, time_constant, windows)  # fmt: skip
+    speed, override = _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top)
+    return node_s, cap, speed, override
+
+
+@njit(cache=True)
+def _piece_caps(seg_f, seg_i, t0, cutting, feed, lag, arc_omega, arc_table, target, top):  # fmt: skip
+    """Speed cap per move (inf on rapids)."""
+    n = seg_f.shape[0]
     axis = np.zeros(3)
     # ---- caps per move: the knob's range (programmed feed × max override), the line's lateral lag, the
     # arc's steady error. The controller's own limits are left to the controller.
@@ -264,6 +300,13 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             if seg_i[k, K.I_TABLE] < 0 and seg_i[k, K.I_KIND] == K.KIND_ARC:
                 axis[seg_i[k, K.I_PW]] = 1.0
             piece_cap[k] = min(piece_cap[k], _arc_cap(1.0 / curvature, axis, arc_omega, arc_table, target))
+    return piece_cap
+
+
+@njit(cache=True)
+def _runs(seg_f, cutting):
+    """Path positions of the start and end of the run of cutting moves each move is in."""
+    n = seg_f.shape[0]
     # ---- the run of cutting moves each move is in (holds and windows never reach across a rapid)
     run_lo = np.empty(n)
     run_hi = np.empty(n)
@@ -277,6 +320,15 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
                 run_lo[k] = seg_f[k, K.F_S0]
                 run_hi[k] = seg_f[k, K.F_S0] + seg_f[k, K.F_LEN]
             start = k + 1
+    return run_lo, run_hi
+
+
+@njit(cache=True)
+def _corners(seg_f, pt_f, t0, t1, cutting, feed, piece_cap, run_lo, run_hi, lag, ramp_t, ramp_e, excess_int,
+             target, time_constant, accel, jerk, slew_per_s, settle_s):  # fmt: skip
+    """Speed at each junction taken as a corner (inf elsewhere), and the path span its hold covers; the
+    number of hold ends (nodes the holds add)."""
+    n = seg_f.shape[0]
     # ---- junctions between cutting moves: the corner model, held after the corner, and held before it
     # as long as the excess lag of the deceleration into it needs
     hold_after = HOLD_TIME_CONSTANTS * time_constant
@@ -297,7 +349,7 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             dot += u_in[a] * u_out[a]
         if dot > math.cos(math.radians(MIN_TURN_DEG)):
             continue
-        per_speed = corner_approach_error(u_in, u_out, 1.0, 0.0, 0.0, 0.0, ramp_t, ramp_e, excess_int, lag)
+        per_speed = corner_error_unit(u_in, u_out, ramp_t, ramp_e, lag)
         if per_speed <= 1e-12:
             continue
         v_c = min(corner_target / per_speed, piece_cap[q - 1], piece_cap[q])
@@ -310,7 +362,7 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             if math.isfinite(piece_cap[q - 1]):
                 fall = max(piece_cap[q - 1] - hard, 0.0)
                 if corner_approach_error(u_in, u_out, hard, fall, _ramp_time(fall, accel, jerk), 0.0, ramp_t,
-                                         ramp_e, excess_int, lag) <= target:  # fmt: skip
+                                         ramp_e, excess_int, lag, target) <= target:  # fmt: skip
                     continue
         # The approach: from the incoming move's cap down to v_c, a ramp at the path acceleration (the
         # override's slew bounds it too), then a hold at v_c of the shortest length that keeps the error
@@ -323,10 +375,12 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             a_eff = DECEL_SHARE * a_full
             ramp = _ramp_time(drop, a_eff, jerk)
             steps = int(HOLD_MAX / HOLD_STEP)
+            failed_at = 0
             for m in range(steps + 1):
                 hold = m * HOLD_STEP * time_constant
-                if corner_approach_error(u_in, u_out, v_c, drop, ramp, hold, ramp_t, ramp_e, excess_int,
-                                         lag) <= target:  # fmt: skip
+                failed_at = corner_approach_exceeds(u_in, u_out, v_c, drop, ramp, hold, ramp_t, ramp_e,
+                                                    excess_int, lag, target, max(failed_at, 0))  # fmt: skip
+                if failed_at < 0:
                     break
             # The controller reaches the knob's speed later than the scan's profile: it turns an
             # acceleration (up to the full one) into the deceleration and ends that with the jerk limit,
@@ -336,6 +390,13 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         hold_lo[q] = max(seg_f[q, K.F_S0] - v_c * hold, run_lo[q - 1])
         hold_hi[q] = min(seg_f[q, K.F_S0] + v_c * hold_after, run_hi[q])
         extra += 2
+    return corner_v, hold_lo, hold_hi, extra
+
+
+@njit(cache=True)
+def _nodes(seg_f, point_s, corner_v, hold_lo, hold_hi, extra):
+    """Sorted node positions, the move each node lies on and the junction it sits on (−1 inside a move)."""
+    n = seg_f.shape[0]
     # ---- nodes: every junction, inside moves every NODE_SPACING_MM at most, and the ends of the holds
     count = np.empty(n, dtype=np.int64)
     total = 1 + extra
@@ -365,6 +426,15 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         if node_s[i] == point_s[k] and (i == 0 or node_s[i - 1] != node_s[i]):
             point[i] = k
     point[total - 1] = n
+    return node_s, piece, point
+
+
+@njit(cache=True)
+def _node_caps(seg_f, pt_f, cutting, piece_cap, corner_v, hold_lo, hold_hi, node_s, piece,
+               point):  # fmt: skip
+    """Cap per node: its move's, the controller's own limits, and the corner holds over it."""
+    n = seg_f.shape[0]
+    total = node_s.shape[0]
     cap = np.empty(total)
     for i in range(total):
         cap[i] = piece_cap[piece[i]]
@@ -385,6 +455,17 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
         while j < total and node_s[j] <= hold_hi[q] + 1e-9:
             cap[j] = min(cap[j], corner_v[q])
             j += 1
+    return cap
+
+
+@njit(cache=True)
+def _window_caps(seg_f, seg_i, point_s, t0, t1, cutting, run_lo, run_hi, node_s, piece, cap, lag, arc_omega,
+                 arc_table, ramp_t, ramp_e, excess_int, target, time_constant, windows):  # fmt: skip
+    """Lower ``cap`` (in place) where the path's net turn over a window around a node is a corner or an arc
+    the servo sees."""
+    n = seg_f.shape[0]
+    total = node_s.shape[0]
+    axis = np.zeros(3)
     # ---- net-turn windows: clusters of junctions seen as one corner, chains of short moves as arcs
     junction_turn = np.zeros(n + 1)
     for q in range(1, n):
@@ -393,12 +474,27 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             junction_turn[q] = math.acos(min(max(dot, -1.0), 1.0))
     ta = np.zeros(3)
     tb = np.zeros(3)
+    # The sharpest junction inside each window, by a sliding maximum per window width: both ends of a
+    # window only move forward from node to node, so each junction enters and leaves its queue once.
+    queue = np.empty((len(windows), n + 1), dtype=np.int64)
+    head = np.zeros(len(windows), dtype=np.int64)
+    tail = np.zeros(len(windows), dtype=np.int64)
+    pushed = np.zeros(len(windows), dtype=np.int64)  # junctions 1 .. pushed - 1 have been queued
+    pushed[:] = 1
+    widest = windows.max() if len(windows) > 0 else 0.0
     for i in range(total):
         k = piece[i]
         if not cutting[k]:
             continue
         s = node_s[i]
-        for w in windows:
+        # Inside one move even for the widest window: so for every window (most nodes of long moves)
+        a_s = max(s - 0.5 * widest, run_lo[k])
+        b_s = min(s + 0.5 * widest, run_hi[k])
+        if (max(min(np.searchsorted(point_s, a_s, side="right") - 1, n - 1), 0)
+                == max(min(np.searchsorted(point_s, b_s, side="left") - 1, n - 1), 0)):  # fmt: skip
+            continue
+        for wi in range(len(windows)):
+            w = windows[wi]
             a_s = max(s - 0.5 * w, run_lo[k])
             b_s = min(s + 0.5 * w, run_hi[k])
             if b_s - a_s < 0.25 * w:
@@ -421,9 +517,7 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             v_point = span / (RESPONSE_TIME_CONSTANTS * time_constant)  # above it, the window is a point
             # Seen as an arc only where the turn is spread over the window: a turn most of which is one
             # junction's is that junction's corner (the corner model has it, at the speed at the corner).
-            sharpest = 0.0
-            for q in range(ka + 1, kb + 1):
-                sharpest = max(sharpest, junction_turn[q])
+            sharpest = _window_max(junction_turn, queue[wi], head, tail, pushed, wi, ka + 1, kb)
             v_arc = SPEED_CEILING_MM_S
             if sharpest < SPREAD_SHARE * turn:
                 v_arc = _arc_cap(span / turn, axis, arc_omega, arc_table, target)
@@ -432,9 +526,18 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             else:
                 if kb - ka == 1:  # a single junction: the corner model above has it
                     continue
-                per_speed = corner_approach_error(ta, tb, 1.0, 0.0, 0.0, 0.0, ramp_t, ramp_e, excess_int, lag)
+                if cap[i] <= v_point:  # the window's cap is at least v_point: it cannot lower this one
+                    continue
+                per_speed = corner_error_unit(ta, tb, ramp_t, ramp_e, lag)
                 cap_w = max(v_point, target / per_speed) if per_speed > 1e-12 else SPEED_CEILING_MM_S
             cap[i] = min(cap[i], cap_w)
+
+
+
+@njit(cache=True)
+def _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top):
+    """Reachable speed per node (the jerk-limited scan under the caps) and the override that asks for it."""
+    total = node_s.shape[0]
     # ---- reachable speeds, then the knob
     accel_at = np.empty(total)
     finite = np.empty(total)
@@ -457,7 +560,7 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
             following = override[i]
         else:
             override[i] = following
-    return node_s, cap, speed, override
+    return speed, override
 
 
 def _dependencies() -> None:

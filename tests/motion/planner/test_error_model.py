@@ -108,3 +108,43 @@ def test_corner_error_of_a_p_loop():
     assert np.all(np.diff(c[:4]) > 0)
     assert c[2] == pytest.approx(c[4], rel=1e-9)
     assert c[3] < 1 / 30
+
+
+# ------------------------------------------------------------------ the planner's fast corner routines
+def _corner_case(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    a = rng.normal(size=3)
+    b = rng.normal(size=3)
+    return a / np.linalg.norm(a), b / np.linalg.norm(b)
+
+
+@pytest.mark.parametrize("machine_name", ["vmc-small", "gsk25i", "p-loop-30"])
+def test_fast_corner_routines_agree_with_the_full_model(machine_name):
+    """corner_error_unit is corner_approach_error at unit speed without an approach, to the bit (the
+    same operations in a loop of their own); corner_approach_exceeds says exactly whether the error
+    passes a limit, from whichever grid index it starts; stop_above never hides a passing error."""
+    from cnc_gym.motion.planner.error_model import (
+        approach_tables,
+        corner_approach_error,
+        corner_approach_exceeds,
+        corner_error_unit,
+    )
+
+    machine = load_machine(machine_name)
+    tables, approach = servo_tables(machine), approach_tables(machine)
+    grid = (tables.ramp_t, approach.ramp_error, approach.excess_integral, tables.lag_s)
+    rng = np.random.default_rng()
+    for _ in range(60):
+        u_in, u_out = _corner_case(rng)
+        full = corner_approach_error(u_in, u_out, 1.0, 0.0, 0.0, 0.0, *grid)
+        assert corner_error_unit(u_in, u_out, tables.ramp_t, approach.ramp_error, tables.lag_s) == full
+        speed, drop = 40.0 * rng.random(), 30.0 * rng.random()
+        ramp, hold = 0.1 * rng.random() * (rng.random() < 0.8), 0.05 * rng.random()
+        error = corner_approach_error(u_in, u_out, speed, drop, ramp, hold, *grid)
+        assert math.isfinite(error) and error >= 0.0
+        for limit in (0.5 * error, 0.999 * error, error, 1.001 * error):
+            first = int(rng.integers(len(tables.ramp_t)))
+            over = corner_approach_exceeds(u_in, u_out, speed, drop, ramp, hold, *grid, limit, first)
+            assert (over >= 0) == (error > limit)
+            stopped = corner_approach_error(u_in, u_out, speed, drop, ramp, hold, *grid, limit)
+            assert (stopped > limit) == (error > limit)
+            assert stopped <= error

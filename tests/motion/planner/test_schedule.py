@@ -59,3 +59,23 @@ def test_schedule_of_a_line_runs_at_the_knobs_top_away_from_its_ends():
     middle = (schedule.s > 20) & (schedule.s < 80)
     assert np.all(schedule.override[middle] == pytest.approx(2.0))
     assert math.isclose(schedule.s[-1], 100.0)
+
+
+def test_the_sliding_window_maximum_is_the_maximum_over_the_window():
+    """_window_max (the net-turn windows' sharpest junction) against a brute-force max, for windows
+    whose ends only move forward, empty windows included."""
+    from cnc_gym.motion.planner.schedule import _window_max
+
+    rng = np.random.default_rng()
+    for _ in range(20):
+        n = int(rng.integers(1, 60))
+        values = rng.random(n + 1) * (rng.random(n + 1) < 0.7)
+        queue = np.empty((1, n + 1), dtype=np.int64)
+        head, tail, pushed = (np.zeros(1, dtype=np.int64) for _ in range(3))
+        pushed[:] = 1
+        lo, hi = 1, 0
+        for _ in range(3 * n):
+            hi = min(n, hi + int(rng.integers(0, 3)))
+            lo = min(hi + 1, lo + int(rng.integers(0, 2)), n)
+            want = values[lo : hi + 1].max() if lo <= hi else 0.0
+            assert _window_max(values, queue[0], head, tail, pushed, 0, lo, hi) == want
