@@ -236,6 +236,17 @@ def _on_grid(table: np.ndarray, t: np.ndarray, x: float, c: int) -> float:
 
 
 @njit(cache=True, inline="always")
+def _on_row(table: np.ndarray, row: int, w: float, c: int) -> float:
+    """Column ``c`` of ``table`` at grid row ``row`` plus ``w`` of the next (row −1: before the grid, the
+    last row: beyond it): :func:`_on_grid`'s value, its grid place found once for the three axes."""
+    if row < 0:
+        return table[0, c]
+    if row >= table.shape[0] - 1:
+        return table[table.shape[0] - 1, c]
+    return table[row, c] * (1.0 - w) + table[row + 1, c] * w
+
+
+@njit(cache=True, inline="always")
 def _approach_error_at(k: int, u_in: np.ndarray, u_out: np.ndarray, speed: float, drop: float, ramp_s: float,
                        hold_s: float, t: np.ndarray, e: np.ndarray, c_int: np.ndarray,
                        lag: np.ndarray) -> float:  # fmt: skip
@@ -275,27 +286,9 @@ def _approach_error_at(k: int, u_in: np.ndarray, u_out: np.ndarray, speed: float
         x0 = x1 = x2 = 0.0
         for a in range(3):
             if ramp_s > 0.0:  # the ramp's mean excess lag: (C(τ + T) − C(τ))/T
-                if row_end < 0:
-                    c_end = c_int[0, a]
-                elif row_end >= n - 1:
-                    c_end = c_int[n - 1, a]
-                else:
-                    c_end = c_int[row_end, a] * (1.0 - w_end) + c_int[row_end + 1, a] * w_end
-                if row < 0:
-                    c_start = c_int[0, a]
-                elif row >= n - 1:
-                    c_start = c_int[n - 1, a]
-                else:
-                    c_start = c_int[row, a] * (1.0 - w) + c_int[row + 1, a] * w
-                x = (c_end - c_start) / ramp_s
+                x = (_on_row(c_int, row_end, w_end, a) - _on_row(c_int, row, w, a)) / ramp_s
             else:  # a step: L − E(τ)
-                if row < 0:
-                    e_at = e[0, a]
-                elif row >= n - 1:
-                    e_at = e[n - 1, a]
-                else:
-                    e_at = e[row, a] * (1.0 - w) + e[row + 1, a] * w
-                x = max(lag[a] - e_at, 0.0)
+                x = max(lag[a] - _on_row(e, row, w, a), 0.0)
             if a == 0:
                 x0 = x
             elif a == 1:
