@@ -172,7 +172,7 @@ def profile_layers(env_id: str, kwargs: dict, n_steps: int) -> list[tuple[str, f
 
 def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
     """µs per step of each compiled part, measured on the modular step (same numbers, separate calls)."""
-    from cnc_gym.envs import fused
+    from cnc_gym.envs.engine import batch
     from cnc_gym.envs.feedrate import FeedrateEnv
     from cnc_gym.motion import Controller
     from cnc_gym.plant import ContourErrorMeter, ServoPlant
@@ -187,7 +187,7 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
     totals = {"controller periods": 0.0, "servo plant": 0.0, "contour error": 0.0,
               "statistics, reward, observation": 0.0}  # fmt: skip
     originals = (Controller.advance_rows, ServoPlant.step, ServoPlant.settled, ContourErrorMeter.measure,
-                 fused._finish_modular)  # fmt: skip
+                 batch.finish_modular)  # fmt: skip
 
     def timed(label, fn):
         def wrapper(*args, **kwargs):
@@ -202,7 +202,7 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
     ServoPlant.step = timed("servo plant", originals[1])
     ServoPlant.settled = timed("servo plant", originals[2])
     ContourErrorMeter.measure = timed("contour error", originals[3])
-    fused._finish_modular = timed("statistics, reward, observation", originals[4])
+    batch.finish_modular = timed("statistics, reward, observation", originals[4])
     try:
         env = _Env(**kwargs)
         actions = sampled(env.action_space, n_steps, 2)
@@ -212,7 +212,7 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
         run_single(env, actions, 2)
     finally:
         (Controller.advance_rows, ServoPlant.step, ServoPlant.settled, ContourErrorMeter.measure,
-         fused._finish_modular) = originals  # fmt: skip
+         batch.finish_modular) = originals  # fmt: skip
     return {key: 1e6 * value / n_steps for key, value in totals.items()}
 
 

@@ -27,7 +27,7 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
-from cnc_gym.envs.fused import INFO_KEYS
+from cnc_gym.envs.engine import INFO_KEYS
 from cnc_gym.envs.vector import FeedrateVectorEnv
 
 

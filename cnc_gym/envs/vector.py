@@ -2,7 +2,7 @@
 
 ``gymnasium.vector.SyncVectorEnv`` over N ``gymnasium.make`` copies steps them one by one, each through
 three wrappers, and merges their info dicts key by key. This class runs the N episodes in one
-:class:`~cnc_gym.envs.fused.FeedrateBatch`: one numba call per step moves every env (in numba's threads
+:class:`~cnc_gym.envs.engine.batch.FeedrateBatch`: one numba call per step moves every env (in numba's threads
 from 16 envs on, where numba has at least four), and the infos are read from the batch's state arrays.
 Semantics are those of ``SyncVectorEnv`` in its default next-step autoreset mode, so the two give the
 same numbers: the step after an episode ends resets that env (its program drawn with its own generator)
@@ -28,8 +28,8 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
+from cnc_gym.envs.engine.layout import I_PROGRAM, I_RESET
 from cnc_gym.envs.feedrate import FeedrateEnv
-from cnc_gym.envs.fused import I_PROGRAM, I_RESET
 from cnc_gym.errors import ConfigError
 from cnc_gym.motion import ActionError
 
