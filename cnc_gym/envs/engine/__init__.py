@@ -1,7 +1,7 @@
 """The feed-rate task's engine: N episodes in the rows of a few arrays, stepped by one compiled call.
 
 What the Feedrate envs (``cnc_gym/Feedrate-v0`` … v3) and their vector env run. The modules, each importing
-only those before it (``layout ← specs ← bank ← step ← batch``; ``tests/envs/engine/test_layout.py``):
+only those before it (``layout ← specs ← bank ← step ← batch``, checked by ``tests/test_package_layout.py``):
 
 - :mod:`~cnc_gym.envs.engine.layout`: the data layout. The per-step signals (:data:`SIGNALS`), the machine
   quantities, the look-ahead rows, the columns of the float and int state rows (``F_*``, ``I_*``) and of

@@ -253,7 +253,7 @@ class FeedrateBatch:
         """The modular step: the Controller, plant and meter objects around the compiled statistics, reward
         and observation (see the module docstring). The step's wiring written a second time, on purpose and
         no more: it is the only step of a plant without compiled kernels (MuJoCo), and the reference the
-        tests hold the compiled step to (tests/envs/engine/test_batch.py); timings of its parts are
+        tests hold the compiled step to (tests/envs/engine/test_step.py); timings of its parts are
         ``scripts/bench_env.py --profile``'s."""
         bank_f, bank_i = self.bank.floats, self.bank.ints
         sf, si = self.state_f, self.state_i
