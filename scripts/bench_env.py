@@ -149,7 +149,7 @@ def against_pendulum(env, runner, n_steps: int, env_steps_per_step: int, repeats
 # ------------------------------------------------------------------------------------------- profiles
 def profile_layers(env_id: str, kwargs: dict, n_steps: int) -> list[tuple[str, float]]:
     """cProfile of ``n_steps`` steps through gym.make: each function's own time per step (µs), largest
-    first. The compiled call appears as one entry (``_run_serial``)."""
+    first. The compiled call appears as one entry (``run_serial``)."""
     env = gym.make(env_id, **kwargs)
     actions = sampled(env.action_space, n_steps, 1)
     run_single(env, actions[:200], 0)
