@@ -350,6 +350,8 @@ class FeedrateBatch:
         infos = dict(zip(OUTPUT_INFO_KEYS, info_f, strict=True))
         infos.update(zip(OUT_INT_KEYS, info_i, strict=True))
         infos["program"] = self._names[self.state_i[:, I_PROGRAM]]
+        for j, key in enumerate(self.info_keys[len(INFO_KEYS):], start=F_PROGRAM_NAME + 1):
+            infos[key] = self.state_f[:, j].copy()  # what the specs add (reward terms, bonus, planner)
         return obs, rewards, terminated, truncated, infos, int(ended)
 
 
