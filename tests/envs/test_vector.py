@@ -11,6 +11,28 @@ from cnc_gym.envs.vector import FeedrateVectorEnv, FeedrateVectorEnvV1
 from cnc_gym.errors import ConfigError
 
 
+def _same_episodes(native: gym.vector.VectorEnv, sync: gym.vector.SyncVectorEnv, *, seed: int, steps: int,
+                   rng: np.random.Generator, low: float, high: float) -> int:  # fmt: skip
+    """Step both with the same random actions from ``reset(seed)``: every observation, reward, flag and info
+    entry equal, bit for bit. Returns the number of episode ends seen."""
+    obs_n, info_n = native.reset(seed=seed)
+    obs_s, info_s = sync.reset(seed=seed)
+    np.testing.assert_array_equal(obs_n, obs_s)
+    np.testing.assert_array_equal(info_n["program"], info_s["program"])
+    ends = 0
+    for _ in range(steps):
+        actions = rng.uniform(low, high, (native.num_envs, 1)).astype(np.float32)
+        out_n = native.step(actions)
+        out_s = sync.step(actions)
+        for a, b in zip(out_n[:4], out_s[:4], strict=True):
+            np.testing.assert_array_equal(a, b)
+        assert set(out_n[4]) == set(out_s[4])
+        for key, value in out_s[4].items():
+            np.testing.assert_array_equal(out_n[4][key], value, err_msg=key)
+        ends += int(np.sum(out_n[2] | out_n[3]))
+    return ends
+
+
 def test_matches_sync_vector_env_through_episode_ends():
     # Four copies over two programs with a 30-step budget, so that truncations and next-step autoresets
     # happen mid-run; random actions. Every observation, reward, flag and info entry must equal
@@ -20,22 +42,7 @@ def test_matches_sync_vector_env_through_episode_ends():
     sync = gym.vector.SyncVectorEnv([lambda: FeedrateEnv(**kwargs)] * 4)
     assert native.observation_space == sync.observation_space
     assert native.action_space == sync.action_space
-    obs_n, info_n = native.reset(seed=7)
-    obs_s, info_s = sync.reset(seed=7)
-    np.testing.assert_array_equal(obs_n, obs_s)
-    np.testing.assert_array_equal(info_n["program"], info_s["program"])
-    rng = np.random.default_rng(0)
-    ends = 0
-    for _ in range(75):
-        actions = rng.uniform(-1, 1, (4, 1)).astype(np.float32)
-        out_n = native.step(actions)
-        out_s = sync.step(actions)
-        for a, b in zip(out_n[:4], out_s[:4], strict=True):
-            np.testing.assert_array_equal(a, b)
-        for key, value in out_s[4].items():
-            np.testing.assert_array_equal(out_n[4][key], value, err_msg=key)
-        assert set(out_n[4]) == set(out_s[4])
-        ends += int(np.sum(out_n[2] | out_n[3]))
+    ends = _same_episodes(native, sync, seed=7, steps=75, rng=np.random.default_rng(0), low=-1.0, high=1.0)
     assert ends >= 8  # two 30-step truncations per copy
     native.close()
     sync.close()
@@ -70,22 +77,7 @@ def test_every_id_has_a_vector_entry_point_with_the_single_envs_numbers(env_id, 
     sync = gym.vector.SyncVectorEnv([lambda: gym.make(env_id, **kwargs)] * 3)
     assert isinstance(native, FeedrateVectorEnvV1)
     assert native.single_observation_space == sync.single_observation_space
-    obs_n, info_n = native.reset(seed=11)
-    obs_s, info_s = sync.reset(seed=11)
-    np.testing.assert_array_equal(obs_n, obs_s)
-    np.testing.assert_array_equal(info_n["program"], info_s["program"])
-    rng = np.random.default_rng()
-    ends = 0
-    for _ in range(70):
-        actions = rng.uniform(-1.2, 1.2, (3, 1)).astype(np.float32)
-        out_n = native.step(actions)
-        out_s = sync.step(actions)
-        for a, b in zip(out_n[:4], out_s[:4], strict=True):
-            np.testing.assert_array_equal(a, b)
-        assert set(out_n[4]) == set(out_s[4])
-        for key, value in out_s[4].items():
-            np.testing.assert_array_equal(out_n[4][key], value, err_msg=key)
-        ends += int(np.sum(out_n[2] | out_n[3]))
+    ends = _same_episodes(native, sync, seed=11, steps=70, rng=np.random.default_rng(), low=-1.2, high=1.2)
     assert ends >= 6
     native.close()
     sync.close()
