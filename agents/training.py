@@ -212,8 +212,8 @@ class TrainConfig:
         LagrangianSettings, doc="PPO-Lagrangian's dual ascent (algorithm: ppo_lagrangian)")
     total_timesteps: int = number(100_000, 1, 10**10, integer=True, doc="env steps to train for",
                                   why="10¹⁰ steps are months at this env's ~10⁴ steps/s.")  # fmt: skip
-    n_envs: int = number(4, 1, 256, integer=True, doc="env copies in the process (DummyVecEnv)",
-                         why="each copy holds a controller, a plant and their buffers.")  # fmt: skip
+    n_envs: int = number(4, 1, 256, integer=True, doc="envs in the process, stepped together by one batched "
+                         "engine", why="each env holds a controller, a plant and their buffers.")  # fmt: skip
     #: Scale rewards by a running estimate of the return's spread (VecNormalize with norm_obs=False):
     #: training only, so the saved model needs no extra statistics to run.
     normalize_reward: bool = flag(False, doc="training only: VecNormalize(norm_obs=False, norm_reward=True)")
@@ -302,18 +302,18 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
 
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv
 
     import cnc_gym  # noqa: F401  (registers the env)
+    from cnc_gym.envs.sb3 import make_sb3_vec_env
     from cnc_gym.programs import load_program
 
     torch.set_num_threads(config.torch_threads)  # small MLPs: more threads only add overhead
     env_kwargs = config.env.make_kwargs()
     for program in env_kwargs["programs"]:  # interpret up front: program errors are one clear line
         load_program(program, config.env.dialect)
-    vec_env = make_vec_env(config.env.id, n_envs=config.n_envs, seed=config.seed, env_kwargs=env_kwargs,
-                           vec_env_cls=DummyVecEnv)  # fmt: skip
+    # One batched engine steps every env (the numbers of DummyVecEnv over gym.make copies, bit for bit;
+    # DummyVecEnv itself when randomize is on: cnc_gym.envs.sb3).
+    vec_env = make_sb3_vec_env(config.n_envs, seed=config.seed, env_kwargs=env_kwargs, env_id=config.env.id)
     callback = None
     if config.algorithm == "ppo_lagrangian":
         from cnc_gym_agents.lagrangian import CostPenalty, DualAscent

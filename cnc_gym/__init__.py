@@ -1,6 +1,7 @@
 """cnc-gym: Gymnasium environments for CNC feed-rate control on real G-code.
 
-Importing the package registers ``cnc_gym/Feedrate-v0``, ``-v1``, ``-v2`` and ``-v3`` with Gymnasium: at once
+Importing the package registers ``cnc_gym/Feedrate-v0``, ``-v1``, ``-v2`` and ``-v3`` with Gymnasium, each
+with a vector entry point (``gymnasium.make_vec(id, n, vectorization_mode="vector_entry_point")``): at once
 when Gymnasium is already imported, otherwise the moment it is (a post-import hook on
 ``gymnasium.envs.registration``). So ``import cnc_gym`` stays cheap for interpreter-only users:
 ``cnc-gym trace`` never loads Gymnasium, numba or scipy. The env module itself is imported by
@@ -17,6 +18,8 @@ from types import ModuleType
 __version__ = "0.1.0"
 
 _REGISTRATION = "gymnasium.envs.registration"
+#: The env ids this package registers (each with a vector entry point).
+ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2", "cnc_gym/Feedrate-v3")
 
 
 def _register() -> None:
@@ -27,17 +30,21 @@ def _register() -> None:
     # junction").
     if "cnc_gym/Feedrate-v0" not in registry:
         register(id="cnc_gym/Feedrate-v0", entry_point="cnc_gym.envs.feedrate:FeedrateEnv",
+                 vector_entry_point="cnc_gym.envs.vector:FeedrateVectorEnv",
                  kwargs={"contour_rule": "cuts"})  # fmt: skip
     if "cnc_gym/Feedrate-v1" not in registry:
         register(id="cnc_gym/Feedrate-v1", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
+                 vector_entry_point="cnc_gym.envs.vector:make_vector_env_v1",
                  kwargs={"contour_rule": "cuts"})  # fmt: skip
     if "cnc_gym/Feedrate-v2" not in registry:
         register(id="cnc_gym/Feedrate-v2", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
+                 vector_entry_point="cnc_gym.envs.vector:make_vector_env_v1",
                  kwargs={"contour_rule": "path"})  # fmt: skip
     # v3 is v2 with the live deployable planner (planner version 2) behind its planner entry and residual
     # mode; v1 and v2 keep the frozen planner version 1.
     if "cnc_gym/Feedrate-v3" not in registry:
         register(id="cnc_gym/Feedrate-v3", entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
+                 vector_entry_point="cnc_gym.envs.vector:make_vector_env_v1",
                  kwargs={"contour_rule": "path", "planner_version": 2})  # fmt: skip
     import warnings
 

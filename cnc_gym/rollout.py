@@ -126,7 +126,7 @@ def announce_compiling(log: TextIO, *, parallel: bool = False) -> bool:
     fused step is neither loaded nor in numba's disk cache), once per process; True if printed. Cheap:
     it reads the cache's index, compiles nothing."""
     global _announced
-    from cnc_gym.envs.fused import step_needs_compiling
+    from cnc_gym.envs.engine.batch import step_needs_compiling
 
     if _announced or not step_needs_compiling(parallel=parallel):
         return False

@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         for root in checkouts.values():  # the bytecode cache, out of the figures
             env = {**base_env, "PYTHONPATH": str(root)}
-            subprocess.run([sys.executable, "-c", "import cnc_gym.envs.fused, cnc_gym.runner"], env=env,
+            subprocess.run([sys.executable, "-c", "import cnc_gym.envs, cnc_gym.runner"], env=env,
                            check=True, cwd=work, capture_output=True)  # fmt: skip
         for repeat in range(args.repeats):
             for name, root in checkouts.items():

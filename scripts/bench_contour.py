@@ -30,8 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_env import FAMILIES, run_single, sampled
 
+from cnc_gym.envs.engine.bank import borrowed as lent
 from cnc_gym.envs.feedrate import FeedrateEnv
-from cnc_gym.envs.fused import _borrowed as lent
 from cnc_gym.plant import ContourErrorMeter, ServoPlant
 from cnc_gym.plant.contour import measure_kernel
 

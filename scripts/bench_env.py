@@ -8,10 +8,11 @@ seconds, all threads; steadier than wall time on a shared machine, larger than i
 
 - **single**: every registered ``cnc_gym/Feedrate-*`` id through ``gymnasium.make`` (its wrappers
   included), steps/s; resets at episode ends are part of the run, as in training;
-- **vector**: :class:`~cnc_gym.envs.vector.FeedrateVectorEnv` at N ∈ ``--envs`` (default 1, 8, 64, 256),
-  env-steps/s (N × steps/s) against Pendulum-v1's single-env steps/s; each repeat runs from a reset for
-  at least ``--vector-steps`` steps (default 1500), so that every env runs whole episodes (500 to 1400
-  steps with random actions on the three families), not only the rapid and the plunge they start with;
+- **vector**: the native vector env of each id of ``--vector-ids`` (default: v0 and the newest; built by
+  ``gymnasium.make_vec(id, N, vectorization_mode="vector_entry_point")``) at N ∈ ``--envs`` (default 1, 8,
+  64, 256), env-steps/s (N × steps/s) against Pendulum-v1's single-env steps/s; each repeat runs from a
+  reset for at least ``--vector-steps`` steps (default 1500), so that every env runs whole episodes (500 to
+  1400 steps with random actions on the three families), not only the rapid and the plunge they start with;
   ``--parallel`` picks numba's threads (``auto``: the env's default rule; ``both``: each N serial and in
   threads);
 - program families (``--families``): ``flat`` (the built-in set: lines and flat arcs), ``helix`` (a
@@ -149,7 +150,7 @@ def against_pendulum(env, runner, n_steps: int, env_steps_per_step: int, repeats
 # ------------------------------------------------------------------------------------------- profiles
 def profile_layers(env_id: str, kwargs: dict, n_steps: int) -> list[tuple[str, float]]:
     """cProfile of ``n_steps`` steps through gym.make: each function's own time per step (µs), largest
-    first. The compiled call appears as one entry (``_run_serial``)."""
+    first. The compiled call appears as one entry (``run_serial``)."""
     env = gym.make(env_id, **kwargs)
     actions = sampled(env.action_space, n_steps, 1)
     run_single(env, actions[:200], 0)
@@ -172,7 +173,7 @@ def profile_layers(env_id: str, kwargs: dict, n_steps: int) -> list[tuple[str, f
 
 def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
     """µs per step of each compiled part, measured on the modular step (same numbers, separate calls)."""
-    from cnc_gym.envs import fused
+    from cnc_gym.envs.engine import batch
     from cnc_gym.envs.feedrate import FeedrateEnv
     from cnc_gym.motion import Controller
     from cnc_gym.plant import ContourErrorMeter, ServoPlant
@@ -187,7 +188,7 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
     totals = {"controller periods": 0.0, "servo plant": 0.0, "contour error": 0.0,
               "statistics, reward, observation": 0.0}  # fmt: skip
     originals = (Controller.advance_rows, ServoPlant.step, ServoPlant.settled, ContourErrorMeter.measure,
-                 fused._finish_modular)  # fmt: skip
+                 batch.finish_modular)  # fmt: skip
 
     def timed(label, fn):
         def wrapper(*args, **kwargs):
@@ -202,7 +203,7 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
     ServoPlant.step = timed("servo plant", originals[1])
     ServoPlant.settled = timed("servo plant", originals[2])
     ContourErrorMeter.measure = timed("contour error", originals[3])
-    fused._finish_modular = timed("statistics, reward, observation", originals[4])
+    batch.finish_modular = timed("statistics, reward, observation", originals[4])
     try:
         env = _Env(**kwargs)
         actions = sampled(env.action_space, n_steps, 2)
@@ -212,7 +213,7 @@ def profile_compiled_parts(kwargs: dict, n_steps: int) -> dict[str, float]:
         run_single(env, actions, 2)
     finally:
         (Controller.advance_rows, ServoPlant.step, ServoPlant.settled, ContourErrorMeter.measure,
-         fused._finish_modular) = originals  # fmt: skip
+         batch.finish_modular) = originals  # fmt: skip
     return {key: 1e6 * value / n_steps for key, value in totals.items()}
 
 
@@ -246,6 +247,15 @@ def compare_plants(args: argparse.Namespace, show: Callable[[str, dict], None]) 
     return rows
 
 
+def make_vector(env_id: str, n: int, kwargs: dict, parallel: bool | None) -> gym.vector.VectorEnv:
+    """The id's native vector env of ``n`` envs: its vector entry point where it has one (v0 alone had one
+    before every id got its own, so older checkouts still run: FeedrateVectorEnv for v0)."""
+    extra = {} if parallel is None else {"parallel": parallel}
+    if gym.spec(env_id).vector_entry_point is not None:
+        return gym.make_vec(env_id, n, vectorization_mode="vector_entry_point", **kwargs, **extra)
+    return FeedrateVectorEnv(n, **kwargs, **extra)
+
+
 def feedrate_ids() -> list[str]:
     return sorted(env_id for env_id in gym.registry if env_id.startswith("cnc_gym/Feedrate"))
 
@@ -269,6 +279,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="at least this many vector steps per timed repeat (default 1500: every env runs "
                              "a whole episode of each family, not only the rapid and plunge it starts with)")
     parser.add_argument("--parallel", choices=["auto", "on", "off", "both"], default="auto")
+    parser.add_argument("--vector-ids", nargs="+", default=None, choices=feedrate_ids(), metavar="ID",
+                        help="ids whose vector env to time (default: v0 and the newest id)")
     parser.add_argument("--profile", action="store_true", help="profile a step (see above)")
     parser.add_argument("--profile-env", default="cnc_gym/Feedrate-v0", choices=feedrate_ids(),
                         help="the id whose Python layers --profile times (default cnc_gym/Feedrate-v0)")
@@ -279,6 +291,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.quick:
         args.steps, args.repeats, args.envs = 1000, 3, [1, 64]
+    if args.vector_ids is None:
+        ids = feedrate_ids()
+        args.vector_ids = sorted({ids[0], ids[-1]}, key=ids.index)
     result: dict = {"steps": args.steps, "vector_steps": args.vector_steps, "repeats": args.repeats,
                     "single": [], "vector": []}
     print(f"ratios against {PENDULUM_ID} in this process (median of {args.repeats}; wall | CPU time)")
@@ -298,16 +313,19 @@ def main(argv: list[str] | None = None) -> int:
             show(f"{env_id} [{family}]", r)
             result["single"].append({"env": env_id, "family": family, **r})
         modes = {"auto": [None], "on": [True], "off": [False], "both": [False, True]}[args.parallel]
-        for n in args.envs:
-            for parallel in modes:
-                # (parallel=None is the env's default rule: not passed, so that older versions run too)
-                venv = FeedrateVectorEnv(n, **kwargs, **({} if parallel is None else {"parallel": parallel}))
-                steps = max(args.vector_steps, args.steps // n)
-                r = against_pendulum(venv, run_vector, steps, n, args.repeats)
-                threads = bool(getattr(getattr(venv, "batch", None), "parallel", False))
-                venv.close()
-                show(f"FeedrateVectorEnv({n}) {'threads' if threads else 'serial'} [{family}]", r)
-                result["vector"].append({"envs": n, "parallel": threads, "family": family, **r})
+        for vector_id in args.vector_ids:
+            short = vector_id.rsplit("-", 1)[-1]
+            for n in args.envs:
+                for parallel in modes:
+                    # (parallel=None is the env's default rule: not passed, so that older versions run too)
+                    venv = make_vector(vector_id, n, kwargs, parallel)
+                    steps = max(args.vector_steps, args.steps // n)
+                    r = against_pendulum(venv, run_vector, steps, n, args.repeats)
+                    threads = bool(getattr(getattr(venv, "batch", None), "parallel", False))
+                    venv.close()
+                    show(f"{short} vector({n}) {'threads' if threads else 'serial'} [{family}]", r)
+                    result["vector"].append({"env": vector_id, "envs": n, "parallel": threads,
+                                             "family": family, **r})  # fmt: skip
     if args.plants:
         result["plants"] = compare_plants(args, show)
     result["build_vector_64_s"] = build_time(64)

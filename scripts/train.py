@@ -5,9 +5,9 @@
 
 The config (YAML, read with the bounded safe loader; every key has a type and range, see docs/configs.md)
 names the env (programs, machine, dialect, action mode, control period, reward weights), the number of
-in-process envs (DummyVecEnv) and the PPO settings. The run writes, under ``<output_dir>/<run_name>/``:
-``model.zip`` (``cnc-gym run --policy`` and ``scripts/evaluate.py`` load it without unpickling, see
-docs/security.md), ``config.yaml`` (the config as used), and TensorBoard logs under
+in-process envs (stepped by one batched engine: ``cnc_gym.envs.sb3``) and the PPO settings. The run writes,
+under ``<output_dir>/<run_name>/``: ``model.zip`` (``cnc-gym run --policy`` and ``scripts/evaluate.py`` load
+it without unpickling, see docs/security.md), ``config.yaml`` (the config as used), and TensorBoard logs under
 ``<output_dir>/tensorboard``. ``--timesteps``, ``--out``, ``--seed`` and ``--run-name`` override
 ``total_timesteps``, ``output_dir``, ``seed`` and ``run_name`` under the same rules; a bad config or option is
 one line on stderr and exit status 2.

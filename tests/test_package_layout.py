@@ -144,6 +144,29 @@ def test_no_import_cycles_between_packages():
     assert not found, f"import cycles between packages: {[sorted(c) for c in found]}"
 
 
+# ----------------------------------------------------------------------------------- the env's engine
+ENGINE = "cnc_gym.envs.engine"
+#: The engine's modules in their import order: each imports only those before it (docs/architecture.md).
+ENGINE_ORDER = ["layout", "specs", "bank", "step", "batch"]
+
+
+def _engine_violations(edges: dict[str, set[str]]) -> list[str]:
+    out = []
+    for i, module in enumerate(ENGINE_ORDER):
+        for target in sorted(edges[f"{ENGINE}.{module}"]):
+            inside = target == ENGINE or target.startswith(ENGINE + ".")
+            if inside and target.removeprefix(ENGINE + ".") not in ENGINE_ORDER[:i]:
+                out.append(f"{ENGINE}.{module} imports {target}")
+    return out
+
+
+def test_the_engine_modules_import_in_one_direction():
+    engine = {ENGINE} | {f"{ENGINE}.{module}" for module in ENGINE_ORDER}
+    assert {name for name in MODULES if name.startswith(ENGINE)} == engine, "a module not in ENGINE_ORDER"
+    problems = _engine_violations(GRAPH)
+    assert not problems, "\n".join(problems)
+
+
 # ------------------------------------------------------------------------------------ the checks can fail
 @pytest.mark.parametrize(("source", "target"), [
     ("cnc_gym.motion.controller", "cnc_gym.envs.feedrate"),     # a stage importing a later one
@@ -154,6 +177,13 @@ def test_the_stage_check_finds_a_planted_import(source, target):
     edges = {k: set(v) for k, v in GRAPH.items()}
     edges[source].add(target)
     assert _violations(edges)
+
+
+def test_the_engine_check_finds_a_planted_import():
+    for source, target in (("layout", "step"), ("bank", "batch"), ("specs", "")):
+        edges = {k: set(v) for k, v in GRAPH.items()}
+        edges[f"{ENGINE}.{source}"].add(f"{ENGINE}.{target}".rstrip("."))  # "": the package's __init__
+        assert _engine_violations(edges), (source, target)
 
 
 def test_the_cycle_checks_find_plantedcycles():

@@ -114,13 +114,13 @@ def test_the_compiling_notice_is_said_once_per_process_and_only_when_it_compiles
     import io
 
     from cnc_gym import rollout
-    from cnc_gym.envs import fused
+    from cnc_gym.envs.engine import batch
 
     log = io.StringIO()
     monkeypatch.setattr(rollout, "_announced", False)
-    monkeypatch.setattr(fused, "step_needs_compiling", lambda parallel=False: False)
+    monkeypatch.setattr(batch, "step_needs_compiling", lambda parallel=False: False)
     assert not rollout.announce_compiling(log)
-    monkeypatch.setattr(fused, "step_needs_compiling", lambda parallel=False: True)
+    monkeypatch.setattr(batch, "step_needs_compiling", lambda parallel=False: True)
     assert rollout.announce_compiling(log)
     assert not rollout.announce_compiling(log)
     assert log.getvalue().count("compiling the simulator (first run only") == 1

@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from cnc_gym.envs.fused import FeedrateBatch, RewardSpec
+from cnc_gym.envs.engine import FeedrateBatch, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V0, ObservationLayout, markdown_table
 from cnc_gym.envs.options import (
     DEFAULT_ACTION_MODE,
@@ -33,7 +33,8 @@ from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike, load_p
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
 #: Feedrate-v0's scalar observation entries, in order (the look-ahead blocks, one per
-#: :data:`~cnc_gym.envs.fused.LOOKAHEAD_ROWS` row, follow them); the entries are :data:`OBSERVATION_V0`.
+#: :data:`~cnc_gym.envs.engine.layout.LOOKAHEAD_ROWS` row, follow them); the entries are
+#: :data:`OBSERVATION_V0`.
 SCALAR_FEATURES = tuple(e.name for e in OBSERVATION_V0 if e.source == "signal")
 
 
@@ -191,7 +192,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ## Implementation
 
-    A step is one compiled call (:mod:`cnc_gym.envs.fused`): the controller's periods, the servo plant,
+    A step is one compiled call (:mod:`cnc_gym.envs.engine`): the controller's periods, the servo plant,
     the contour error, the statistics, the reward and the observation, on state held in arrays. The
     observation and the reward are declared (:data:`~cnc_gym.envs.observation.OBSERVATION_V0`,
     :func:`reward_spec_v0`). The
@@ -301,9 +302,9 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def make_batch(self, n_envs: int, parallel: bool | None = None,
                    plant: Any | None = None) -> FeedrateBatch:  # fmt: skip
         """``n_envs`` episodes of this env's task stepped together: the engine of this env (one episode)
-        and of its vector env (:class:`~cnc_gym.envs.fused.FeedrateBatch`). ``plant``: a plant backend for
-        ``n_envs`` envs (default: the machine's ``plant.backend``, which the env's ``plant=`` sets: the LTI
-        servo plant is stepped inside the compiled step, the MuJoCo plant through its methods)."""
+        and of its vector env (:class:`~cnc_gym.envs.engine.batch.FeedrateBatch`). ``plant``: a plant backend
+        for ``n_envs`` envs (default: the machine's ``plant.backend``, which the env's ``plant=`` sets: the
+        LTI servo plant is stepped inside the compiled step, the MuJoCo plant through its methods)."""
         config = {
             "ticks_per_step": self.ticks_per_step, "tolerance_mm": self.tolerance_mm,
             "in_position_mm": self.in_position_mm, "max_override": self.max_override,

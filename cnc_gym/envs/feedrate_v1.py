@@ -13,8 +13,9 @@ import numpy as np
 from gymnasium import spaces
 
 from cnc_gym.config import Choice, Number, declared, number, parse_value, schema, section, spec_of
+from cnc_gym.envs.engine import RewardSpec
+from cnc_gym.envs.engine.layout import F_SIGNAL, SIG_PLANNER_OVERRIDE
 from cnc_gym.envs.feedrate import FeedrateEnv
-from cnc_gym.envs.fused import F_SIGNAL, SIG_PLANNER_OVERRIDE, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V1, ObservationLayout, markdown_table
 from cnc_gym.envs.options import (
     ACTION_MODES,
@@ -132,7 +133,7 @@ class FeedrateEnvV1(FeedrateEnv):
     r"""Feed-rate control on real G-code, with a return that ranks policies like the benchmark's score.
 
     The same machine, controller, servo plant and contour meter as ``cnc_gym/Feedrate-v0`` (one compiled
-    step, :mod:`cnc_gym.envs.fused`); what changes is what the agent is paid for, what it sees, and what
+    step, :mod:`cnc_gym.envs.engine`); what changes is what the agent is paid for, what it sees, and what
     it may be trained on.
 
     ## Action Space

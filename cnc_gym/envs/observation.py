@@ -4,10 +4,10 @@
 From each come
 
 - the Box bounds (:meth:`ObservationLayout.low`, :meth:`ObservationLayout.high`);
-- the compiled step's :class:`~cnc_gym.envs.fused.ObservationSpec` (:attr:`ObservationLayout.kernel_spec`),
-  which scales and clips every entry inside the step: the per-step signals, the look-ahead blocks, and
-  after them the entries of the episode's machine, of the episode and of the deployable planner (signals
-  of the kernel too, :func:`kernel_signal`);
+- the compiled step's :class:`~cnc_gym.envs.engine.specs.ObservationSpec`
+  (:attr:`ObservationLayout.kernel_spec`), which scales and clips every entry inside the step: the
+  per-step signals, the look-ahead blocks, and after them the entries of the episode's machine, of the
+  episode and of the deployable planner (signals of the kernel too, :func:`kernel_signal`);
 - the table of the env's docstring and of docs/env.md (:func:`markdown_table`; a test keeps docs/env.md
   equal to it);
 - ``observation_structure``: entry name → the indices it occupies, as Gymnasium's MuJoCo envs expose it.
@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cnc_gym.envs.fused import (
+from cnc_gym.envs.engine import (
     LOOKAHEAD_ROWS,
     MACHINE_QUANTITIES,
     SIGNALS,
@@ -53,8 +53,8 @@ MISMATCH_REF = 0.1
 class Entry:
     """One observation entry (a look-ahead entry is a block of ``N = lookahead_points`` values).
 
-    ``quantity`` is a kernel signal (:data:`~cnc_gym.envs.fused.SIGNALS`), a look-ahead row
-    (:data:`~cnc_gym.envs.fused.LOOKAHEAD_ROWS`), a machine quantity (:data:`MACHINE_QUANTITIES`) or
+    ``quantity`` is a kernel signal (:data:`~cnc_gym.envs.engine.layout.SIGNALS`), a look-ahead row
+    (:data:`~cnc_gym.envs.engine.layout.LOOKAHEAD_ROWS`), a machine quantity (:data:`MACHINE_QUANTITIES`) or
     ``override`` of the planner; ``divide_by`` names the reference it is divided by (``1`` for none);
     ``saturate`` applies ``x·L / (1 + x·L)`` with L = ``saturate`` mm before scaling.
     """
@@ -138,7 +138,7 @@ __all__ = ["MACHINE_QUANTITIES", "OBSERVATION_V0", "OBSERVATION_V1", "Entry", "O
 
 
 def kernel_signal(entry: Entry) -> str:
-    """The kernel signal (:data:`~cnc_gym.envs.fused.SIGNALS`) an entry of a source other than the
+    """The kernel signal (:data:`~cnc_gym.envs.engine.layout.SIGNALS`) an entry of a source other than the
     look-ahead reads: a signal itself, a machine quantity, ``violation_free``, or ``planner_override``."""
     return f"planner_{entry.quantity}" if entry.source == "planner" else entry.quantity
 

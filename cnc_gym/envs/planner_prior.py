@@ -8,7 +8,7 @@ tables, never the env's dynamics, so it is what a real controller could run in i
 its answer to a policy gives the policy nothing a machine would not have. This module is the env's one
 seam to it: :class:`PlannerPrior` plans a program once per (tool path, machine), when the program is
 packed for the compiled step, and hands the step its schedule as a table
-(:class:`~cnc_gym.envs.fused.Planner`); the step answers "what would the planner command now" every
+(:class:`~cnc_gym.envs.engine.bank.Planner`); the step answers "what would the planner command now" every
 control period with the planner's one knob rule (:func:`cnc_gym.motion.planner.planner_override`, with
 the same reaction lead), and the residual action rounds the knob as the policy does
 (:func:`~cnc_gym.envs.options.knob_of_override`), so the residual action 0 reproduces the ``classical``
@@ -30,7 +30,7 @@ _CACHE_SIZE = 64
 
 
 class PlannerPrior:
-    """The planner's schedules, for the compiled step (:class:`~cnc_gym.envs.fused.Planner`)."""
+    """The planner's schedules, for the compiled step (:class:`~cnc_gym.envs.engine.bank.Planner`)."""
 
     def __init__(self, control_period_s: float, max_override: float, version: int) -> None:
         self.max_override = float(max_override)

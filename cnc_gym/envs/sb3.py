@@ -1,17 +1,20 @@
-"""Stable-Baselines3 on the batched env: a ``VecEnv`` over :class:`~cnc_gym.envs.vector.FeedrateVectorEnv`.
+"""Stable-Baselines3 on the batched engine: a ``VecEnv`` over the native vector envs (:mod:`.vector`).
 
 SB3 trains on its own ``VecEnv`` API (``reset() -> obs``, ``step_async``/``step_wait`` with a list of info
 dicts, and the episode's end handled in the same step: the env is reset at once and its last observation
 put in ``infos[i]["terminal_observation"]``). :class:`FeedrateSB3VecEnv` gives that API on the batched
-engine, so one compiled call per step serves every env, and :func:`make_sb3_vec_env` is the drop-in for
-SB3's ``make_vec_env("cnc_gym/Feedrate-v0", n_envs, seed=..., env_kwargs=..., vec_env_cls=DummyVecEnv)``
-(the same seeds, programs and numbers, Monitor's episode records from ``VecMonitor``)::
+engine of any registered id, so one compiled call per step serves every env, and :func:`make_sb3_vec_env`
+is the drop-in for SB3's ``make_vec_env(env_id, n_envs, seed=..., env_kwargs=..., vec_env_cls=DummyVecEnv)``
+(the same seeds, programs and numbers, bit for bit; Monitor's episode records from ``VecMonitor``)::
 
     from cnc_gym.envs.sb3 import make_sb3_vec_env
-    vec_env = make_sb3_vec_env(8, seed=0, env_kwargs={"programs": ["star", "circle"]})
+    vec_env = make_sb3_vec_env(8, seed=0, env_id="cnc_gym/Feedrate-v3",
+                               env_kwargs={"programs": ["star", "circle"]})
     model = PPO("MlpPolicy", vec_env).learn(100_000)
 
-Infos: at an episode's end a dict with the episode's totals (the env's info keys),
+With domain randomisation on (each episode draws a machine, so the envs cannot share one engine)
+:func:`make_sb3_vec_env` returns SB3's ``DummyVecEnv`` over single envs, the same numbers at the single
+env's speed. Infos: at an episode's end a dict with the episode's totals (the env's info keys),
 ``terminal_observation`` and ``TimeLimit.truncated``; on other steps a read-only mapping with the same
 keys, its values taken when the step ends but made Python numbers only when read (SB3 looks for
 ``"episode"`` in every info every step).
@@ -27,17 +30,22 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvIndices, VecEnvStepReturn
 
-from cnc_gym.envs.fused import INFO_KEYS
 from cnc_gym.envs.vector import FeedrateVectorEnv
+from cnc_gym.errors import ConfigError
 
 
 class _StepInfos:
     """One step's infos of every env (arrays taken when the step ends), for :class:`StepInfo`."""
 
-    __slots__ = ("_arrays",)
+    __slots__ = ("_arrays", "keys")
 
-    def __init__(self, arrays: dict[str, np.ndarray]) -> None:
+    def __init__(self, arrays: dict[str, np.ndarray], keys: frozenset[str]) -> None:
         self._arrays = arrays
+        self.keys = keys
+
+    def arrays_keys(self) -> list[str]:
+        """The info keys in the env's order."""
+        return list(self._arrays)
 
     def value(self, key: str, env: int) -> Any:
         value = self._arrays[key][env]
@@ -49,35 +57,45 @@ class StepInfo(Mapping):
     keys; ``copy()`` gives a dict)."""
 
     __slots__ = ("_env", "_infos")
-    _KEYS = frozenset(INFO_KEYS)
 
     def __init__(self, infos: _StepInfos, env: int) -> None:
         self._infos = infos
         self._env = env
 
     def __getitem__(self, key: str) -> Any:
-        if key not in self._KEYS:
+        if key not in self._infos.keys:
             raise KeyError(key)
         return self._infos.value(key, self._env)
 
     def __iter__(self) -> Iterator[str]:
-        return iter(INFO_KEYS)
+        return iter(self._infos.arrays_keys())
 
     def __len__(self) -> int:
-        return len(INFO_KEYS)
+        return len(self._infos.keys)
 
     def copy(self) -> dict[str, Any]:
         return dict(self)
 
 
 class FeedrateSB3VecEnv(VecEnv):
-    """``num_envs`` Feedrate-v0 episodes as an SB3 ``VecEnv`` (keyword arguments as :class:`FeedrateEnv`'s;
-    ``parallel`` as :class:`FeedrateVectorEnv`'s)."""
+    """``num_envs`` episodes of ``env_id`` (a registered ``cnc_gym/Feedrate`` id; keyword arguments as
+    its env's) as an SB3 ``VecEnv``, on the id's native vector env (``parallel`` as
+    :class:`~cnc_gym.envs.vector.FeedrateVectorEnv`'s)."""
 
-    def __init__(self, num_envs: int, parallel: bool | None = None, **env_kwargs: Any) -> None:
-        self.venv = FeedrateVectorEnv(num_envs, parallel=parallel, **env_kwargs)
-        super().__init__(num_envs, self.venv.single_observation_space, self.venv.single_action_space)
+    def __init__(self, num_envs: int, parallel: bool | None = None, *, env_id: str = "cnc_gym/Feedrate-v0",
+                 venv: FeedrateVectorEnv | None = None, **env_kwargs: Any) -> None:  # fmt: skip
+        if venv is None:
+            built = _native_vector_env(env_id, num_envs, parallel, env_kwargs)
+            if not isinstance(built, FeedrateVectorEnv):
+                built.close()
+                raise ConfigError(f"{env_id} with these arguments has no batched engine (randomize is on): "
+                                  "use make_sb3_vec_env, which falls back to DummyVecEnv")  # fmt: skip
+            venv = built
+        #: The native vector env (``venv``: one already built, of ``num_envs`` envs).
+        self.venv = venv
+        super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self._actions: np.ndarray | None = None
+        self._info_keys = frozenset(venv.batch.info_keys)
 
     def reset(self) -> np.ndarray:
         envs = list(range(self.num_envs))
@@ -96,7 +114,7 @@ class FeedrateSB3VecEnv(VecEnv):
         batch.step()
         obs, rewards, terminated, truncated, arrays, n_ended = batch.gather()
         dones = terminated | truncated
-        step_infos = _StepInfos(arrays)
+        step_infos = _StepInfos(arrays, self._info_keys)
         infos: list[Any] = [StepInfo(step_infos, i) for i in range(self.num_envs)]
         if n_ended:
             ended = np.flatnonzero(dones).tolist()
@@ -138,12 +156,37 @@ class FeedrateSB3VecEnv(VecEnv):
         return [None for _ in range(self.num_envs)]
 
 
+def _native_vector_env(env_id: str, num_envs: int, parallel: bool | None,
+                       env_kwargs: dict[str, Any]) -> gym.vector.VectorEnv:  # fmt: skip
+    """The id's vector env from its vector entry point (``env_kwargs`` over the id's registered ones)."""
+    import cnc_gym  # noqa: F401  (registers the ids)
+
+    try:
+        spec = gym.spec(env_id)
+    except gym.error.Error as exc:
+        raise ConfigError(f"unknown env id {env_id!r}: {exc}") from None
+    if spec.vector_entry_point is None or not env_id.startswith("cnc_gym/"):
+        raise ConfigError(f"{env_id} is not a cnc_gym id with a vector entry point")
+    return gym.make_vec(env_id, num_envs, vectorization_mode="vector_entry_point", parallel=parallel,
+                        **env_kwargs)  # fmt: skip
+
+
 def make_sb3_vec_env(n_envs: int, seed: int | None = None, env_kwargs: dict[str, Any] | None = None,
-                     monitor: bool = True, parallel: bool | None = None) -> VecEnv:  # fmt: skip
-    """The batched env for SB3, in place of ``make_vec_env("cnc_gym/Feedrate-v0", n_envs, seed=seed,
-    env_kwargs=env_kwargs, vec_env_cls=DummyVecEnv)``: env i is seeded with ``seed + i`` at the first reset,
-    and ``monitor`` adds SB3's episode records (``VecMonitor``)."""
-    venv: VecEnv = FeedrateSB3VecEnv(n_envs, parallel=parallel, **(env_kwargs or {}))
+                     monitor: bool = True, parallel: bool | None = None,
+                     env_id: str = "cnc_gym/Feedrate-v0") -> VecEnv:  # fmt: skip
+    """The batched env for SB3, in place of ``make_vec_env(env_id, n_envs, seed=seed, env_kwargs=env_kwargs,
+    vec_env_cls=DummyVecEnv)``: env i is seeded with ``seed + i`` at the first reset, and ``monitor`` adds
+    SB3's episode records (``VecMonitor``). With domain randomisation on, that ``DummyVecEnv`` itself (the
+    same numbers; each env steps its own engine)."""
+    kwargs = dict(env_kwargs or {})
+    native = _native_vector_env(env_id, n_envs, parallel, kwargs)
+    if not isinstance(native, FeedrateVectorEnv):  # randomised: one engine per env
+        native.close()
+        from stable_baselines3.common.env_util import make_vec_env
+        from stable_baselines3.common.vec_env import DummyVecEnv
+
+        return make_vec_env(env_id, n_envs=n_envs, seed=seed, env_kwargs=kwargs, vec_env_cls=DummyVecEnv)
+    venv: VecEnv = FeedrateSB3VecEnv(n_envs, venv=native)
     if seed is not None:
         venv.seed(seed)
     return VecMonitor(venv) if monitor else venv

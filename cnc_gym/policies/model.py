@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from cnc_gym import ENV_IDS
 from cnc_gym.config import escaped
 from cnc_gym.errors import CncGymError
 
@@ -160,7 +161,7 @@ def _json(data_bytes: bytes) -> dict[str, Any]:
 
 
 #: Env ids a model may name, and the keyword arguments it may record with their types.
-_ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
+_ENV_IDS = ENV_IDS
 _ENV_KEYS: dict[str, tuple[type, ...]] = {"action_mode": (str,), "control_period_s": (int, float),
                                           "residual_range": (int, float), "lookahead_mm": (int, float),
                                           "lookahead_points": (int,)}  # fmt: skip

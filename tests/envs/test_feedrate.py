@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import cnc_gym  # noqa: F401  (registers the env)
+from cnc_gym.envs.engine import LOOKAHEAD_ROWS, ObservationSpec
 from cnc_gym.envs.feedrate import (
     SCALAR_FEATURES,
     ActionError,
@@ -17,7 +18,6 @@ from cnc_gym.envs.feedrate import (
     nominal_time_s,
     observation_layout_v0,
 )
-from cnc_gym.envs.fused import LOOKAHEAD_ROWS, ObservationSpec
 from cnc_gym.envs.observation import OBSERVATION_V0, markdown_table
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.programs import BUILTIN_PROGRAMS, ProgramText, load_program

@@ -13,16 +13,21 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 import cnc_gym  # noqa: F401  (registers the env)
 from cnc_gym.envs.sb3 import FeedrateSB3VecEnv, StepInfo, make_sb3_vec_env
+from cnc_gym.errors import ConfigError
 
 
-def test_same_transitions_as_make_vec_env():
+@pytest.mark.parametrize(("env_id", "extra"), [
+    ("cnc_gym/Feedrate-v0", {}),
+    ("cnc_gym/Feedrate-v2", {}),
+    ("cnc_gym/Feedrate-v3", {"action_mode": "residual"}),
+])  # fmt: skip
+def test_same_transitions_as_make_vec_env(env_id, extra):
     # Four envs on two programs with a 40-step budget: SB3's same-step resets happen mid-run. Observations,
     # rewards, dones, the info values, terminal observations and the truncation flags must all be equal
     # to DummyVecEnv over Monitor-wrapped gym.make copies seeded the same way.
-    kwargs = {"programs": ["star", "circle"], "max_episode_steps": 40}
-    reference = make_vec_env("cnc_gym/Feedrate-v0", n_envs=4, seed=3, env_kwargs=kwargs,
-                             vec_env_cls=DummyVecEnv)
-    batched = make_sb3_vec_env(4, seed=3, env_kwargs=kwargs)
+    kwargs = {"programs": ["star", "circle"], "max_episode_steps": 40, **extra}
+    reference = make_vec_env(env_id, n_envs=4, seed=3, env_kwargs=kwargs, vec_env_cls=DummyVecEnv)
+    batched = make_sb3_vec_env(4, seed=3, env_kwargs=kwargs, env_id=env_id)
     np.testing.assert_array_equal(reference.reset(), batched.reset())
     actions = np.random.default_rng(0).uniform(-1, 1, (100, 4, 1)).astype(np.float32)
     steps_r = [reference.step(a) for a in actions]
@@ -32,7 +37,9 @@ def test_same_transitions_as_make_vec_env():
         for a, b in zip(out_r[:3], out_b[:3], strict=True):  # observations, rewards, dones
             np.testing.assert_array_equal(a, b, err_msg=f"step {t}")
         for info_r, info_b in zip(out_r[3], out_b[3], strict=True):
-            for key in ("cycle_time_s", "contour_error_mm", "violations", "program", "steps", "line"):
+            keys = {k for k in info_r if k not in ("episode", "terminal_observation", "TimeLimit.truncated")}
+            assert keys == set(info_b) - {"episode", "terminal_observation", "TimeLimit.truncated"}
+            for key in keys:
                 assert info_r[key] == info_b[key], (t, key)
             assert ("terminal_observation" in info_r) == ("terminal_observation" in info_b)
             if "terminal_observation" in info_r:
@@ -63,3 +70,15 @@ def test_ppo_learns_a_few_steps_on_the_batched_env():
     model = PPO("MlpPolicy", vec_env, n_steps=32, batch_size=64, n_epochs=1, seed=0, device="cpu")
     model.learn(total_timesteps=256)
     vec_env.close()
+
+
+def test_randomised_envs_fall_back_to_dummy_vec_env():
+    venv = make_sb3_vec_env(2, seed=0, env_id="cnc_gym/Feedrate-v3",
+                            env_kwargs={"programs": ["circle"], "randomize": {"enabled": True}})
+    assert isinstance(venv, DummyVecEnv)
+    assert venv.reset().shape == (2, 46)
+    venv.close()
+    with pytest.raises(ConfigError, match="randomize"):
+        FeedrateSB3VecEnv(2, env_id="cnc_gym/Feedrate-v3", programs=["circle"], randomize={"enabled": True})
+    with pytest.raises(ConfigError, match="unknown env id"):
+        make_sb3_vec_env(2, env_id="cnc_gym/Feedrate-v99")

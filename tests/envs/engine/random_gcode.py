@@ -113,7 +113,7 @@ def random_gcode(rng: np.random.Generator, n_blocks: int, *, helix_p: float = 0.
 def bench_program(family: str) -> str:
     """The benchmark's program of a family (``helix``: a helical bore; ``nurbs``: a chain of cubic curves),
     from ``scripts/bench_env.py``, so that the tests run what the benchmark times."""
-    path = Path(__file__).resolve().parents[2] / "scripts" / "bench_env.py"
+    path = Path(__file__).resolve().parents[3] / "scripts" / "bench_env.py"
     spec = importlib.util.spec_from_file_location("bench_env", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
