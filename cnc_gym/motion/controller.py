@@ -87,7 +87,7 @@ class Controller:
     Look-ahead over ``machine.controller.lookahead_blocks`` motion blocks, speed limits from programmed
     feed × override (clamped), per-axis velocity/acceleration/jerk projected on the path, curvature,
     chord error, corner steps, exact stops, rapids, dwells and program end; a jerk-limited profile that
-    reacts to the override knob in real time and never violates a geometric limit. ``advance`` returns a
+    reacts to the override in real time and never violates a geometric limit. ``advance`` returns a
     :class:`MotionChunk`; ``lookahead`` returns :class:`LookaheadFeatures` for observations.
     """
 
@@ -109,6 +109,11 @@ class Controller:
         self.limits: PathLimits = build_limits(toolpath, machine) if limits is None else limits
         self._n_seg = self.limits.seg_f.shape[0]
         self._cfg = kernel_config(machine, self.limits)
+        lim = self.limits
+        #: The kernel's record of the path's tables (fixed for the controller's life), as the plain tuple
+        #: kernel.advance_rows takes from Python.
+        self._path = tuple(K.PathTables(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, lim.curve_f,
+                                        self._cfg))  # fmt: skip
         self._scratch = np.zeros((int(self._cfg[1]) + 2, 3))
         own_state = state is None
         if state is None:
@@ -186,8 +191,8 @@ class Controller:
 
     @property
     def override_applied(self) -> float:
-        """The override in force. It starts at the first knob value after reset (1.0 before any advance)
-        and then follows the knob at ``override_slew_per_s``."""
+        """The override in force. It starts at the first commanded override after reset (1.0 before any
+        advance) and then follows the command at ``override_slew_per_s``."""
         ov = float(self._st_f[K.S_OV])
         return 1.0 if ov < 0 else ov
 
@@ -210,7 +215,7 @@ class Controller:
         *,
         feed_mm_min: float | None = None,
     ) -> MotionChunk:
-        """Run ``n_ticks`` interpolation periods with the override knob at ``override`` (0..max_override)
+        """Run ``n_ticks`` interpolation periods with the override at ``override`` (0..max_override)
         or, in 'feed' action mode, with ``feed_mm_min`` commanded instead of F × override (still clamped by
         every limit). ``rapid_override`` (0..1) scales rapids. Returns the reference of these periods."""
         chunk = _chunk(self.advance_rows(n_ticks, override, rapid_override, feed_mm_min=feed_mm_min))
@@ -241,24 +246,23 @@ class Controller:
             feed = _finite(feed_mm_min, "feed_mm_min")
             if feed < 0:
                 raise ActionError(f"feed_mm_min must not be negative, got {feed_mm_min!r}")
-            mode, knob, cmd = 1, 1.0, feed / 60.0
+            mode, ratio, feed_mm_s = K.MODE_FEED, 1.0, feed / 60.0
         else:
-            knob = 1.0 if override is None else _finite(override, "override")
-            if not 0.0 <= knob <= self.max_override:
+            ratio = 1.0 if override is None else _finite(override, "override")
+            if not 0.0 <= ratio <= self.max_override:
                 raise ActionError(f"override must be within 0..{self.max_override:g}, got {override!r}")
-            mode, cmd = 0, 0.0
+            mode, feed_mm_s = K.MODE_OVERRIDE, 0.0
         rapid = _finite(rapid_override, "rapid_override")
         if not 0.0 <= rapid <= 1.0:
             raise ActionError(f"rapid_override must be within 0..1, got {rapid_override!r}")
-        return self._advance_raw(int(n_ticks), knob, rapid, mode, cmd)
+        return self._advance_raw(int(n_ticks), ratio, rapid, mode, feed_mm_s)
 
-    def _advance_raw(self, n_ticks: int, knob: float, rapid: float = 1.0, mode: int = 0,
-                     cmd: float = 0.0, stop_when_done: bool = False,
+    def _advance_raw(self, n_ticks: int, ratio: float, rapid: float = 1.0, mode: int = K.MODE_OVERRIDE,
+                     feed_mm_s: float = 0.0, stop_when_done: bool = False,
                      wait: bool = True) -> np.ndarray:  # fmt: skip
-        lim = self.limits
-        out = K.advance_kernel(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, lim.curve_f, self._cfg,
-                               self._st_f, self._st_i, n_ticks, mode, knob, rapid, cmd, self._scratch,
-                               stop_when_done, wait and self.in_position_check)  # fmt: skip
+        # a kernel.Command and a kernel.ControllerState, as plain tuples (see kernel.advance_rows)
+        command = (mode, ratio, rapid, feed_mm_s, wait and self.in_position_check, stop_when_done)
+        out = K.advance_rows(self._path, (self._st_f, self._st_i), command, n_ticks, self._scratch)
         if len(out):
             self._last_position = out[-1, K.O_X : K.O_Z + 1].copy()
         return out
@@ -270,8 +274,8 @@ class Controller:
         clock) stops on the period at which it finished (for tests, scripts and baselines). With no servo
         to wait for, the reference goes on from every stop once at rest (no in-position wait; a wait
         already begun is released)."""
-        knob = _finite(override, "override")
-        if not 0.0 <= knob <= self.max_override:
+        ratio = _finite(override, "override")
+        if not 0.0 <= ratio <= self.max_override:
             raise ActionError(f"override must be within 0..{self.max_override:g}, got {override!r}")
         parts = []
         done = 0
@@ -279,7 +283,7 @@ class Controller:
         while not self.finished:
             if done >= max_ticks:
                 raise CncGymError(f"program did not finish within {max_ticks} interpolation periods")
-            parts.append(self._advance_raw(chunk, knob, stop_when_done=True, wait=False))
+            parts.append(self._advance_raw(chunk, ratio, stop_when_done=True, wait=False))
             done += chunk
         out = np.concatenate(parts) if parts else np.zeros((0, K.N_OUT))
         result = _chunk(out)

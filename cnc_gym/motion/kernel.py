@@ -1,7 +1,9 @@
 """The controller's hot path: one interpolation period at a time, compiled with numba.
 
 Everything here works on flat arrays packed by :mod:`cnc_gym.motion.limits` (column indices below) and
-on a small state vector, so that a call from Python costs a handful of argument conversions.
+on a small state vector, so that a call from Python costs a handful of argument conversions. The entry,
+:func:`advance_into`, takes them as small typed records in the manner of Ruckig's input and output
+parameters (:class:`PathTables`, :class:`ControllerState`, :class:`Command`; rows out).
 
 The planner is a *safe-set* jerk-limited tracker (details and guarantees: ``docs/motion.md``):
 
@@ -25,6 +27,7 @@ The planner is a *safe-set* jerk-limited tracker (details and guarantees: ``docs
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -576,44 +579,96 @@ def _position(seg_f: np.ndarray, seg_i: np.ndarray, curve_f: np.ndarray, k: int,
             out[row, O_X + ax] = p0 + (seg_f[k, F_EX + ax] - p0) * frac
 
 
-@njit(cache=True)
-def advance_kernel(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
-                   dwell_f: np.ndarray, curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray,
-                   st_i: np.ndarray, n_ticks: int, mode: int, knob: float, rapid_ov: float, cmd: float,
-                   pts: np.ndarray, stop_when_done: bool = False,
-                   wait: bool = True) -> np.ndarray:  # fmt: skip
-    """Run ``n_ticks`` interpolation periods from the state (st_f, st_i); returns one row per tick.
+# ---------------------------------------------------------------- the entry's records
+class PathTables(NamedTuple):
+    """What holds still over a program (Ruckig's input parameters that do not change between calls): the
+    tool path's limits on one machine, packed by :func:`cnc_gym.motion.limits.build_limits` (columns
+    above), and the machine's ``cfg`` (:func:`cnc_gym.motion.controller.kernel_config`: [dt, window
+    blocks, override slew per s, rest x, y, z])."""
 
-    cfg: [dt, window_blocks, override_slew_per_s, rest_x, rest_y, rest_z]. ``dwell_f`` rows: [seconds,
-    toolpath index, x, y, z]. ``pts`` is scratch space (window + 2 rows, 3 columns). With
-    ``stop_when_done`` the run ends on the period that finishes the program (fewer rows). With ``wait``
-    the reference holds at every in-position stop (PHASE_WAIT) until :func:`release_wait` is called.
-    """
+    seg_f: np.ndarray  # (n_seg, N_SEG_F) per motion segment
+    seg_i: np.ndarray  # (n_seg, N_SEG_I)
+    pt_f: np.ndarray  # (n_seg + 1, N_PT_F) per limit point
+    pt_i: np.ndarray  # (n_seg + 1, N_PT_I)
+    dwell_f: np.ndarray  # (n_dwell, 5): seconds, toolpath row, x, y, z
+    curve_f: np.ndarray  # NURBS pieces' samples: point and unit tangent per row
+    cfg: np.ndarray  # (6,)
+
+
+class ControllerState(NamedTuple):
+    """The controller's state, advanced in place: ``f`` (N_STATE_F: the S_* columns) and ``i``
+    (N_STATE_I: the K_* columns). Views of a batch's state rows serve as well as the controller's own."""
+
+    f: np.ndarray
+    i: np.ndarray
+
+
+#: Command.mode: the override scales the programmed feed, or the path feed is commanded instead of F.
+MODE_OVERRIDE, MODE_FEED = 0, 1
+
+
+class Command(NamedTuple):
+    """What one :func:`advance_into` call is asked to do (Ruckig's input parameters beside the state).
+
+    ``mode`` :data:`MODE_OVERRIDE` (programmed feed × ``override``, 0..max override) or :data:`MODE_FEED`
+    (the path feed ``feed_mm_s`` instead of F, still clamped by every limit); ``rapid_override`` (0..1)
+    scales rapids. ``wait``: the reference holds at every in-position stop (PHASE_WAIT) until
+    :func:`release_wait`; ``stop_when_done``: the run ends on the period that finishes the program."""
+
+    mode: int
+    override: float
+    rapid_override: float
+    feed_mm_s: float
+    wait: bool
+    stop_when_done: bool
+
+
+class Clock(NamedTuple):
+    """The per-call constants of a period (from ``cfg`` and the path): the period, the look-ahead window in
+    motion segments, the override's slew per period, the number of motion segments."""
+
+    dt: float
+    window: int
+    slew_step: float
+    n_seg: int
+
+
+@njit(cache=True)
+def advance_kernel(path: PathTables, state: ControllerState, command: Command, n_ticks: int,
+                   pts: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Run ``n_ticks`` interpolation periods of ``command`` from ``state``; returns one row per period
+    (fewer with ``command.stop_when_done``). ``pts`` is scratch space (window + 2 rows, 3 columns)."""
     out = np.zeros((n_ticks, N_OUT))
-    done = advance_into(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, knob, rapid_ov,
-                        cmd, pts, out, stop_when_done, wait)  # fmt: skip
+    done = advance_into(path, state, command, out, pts)
     return out[:done]
 
 
 @njit(cache=True)
-def advance_into(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray,
-                 dwell_f: np.ndarray, curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray,
-                 st_i: np.ndarray, mode: int, knob: float, rapid_ov: float, cmd: float, pts: np.ndarray,
-                 out: np.ndarray, stop_when_done: bool, wait: bool) -> int:  # fmt: skip
-    """:func:`advance_kernel` into ``out`` (one row per tick, ``len(out)`` ticks, every column written);
-    returns the number of rows run (fewer with ``stop_when_done``)."""
+def advance_rows(path: tuple, state: tuple, command: tuple, n_ticks: int, pts: np.ndarray) -> np.ndarray:
+    """:func:`advance_kernel` for a caller in Python, the records given as plain tuples in their fields'
+    order: numba types a plain tuple argument in its fast path, a named one costs microseconds a call."""
+    return advance_kernel(PathTables(*path), ControllerState(*state), Command(*command), n_ticks, pts)
+
+
+@njit(cache=True)
+def advance_into(path: PathTables, state: ControllerState, command: Command, out: np.ndarray,
+                 pts: np.ndarray) -> int:  # fmt: skip
+    """The controller's entry, in the manner of Ruckig's input and output parameters: run ``len(out)``
+    interpolation periods of ``command`` (:class:`Command`) on ``path`` (:class:`PathTables`), advancing
+    ``state`` (:class:`ControllerState`) in place; ``out`` gets one row per period, every ``O_*`` column
+    written. ``pts`` is scratch space (window + 2 rows, 3 columns). Returns the number of rows run:
+    ``len(out)``, or fewer with ``command.stop_when_done``."""
+    cfg = path.cfg
     dt = cfg[0]
-    window = int(cfg[1])
-    slew_step = cfg[2] * dt
-    n_seg = seg_f.shape[0]
+    clock = Clock(dt, int(cfg[1]), cfg[2] * dt, path.seg_f.shape[0])
+    st_i = state.i
     for tick in range(out.shape[0]):
         for col in range(N_OUT):
             out[tick, col] = 0.0
-        _tick(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i, mode, knob, rapid_ov, cmd, pts,
-              out, tick, dt, window, slew_step, n_seg, wait)
+        _tick(path, state, command, clock, pts, out, tick)
         if st_i[K_PHASE] == PHASE_DONE:
             out[tick, O_DONE] = 1.0
-            if stop_when_done:
+            if command.stop_when_done:
                 return tick + 1
     return out.shape[0]
 
@@ -621,7 +676,7 @@ def advance_into(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: n
 @njit(cache=True)
 def reset_state(pt_i: np.ndarray, pt_f: np.ndarray, dwell_f: np.ndarray, n_seg: int, st_f: np.ndarray,
                 st_i: np.ndarray) -> None:  # fmt: skip
-    """The state at the program start: t = 0, at rest, override unset (the first period takes the knob as
+    """The state at the program start: t = 0, at rest, override unset (the first period takes the command as
     it is), on the first segment or its leading dwells, or done where there is no motion at all."""
     st_f[:] = 0.0
     st_f[S_OV] = -1.0
@@ -648,18 +703,21 @@ def segment_index(seg_i: np.ndarray, dwell_f: np.ndarray, st_i: np.ndarray) -> i
 
 
 @njit(cache=True)
-def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarray, dwell_f: np.ndarray,
-          curve_f: np.ndarray, cfg: np.ndarray, st_f: np.ndarray, st_i: np.ndarray, mode: int, knob: float,
-          rapid_ov: float, cmd: float, pts: np.ndarray, out: np.ndarray, tick: int, dt: float, window: int,
-          slew_step: float, n_seg: int, wait: bool) -> None:  # fmt: skip
-    """One interpolation period (see the module docstring)."""
+def _tick(path: PathTables, state: ControllerState, command: Command, clock: Clock, pts: np.ndarray,
+          out: np.ndarray, tick: int) -> None:  # fmt: skip
+    """One interpolation period (see the module docstring), written to row ``tick`` of ``out``."""
+    seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg = path
+    st_f, st_i = state
+    mode, commanded, rapid_ov, cmd = command.mode, command.override, command.rapid_override, command.feed_mm_s
+    wait = command.wait
+    dt, window, slew_step, n_seg = clock
     phase = st_i[K_PHASE]
     k = st_i[K_SEG]
-    # The applied override follows the knob at a bounded rate.
+    # The applied override follows the commanded one at a bounded rate.
     ov = st_f[S_OV]
-    if ov < 0.0:  # first period after reset: the knob is wherever the operator left it
-        ov = knob
-    ov = min(knob, ov + slew_step) if knob > ov else max(knob, ov - slew_step)
+    if ov < 0.0:  # first period after reset: the override is wherever the operator left it
+        ov = commanded
+    ov = min(commanded, ov + slew_step) if commanded > ov else max(commanded, ov - slew_step)
     st_f[S_OV] = ov
     st_f[S_T] += dt
     out[tick, O_T] = st_f[S_T]
@@ -785,7 +843,7 @@ def _tick(seg_f: np.ndarray, seg_i: np.ndarray, pt_f: np.ndarray, pt_i: np.ndarr
     m_cap = cap_hard
     m_col = hard
     # Where the override is still slewing down, the speed must not dip below where it will settle.
-    cap_final = _target(seg_f, seg_i, k, mode, knob, rapid_ov, cmd)
+    cap_final = _target(seg_f, seg_i, k, mode, commanded, rapid_ov, cmd)
     j_track = max(_track_jerk(v, a, cap_soft, jerk_b, dt), j_lo)
     if v >= cap_final:
         j_track = max(j_track, _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, cap_final))

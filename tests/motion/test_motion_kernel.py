@@ -1,4 +1,5 @@
-"""The braking closed forms of the kernel against textbook S-curve formulas and against each other."""
+"""The braking closed forms of the kernel against textbook S-curve formulas and against each other; the
+kernel's entry (typed records in, rows out) against the Controller built on it."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from cnc_gym.motion import kernel
 from cnc_gym.motion.kernel import brake, brake_step, reach, reach_speed
 
 A, J = 3000.0, 30000.0  # A²/J = 300 mm/s
@@ -155,3 +157,38 @@ def test_the_braking_certificate_is_not_monotone_but_the_stop_envelope_is():
         assert d0 <= reach(v, a, w, level, A, J) * (1 + 1e-12) + 1e-12
         assert reach(v, a, 0.0, level, A, J * rng.uniform(1, 3)) <= d0 * (1 + 1e-12) + 1e-12
         assert reach(v, a, 0.0, level, A * rng.uniform(1, 3), J) <= d0 * (1 + 1e-12) + 1e-12
+
+
+def test_the_entry_takes_records_and_runs_as_the_controller():
+    from cnc_gym.machine import load_machine
+    from cnc_gym.motion import Controller
+    from cnc_gym.motion.controller import kernel_config
+    from cnc_gym.programs import load_program
+
+    machine = load_machine("vmc-small")
+    _, toolpath = load_program("star")
+    controller = Controller(toolpath, machine)
+    controller.reset()
+    lim = controller.limits
+    path = kernel.PathTables(lim.seg_f, lim.seg_i, lim.pt_f, lim.pt_i, lim.dwell_f, lim.curve_f,
+                             kernel_config(machine, lim))  # fmt: skip
+    state = kernel.ControllerState(np.zeros(kernel.N_STATE_F), np.zeros(kernel.N_STATE_I, dtype=np.int64))
+    kernel.reset_state(lim.pt_i, lim.pt_f, lim.dwell_f, lim.seg_f.shape[0], state.f, state.i)
+    scratch = np.zeros((int(path.cfg[1]) + 2, 3))
+    # The same periods as the controller's, row for row: at an override, then at a commanded feed.
+    out = np.zeros((400, kernel.N_OUT))
+    command = kernel.Command(kernel.MODE_OVERRIDE, 1.5, 1.0, 0.0, True, False)
+    assert kernel.advance_into(path, state, command, out, scratch) == 400
+    np.testing.assert_array_equal(out, controller.advance_rows(400, override=1.5))
+    feed = kernel.Command(kernel.MODE_FEED, 1.0, 1.0, 1200.0 / 60.0, True, False)
+    assert kernel.advance_into(path, state, feed, out, scratch) == 400
+    np.testing.assert_array_equal(out, controller.advance_rows(400, feed_mm_min=1200.0))
+    np.testing.assert_array_equal(state.f, controller._st_f)
+    # stop_when_done: from the start, the run ends on the period that finishes the program (no in-position
+    # waits)
+    kernel.reset_state(lim.pt_i, lim.pt_f, lim.dwell_f, lim.seg_f.shape[0], state.f, state.i)
+    to_the_end = kernel.Command(kernel.MODE_OVERRIDE, 2.0, 1.0, 0.0, False, True)
+    rows = kernel.advance_kernel(path, state, to_the_end, 200_000, scratch)
+    assert 0 < len(rows) < 200_000
+    assert rows[-1, kernel.O_DONE] == 1.0 and not rows[:-1, kernel.O_DONE].any()
+    assert state.i[kernel.K_PHASE] == kernel.PHASE_DONE

@@ -256,11 +256,12 @@ def _reference(e, bank_f, bank_i, sf, si, knob, seg_f, pt_f, dwell_f, curve_f, s
     if st_i[K.K_PHASE] != K.PHASE_DONE:
         # One call with a typed mode, not one per literal mode: numba would compile the controller twice.
         if bank_i[CI_FEED_MODE]:  # the knob commands the feed (replacing F), 0 … max feed
-            mode, override, feed = np.int64(1), 1.0, (knob + 1.0) * 0.5 * cfg_f[CF_MAX_FEED] / 60.0
+            mode, override, feed = np.int64(K.MODE_FEED), 1.0, (knob + 1.0) * 0.5 * cfg_f[CF_MAX_FEED] / 60.0
         else:
-            mode, override, feed = np.int64(0), (knob + 1.0) * 0.5 * cfg_f[CF_MAX_OVERRIDE], 0.0
-        K.advance_into(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg, st_f, st_i,
-                       mode, override, 1.0, feed, pts, out, False, True)  # type: ignore[arg-type]  # (int64 mode)
+            mode, override, feed = np.int64(K.MODE_OVERRIDE), (knob + 1.0) * 0.5 * cfg_f[CF_MAX_OVERRIDE], 0.0
+        path = K.PathTables(seg_f, seg_i, pt_f, pt_i, dwell_f, curve_f, cfg)
+        command = K.Command(mode, override, 1.0, feed, True, False)  # type: ignore[arg-type]  # (int64 mode)
+        K.advance_into(path, K.ControllerState(st_f, st_i), command, out, pts)
         for t in range(ticks):
             for a in range(3):
                 reference[t, a] = out[t, K.O_X + a]
