@@ -3,7 +3,8 @@
 *Deployable* means it uses only what a real controller or CAM system knows: the program, the machine
 parameters (axis limits, the controller's static speed and junction limits) and its own model of the
 servo axes. It never runs the env or the plant, so it could run inside a controller's look-ahead. It
-costs a few µs per segment (``scripts/bench_planner.py``); a schedule is computed once per program and
+costs about 12 µs of CPU per segment on average over the benchmark's test split
+(``scripts/bench_planner_versions.py``; docs/benchmark.md); a schedule is computed once per program and
 machine and kept (:class:`SchedulePlanner`).
 
 Its users: the ``classical`` baseline policy (:mod:`cnc_gym.policies.classical`), the env's planner
