@@ -34,6 +34,10 @@ _SCRIPT = _load_script()
 _children, _running = _SCRIPT._children, _SCRIPT._running
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _records(path: Path) -> list[dict]:
     try:
         text = path.read_text()
@@ -53,8 +57,11 @@ def test_ctrl_c_keeps_every_finished_record_cancels_the_rest_and_leaves_no_worke
                "--seeds", "0,1,2", "--policy", "constant:1.0", "--policy", "classical", "--policy", "oracle",
                "--json", str(out), "--no-progress"]  # fmt: skip
     env = {**os.environ, "CNC_GYM_CACHE_DIR": str(tmp_path / "cache")}
+    # The command gets Ctrl-C's default disposition whatever the suite's own is: a suite started in the
+    # background of a non-interactive shell (`make test &`) runs with SIGINT ignored, and a child inherits
+    # an ignored signal, as Unix has every command started that way do.
     process = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)  # fmt: skip
+                               text=True, start_new_session=True, preexec_fn=_default_sigint)  # fmt: skip
     try:
         seen: list[dict] = []
         while not seen and process.poll() is None:  # streamed: a record appears long before the end
