@@ -11,14 +11,13 @@ NAME is a key of :data:`TABLES`, which maps it to the dataclass whose declared k
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from doc_blocks import update_docs
+from doc_blocks import block_renderer, update_docs
 
 from cnc_gym.config import markdown_table
 from cnc_gym.envs import observation
@@ -70,25 +69,11 @@ GENERATED = {"env.v1.observation": observation.markdown_table,
              "env.v0.observation": lambda: observation.markdown_table(observation.OBSERVATION_V0)}
 #: Files that hold tables.
 DOCS = ("docs/configs.md", "docs/env.md")
-_BLOCK = re.compile(r"(<!-- config-table ([\w.]+) -->\n)(.*?)(<!-- end config-table -->)", re.S)
-
-
-def render(text: str) -> tuple[str, list[str]]:
-    """``text`` with every table block rewritten, and the names of the blocks found."""
-    names: list[str] = []
-
-    def fill(match: re.Match[str]) -> str:
-        name = match.group(2)
-        if name in GENERATED:
-            names.append(name)
-            return f"{match.group(1)}{GENERATED[name]()}\n{match.group(4)}"
-        if name not in TABLES:
-            raise SystemExit(f"config_docs: unknown table {name!r} (known: {', '.join(TABLES)})")
-        names.append(name)
-        cls, prefix = TABLES[name]
-        return f"{match.group(1)}{markdown_table(cls, prefix)}\n{match.group(4)}"
-
-    return _BLOCK.sub(fill, text), names
+#: ``text`` with every table block rewritten, and the names of the blocks found.
+render = block_renderer("config-table", {
+    **{name: (lambda cls=cls, prefix=prefix: markdown_table(cls, prefix))
+       for name, (cls, prefix) in TABLES.items()},
+    **GENERATED}, "config_docs")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -3,8 +3,30 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import re
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
+
+
+def block_renderer(marker: str, tables: Mapping[str, Callable[[], str]],
+                   tool: str) -> Callable[[str], tuple[str, list[str]]]:  # fmt: skip
+    """A ``render`` for :func:`update_docs`: every block between ``<!-- MARKER NAME -->`` and
+    ``<!-- end MARKER -->`` rewritten as ``tables[NAME]()``; an unknown NAME stops ``tool`` with one line."""
+    block = re.compile(rf"(<!-- {marker} ([\w.]+) -->\n)(.*?)(<!-- end {marker} -->)", re.S)
+
+    def render(text: str) -> tuple[str, list[str]]:
+        names: list[str] = []
+
+        def fill(match: re.Match[str]) -> str:
+            name = match.group(2)
+            if name not in tables:
+                raise SystemExit(f"{tool}: unknown table {name!r} (known: {', '.join(tables)})")
+            names.append(name)
+            return f"{match.group(1)}{tables[name]()}\n{match.group(4)}"
+
+        return block.sub(fill, text), names
+
+    return render
 
 
 def update_docs(repo: Path, docs: Iterable[str], render: Callable[[str], tuple[str, list[str]]],

@@ -11,14 +11,13 @@ NAME is a key of :data:`TABLES`, which maps it to the scopes of :mod:`cnc_gym.er
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from doc_blocks import update_docs
+from doc_blocks import block_renderer, update_docs
 
 from cnc_gym.error_codes import Scope, markdown_table
 
@@ -33,21 +32,9 @@ TABLES: dict[str, tuple[Scope, ...]] = {
 }
 #: Files that hold tables.
 DOCS = ("docs/gcode.md", "docs/azmc1.md", "docs/motion.md")
-_BLOCK = re.compile(r"(<!-- error-codes ([\w.]+) -->\n)(.*?)(<!-- end error-codes -->)", re.S)
-
-
-def render(text: str) -> tuple[str, list[str]]:
-    """``text`` with every table block rewritten, and the names of the blocks found."""
-    names: list[str] = []
-
-    def fill(match: re.Match[str]) -> str:
-        name = match.group(2)
-        if name not in TABLES:
-            raise SystemExit(f"error_code_docs: unknown table {name!r} (known: {', '.join(TABLES)})")
-        names.append(name)
-        return f"{match.group(1)}{markdown_table(*TABLES[name])}\n{match.group(4)}"
-
-    return _BLOCK.sub(fill, text), names
+#: ``text`` with every table block rewritten, and the names of the blocks found.
+render = block_renderer("error-codes", {name: (lambda scopes=scopes: markdown_table(*scopes))
+                                         for name, scopes in TABLES.items()}, "error_code_docs")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
