@@ -35,20 +35,16 @@ from cnc_gym.errors import ConfigError
 
 
 class _StepInfos:
-    """One step's infos of every env (arrays taken when the step ends), for :class:`StepInfo`."""
+    """One step's infos of every env (arrays taken when the step ends, one per info key in the env's
+    order), for :class:`StepInfo`."""
 
-    __slots__ = ("_arrays", "keys")
+    __slots__ = ("arrays",)
 
-    def __init__(self, arrays: dict[str, np.ndarray], keys: frozenset[str]) -> None:
-        self._arrays = arrays
-        self.keys = keys
-
-    def arrays_keys(self) -> list[str]:
-        """The info keys in the env's order."""
-        return list(self._arrays)
+    def __init__(self, arrays: dict[str, np.ndarray]) -> None:
+        self.arrays = arrays
 
     def value(self, key: str, env: int) -> Any:
-        value = self._arrays[key][env]
+        value = self.arrays[key][env]  # (a KeyError for a key the env has not)
         return value if key == "program" else value.item()
 
 
@@ -63,15 +59,13 @@ class StepInfo(Mapping):
         self._env = env
 
     def __getitem__(self, key: str) -> Any:
-        if key not in self._infos.keys:
-            raise KeyError(key)
         return self._infos.value(key, self._env)
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self._infos.arrays_keys())
+        return iter(self._infos.arrays)
 
     def __len__(self) -> int:
-        return len(self._infos.keys)
+        return len(self._infos.arrays)
 
     def copy(self) -> dict[str, Any]:
         return dict(self)
@@ -95,7 +89,6 @@ class FeedrateSB3VecEnv(VecEnv):
         self.venv = venv
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self._actions: np.ndarray | None = None
-        self._info_keys = frozenset(venv.batch.info_keys)
 
     def reset(self) -> np.ndarray:
         envs = list(range(self.num_envs))
@@ -114,7 +107,7 @@ class FeedrateSB3VecEnv(VecEnv):
         batch.step()
         obs, rewards, terminated, truncated, arrays, n_ended = batch.gather()
         dones = terminated | truncated
-        step_infos = _StepInfos(arrays, self._info_keys)
+        step_infos = _StepInfos(arrays)
         infos: list[Any] = [StepInfo(step_infos, i) for i in range(self.num_envs)]
         if n_ended:
             ended = np.flatnonzero(dones).tolist()
