@@ -222,23 +222,9 @@ def approach_tables(machine: MachineConfig) -> ApproachTables:
 
 
 @njit(cache=True, inline="always")
-def _on_grid(table: np.ndarray, t: np.ndarray, x: float, c: int) -> float:
-    """Column ``c`` of ``table`` at time ``x`` on the uniform grid ``t`` (held at its last value beyond)."""
-    if x <= 0.0:
-        return table[0, c]
-    step = t[1] - t[0]
-    f = x / step
-    i = int(f)
-    if i >= t.shape[0] - 1:
-        return table[t.shape[0] - 1, c]
-    w = f - i
-    return table[i, c] * (1.0 - w) + table[i + 1, c] * w
-
-
-@njit(cache=True, inline="always")
 def _on_row(table: np.ndarray, row: int, w: float, c: int) -> float:
-    """Column ``c`` of ``table`` at grid row ``row`` plus ``w`` of the next (row −1: before the grid, the
-    last row: beyond it): :func:`_on_grid`'s value, its grid place found once for the three axes."""
+    """Column ``c`` of a table on the uniform time grid at grid row ``row`` plus ``w`` of the next: linear
+    between rows, held at the first row before the grid (row −1) and at the last beyond it."""
     if row < 0:
         return table[0, c]
     if row >= table.shape[0] - 1:
@@ -252,8 +238,8 @@ def _approach_error_at(k: int, u_in: np.ndarray, u_out: np.ndarray, speed: float
                        lag: np.ndarray) -> float:  # fmt: skip
     """The error of :func:`corner_approach_error` at time ``t[k]`` after the corner.
 
-    The planner's innermost loop, so written out in scalars: the table look-ups are :func:`_on_grid`'s
-    (the same operations, one grid place per time shared by the three axes).
+    The planner's innermost loop, so written out in scalars: each time's place on the grid (row and
+    weight) is found once for the three axes' look-ups (:func:`_on_row`).
     """
     tk = t[k]
     i0, i1, i2 = u_in[0], u_in[1], u_in[2]
