@@ -69,8 +69,9 @@ MACHINE_V1 = MachineRef(doc="the machine (of every episode, or the centre of the
 RESIDUAL_RANGE = Number(low=1, high=10, low_open=True, doc="residual mode: the override is the planner's "
                         "× residual_range^a", why="a factor above 1; 10 spans 0.1 to 10 times the "
                         "planner's override.")  # fmt: skip
-PLANNER_VERSION_V1 = Number(low=1, high=2, integer=True, doc="the deployable planner's version behind the "
-                            "`planner_override` entry and the residual mode: 1 (v1, v2; frozen), 2 (v3)",
+PLANNER_VERSION_V1 = Number(low=1, high=3, integer=True, doc="the deployable planner's version behind the "
+                            "`planner_override` entry and the residual mode: 1 (v1, v2; frozen), 2 (v3; "
+                            "frozen), 3 (v4)",
                             why="the planner versions there are (motion.planner.PLANNERS).")  # fmt: skip
 ACTION_MODE_V1 = Choice(choices=ACTION_MODES_V1, doc="what the action sets: the override knob, the feed, or "
                         "a factor on the deployable planner's override")
@@ -212,7 +213,7 @@ class FeedrateEnvV1(FeedrateEnv):
     ``reward`` (:class:`RankingReward` or a dict of its weights), ``randomize``
     (:class:`~cnc_gym.envs.randomization.DomainRandomization` or a dict; None: off, as in the benchmark),
     ``residual_range``, ``planner_version`` (the deployable planner behind ``planner_override`` and the
-    ``residual`` mode: 1 for v1 and v2, 2 for v3; :data:`cnc_gym.motion.planner.PLANNERS`).
+    ``residual`` mode: 1 for v1 and v2, 2 for v3, 3 for v4; :data:`cnc_gym.motion.planner.PLANNERS`).
     ``reset(seed=..., options={{"program": ...}})`` as v0.
 
     ## Info
@@ -222,17 +223,19 @@ class FeedrateEnvV1(FeedrateEnv):
 
     ## Version History
 
-    - v3: v2 with the live deployable planner (planner version 2, ``planner_version=2``): the
-      ``planner_override`` observation entry and info key, and the knob the ``residual`` mode scales, are
-      the ``classical`` baseline's of today, which holds the contour tolerance on every program of
-      ``cnc-bench-v1`` (docs/baselines.md). Dynamics, reward and the other entries are v2's. v1 and v2
-      keep planner version 1, frozen bit for bit, so that their published results and the models trained
-      on them reproduce.
+    - v4: v3 with the live deployable planner, version 3 (``planner_version=3``): the ``planner_override``
+      observation entry and info key, and the knob the ``residual`` mode scales, are the ``classical``
+      baseline's of today (faster than version 2 at the same feasibility: docs/benchmark.md). Dynamics,
+      reward and the other entries are v2's. The version to train on.
+    - v3: v2 with the deployable planner version 2 (``planner_version=2``, now frozen bit for bit), which
+      holds the contour tolerance on the test split of ``cnc-bench-v1``. Dynamics, reward and the other
+      entries are v2's. v1 and v2 keep planner version 1, frozen bit for bit, so that their published
+      results and the models trained on them reproduce.
     - v2: v1 with the programmed-path contour meter (``contour_rule="path"``): the rapids the reference
       has left are part of the path the tool is measured against, so the in-position residual at a
       rapid → cut junction (about 4 µm on vmc-small, at every cut that follows a rapid) is no longer
       contour error; everywhere else the error, and so the reward, cost and observation, are v1's.
-      Dynamics unchanged. The version to train on (docs/plant.md, "Contour error at a rapid → cut
+      Dynamics unchanged (docs/plant.md, "Contour error at a rapid → cut
       junction").
     - v1: reward that ranks like the benchmark's score (violations per path length, finish bonus, no
       penalty inside the tolerance); observation without program position, with the machine's parameters

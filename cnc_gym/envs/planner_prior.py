@@ -39,6 +39,8 @@ class PlannerPrior:
         #: The planner version (:data:`cnc_gym.motion.planner.PLANNERS`) and its margin.
         self.version = self._planner.version
         self.margin = self._planner.margin
+        #: How far beyond the reaction lead the version's knob rule looks, mm.
+        self.reach_mm = self._planner.reach_mm
         #: The machine the planner plans with in place of the env's (None: the env's): the benchmark's
         #: tracks whose plant differs from the parameter table give the nominal machine.
         self.nominal_machine: MachineConfig | None = None

@@ -56,7 +56,8 @@ class ClassicalPlanner:
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         return override_action(override_at(self.schedule, float(info.get("path_s", 0.0)),
-                                           float(info.get("feed_mm_min", 0.0)), self._lead_s),
+                                           float(info.get("feed_mm_min", 0.0)), self._lead_s,
+                                           self._planner.reach_mm),
                                self._max_override)  # fmt: skip
 
 

@@ -62,6 +62,7 @@ from cnc_gym.motion.planner import (
     bidirectional_scan,
     override_at,
 )
+from cnc_gym.motion.planner.rule import REACH_MM_V1
 from cnc_gym.policies.base import override_action
 from cnc_gym.policies.classical import knob_setup
 from cnc_gym.rollout import play
@@ -145,7 +146,8 @@ class OraclePlanner:
     # ------------------------------------------------------------------ schedule
     def override_at(self, path_s: float, info: dict[str, Any] | None = None) -> float:
         """Knob value at path position ``path_s``: smallest scheduled override over the reaction window."""
-        return override_at(self.schedule, path_s, float((info or {}).get("feed_mm_min", 0.0)), self._lead_s)
+        return override_at(self.schedule, path_s, float((info or {}).get("feed_mm_min", 0.0)), self._lead_s,
+                           REACH_MM_V1)
 
     def plan(self, toolpath: Toolpath, machine: MachineConfig, env: Any = None) -> Schedule:
         """Build (and, given an env to copy, refine by simulation) the schedule for one program."""

@@ -93,8 +93,10 @@ class Planner(Protocol):
     """What the compiled step needs of a planner whose override it evaluates every step (the signal
     ``planner_override``): a schedule per program, and how far ahead it looks."""
 
-    #: Reaction lead, s: the override is the schedule's smallest over the stretch covered in this time.
+    #: Reaction lead, s: the override is the schedule's smallest over the stretch covered in this time ...
     lead_s: float
+    #: ... and this much farther, mm.
+    reach_mm: float
 
     def schedule_table(self, toolpath: Toolpath, machine: MachineConfig, limits: PathLimits) -> np.ndarray:
         """(n, 2) rows of path position (mm, ascending) and the override scheduled from there on."""

@@ -109,6 +109,7 @@ class FeedrateBatch:
         config_f = np.array([config["tolerance_mm"], config["in_position_mm"], config["max_override"],
                              config["max_feed_mm_min"], config["lookahead_mm"], self.period_s,
                              0.0 if planner is None else planner.lead_s,
+                             0.0 if planner is None else planner.reach_mm,
                              *(quantities[q] for q in MACHINE_QUANTITIES)])  # fmt: skip
         # The info: v0's keys and the program, then what the specs add (see F_PROGRAM_NAME).
         keys = [*OUTPUT_INFO_KEYS, "program"]

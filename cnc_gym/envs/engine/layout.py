@@ -95,7 +95,7 @@ N_STATE_I = I_RESET + 1
 # ------------------------------------------------------------------------------------- config head
 # Config (shared by every env), at the start of the bank: floats then ints.
 (CF_TOLERANCE, CF_IN_POSITION, CF_MAX_OVERRIDE, CF_MAX_FEED, CF_HORIZON, CF_PERIOD, CF_PLANNER_LEAD,
- CF_MACHINE) = range(8)  # fmt: skip
+ CF_PLANNER_REACH, CF_MACHINE) = range(9)  # fmt: skip
 N_CONFIG_F = CF_MACHINE + len(MACHINE_QUANTITIES)
 (CI_TICKS, CI_POINTS, CI_FEED_MODE, CI_WINDOW_AHEAD, CI_WINDOW, CI_OBS, CI_OBS_BLOCKS, CI_REWARD, CI_PROGRAMS,
  CI_OBS_AT, CI_BLOCKS_AT, CI_REWARD_AT, CI_OBS_TAIL, CI_TAIL_AT, CI_COST, CI_TERMS_OUT, CI_FINISH_OUT,

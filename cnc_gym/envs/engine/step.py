@@ -46,6 +46,7 @@ from cnc_gym.envs.engine.layout import (
     CF_MAX_OVERRIDE,
     CF_PERIOD,
     CF_PLANNER_LEAD,
+    CF_PLANNER_REACH,
     CF_TOLERANCE,
     CI_BLOCKS_AT,
     CI_COST,
@@ -137,7 +138,8 @@ def _observe(e, bank_f, bank_i, sf, si, seg_f, pt_f, pt_i, scalars, ahead, obs) 
     schedule = float_table(bank_f, bank_i, si[e, I_PROGRAM], TABLE_SCHEDULE, 2)
     if schedule.shape[0]:
         sig[SIG_PLANNER_OVERRIDE] = planner_override(schedule, st_f[K.S_S], sig[SIG_SPEED] * 60.0,
-                                                     cfg_f[CF_PLANNER_LEAD])  # fmt: skip
+                                                     cfg_f[CF_PLANNER_LEAD],
+                                                     cfg_f[CF_PLANNER_REACH])  # fmt: skip
     row = bank_f[bank_i[CI_OBS_AT] :]
     n_signals = bank_i[CI_OBS]
     for i in range(n_signals):

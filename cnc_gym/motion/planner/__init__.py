@@ -68,11 +68,12 @@ from cnc_gym.motion.planner.error_model import (
     servo_tables,
 )
 from cnc_gym.motion.planner.record import Schedule
-from cnc_gym.motion.planner.rule import override_at, planner_override, reaction_lead_s
+from cnc_gym.motion.planner.rule import override_at, planner_override, reaction_lead_s, rule_reach_mm
 from cnc_gym.motion.planner.schedule import MARGIN, bidirectional_scan, plan_schedule
 from cnc_gym.motion.planner.service import PLANNER_VERSION, PLANNERS, SchedulePlanner, planner_version
 
 __all__ = ["MARGIN", "PLANNERS", "PLANNER_VERSION", "SPEED_CEILING_MM_S", "Schedule", "SchedulePlanner",
            "ServoErrorModel", "ServoTables", "arc_caps", "bidirectional_scan", "corner_error_per_speed",
            "override_at", "plan_schedule", "planner_override", "planner_version", "reaction_lead_s",
+           "rule_reach_mm",
            "servo_tables"]

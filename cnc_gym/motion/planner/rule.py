@@ -20,6 +20,10 @@ if TYPE_CHECKING:
 REACTION_PERIODS = 2.0
 #: ... plus this much, s.
 REACTION_MARGIN_S = 0.01
+#: How much farther than the reaction lead the knob of planner versions 1 and 2 looks, mm (at a few mm/s
+#: that is tenths of a second of crawl before every slow stretch; version 3 bakes its anticipation into
+#: the schedule at the scheduled speed and looks no farther: :func:`rule_reach_mm`).
+REACH_MM_V1 = 0.5
 
 
 def reaction_lead_s(control_period_s: float) -> float:
@@ -28,10 +32,17 @@ def reaction_lead_s(control_period_s: float) -> float:
     return REACTION_PERIODS * float(control_period_s) + REACTION_MARGIN_S
 
 
+def rule_reach_mm(version: int) -> float:
+    """The knob's look beyond the reaction lead for planner ``version``, mm (:data:`REACH_MM_V1`)."""
+    return REACH_MM_V1 if version <= 2 else 0.0
+
+
 @njit(cache=True, nogil=True)
-def planner_override(schedule: np.ndarray, path_s: float, feed_mm_min: float, lead_s: float) -> float:
+def planner_override(schedule: np.ndarray, path_s: float, feed_mm_min: float, lead_s: float,
+                     reach_mm: float) -> float:  # fmt: skip
     """A schedule's override at path position ``path_s`` moving at ``feed_mm_min``: the smallest scheduled
-    override over the stretch covered in ``lead_s`` at the current speed (and 0.5 mm more).
+    override over the stretch covered in ``lead_s`` at the current speed and ``reach_mm`` more
+    (:func:`rule_reach_mm`).
 
     ``schedule``: (n, 2) rows of path position (mm, ascending) and the override scheduled from there on
     (:attr:`Schedule.table <cnc_gym.motion.planner.schedule.Schedule.table>`). A NaN override in the
@@ -40,7 +51,7 @@ def planner_override(schedule: np.ndarray, path_s: float, feed_mm_min: float, le
     speed = max(feed_mm_min / 60.0, 1.0)
     n = schedule.shape[0]
     lo = _count_at_most(schedule, path_s) - 1
-    hi = _count_at_most(schedule, path_s + speed * lead_s + 0.5)
+    hi = _count_at_most(schedule, path_s + speed * lead_s + reach_mm)
     lo = min(max(lo, 0), n - 1)
     lowest = schedule[lo, 1]
     for i in range(lo + 1, max(hi, lo + 1)):
@@ -65,9 +76,11 @@ def _count_at_most(schedule: np.ndarray, x: float) -> int:
     return lo
 
 
-def override_at(schedule: Schedule | None, path_s: float, feed_mm_min: float, lead_s: float) -> float:
+def override_at(schedule: Schedule | None, path_s: float, feed_mm_min: float, lead_s: float,
+                reach_mm: float) -> float:  # fmt: skip
     """:func:`planner_override` of a :class:`~cnc_gym.motion.planner.schedule.Schedule` (a policy's
     call; an env's compiled step reads the table itself)."""
     if schedule is None:
         raise RuntimeError("the planner's reset(env) must be called before act()")
-    return float(planner_override(schedule.table, float(path_s), float(feed_mm_min), float(lead_s)))
+    return float(planner_override(schedule.table, float(path_s), float(feed_mm_min), float(lead_s),
+                                  float(reach_mm)))  # fmt: skip

@@ -8,6 +8,7 @@ they loop over the path.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -110,9 +111,31 @@ RESPONSE_TIME_CONSTANTS = 1.0
 #: A window is an arc only where no single junction in it makes this share of its net turn.
 SPREAD_SHARE = 0.5
 CONTROLLER_LIMITS = True
-#: Decelerations are scheduled at this share of the acceleration the path and the override's slew allow:
-#: the controller follows the knob with its jerk limit, and lags a steep ramp by ~a²/J.
-DECEL_SHARE = 0.5
+
+
+class PlanSettings(NamedTuple):
+    """What distinguishes the planner versions built on this module (version 2, frozen, and 3)."""
+
+    #: Decelerations are scheduled at this share of the acceleration the path and the override's slew
+    #: allow: the controller follows the knob with its jerk limit, and lags a steep ramp by ~a²/J.
+    decel_share: float
+    #: How a window of the net-turn analysis is told to be a point for the servo: by the extent of the
+    #: junctions inside it (True) or by its width (False, version 2, which let two junctions a few tenths
+    #: of a mm apart inside a wide window pass for an arc).
+    junction_extent: bool
+    #: The knob's anticipation baked into the schedule's overrides (0: none, version 2): each node asks for
+    #: the lowest override of the stretch the scheduled speed covers in this time, and where the override
+    #: must fall faster than its slew allows (at a change of programmed feed the same speed is another
+    #: override) it starts falling earlier.
+    knob_lead_s: float
+
+
+#: Version 2 (the frozen planner of ``cnc_gym/Feedrate-v3``).
+SETTINGS_V2 = PlanSettings(decel_share=0.5, junction_extent=False, knob_lead_s=0.0)
+#: Version 3 (the live planner). Chosen on the train and val splits of cnc-bench-v1: decelerations at
+#: 0.75 of the acceleration (0.85 broke a train program), two control periods of baked anticipation
+#: (one broke 4 % of the programs of every split).
+SETTINGS_V3 = PlanSettings(decel_share=0.75, junction_extent=True, knob_lead_s=0.02)
 
 
 @njit(cache=True)
@@ -219,11 +242,13 @@ def _window_max(values: np.ndarray, queue: np.ndarray, head: np.ndarray, tail: n
 
 
 def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLimits | None = None,
-                  margin: float = MARGIN, max_override: float | None = None) -> Schedule:  # fmt: skip
+                  margin: float = MARGIN, max_override: float | None = None,
+                  settings: PlanSettings = SETTINGS_V3) -> Schedule:  # fmt: skip
     """The deployable schedule of ``toolpath`` on ``machine`` (:mod:`cnc_gym.motion.planner`'s docstring).
 
     ``limits``: the controller's static tables (:func:`cnc_gym.motion.limits.build_limits`), computed
-    here when not given (an env's controller already holds them).
+    here when not given (an env's controller already holds them); ``settings``: the planner version's
+    (:data:`SETTINGS_V3`, the live one, or :data:`SETTINGS_V2`).
     """
     lim = limits if limits is not None else build_limits(toolpath, machine)
     tables = servo_tables(machine)
@@ -242,13 +267,15 @@ def plan_schedule(toolpath: Toolpath, machine: MachineConfig, *, limits: PathLim
         seg_f, seg_i, lim.pt_f, np.ascontiguousarray(lim.pt_f[:, K.P_S]), lim.curve_f, tables.lag_s,
         tables.arc_omega, tables.arc_error, tables.ramp_t, approach.ramp_error, approach.excess_integral,
         target, top, 1.0 / kv_min, accel, jerk, float(ctl.override_slew_per_s),
-        K.TRACK_PERIODS * float(ctl.interpolation_period_s), np.array(WINDOWS_MM))
+        K.TRACK_PERIODS * float(ctl.interpolation_period_s), np.array(WINDOWS_MM),
+        float(settings.decel_share), bool(settings.junction_extent), float(settings.knob_lead_s))
     return Schedule(s=node_s, cap_mm_s=node_cap, speed_mm_s=speed, override=override)
 
 
 @njit(cache=True)
 def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_t, ramp_e, excess_int, target,
-          top, time_constant, accel, jerk, slew_per_s, settle_s, windows):  # fmt: skip
+          top, time_constant, accel, jerk, slew_per_s, settle_s, windows, decel_share, junction_extent,
+          knob_lead_s):  # fmt: skip
     """The schedule (node positions, caps, speeds, overrides): piece caps, junction corners with their
     approach holds, the net-turn windows, the jerk-limited scan and the knob per node."""
     n = seg_f.shape[0]
@@ -262,12 +289,14 @@ def _plan(seg_f, seg_i, pt_f, point_s, curve_f, lag, arc_omega, arc_table, ramp_
     run_lo, run_hi = _runs(seg_f, cutting)
     corner_v, hold_lo, hold_hi, extra = _corners(
         seg_f, pt_f, t0, t1, cutting, feed, piece_cap, run_lo, run_hi, lag, ramp_t, ramp_e, excess_int,
-        target, time_constant, accel, jerk, slew_per_s, settle_s)
+        target, time_constant, accel, jerk, slew_per_s, settle_s, decel_share)
     node_s, piece, point = _nodes(seg_f, point_s, corner_v, hold_lo, hold_hi, extra)
     cap = _node_caps(seg_f, pt_f, cutting, piece_cap, corner_v, hold_lo, hold_hi, node_s, piece, point)
     _window_caps(seg_f, seg_i, point_s, t0, t1, cutting, run_lo, run_hi, node_s, piece, cap, lag, arc_omega,
-                 arc_table, ramp_t, ramp_e, excess_int, target, time_constant, windows)  # fmt: skip
-    speed, override = _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top)
+                 arc_table, ramp_t, ramp_e, excess_int, target, time_constant, windows,
+                 junction_extent)  # fmt: skip
+    speed, override = _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top, decel_share,
+                            knob_lead_s)  # fmt: skip
     return node_s, cap, speed, override
 
 
@@ -325,7 +354,7 @@ def _runs(seg_f, cutting):
 
 @njit(cache=True)
 def _corners(seg_f, pt_f, t0, t1, cutting, feed, piece_cap, run_lo, run_hi, lag, ramp_t, ramp_e, excess_int,
-             target, time_constant, accel, jerk, slew_per_s, settle_s):  # fmt: skip
+             target, time_constant, accel, jerk, slew_per_s, settle_s, decel_share):  # fmt: skip
     """Speed at each junction taken as a corner (inf elsewhere), and the path span its hold covers; the
     number of hold ends (nodes the holds add)."""
     n = seg_f.shape[0]
@@ -372,7 +401,7 @@ def _corners(seg_f, pt_f, t0, t1, cutting, feed, piece_cap, run_lo, run_hi, lag,
         hold = 0.0
         if drop > 1e-9:
             a_full = max(min(accel, slew_per_s * feed[q - 1]) if feed[q - 1] > 0 else accel, 1e-3)
-            a_eff = DECEL_SHARE * a_full
+            a_eff = decel_share * a_full
             ramp = _ramp_time(drop, a_eff, jerk)
             steps = int(HOLD_MAX / HOLD_STEP)
             failed_at = 0
@@ -460,7 +489,8 @@ def _node_caps(seg_f, pt_f, cutting, piece_cap, corner_v, hold_lo, hold_hi, node
 
 @njit(cache=True)
 def _window_caps(seg_f, seg_i, point_s, t0, t1, cutting, run_lo, run_hi, node_s, piece, cap, lag, arc_omega,
-                 arc_table, ramp_t, ramp_e, excess_int, target, time_constant, windows):  # fmt: skip
+                 arc_table, ramp_t, ramp_e, excess_int, target, time_constant, windows,
+                 junction_extent):  # fmt: skip
     """Lower ``cap`` (in place) where the path's net turn over a window around a node is a corner or an arc
     the servo sees."""
     n = seg_f.shape[0]
@@ -514,7 +544,9 @@ def _window_caps(seg_f, seg_i, point_s, t0, t1, cutting, run_lo, run_hi, node_s,
             axis[1] = ta[2] * tb[0] - ta[0] * tb[2]
             axis[2] = ta[0] * tb[1] - ta[1] * tb[0]
             span = b_s - a_s
-            v_point = span / (RESPONSE_TIME_CONSTANTS * time_constant)  # above it, the window is a point
+            # Above v_point the servo sees the window's junctions as one point.
+            extent = point_s[kb] - point_s[ka + 1] if junction_extent else span
+            v_point = extent / (RESPONSE_TIME_CONSTANTS * time_constant)
             # Seen as an arc only where the turn is spread over the window: a turn most of which is one
             # junction's is that junction's corner (the corner model has it, at the speed at the corner).
             sharpest = _window_max(junction_turn, queue[wi], head, tail, pushed, wi, ka + 1, kb)
@@ -535,7 +567,7 @@ def _window_caps(seg_f, seg_i, point_s, t0, t1, cutting, run_lo, run_hi, node_s,
 
 
 @njit(cache=True)
-def _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top):
+def _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top, decel_share, knob_lead_s):
     """Reachable speed per node (the jerk-limited scan under the caps) and the override that asks for it."""
     total = node_s.shape[0]
     # ---- reachable speeds, then the knob
@@ -546,12 +578,14 @@ def _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top):
         accel_at[i] = max(min(accel, slew_per_s * f) if f > 0 else accel, 1e-3)
         finite[i] = cap[i] if math.isfinite(cap[i]) else SPEED_CEILING_MM_S
     speed = finite.copy()
-    _scan(node_s, speed, accel_at, jerk, DECEL_SHARE)
+    _scan(node_s, speed, accel_at, jerk, decel_share)
     override = np.full(total, top)
     for i in range(total):
         f = feed[piece[i]]
         if cutting[piece[i]] and f > 0:
             override[i] = min(max(speed[i] / f, 0.0), top)
+    if knob_lead_s > 0.0:
+        _anticipate(node_s, speed, override, slew_per_s, knob_lead_s)
     # On rapids (and before the first cut) the knob moves nothing (rapids run at their own override), so
     # it already asks for the next cut's override: the applied override slews there during the rapid.
     following = top
@@ -561,6 +595,23 @@ def _knob(node_s, cap, piece, cutting, feed, accel, jerk, slew_per_s, top):
         else:
             override[i] = following
     return speed, override
+
+
+@njit(cache=True)
+def _anticipate(node_s, speed, override, slew_per_s, lead_s):
+    """The knob's anticipation (:attr:`PlanSettings.knob_lead_s`), in place: falls the override cannot
+    slew in time start earlier, then each node asks for the lowest override the scheduled speed reaches
+    within ``lead_s``."""
+    total = node_s.shape[0]
+    for i in range(total - 2, -1, -1):  # (the time to the next node at the scheduled speed: an upper bound)
+        dt = (node_s[i + 1] - node_s[i]) / max(speed[i], 1e-3)
+        override[i] = min(override[i], override[i + 1] + slew_per_s * dt)
+    for i in range(total):
+        reach = node_s[i] + speed[i] * lead_s
+        j = i + 1
+        while j < total and node_s[j] <= reach:
+            override[i] = min(override[i], override[j])
+            j += 1
 
 
 def _dependencies() -> None:

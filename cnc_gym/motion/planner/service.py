@@ -1,26 +1,33 @@
 """The planner as a service: a schedule per (tool path, machine), planned once by the version asked for.
 
-Version 2 (:mod:`.schedule`) is the live planner: the ``classical`` baseline, the benchmark and
-``cnc_gym/Feedrate-v3`` use it. Version 1 (:mod:`.v1`) is kept bit for bit for ``cnc_gym/Feedrate-v1`` and
-``-v2``, whose planner observation entry and ``residual`` action mode publish it.
+Version 3 (:mod:`.schedule` with :data:`~.schedule.SETTINGS_V3`) is the live planner: the ``classical``
+baseline, the benchmark and ``cnc_gym/Feedrate-v4`` use it. Version 2 (the same module with
+:data:`~.schedule.SETTINGS_V2`) is kept bit for bit for ``cnc_gym/Feedrate-v3``, version 1 (:mod:`.v1`) for
+``cnc_gym/Feedrate-v1`` and ``-v2``: their planner observation entry and ``residual`` action mode publish
+them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion.limits import PathLimits
 from cnc_gym.motion.planner.record import Schedule
-from cnc_gym.motion.planner.schedule import MARGIN, plan_schedule
+from cnc_gym.motion.planner.rule import rule_reach_mm
+from cnc_gym.motion.planner.schedule import MARGIN, SETTINGS_V2, SETTINGS_V3, plan_schedule
 from cnc_gym.motion.planner.v1 import MARGIN_V1, plan_schedule_v1
 from cnc_gym.toolpath import Toolpath
 
 #: The live planner version (the ``classical`` baseline's).
-PLANNER_VERSION = 2
+PLANNER_VERSION = 3
 #: Planner versions: (schedule function, default margin).
-PLANNERS: dict[int, tuple[Callable[..., Schedule], float]] = {1: (plan_schedule_v1, MARGIN_V1),
-                                                             2: (plan_schedule, MARGIN)}  # fmt: skip
+PLANNERS: dict[int, tuple[Callable[..., Schedule], float]] = {
+    1: (plan_schedule_v1, MARGIN_V1),
+    2: (partial(plan_schedule, settings=SETTINGS_V2), MARGIN),
+    3: (partial(plan_schedule, settings=SETTINGS_V3), MARGIN),
+}
 
 
 def planner_version(version: int) -> int:
@@ -44,6 +51,8 @@ class SchedulePlanner:
         self.version = planner_version(version)
         self._plan, default = PLANNERS[self.version]
         self.margin = float(default if margin is None else margin)
+        #: How far beyond the reaction lead the version's knob rule looks, mm.
+        self.reach_mm = rule_reach_mm(self.version)
         self.cache_size = int(cache_size)
         self._cache: dict[tuple[int, MachineConfig], tuple[Toolpath, Schedule]] = {}
 

@@ -100,7 +100,7 @@ class ReferenceEnvV1(FeedrateEnvV1):
         program = self._batch.program(0)
         schedule = self._planner.schedule(program.toolpath, self.machine, program.limits)
         self.reference_override = override_at(schedule, info["path_s"], info["feed_mm_min"],
-                                              self._planner.lead_s)  # fmt: skip
+                                              self._planner.lead_s, self._planner.reach_mm)  # fmt: skip
         quantities = machine_quantities(self.machine)
         violation_free = info["violation_length_mm"] <= 0.0
         at = self.layout.kernel_spec.size - len(self.layout.kernel_spec.tail)
