@@ -5,7 +5,8 @@ parameters (axis limits, the controller's static speed and junction limits) and 
 servo axes. It never runs the env or the plant, so it could run inside a controller's look-ahead. It
 costs about 12 µs of CPU per segment on average over the benchmark's test split
 (``scripts/bench_planner_versions.py``; docs/benchmark.md); a schedule is computed once per program and
-machine and kept (:class:`SchedulePlanner`).
+machine and kept (:class:`SchedulePlanner`). Versions: 3 is the live one, 2 and 1 are frozen for the env
+ids that publish them (:mod:`.service`).
 
 Its users: the ``classical`` baseline policy (:mod:`cnc_gym.policies.classical`), the env's planner
 observation entry and its ``residual`` action mode (:mod:`cnc_gym.envs.planner_prior`); the oracle
@@ -46,13 +47,15 @@ How the schedule is built:
 3. **Bidirectional jerk-limited scan** (compiled): backward (deceleration feasibility) and forward
    (acceleration) passes with the path acceleration A, jerk J and the override slew rate, using the
    jerk-limited S-curve reach ``(v − v0)(v + v0)² = J·L²`` (acceleration capped at A).
-4. **As a policy**: at path position s the knob is the smallest scheduled override ``v_sched/F`` over the
-   stretch the controller covers in its reaction time, clipped to ``[0, max_override]``; on rapids the knob
-   is at ``max_override`` (no contour error is measured there).
 4. **The knob rule** (:func:`~.rule.planner_override`): at path position s the knob is the smallest
    scheduled override ``v_sched/F`` over the stretch the controller covers in its reaction lead (two
-   control periods + 10 ms, :func:`~.rule.reaction_lead_s`) and 0.5 mm more, clipped to
+   control periods + 10 ms at the current speed, :func:`~.rule.reaction_lead_s`), clipped to
    ``[0, max_override]``; on rapids the knob is at ``max_override`` (no contour error is measured there).
+   Version 3 bakes a second anticipation into the schedule, at the scheduled speed (so that a slow actual
+   speed cannot shorten it): where the override must fall faster than its slew allows (at a change of
+   programmed feed the same speed is another override) it starts falling earlier, and each node asks for
+   the lowest override of the next 20 ms (:class:`~.schedule.PlanSettings`). Versions 1 and 2 look
+   0.5 mm farther instead, which at a few mm/s is tenths of a second of crawl before every slow stretch.
 
 Boundary records: the input is the tool path, the machine and (optionally) the controller's static tables
 (:class:`~cnc_gym.motion.limits.PathLimits`); the output is a :class:`~.schedule.Schedule` (path

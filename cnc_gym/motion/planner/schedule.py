@@ -133,8 +133,8 @@ class PlanSettings(NamedTuple):
 #: Version 2 (the frozen planner of ``cnc_gym/Feedrate-v3``).
 SETTINGS_V2 = PlanSettings(decel_share=0.5, junction_extent=False, knob_lead_s=0.0)
 #: Version 3 (the live planner). Chosen on the train and val splits of cnc-bench-v1: decelerations at
-#: 0.75 of the acceleration (0.85 broke a train program), two control periods of baked anticipation
-#: (one broke 4 % of the programs of every split).
+#: 0.75 of the acceleration (0.85 broke a train program), 20 ms of baked anticipation (none, or 10 ms,
+#: left 3–6 % of the programs of every split over tolerance).
 SETTINGS_V3 = PlanSettings(decel_share=0.75, junction_extent=True, knob_lead_s=0.02)
 
 
