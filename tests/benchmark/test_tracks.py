@@ -8,6 +8,7 @@ import math
 import pytest
 
 from cnc_gym.benchmark.leaderboard import leaderboard_rows, render_markdown
+from cnc_gym.benchmark.metrics import RECORD_VERSION
 from cnc_gym.benchmark.runner import BenchConfig, BenchProgram, run_bench
 from cnc_gym.benchmark.tracks import (
     PERTURBATION,
@@ -18,6 +19,7 @@ from cnc_gym.benchmark.tracks import (
 )
 from cnc_gym.errors import CncGymError
 from cnc_gym.machine import AXIS_NAMES, load_machine
+from cnc_gym.motion.planner import PLANNER_VERSION
 
 # A short L-shaped cut: one corner, so the plants differ in contour error, and each episode is short.
 PROGRAM = "G90 G21 G17\nG00 X0 Y0\nG01 X12 F2400\nG01 Y6\nM30\n"
@@ -95,7 +97,7 @@ def test_perturbed_track_records_name_the_track_and_one_plant_for_every_policy()
     assert parameters is not None and set(parameters) >= {"kv_1_s", "velocity_loop_hz", "feedforward",
                                                            "coulomb_friction_n", "backlash_mm"}  # fmt: skip
     for r in records.values():
-        assert r["track"] == "perturbed" and r["record_version"] == 3
+        assert r["track"] == "perturbed" and r["record_version"] == RECORD_VERSION
         assert r["plant_parameters"] == parameters
     assert {records[p]["plant"] for p in ("classical", "nominal-oracle")} == {"mujoco"}
     # the bound is the nominal machine's: the same on every track
@@ -187,7 +189,8 @@ def test_residual_env_plans_on_the_machine_it_is_told():
     classical = outcome(run_episode(FeedrateEnv(programs=[PROGRAM], machine=slow), planner).info)
     results = []
     for told in (nominal, None):
-        env = FeedrateEnvV1(programs=[PROGRAM], machine=slow, action_mode="residual", planner_version=2)
+        env = FeedrateEnvV1(programs=[PROGRAM], machine=slow, action_mode="residual",
+                            planner_version=PLANNER_VERSION)  # fmt: skip
         env.plan_on(told)
         results.append(outcome(run_episode(env, Zero()).info))
     assert results[0] == classical
