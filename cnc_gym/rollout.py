@@ -13,17 +13,27 @@ module, so a baseline, a trained model and an RL agent are measured by the same 
   which return an :class:`Episode` record; an optional ``on_step`` hook sees every step and can stop the
   episode (``cnc-gym run``'s series, progress bar and ``--max-time``; the oracle's record of its
   simulation);
+- :class:`DeployablePolicy`, a policy whose knob needs no Python in the loop (a constant, the
+  deployable planner's schedule): it states its :class:`~cnc_gym.envs.engine.KnobRule`, and
+  :func:`compiled_rule` says whether an episode can run on it in compiled code; :func:`play_compiled`
+  runs it there, chunk by chunk, with the same steps, infos and return as :func:`play` (an ``on_chunk``
+  hook sees each chunk's info values);
 - :func:`announce_compiling`, the line a command prints before the simulator compiles (a cold numba
   cache: the first run after an install or an update).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, TextIO, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, TextIO, runtime_checkable
 
 import numpy as np
+
+if TYPE_CHECKING:  # (the engine loads numba: imported where an episode runs, not with this module)
+    from cnc_gym.envs.engine import KnobRule
 
 #: The env a policy runs in when it names none (the baselines: they turn the feed-override knob).
 DEFAULT_ENV_ID = "cnc_gym/Feedrate-v0"
@@ -119,6 +129,95 @@ def play(env: Any, policy: Any, observation: Any, info: dict[str, Any],
             stopped = True
             break
     return Episode(info, total, steps, bool(terminated), bool(truncated), stopped)
+
+
+@runtime_checkable
+class DeployablePolicy(Protocol):
+    """A policy whose knob needs no Python in the loop: after its ``reset(env)`` it states the knob as
+    data (:class:`~cnc_gym.envs.engine.KnobRule`: a constant, or a schedule read by the planner's knob
+    rule), and its ``act`` gives exactly that knob. None: not this episode (it acts in Python)."""
+
+    def knob_rule(self) -> KnobRule | None:
+        """The rule of the episode the policy has just been reset for, or None."""
+
+
+#: Steps per compiled call of :func:`play_compiled` (its hook, a progress bar, a CPU-time check, run
+#: between calls: a few ms apart).
+CHUNK_STEPS = 2048
+#: ``on_chunk(steps, total_return, rows, info)``: after each compiled chunk, with the steps and return so
+#: far, the chunk's rows of recorded info values (one row per step) and its last step's info; True stops
+#: the episode there (if it has not ended).
+ChunkHook = Callable[[int, float, np.ndarray, dict[str, Any]], bool | None]
+
+
+_compiled_episodes = True  # False inside step_by_step()
+
+
+@contextlib.contextmanager
+def step_by_step() -> Iterator[None]:
+    """Within it, :func:`compiled_rule` answers None: every episode runs in the Python loop (:func:`play`),
+    as before compiled episodes existed (the tests and ``scripts/bench_episodes.py`` compare the two)."""
+    global _compiled_episodes
+    before, _compiled_episodes = _compiled_episodes, False
+    try:
+        yield
+    finally:
+        _compiled_episodes = before
+
+
+def compiled_rule(env: Any, policy: Any) -> KnobRule | None:
+    """The knob rule ``policy`` (just reset for ``env``) runs ``env``'s episode on in compiled code, or
+    None when something needs the Python loop: a policy that is not a :class:`DeployablePolicy` (or has
+    no rule for this episode); an env whose step is not the compiled one (the MuJoCo plant), that records
+    frames (a render mode), or whose knob is turned in Python (``residual`` mode); a wrapper other than
+    Gymnasium's order and passive checkers (which change no step) around it; inside
+    :func:`step_by_step`."""
+    from gymnasium import Wrapper
+    from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker
+
+    from cnc_gym.envs.feedrate import FeedrateEnv
+
+    if not _compiled_episodes or not isinstance(policy, DeployablePolicy):
+        return None
+    inner = env
+    while isinstance(inner, Wrapper):
+        if type(inner) not in (OrderEnforcing, PassiveEnvChecker):
+            return None
+        inner = inner.env
+    if not (isinstance(inner, FeedrateEnv) and inner.compiled_episodes):
+        return None
+    return policy.knob_rule()
+
+
+def play_compiled(env: Any, rule: KnobRule, *, record: Sequence[str] = (), stop_time_s: float | None = None,
+                  on_chunk: ChunkHook | None = None, chunk_steps: int = CHUNK_STEPS) -> Episode:  # fmt: skip
+    """:func:`play` of a policy whose knob is ``rule`` (:func:`compiled_rule`), from the state ``env`` is
+    in, in compiled chunks of ``chunk_steps`` steps: the same episode (steps, last info, return) bit for
+    bit. ``record``: the info keys (of ``OUTPUT_INFO_KEYS``) whose values ``on_chunk`` gets, one row per
+    step; ``stop_time_s``: stop after the step whose ``cycle_time_s`` reaches it, less 1 ns, unless that
+    step terminated the episode (``stopped``), as ``cnc-gym run --max-time`` and ``bench --max-time`` do."""
+    from cnc_gym.envs.engine import OUTPUT_INFO_KEYS
+    from cnc_gym.envs.engine.episode import NOT_FINITE, RAN, STOPPED
+
+    base = env.unwrapped
+    columns = np.array([OUTPUT_INFO_KEYS.index(key) for key in record], dtype=np.int64)
+    rows = np.empty((chunk_steps, len(columns)))
+    stop = math.inf if stop_time_s is None else float(stop_time_s)
+    total, steps = 0.0, 0
+    while True:
+        n, total, why, terminated, truncated, info = base.run_rule(rule, chunk_steps, stop_time_s=stop,
+                                                                   columns=columns, rows=rows,
+                                                                   total=total)  # fmt: skip
+        steps += n
+        stopped = why == STOPPED
+        if on_chunk is not None and n and on_chunk(steps, total, rows[:n], info) and why == RAN:
+            stopped = True
+        if why == NOT_FINITE:  # the action the Python loop would have given, and the env's error for it
+            from cnc_gym.envs.options import parse_action
+
+            parse_action(np.array([math.nan], dtype=np.float32))
+        if why != RAN or stopped:
+            return Episode(info, total, steps, bool(terminated), bool(truncated), stopped)
 
 
 def announce_compiling(log: TextIO, *, parallel: bool = False) -> bool:

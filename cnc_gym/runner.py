@@ -32,7 +32,7 @@ from cnc_gym.envs.render import DEFAULT_MAX_BINS, BinnedSeries, range_indices
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE
 from cnc_gym.programs import DEFAULT_DIALECT
-from cnc_gym.rollout import announce_compiling, play, policy_env
+from cnc_gym.rollout import CHUNK_STEPS, announce_compiling, compiled_rule, play, play_compiled, policy_env
 
 #: Keys of the ``--json`` object (the contract of docs/cli.md, "What `run` prints").
 JSON_KEYS = (
@@ -60,6 +60,10 @@ PATH_ERROR_BINS = 8192
 
 _SERIES_COLUMNS = {"time_s": "last", "path_s": "last", "feed_mm_min": "mean", "override": "mean",
                    "contour_error_mm": "max"}  # fmt: skip
+#: Steps of a compiled run between two updates of the progress bar and the projection (a few ms).
+_CHUNK_STEPS = CHUNK_STEPS
+#: The info values of each step the series are made of (their columns, in order).
+_RECORDED = ("cycle_time_s", "path_s", "feed_mm_min", "override", "contour_error_mm")
 
 
 @dataclass
@@ -176,35 +180,55 @@ def record_run(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = 
     projection_due = started + _PROJECTION_AFTER_WALL_S if log is not None else math.inf
     baseline: tuple[float, float] | None = None  # (wall clock, simulated s) at the first projection sample
 
-    def on_step(steps: int, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> bool:
+    def report(info: dict[str, Any]) -> None:
+        """The progress bar and the projection of the wall-clock time (every few steps)."""
         nonlocal projection_due, baseline
+        if bar is not None:
+            bar.n = round(100 * float(info.get("progress", 0.0)))
+            bar.refresh()
+        now = time.perf_counter()
+        if log is not None and now >= projection_due:
+            # Two samples, _PROJECTION_AFTER_WALL_S apart, after the first such interval: the rate
+            # between them leaves out start-up (compiling, the first in-position wait), which once
+            # made a 31 s run project hours.
+            simulated = float(info.get("cycle_time_s", 0.0))
+            if baseline is None or now <= baseline[0]:
+                baseline = (now, simulated)
+                projection_due = now + _PROJECTION_AFTER_WALL_S
+            else:
+                projection_due = math.inf
+                _project_wall_time(log, info, nominal, max_time_s, rate=(simulated - baseline[1])
+                                   / (now - baseline[0]))  # fmt: skip
+
+    def on_step(steps: int, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> bool:
         if series is not None:
             series.add(info["cycle_time_s"], info["path_s"], info["feed_mm_min"], info["override"],
                        info["contour_error_mm"])  # fmt: skip
         if envelope is not None:
             envelope.add(info["path_s"], info["contour_error_mm"])
         if steps % 20 == 0:
-            if bar is not None:
-                bar.n = round(100 * float(info.get("progress", 0.0)))
-                bar.refresh()
-            now = time.perf_counter()
-            if log is not None and now >= projection_due:
-                # Two samples, _PROJECTION_AFTER_WALL_S apart, after the first such interval: the rate
-                # between them leaves out start-up (compiling, the first in-position wait), which once
-                # made a 31 s run project hours.
-                simulated = float(info.get("cycle_time_s", 0.0))
-                if baseline is None or now <= baseline[0]:
-                    baseline = (now, simulated)
-                    projection_due = now + _PROJECTION_AFTER_WALL_S
-                else:
-                    projection_due = math.inf
-                    _project_wall_time(log, info, nominal, max_time_s, rate=(simulated - baseline[1])
-                                       / (now - baseline[0]))  # fmt: skip
+            report(info)
         # --max-time: stop at that much simulated time, unless the program has just ended.
         return max_time_s is not None and not terminated and info["cycle_time_s"] >= max_time_s - 1e-9
 
+    def on_chunk(steps: int, total_return: float, rows: np.ndarray, info: dict[str, Any]) -> bool:
+        if series is not None:
+            series.extend_rows(rows)
+        if envelope is not None:
+            envelope.add_many(rows[:, 1], rows[:, 4])
+        report(info)
+        return False
+
+    # A constant or the deployable planner runs in compiled chunks (the same episode, bit for bit), any
+    # other policy step by step in Python.
+    rule = compiled_rule(env, policy)
     try:
-        episode = play(env, policy, observation, info, on_step)
+        if rule is None:
+            episode = play(env, policy, observation, info, on_step)
+        else:
+            recorded = _RECORDED if series is not None or envelope is not None else ()
+            episode = play_compiled(env, rule, record=recorded, stop_time_s=max_time_s, on_chunk=on_chunk,
+                                    chunk_steps=_CHUNK_STEPS)  # fmt: skip
     finally:
         if bar is not None:
             bar.close()
@@ -274,6 +298,14 @@ class PathErrorEnvelope:
     def add(self, path_s: float, error_mm: float) -> None:
         self._s.append(float(path_s))
         self._e.append(float(error_mm))
+        if len(self._s) >= self._BATCH:
+            self._flush()
+
+    def add_many(self, path_s: np.ndarray, error_mm: np.ndarray) -> None:
+        """Several steps at once (the same envelope as :meth:`add` of each: a maximum, whatever the
+        batches)."""
+        self._s.extend(np.asarray(path_s, dtype=float).tolist())
+        self._e.extend(np.asarray(error_mm, dtype=float).tolist())
         if len(self._s) >= self._BATCH:
             self._flush()
 
@@ -361,12 +393,13 @@ def _duration(seconds: float) -> str:
 
 def simulate(program: Any, *, dialect: str = DEFAULT_DIALECT, machine: str = DEFAULT_MACHINE,
              policy: str | Any = "constant:1.0", progress: bool = False, max_time_s: float | None = None,
-             max_blocks: int | None = None, log: TextIO | None = None,
-             units: str | None = None, plant: str | None = None) -> RunResult:  # fmt: skip
+             max_blocks: int | None = None, log: TextIO | None = None, units: str | None = None,
+             plant: str | None = None, record: bool = True) -> RunResult:  # fmt: skip
     """Simulate ``program`` (built-in name, file or G-code text: the rule of :mod:`cnc_gym.programs`)
     under ``policy`` (spec or Policy). ``log`` (e.g. ``sys.stderr``) gets a notice before a long program
     and a projection of the wall-clock time once it has run a while. ``units``: the input unit at
-    power-on (``"mm"``/``"inch"``; default the machine preset's ``power_on_units``, else the dialect's)."""
+    power-on (``"mm"``/``"inch"``; default the machine preset's ``power_on_units``, else the dialect's).
+    ``record=False``: the summary only, no series for a plot (:func:`record_run`)."""
     from cnc_gym.policies import make_policy
 
     _check_max_time(max_time_s)
@@ -381,7 +414,7 @@ def simulate(program: Any, *, dialect: str = DEFAULT_DIALECT, machine: str = DEF
                     print(note, file=log)
             _announce_long_program(env.unwrapped, max_time_s, log)
             announce_compiling(log)
-        return record_run(env, pol, progress=progress, max_time_s=max_time_s, log=log)
+        return record_run(env, pol, progress=progress, max_time_s=max_time_s, log=log, record=record)
     finally:
         env.close()
 
@@ -420,7 +453,8 @@ def run_cli(args: Any) -> int:
     result = simulate(args.program, dialect=args.dialect, machine=machine, policy=args.policy,
                       progress=progress, max_time_s=getattr(args, "max_time", None),
                       max_blocks=getattr(args, "max_blocks", None), log=sys.stderr,
-                      units=getattr(args, "units", None), plant=getattr(args, "plant", None))  # fmt: skip
+                      units=getattr(args, "units", None), plant=getattr(args, "plant", None),
+                      record=plot is not None)  # the series are the plot's  # fmt: skip
     if plot is not None:
         target, is_folder = plot
         plot_run(result, target / default_plot_name(result) if is_folder else target)

@@ -147,7 +147,7 @@ def test_no_import_cycles_between_packages():
 # ----------------------------------------------------------------------------------- the env's engine
 ENGINE = "cnc_gym.envs.engine"
 #: The engine's modules in their import order: each imports only those before it (docs/architecture.md).
-ENGINE_ORDER = ["layout", "specs", "bank", "step", "batch"]
+ENGINE_ORDER = ["layout", "specs", "bank", "step", "episode", "batch"]
 
 
 def _engine_violations(edges: dict[str, set[str]]) -> list[str]:

@@ -137,3 +137,50 @@ def test_the_readme_check_knows_the_notice():
     import readme_tour
 
     assert COMPILING_NOTICE.format(30).startswith(readme_tour.COMPILING_PREFIX)
+
+
+# ------------------------------------------------------------------------------- compiled episodes
+def test_the_baselines_run_compiled_and_other_policies_in_python():
+    from cnc_gym.envs.engine import KnobRule
+    from cnc_gym.policies import ClassicalPlanner, ConstantOverride
+    from cnc_gym.rollout import compiled_rule, step_by_step
+
+    for policy in (ConstantOverride(0.7), ClassicalPlanner()):
+        env = policy_env(policy, programs=["star"], machine="vmc-small")
+        env.reset(seed=0)
+        policy.reset(env)
+        rule = compiled_rule(env, policy)
+        assert isinstance(rule, KnobRule)
+        with step_by_step():
+            assert compiled_rule(env, policy) is None
+        # A wrapper that may act on every step (here the step budget's) keeps the Python loop.
+        assert compiled_rule(gymnasium.wrappers.TimeLimit(env, 10), policy) is None
+        env.close()
+    knob = ConstantOverride(0.7)
+    assert compiled_rule(policy_env(knob, programs=["star"]), _Knob()) is None  # not a DeployablePolicy
+    # A render mode records every step in Python; so does the MuJoCo plant (not the compiled step).
+    env = policy_env(knob, programs=["star"], render_mode="rgb_array")
+    env.reset(seed=0)
+    knob.reset(env)
+    assert compiled_rule(env, knob) is None
+    env.close()
+
+
+def test_a_subclass_that_acts_its_own_way_runs_in_python():
+    from cnc_gym.policies import ClassicalPlanner, ConstantOverride
+
+    class Wobbly(ConstantOverride):
+        def act(self, observation, info):
+            return -super().act(observation, info)
+
+    class Late(ClassicalPlanner):
+        def act(self, observation, info):
+            return super().act(observation, info)
+
+    for policy in (Wobbly(0.5), Late()):
+        env = policy_env(policy, programs=["star"])
+        env.reset(seed=0)
+        policy.reset(env)
+        assert policy.knob_rule() is None
+        env.close()
+    assert ClassicalPlanner().knob_rule() is None  # before its reset: no schedule

@@ -177,12 +177,29 @@ def test_long_programs_are_announced_and_projected(monkeypatch):
     monkeypatch.setattr(runner, "LONG_RUN_NOTICE_S", 1.0)
     monkeypatch.setattr(runner, "_PROJECTION_AFTER_WALL_S", 0.0)
     monkeypatch.setattr(runner, "_PROJECTION_NOTICE_WALL_S", -1.0)
-    log = io.StringIO()
-    simulate("star", log=log)
-    lines = log.getvalue().splitlines()
-    assert len(lines) == 2
-    assert "nominal cycle time" in lines[0] and "step budget" in lines[0]
-    assert "wall-clock time to go" in lines[1] and "--max-time" in lines[1]
+    monkeypatch.setattr(runner, "_CHUNK_STEPS", 20)  # (a compiled run reports between chunks)
+    for policy in ("constant:1.0", "module:callable"):
+        log = io.StringIO()
+        simulate("star", log=log, policy=_python_knob() if policy.startswith("module") else policy)
+        lines = log.getvalue().splitlines()
+        assert len(lines) == 2
+        assert "nominal cycle time" in lines[0] and "step budget" in lines[0]
+        assert "wall-clock time to go" in lines[1] and "--max-time" in lines[1]
+
+
+def _python_knob():
+    """A policy in Python (the step-by-step loop)."""
+
+    class Knob:
+        name = "knob"
+
+        def reset(self, env):
+            pass
+
+        def act(self, observation, info):
+            return np.array([0.0], dtype=np.float32)
+
+    return Knob()
 
 
 @pytest.mark.parametrize("bad", [0, -1.0, math.nan, math.inf, "5"])
@@ -414,3 +431,44 @@ def test_a_long_program_plots_its_error_along_the_path_with_the_violations_marke
         assert any(f"line {worst}" in text.get_text() for ax in (ax_xy, ax_err) for text in ax.texts)
     finally:
         plt.close(fig)
+
+
+# ------------------------------------------------------------------------------- compiled episodes
+_RESULT_ARRAYS = ("time_s", "path_s", "feed_mm_min", "override", "contour_error_mm", "path_feed_mm_min",
+                  "path_error_edges_mm", "path_error_mm", "segment_error_mm")  # fmt: skip
+
+
+@pytest.mark.parametrize(("policy", "max_time_s", "max_bins"), [("classical", None, 64),
+                                                               ("constant:0.6", 0.7, 8),
+                                                               ("constant:1.3", None, 4096)])  # fmt: skip
+def test_a_compiled_run_is_the_python_loops_run(policy, max_time_s, max_bins):
+    # The whole RunResult: the summary, the binned series and the error along the path, bit for bit.
+    from cnc_gym.rollout import step_by_step
+
+    def run():
+        pol = make_policy(policy)
+        env = runner.program_env("pocket", pol, machine="vmc-small")
+        try:
+            return record_run(env, pol, max_time_s=max_time_s, max_bins=max_bins)
+        finally:
+            env.close()
+
+    with step_by_step():
+        loop = run()
+    compiled = run()
+    assert compiled.summary() == loop.summary() and compiled.bin_steps == loop.bin_steps
+    for name in _RESULT_ARRAYS:
+        a, b = getattr(loop, name), getattr(compiled, name)
+        assert a.shape == b.shape and np.array_equal(a, b, equal_nan=True), name
+    assert (loop.stopped_by is not None) == (max_time_s is not None)
+
+
+def test_run_without_a_plot_keeps_no_series(monkeypatch, capsys):
+    kept = []
+    monkeypatch.setattr(runner, "record_run", lambda *a, **kw: kept.append(kw["record"]) or simulate_stub())
+
+    def simulate_stub():
+        return runner.RunResult("p", "m", "constant:1", 1.0, 0.0, 0.0, 0.02, 0, 1, 0.0, True)
+
+    assert main(["run", "star", "--policy", "constant:1.0", "--json"]) == 0
+    assert kept == [False]

@@ -38,7 +38,7 @@ from cnc_gym.benchmark.metrics import RECORD_VERSION, episode_score, is_feasible
 from cnc_gym.errors import CncGymError
 from cnc_gym.gcode.dialect import DEFAULT_DIALECT
 from cnc_gym.machine import DEFAULT_MACHINE
-from cnc_gym.rollout import CONTOUR_RULE, play, policy_env
+from cnc_gym.rollout import CONTOUR_RULE, compiled_rule, play, play_compiled, policy_env
 
 #: The baselines ``cnc-gym bench`` runs when no ``--policy`` is given.
 DEFAULT_POLICIES = ("constant:1.0", "classical", "oracle", "bound")
@@ -255,12 +255,27 @@ def _limited_episode(env: Any, policy: Any, seed: int, limits: EpisodeLimits) ->
             return True
         return False
 
+    def on_chunk(steps: int, total_return: float, rows: Any, info: dict[str, Any]) -> bool:
+        last["info"], last["steps"], last["return"] = info, steps, total_return
+        if not armed and limits.max_cpu_s is not None and time.process_time() - started >= limits.max_cpu_s:
+            last["why"] = MAX_CPU
+            return True
+        return False
+
     episode = None
     armed = False
     try:
         with _cpu_limit(limits.max_cpu_s) as armed:
             policy.reset(env)
-            episode = play(env, policy, observation, info, on_step)
+            # A constant or the deployable planner runs in compiled chunks (the same episode, bit for bit;
+            # the CPU limit is checked between chunks, a few ms apart), any other policy step by step.
+            rule = compiled_rule(env, policy)
+            if rule is None:
+                episode = play(env, policy, observation, info, on_step)
+            else:
+                episode = play_compiled(env, rule, stop_time_s=limits.max_time_s, on_chunk=on_chunk)
+                if episode.stopped and last["why"] is None:
+                    last["why"] = MAX_TIME
     except CpuLimitReached:
         if episode is None:  # (the limit may fall just after the episode ended: then it did not cut it)
             return dict(last["info"]), float(last["return"]), int(last["steps"]), False, MAX_CPU

@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from cnc_gym.envs.engine import FeedrateBatch, RewardSpec
+from cnc_gym.envs.engine import FeedrateBatch, KnobRule, RewardSpec
 from cnc_gym.envs.observation import OBSERVATION_V0, ObservationLayout, markdown_table
 from cnc_gym.envs.options import (
     DEFAULT_ACTION_MODE,
@@ -411,6 +411,33 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         if self._renderer is not None:
             self._renderer.record(*batch.last_samples(0)[:2])
         return batch.observations[0].copy(), reward, terminated, truncated, info
+
+    # ----------------------------------------------------------------------------------- whole episodes
+    @property
+    def compiled_episodes(self) -> bool:
+        """Whether :meth:`run_rule` can run this env's episode: the LTI plant, stepped inside the compiled
+        step; no renderer recording every step; the knob in ``override`` mode (v1's ``residual`` mode
+        turns it in Python)."""
+        return self._batch.fused and self._renderer is None and self.action_mode == "override"
+
+    def run_rule(self, rule: KnobRule, max_steps: int, *, stop_time_s: float = math.inf,
+                 columns: np.ndarray | None = None, rows: np.ndarray | None = None,
+                 total: float = 0.0) -> tuple[int, float, int, bool, bool, dict[str, Any]]:  # fmt: skip
+        """Up to ``max_steps`` steps under a deployable policy's knob rule in one compiled call
+        (:meth:`FeedrateBatch.run_rule <cnc_gym.envs.engine.batch.FeedrateBatch.run_rule>`: the same steps
+        as :meth:`step` with the actions the policy would give). Returns ``(steps, return, why,
+        terminated, truncated, info)``: the steps run, ``total`` plus their rewards (added in order, so
+        that chunks of an episode sum as one loop does), why it returned
+        (:data:`~cnc_gym.envs.engine.episode.RAN` …), and the last step's flags and info. Needs
+        :attr:`compiled_episodes`."""
+        if self._needs_reset:
+            raise EnvNotReset("FeedrateEnv: call reset() before run_rule()")
+        if not self.compiled_episodes:
+            raise ValueError("run_rule needs the LTI plant, no render mode and the override action mode")
+        steps, total, why = self._batch.run_rule(rule, max_steps, stop_time_s=stop_time_s, columns=columns,
+                                                 rows=rows, total=total)  # fmt: skip
+        _, terminated, truncated, info = self._batch.outcome(0)
+        return steps, total, why, terminated, truncated, info
 
     # ------------------------------------------------------------------------------------------ render
     def render(self) -> np.ndarray | None:

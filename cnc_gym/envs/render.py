@@ -107,6 +107,45 @@ class BinnedSeries:
         for row in rows:
             self.add(*row)
 
+    def extend_rows(self, rows: np.ndarray) -> None:
+        """Several samples, one row each of an (n, columns) array: the same bins as :meth:`add` of each
+        row, bit for bit (each whole bin reduced in the order :meth:`add` takes its samples, a numpy
+        operation per sample place over every bin at once)."""
+        rows = np.asarray(rows, dtype=float)
+        at, n = 0, len(rows)
+        while at < n:
+            width = self.width
+            if self._staged or n - at < width:  # the bin being filled, sample by sample
+                take = min(width - self._staged, n - at)
+                for row in rows[at : at + take].tolist():
+                    self.add(*row)
+                at += take
+                continue
+            m = min((n - at) // width, self.max_bins - self._filled)
+            block = rows[at : at + m * width].reshape(m, width, -1)
+            acc = block[:, 0, :].copy()
+            for j, op in self._ops:
+                column = acc[:, j]
+                for t in range(1, width):
+                    value = block[:, t, j]
+                    if op == 0:
+                        np.copyto(column, value, where=value > column)
+                    elif op == 1:
+                        np.copyto(column, value, where=value < column)
+                    elif op == 2:
+                        column += value
+                    else:
+                        column[:] = value
+                if op == 2:
+                    column /= width
+            self._bins[self._filled : self._filled + m] = acc
+            self._weights[self._filled : self._filled + m] = width
+            self._filled += m
+            self.count += m * width
+            at += m * width
+            if self._filled == self.max_bins:
+                self._merge_pairs()
+
     def arrays(self) -> dict[str, np.ndarray]:
         """One array per column (bins in order, the partly filled last bin included) and ``"samples"``
         (the number of samples in each bin)."""

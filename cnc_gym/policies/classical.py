@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from cnc_gym.envs.engine import KnobRule
 from cnc_gym.machine import MachineConfig
 from cnc_gym.motion.planner import PLANNER_VERSION, Schedule, SchedulePlanner, override_at, reaction_lead_s
 from cnc_gym.policies.base import override_action, require_override_mode
@@ -59,6 +60,15 @@ class ClassicalPlanner:
                                            float(info.get("feed_mm_min", 0.0)), self._lead_s,
                                            self._planner.reach_mm),
                                self._max_override)  # fmt: skip
+
+    def knob_rule(self) -> KnobRule | None:
+        """The knob :meth:`act` gives, as data: the schedule with the reaction lead, the reach and the knob
+        range :meth:`act` reads it with (the rollout runs the episode in compiled code, by the same knob
+        rule: :func:`cnc_gym.rollout.compiled_rule`); None before a reset, or for a subclass with an
+        ``act`` of its own."""
+        if self.schedule is None or type(self).act is not ClassicalPlanner.act:
+            return None
+        return KnobRule.follow(self.schedule.table, self._lead_s, self._planner.reach_mm, self._max_override)
 
 
 def knob_setup(planner: Any, env: Any) -> tuple[Any, Toolpath, MachineConfig, float]:

@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from cnc_gym.envs.engine import KnobRule
 from cnc_gym.errors import CncGymError
 from cnc_gym.policies.base import override_action, require_override_mode
 
@@ -30,3 +31,10 @@ class ConstantOverride:
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         return self._action.copy()
+
+    def knob_rule(self) -> KnobRule | None:
+        """The knob :meth:`act` gives, held (the rollout runs the episode in compiled code:
+        :func:`cnc_gym.rollout.compiled_rule`); None for a subclass with an ``act`` of its own."""
+        if type(self).act is not ConstantOverride.act:
+            return None
+        return KnobRule.hold(float(self._action[0]))

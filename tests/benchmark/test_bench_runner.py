@@ -375,3 +375,19 @@ def _star(tmp_path):
     program = tmp_path / "mine.nc"
     program.write_text(program_path("star").read_text())
     return program
+
+
+def test_compiled_episodes_give_the_python_loops_records():
+    # constant:x and classical run in compiled chunks on the LTI plant; every field of every record is
+    # what the Python loop gives (both run here, on this CPU: exact), --max-time cuts included.
+    from cnc_gym.benchmark.runner import EpisodeLimits
+    from cnc_gym.rollout import step_by_step
+
+    programs, suite = _tiny(3)
+    for limits in (EpisodeLimits(), EpisodeLimits(max_time_s=0.3)):
+        config = _config(programs, suite, limits=limits)
+        config.policies = ["constant:1.0", "constant:0.45", "classical"]
+        with step_by_step():
+            loop = run_bench(config)
+        assert run_bench(config) == loop
+    assert any(r["stopped_by"] == "max_time" for r in loop)

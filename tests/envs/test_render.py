@@ -6,6 +6,8 @@ from itertools import pairwise
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cnc_gym.envs.render import BinnedSeries, wants_z_views
 from cnc_gym.errors import ConfigError
@@ -108,3 +110,29 @@ def test_the_path_envelope_keeps_every_maximum_in_at_most_max_bins():
     # Few stretches: drawn as they are.
     x_few, y_few = path_envelope(edges[:51], error[:50], max_bins=300)
     assert np.array_equal(x_few, edges[:51]) and np.array_equal(y_few, error[:50], equal_nan=True)
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(0, 300), max_bins=st.sampled_from([2, 4, 16]), seed=st.integers(0, 2**32 - 1),
+       holes=st.booleans())
+def test_rows_added_at_once_are_the_samples_added_one_by_one(n, max_bins, seed, holes):
+    # extend_rows (cnc-gym run's compiled episodes) keeps the bins of add() bit for bit: NaN and -0.0
+    # included, whatever the blocks the rows come in.
+    rng = np.random.default_rng(seed)
+    rows = rng.normal(size=(n, 4))
+    if holes:
+        rows[rng.random(rows.shape) < 0.1] = np.nan
+        rows[rng.random(rows.shape) < 0.1] = -0.0
+    columns = {"hi": "max", "lo": "min", "avg": "mean", "end": "last"}
+    one, many = BinnedSeries(columns, max_bins), BinnedSeries(columns, max_bins)
+    for row in rows.tolist():
+        one.add(*row)
+    at = 0
+    while at < n:
+        k = int(rng.integers(1, 40))
+        many.extend_rows(rows[at : at + k])
+        at += k
+    a, b = one.arrays(), many.arrays()
+    assert (one.count, one.width) == (many.count, many.width)
+    for key in a:
+        assert a[key].tobytes() == b[key].tobytes(), key

@@ -16,11 +16,13 @@ hold the compiled step to (the same numbers, exactly).
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from cnc_gym.envs.engine.bank import PackedProgram, Planner, ProgramBank, work_rows, work_size
+from cnc_gym.envs.engine.episode import KnobRule, run_steps
 from cnc_gym.envs.engine.layout import (
     CI_COST,
     CI_FEED_MODE,
@@ -239,6 +241,11 @@ class FeedrateBatch:
             self._modular(None)
 
     def _call(self, stepping: bool) -> None:
+        self._run(*self._arguments(), stepping)  # type: ignore[call-arg]
+
+    def _arguments(self) -> tuple:
+        """The compiled step's arrays (rebuilt when the plant's gains changed or a program joined the
+        bank)."""
         plant = self.plant
         if plant.model_version != self._plant_version or self._args_bank is not self.bank.floats:
             # gains changed (ServoPlant.set_kv_scale), or a program joined the bank
@@ -248,7 +255,28 @@ class FeedrateBatch:
             self._args = (self.bank.floats, self.bank.ints, self.state_f, self.state_i, plant._state,
                           plant._history, plant._velocity, plant._lifted4_matrix(self.ticks), self.actions,
                           self.observations, self.work_f, self.work_i)  # fmt: skip
-        self._run(*self._args, stepping)  # type: ignore[call-arg]
+        return self._args
+
+    def run_rule(self, rule: KnobRule, max_steps: int, *, stop_time_s: float = math.inf,
+                 columns: np.ndarray | None = None, rows: np.ndarray | None = None,
+                 total: float = 0.0) -> tuple[int, float, int]:  # fmt: skip
+        """Step the batch's one env under ``rule`` in one compiled call (:func:`~cnc_gym.envs.engine.episode.
+        run_steps`): up to ``max_steps`` steps, the episode's end, or the step whose cycle time reaches
+        ``stop_time_s`` (unless it terminated the episode). Row k of ``rows`` gets step k's info values of
+        ``columns`` (indices into ``OUTPUT_INFO_KEYS``). Returns ``(steps, total, why)``: ``total`` plus the
+        steps' rewards, and why it returned (``episode.RAN``, ``ENDED``, ``STOPPED``, ``NOT_FINITE``).
+        Only for a batch of one env stepped by the compiled step (:attr:`fused`)."""
+        if not self.fused or self.n_envs != 1:
+            raise ValueError("run_rule steps a batch of one env with the compiled step (the LTI plant)")
+        columns = np.zeros(0, dtype=np.int64) if columns is None else columns
+        if rows is None:
+            rows = np.empty((max_steps, len(columns)))
+        if rows.shape[0] < max_steps or rows.shape[1] != len(columns):
+            raise ValueError(f"rows must have ({max_steps}, {len(columns)}) entries, got {rows.shape}")
+        steps, total, why = run_steps(*self._arguments(), rule.constant, rule.schedule, rule.lead_s,
+                                      rule.reach_mm, rule.max_override, int(max_steps), float(stop_time_s),
+                                      columns, rows, float(total))  # fmt: skip
+        return int(steps), float(total), int(why)
 
     def _modular(self, reset_only: np.ndarray | None) -> None:
         """The modular step: the Controller, plant and meter objects around the compiled statistics, reward
@@ -362,8 +390,9 @@ INFO_KEYS = (*OUTPUT_INFO_KEYS, "program")
 
 
 def step_needs_compiling(*, parallel: bool = False) -> bool:
-    """Whether this process's first batch step compiles the fused step: numba's disk cache holds none for
+    """Whether this process's first batch step, or its first compiled episode (the baselines' episodes:
+    :func:`~cnc_gym.envs.engine.episode.run_steps`), compiles: numba's disk cache holds no machine code for
     this source and CPU (a fresh install, or a kernel changed). Reads the cache's index, compiles nothing."""
     from cnc_gym.numba_cache import needs_compiling
 
-    return needs_compiling([run_parallel if parallel else run_serial])
+    return needs_compiling([run_parallel if parallel else run_serial, run_steps])
