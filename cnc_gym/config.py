@@ -21,7 +21,9 @@ ConfigError` line that names the file and the key.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
 import math
 import numbers
 import os
@@ -599,4 +601,10 @@ def read_yaml(path: str | Path, what: str) -> Any:
         raise ConfigError(
             f"{path}: {what} is not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start})"
         ) from None
-    return parse_yaml(decoded, str(path))
+    # A bench run reads the same preset hundreds of times (every episode's env): parsed once per text, and
+    # every caller gets its own copy to change.
+    return copy.deepcopy(_parse_yaml_cached(decoded, str(path)))
+
+
+#: parse_yaml's results by (text, source); a failed parse raises every time (nothing is kept of it).
+_parse_yaml_cached = functools.lru_cache(maxsize=64)(parse_yaml)

@@ -254,3 +254,22 @@ def test_markdown_table_lists_every_key_with_its_range():
 
 def test_a_spec_without_range_reads_anything():
     assert Spec().parse([1, "x"]) == [1, "x"]
+
+
+def test_read_yaml_parses_a_text_once_and_hands_every_caller_its_own_copy(tmp_path):
+    import cnc_gym.config as config
+
+    path = tmp_path / "preset.yaml"
+    path.write_text("axes:\n  x: {kv: 40}\nname: a\n")
+    config._parse_yaml_cached.cache_clear()
+    first = read_yaml(path, "machine config")
+    first["axes"]["x"]["kv"] = 1  # a caller changing what it got
+    second = read_yaml(path, "machine config")
+    assert second == {"axes": {"x": {"kv": 40}}, "name": "a"}
+    assert config._parse_yaml_cached.cache_info().hits == 1
+    path.write_text("axes:\n  x: {kv: 45}\nname: a\n")  # a changed file is read anew
+    assert read_yaml(path, "machine config")["axes"]["x"]["kv"] == 45
+    path.write_text("axes: [\n")  # and a broken one fails every time
+    for _ in range(2):
+        with pytest.raises(ConfigError, match="invalid YAML"):
+            read_yaml(path, "machine config")
