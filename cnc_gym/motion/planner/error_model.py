@@ -9,9 +9,12 @@ the straight line's lag, the arc's radial error and the corner's transient, tabu
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -98,6 +101,53 @@ class ServoTables:
 
 
 def _ramp_error_response(model: ServoErrorModel, t: np.ndarray) -> np.ndarray:
+    """E_k(t) of every axis (:func:`_compute_ramp_error_response`), kept on disk: computing it imports
+    ``scipy.signal``, which costs a fresh process about a second, the rest of the planner's tables a few
+    ms. The file holds the very array computed (``.npy``, no pickle) under a key of everything it depends
+    on (the loop parameters, the time grid, the SciPy version), so a hit gives the same bits a computation
+    would; a file that cannot be read, or is not the array its key names, is computed again."""
+    key = _response_key(model, t)
+    path = response_cache_dir() / f"{key}.npy"
+    try:
+        with path.open("rb") as fh:
+            cached = np.load(fh, allow_pickle=False)
+        if cached.shape == (3, len(t)) and cached.dtype == np.float64 and np.all(np.isfinite(cached)):
+            return cached
+    except (OSError, ValueError, EOFError):
+        pass
+    out = _compute_ramp_error_response(model, t)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        with tmp.open("wb") as fh:
+            np.save(fh, out, allow_pickle=False)
+        os.replace(tmp, path)
+    except OSError:  # a read-only or full disk: the next process computes it again
+        pass
+    return out
+
+
+def response_cache_dir() -> Path:
+    """Where the servo responses are kept: ``$CNC_GYM_CACHE_DIR/servo``, else
+    ``$XDG_CACHE_HOME/cnc-gym/servo`` (beside the bounds, :func:`cnc_gym.motion.bound.cache_dir`)."""
+    root = os.environ.get("CNC_GYM_CACHE_DIR")
+    if root:
+        return Path(root) / "servo"
+    xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(xdg) / "cnc-gym" / "servo"
+
+
+def _response_key(model: ServoErrorModel, t: np.ndarray) -> str:
+    from importlib.metadata import version
+
+    h = hashlib.sha256(f"ramp-error-1:scipy-{version('scipy')}:".encode())
+    for arr in (model.kv, model.ff, model.vel_hz, model.vel_zeta, t):
+        h.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
+    h.update(f"{model.filter_samples}:{model.period_s!r}".encode())
+    return h.hexdigest()
+
+
+def _compute_ramp_error_response(model: ServoErrorModel, t: np.ndarray) -> np.ndarray:
     """E_k(t) of every axis: the step response of (1 − G_k(s))/s, then the moving average if any."""
     from scipy import signal
 

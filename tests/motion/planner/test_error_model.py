@@ -148,3 +148,34 @@ def test_fast_corner_routines_agree_with_the_full_model(machine_name):
             stopped = corner_approach_error(u_in, u_out, speed, drop, ramp, hold, *grid, limit)
             assert (stopped > limit) == (error > limit)
             assert stopped <= error
+
+
+def test_the_servo_response_is_kept_on_disk_and_a_kept_one_is_the_computed_one(tmp_path, monkeypatch):
+    """A second process reads the ramp-error response from the cache (no scipy.signal import) and gets
+    the bits a computation gives; a damaged file is computed again."""
+    import os
+    import subprocess
+    import sys
+
+    from cnc_gym.motion.planner import error_model
+
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path))
+    machine = load_machine("vmc-small")
+    model = error_model.ServoErrorModel(machine)
+    t = np.linspace(0.0, 0.3, 160)
+    computed = error_model._compute_ramp_error_response(model, t)
+    first = error_model._ramp_error_response(model, t)  # computes and writes
+    files = list((tmp_path / "servo").glob("*.npy"))
+    assert len(files) == 1 and np.array_equal(first, computed)
+    probe = ("import sys, numpy as np\nfrom cnc_gym.machine import load_machine\n"
+             "from cnc_gym.motion.planner import error_model as em\n"
+             "m = em.ServoErrorModel(load_machine('vmc-small'))\n"
+             "out = em._ramp_error_response(m, np.linspace(0.0, 0.3, 160))\n"
+             "print('scipy.signal' in sys.modules, out.tobytes().hex())\n")  # fmt: skip
+    env = {**os.environ, "CNC_GYM_CACHE_DIR": str(tmp_path)}
+    loaded, hexed = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True,
+                                   check=True).stdout.split()  # fmt: skip
+    assert loaded == "False" and bytes.fromhex(hexed) == computed.tobytes()
+    files[0].write_bytes(b"not an array")  # damaged: computed again, and the file repaired
+    assert np.array_equal(error_model._ramp_error_response(model, t), computed)
+    assert np.array_equal(np.load(files[0]), computed)
