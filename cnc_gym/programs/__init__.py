@@ -33,7 +33,6 @@ time is part of the key, so an edited file is read again).
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 from dataclasses import dataclass
@@ -182,6 +181,8 @@ def _excerpt(text: str, limit: int = 60) -> str:
 
 
 def _text_name(text: str) -> str:
+    import hashlib  # here, not at the top: `cnc-gym trace` of a file never names a text
+
     return f"text-{hashlib.sha1(text.encode('utf-8', 'surrogatepass')).hexdigest()[:8]}"
 
 
