@@ -40,6 +40,15 @@ def test_trace_without_a_config_loads_no_yaml(tmp_path):
     assert out.strip().splitlines()[-1] == "[]"
 
 
+def test_the_interpreter_without_a_machine_loads_no_machine_record():
+    # The machine records and their config schema (dataclasses built at import) are for a preset; the
+    # interpreter's unit constants come from cnc_gym.defaults.
+    out = run("import sys; from cnc_gym.gcode import interpret; from cnc_gym.toolpath.records import "
+              "toolpath_jsonl; toolpath_jsonl(interpret('G20 G91 G01 X1 F10\\nG02 X1 Y1 R1\\nM30\\n')); "
+              "print(sorted(m for m in ('cnc_gym.machine', 'cnc_gym.config') if m in sys.modules))")
+    assert out.strip() == "[]"
+
+
 def test_env_registers_whichever_is_imported_first():
     for order in ("import cnc_gym, gymnasium as gym", "import gymnasium as gym, cnc_gym"):
         out = run(f"{order}; print('cnc_gym/Feedrate-v0' in gym.registry)")

@@ -38,13 +38,15 @@ import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Literal, NamedTuple
+from typing import TYPE_CHECKING, Literal, NamedTuple
 
 from cnc_gym.errors import ConfigError
 from cnc_gym.gcode.dialect import DEFAULT_DIALECT
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import Toolpath
+
+if TYPE_CHECKING:
+    from cnc_gym.machine import MachineConfig
 
 PROGRAMS_DIR = Path(__file__).resolve().parent
 
