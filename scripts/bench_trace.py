@@ -17,6 +17,9 @@ the least CPU time of the repeats and its ratio (on a loaded machine the steadie
 - **bytecode**: as in an installed package (pip compiles it at install), the Python commands run with
   their bytecode cache: ``PYTHONDONTWRITEBYTECODE`` is dropped from their environment and each command
   runs once, untimed, before the repeats (without the cache, start-up compiles some fifty modules);
+- **floors**: ``python -c pass`` and ``python -c 'import numpy'`` (the interpreter's own start-up, and
+  with numpy, which the tool path's arrays need), against the 3-line file's reference: what no Python
+  command can go below;
 - **split**: where ``cnc-gym trace`` spends its time: start-up (the same command on a one-line program),
   interpretation and JSON Lines writing (each timed in this process, CPU time).
 
@@ -44,6 +47,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 STARTUP = "cnc-gym trace, 3-line file"
 REFERENCE_TINY = "rs274 -g, 3-line file"
+#: The floors under any Python command's start-up, timed beside it: the interpreter alone, and with numpy
+#: (which the tool path's arrays need); compared with the 3-line file's reference.
+FLOORS = {"floor: python -c pass": "pass", "floor: python -c 'import numpy'": "import numpy"}
 #: The 3-line file: a move, an arc and the program end.
 TINY = "G21 G90 G01 X5 Y0 F1200\nG02 X10 Y5 R5\nM30\n"
 
@@ -120,6 +126,9 @@ def main(argv: list[str] | None = None) -> int:
         commands: dict[str, tuple[list[str], dict[str, str] | None]] = {
             "cnc-gym trace": ([*trace, str(program)], cached),
             STARTUP: ([*trace, str(tiny)], cached),
+            # (OPENBLAS_NUM_THREADS=1 as `cnc-gym` sets it before numpy loads)
+            **{name: ([sys.executable, "-c", code], {**cached, "OPENBLAS_NUM_THREADS": "1"})
+               for name, code in FLOORS.items()},
         }
         if args.before:
             before_env = {**cached, "PYTHONPATH": str(Path(args.before).resolve())}
@@ -152,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
         for name, m in medians.items():
             line = f"{name:46s} {m['wall']:7.3f} {m['cpu']:7.3f} {m['cpu_min']:7.3f}"
             if reference:
-                ref = medians[REFERENCE_TINY if name in (STARTUP, REFERENCE_TINY) else reference]
+                ref = medians[REFERENCE_TINY if name in (STARTUP, REFERENCE_TINY, *FLOORS) else reference]
                 m["ratio_wall"], m["ratio_cpu"] = m["wall"] / ref["wall"], m["cpu"] / ref["cpu"]
                 m["ratio_cpu_min"] = m["cpu_min"] / ref["cpu_min"]
                 line += f"   {m['ratio_wall']:5.2f}× | {m['ratio_cpu']:5.2f}× | {m['ratio_cpu_min']:5.2f}×"
