@@ -46,6 +46,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 STARTUP = "cnc-gym trace, 3-line file"
+STARTUP_BEFORE = "cnc-gym trace, 3-line file, --before"
 REFERENCE_TINY = "rs274 -g, 3-line file"
 #: The floors under any Python command's start-up, timed beside it: the interpreter alone, and with numpy
 #: (which the tool path's arrays need); compared with the 3-line file's reference.
@@ -133,6 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.before:
             before_env = {**cached, "PYTHONPATH": str(Path(args.before).resolve())}
             commands["cnc-gym trace, --before"] = ([*trace, str(program)], before_env)
+            commands[STARTUP_BEFORE] = ([*trace, str(tiny)], before_env)
         rs274 = shutil.which("rs274")
         if rs274:
             ngc = work / "program.ngc"
@@ -161,7 +163,8 @@ def main(argv: list[str] | None = None) -> int:
         for name, m in medians.items():
             line = f"{name:46s} {m['wall']:7.3f} {m['cpu']:7.3f} {m['cpu_min']:7.3f}"
             if reference:
-                ref = medians[REFERENCE_TINY if name in (STARTUP, REFERENCE_TINY, *FLOORS) else reference]
+                tiny_file = name in (STARTUP, STARTUP_BEFORE, REFERENCE_TINY, *FLOORS)
+                ref = medians[REFERENCE_TINY if tiny_file else reference]
                 m["ratio_wall"], m["ratio_cpu"] = m["wall"] / ref["wall"], m["cpu"] / ref["cpu"]
                 m["ratio_cpu_min"] = m["cpu_min"] / ref["cpu_min"]
                 line += f"   {m['ratio_wall']:5.2f}× | {m['ratio_cpu']:5.2f}× | {m['ratio_cpu_min']:5.2f}×"
