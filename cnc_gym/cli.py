@@ -36,10 +36,10 @@ from typing import NoReturn
 # user set wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+from cnc_gym.defaults import DEFAULT_MACHINE, INPUT_UNITS
 from cnc_gym.errors import MAX_LINE_CHARS, CncGymError, printable
 from cnc_gym.gcode.dialect import DEFAULT_DIALECT, DIALECT_MODULES
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-from cnc_gym.machine import DEFAULT_MACHINE, INPUT_UNITS
 from cnc_gym.programs import BUILTIN_PROGRAMS
 
 EXIT_USAGE = 2

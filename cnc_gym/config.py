@@ -30,13 +30,15 @@ import os
 import re
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
-from typing import Any
-
-import yaml
+from typing import TYPE_CHECKING, Any
 
 from cnc_gym.errors import ConfigError
 from cnc_gym.files import read_regular_file
+
+if TYPE_CHECKING:  # PyYAML loads when a config is read (`cnc-gym trace` of a program without one never does)
+    import yaml
 
 #: Largest config file read (the shipped ones are 1-3 KB).
 MAX_CONFIG_BYTES = 256 * 1024
@@ -467,33 +469,39 @@ def _default_text(value: Any) -> str:
 
 
 # ----------------------------------------------------------------------------------------------- YAML
-class _ConfigLoader(yaml.SafeLoader):
-    """PyYAML's safe loader with a nesting cap and YAML 1.2 exponent floats (``1e-3``)."""
+@cache
+def _config_loader() -> type:
+    """The loader class, made on first use (importing PyYAML costs start-up time a config-less command
+    need not pay)."""
+    import yaml
 
-    def __init__(self, stream: str) -> None:
-        super().__init__(stream)
-        self._depth = 0
-        self._nodes = 0
+    class ConfigLoader(yaml.SafeLoader):
+        """PyYAML's safe loader with a nesting cap and YAML 1.2 exponent floats (``1e-3``)."""
 
-    def compose_node(self, parent: Any, index: Any) -> Any:
-        self._depth += 1
-        self._nodes += 1
-        try:
-            if self._depth > MAX_NESTING or self._nodes > MAX_NODES:
-                line = self.peek_event().start_mark.line + 1
-                too_deep = self._depth > MAX_NESTING
-                raise _Bound(line, f"nested deeper than {MAX_NESTING} levels" if too_deep
-                             else f"more than {MAX_NODES} values")  # fmt: skip
-            return super().compose_node(parent, index)
-        finally:
-            self._depth -= 1
+        def __init__(self, stream: str) -> None:
+            super().__init__(stream)
+            self._depth = 0
+            self._nodes = 0
 
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            self._depth += 1
+            self._nodes += 1
+            try:
+                if self._depth > MAX_NESTING or self._nodes > MAX_NODES:
+                    line = self.peek_event().start_mark.line + 1
+                    too_deep = self._depth > MAX_NESTING
+                    raise _Bound(line, f"nested deeper than {MAX_NESTING} levels" if too_deep
+                                 else f"more than {MAX_NODES} values")  # fmt: skip
+                return super().compose_node(parent, index)
+            finally:
+                self._depth -= 1
 
-_ConfigLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."),
-)
+    ConfigLoader.add_implicit_resolver(
+        "tag:yaml.org,2002:float",
+        re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$"),
+        list("-+0123456789."),
+    )
+    return ConfigLoader
 
 
 class _Bound(Exception):
@@ -508,6 +516,8 @@ def _tree_problem(root: yaml.Node) -> tuple[int, str] | None:
     """``(line, problem)`` of the composed YAML tree, or None: too many values or too deep once aliases are
     expanded, an alias inside itself, a duplicate key. Each node is walked once (sizes and heights are
     remembered), so a "billion laughs" file costs as much as its text."""
+    import yaml
+
     seen_nodes: dict[int, tuple[int, int]] = {}  # id → (values in the expanded subtree, its height)
     open_nodes: set[int] = set()
 
@@ -556,6 +566,8 @@ class _Stop(Exception):
 
 
 def _yaml_message(exc: yaml.YAMLError) -> tuple[int | None, str]:
+    import yaml
+
     if isinstance(exc, yaml.reader.ReaderError):
         return None, f"character #x{exc.character:04x} at offset {exc.position} is not allowed in YAML"
     if isinstance(exc, yaml.MarkedYAMLError) and exc.problem_mark is not None:
@@ -566,9 +578,11 @@ def _yaml_message(exc: yaml.YAMLError) -> tuple[int | None, str]:
 
 def parse_yaml(text_: str, source: str) -> Any:
     """The data of one YAML document, read with the bounded safe loader; ConfigError on any problem."""
+    import yaml
+
     loader = None
     try:
-        loader = _ConfigLoader(text_)
+        loader = _config_loader()(text_)
         root = loader.get_single_node()
         if root is None:
             return None

@@ -65,6 +65,7 @@ from cnc_gym.config import (
     table,
     text,
 )
+from cnc_gym.defaults import DEFAULT_MACHINE, INCH_MM, INPUT_UNITS
 from cnc_gym.errors import ConfigError
 from cnc_gym.frozen import FrozenDict
 
@@ -73,8 +74,6 @@ __all__ = ["DEFAULT_MACHINE", "INPUT_UNITS", "AxisConfig", "AxisMechanicsConfig"
            "ToolSetup", "check_machine", "configs_dir", "load_machine", "load_setup", "machine_names",
            "merge_setups", "with_setup"]  # fmt: skip
 
-#: The machine preset used where none is named (``cnc-gym run``, the envs, ``bench``, ``load_machine()``).
-DEFAULT_MACHINE = "vmc-small"
 AXIS_NAMES = ("x", "y", "z")
 ROTARY_NAMES = ("a", "b", "c")
 
@@ -86,12 +85,6 @@ _ACCEL_WHY = ("0.0001 g to 100 g: real axes reach about 0.1-5 g; values far outs
 _JERK_WHY = "real axes run at 10^3-10^7 mm/s³; values far outside make the planner's arithmetic overflow."
 _TRAVEL_WHY = "±1 km: any machine's travel, and positions stay exact in double precision."
 
-
-#: The input units a controller can be in at power-on (a preset's ``power_on_units``,
-#: ``interpret(units=)``, ``--units``): G21 millimetres or G20 inches.
-INPUT_UNITS = ("mm", "inch")
-#: Millimetres in an inch (the interpreter's G20 scale, a setup in inch, the rotary feed rule in G20).
-INCH_MM = 25.4
 
 _ROTARY_WHY = "as the linear axes', degrees counting as mm (the GSK rotary feed rule)."
 

@@ -41,7 +41,7 @@ def one_line_error(path: Path, load=load_machine, max_nodes: int | None = None) 
     at most ``max_nodes`` YAML values composed (counted, not timed: a timed test fails on a busy machine)
     and at most 64 MB of Python memory at the peak."""
     composed = 0
-    compose = config_module._ConfigLoader.compose_node
+    compose = config_module._config_loader().compose_node
 
     def counting(self, parent, index):
         nonlocal composed
@@ -52,7 +52,7 @@ def one_line_error(path: Path, load=load_machine, max_nodes: int | None = None) 
     try:
         with warnings.catch_warnings(), pytest.MonkeyPatch.context() as patch:
             warnings.simplefilter("error")  # numpy overflow warnings and the like fail the test
-            patch.setattr(config_module._ConfigLoader, "compose_node", counting)
+            patch.setattr(config_module._config_loader(), "compose_node", counting)
             with pytest.raises(ConfigError) as err:
                 load(path)
         peak = tracemalloc.get_traced_memory()[1]

@@ -17,6 +17,9 @@ def run(code: str) -> str:
 
 #: What a simulation needs and a trace does not: each costs start-up time (numba alone ~0.3 s).
 HEAVY = ("numba", "llvmlite", "scipy", "matplotlib", "mujoco", "gymnasium", "torch", "toppra")
+#: What a trace without a config file does not need either: PyYAML (read with a machine preset or a setup
+#: file) and importlib.resources (with tempfile, shutil, random and the compression modules).
+CONFIG_ONLY = ("yaml", "importlib.resources", "tempfile", "random")
 
 
 @pytest.mark.parametrize("options", [[], ["--machine", "vmc-small", "--dialect", "fanuc"]])
@@ -27,6 +30,23 @@ def test_trace_loads_no_heavy_module(tmp_path, options):
               f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
     assert out.strip().splitlines()[-1] == "[]"
     assert '"kind": "arc"' in out
+
+
+def test_trace_without_a_config_loads_no_yaml(tmp_path):
+    program = tmp_path / "p.nc"
+    program.write_text("G90 G21\nG01 X5 F1200\nM30\n")
+    out = run(f"import sys; from cnc_gym.cli import main; main(['trace', {str(program)!r}]); "
+              f"print(sorted(m for m in {CONFIG_ONLY!r} if m in sys.modules))")
+    assert out.strip().splitlines()[-1] == "[]"
+
+
+def test_the_interpreter_without_a_machine_loads_no_machine_record():
+    # The machine records and their config schema (dataclasses built at import) are for a preset; the
+    # interpreter's unit constants come from cnc_gym.defaults.
+    out = run("import sys; from cnc_gym.gcode import interpret; from cnc_gym.toolpath.records import "
+              "toolpath_jsonl; toolpath_jsonl(interpret('G20 G91 G01 X1 F10\\nG02 X1 Y1 R1\\nM30\\n')); "
+              "print(sorted(m for m in ('cnc_gym.machine', 'cnc_gym.config') if m in sys.modules))")
+    assert out.strip() == "[]"
 
 
 def test_env_registers_whichever_is_imported_first():

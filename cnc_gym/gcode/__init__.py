@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cnc_gym.defaults import INPUT_UNITS
 from cnc_gym.errors import ConfigError, ProgramError
 from cnc_gym.files import MAX_PROGRAM_BYTES, read_regular_file
 from cnc_gym.gcode.dialect import DEFAULT_DIALECT, DIALECT_MODULES, Dialect, get_dialect
@@ -33,7 +34,6 @@ from cnc_gym.gcode.settings import (
     FlowOptions,
     MacroCalls,
 )
-from cnc_gym.machine import INPUT_UNITS
 
 if TYPE_CHECKING:
     from cnc_gym.machine import MachineConfig, SetupConfig
@@ -160,6 +160,8 @@ def interpret(
 
 def _setup(machine: MachineConfig | None, setup) -> SetupConfig | None:
     """The setup of a run: the machine preset's section with ``setup=`` on top (None: none at all)."""
+    if machine is None and setup is None:
+        return None  # (the machine records not even loaded: a trace without a preset)
     from cnc_gym.machine import load_setup, merge_setups
 
     given = None if setup is None else load_setup(setup)

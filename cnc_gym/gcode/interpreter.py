@@ -23,6 +23,7 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from cnc_gym.defaults import INCH_MM, INPUT_UNITS
 from cnc_gym.errors import ConfigError, ProgramError, notice_line
 from cnc_gym.gcode.canonical import ZERO, CanonicalMachine, MapError, map_arc
 from cnc_gym.gcode.codes import CodeSpec, code_name, gkey, round_to
@@ -31,7 +32,6 @@ from cnc_gym.gcode.program import split_words
 from cnc_gym.gcode.settings import FlowOptions, ToolMeasurement, skip_signal_surfaces
 from cnc_gym.gcode.setup import apply_setup
 from cnc_gym.gcode.state import CompensationState, State
-from cnc_gym.machine import INCH_MM, INPUT_UNITS
 from cnc_gym.toolpath import PLANE_AXES, Plane, SegmentMode, Toolpath, ToolpathBuilder
 
 if TYPE_CHECKING:

@@ -33,19 +33,20 @@ time is part of the key, so an edited file is read again).
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Literal, NamedTuple
+from typing import TYPE_CHECKING, Literal, NamedTuple
 
 from cnc_gym.errors import ConfigError
 from cnc_gym.gcode.dialect import DEFAULT_DIALECT
 from cnc_gym.gcode.settings import DEFAULT_MAX_BLOCKS
-from cnc_gym.machine import MachineConfig
 from cnc_gym.toolpath import Toolpath
+
+if TYPE_CHECKING:
+    from cnc_gym.machine import MachineConfig
 
 PROGRAMS_DIR = Path(__file__).resolve().parent
 
@@ -182,6 +183,8 @@ def _excerpt(text: str, limit: int = 60) -> str:
 
 
 def _text_name(text: str) -> str:
+    import hashlib  # here, not at the top: `cnc-gym trace` of a file never names a text
+
     return f"text-{hashlib.sha1(text.encode('utf-8', 'surrogatepass')).hexdigest()[:8]}"
 
 

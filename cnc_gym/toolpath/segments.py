@@ -22,8 +22,8 @@ from operator import itemgetter
 
 import numpy as np
 
+from cnc_gym.defaults import INCH_MM
 from cnc_gym.frozen import FrozenDict
-from cnc_gym.machine import INCH_MM
 from cnc_gym.toolpath.kinds import PLANE_AXES, PLANE_AXES_TABLE, Plane, SegmentKind, SegmentMode
 from cnc_gym.toolpath.nurbs import NurbsCurve
 

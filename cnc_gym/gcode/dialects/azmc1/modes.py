@@ -7,10 +7,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from cnc_gym.defaults import INCH_MM
 from cnc_gym.gcode.canonical import scaling_stage
 from cnc_gym.gcode.dialects.azmc1.options import data, options
 from cnc_gym.gcode.lang.fanuc.modal import spindle_speed as family_spindle_speed
-from cnc_gym.machine import INCH_MM
 from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:

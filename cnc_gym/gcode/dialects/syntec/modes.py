@@ -22,7 +22,6 @@ from cnc_gym.gcode.dialects.syntec.options import data, options
 from cnc_gym.gcode.lang.fanuc import modal, nurbs
 from cnc_gym.gcode.lang.fanuc import motion as family_motion
 from cnc_gym.gcode.lang.fanuc.least_units import is_whole, whole_count
-from cnc_gym.machine import ControllerConfig
 from cnc_gym.toolpath import SegmentKind, SegmentMode
 
 if TYPE_CHECKING:
@@ -280,7 +279,12 @@ def thread(core: Seam, values: dict) -> None:
         raise core.error("G33 needs F, the thread lead (mm per revolution)", "missing-feed")
     rpm = st.spindle_speed
     machine = st.machine
-    limit = (machine.controller if machine is not None else ControllerConfig()).max_feed_mm_min
+    if machine is None:  # the default controller's clamp (loaded here: a trace without a preset needs none)
+        from cnc_gym.machine import ControllerConfig
+
+        limit = ControllerConfig().max_feed_mm_min
+    else:
+        limit = machine.controller.max_feed_mm_min
     if not 1.0 <= rpm <= limit / lead:
         raise core.error(f"G33 at S{rpm:g}: the spindle speed must be 1..{limit / lead:g} r/min (maximum "
                          f"cutting feed {limit:g} / lead {lead:g})", "thread-speed")  # fmt: skip

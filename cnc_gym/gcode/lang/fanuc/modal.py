@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from cnc_gym.defaults import INCH_MM
 from cnc_gym.gcode.lang.fanuc import compensation, corners, least_units, transforms
-from cnc_gym.machine import INCH_MM
 from cnc_gym.toolpath import SegmentMode
 
 if TYPE_CHECKING:

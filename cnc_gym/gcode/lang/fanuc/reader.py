@@ -47,7 +47,9 @@ _NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)"
 # pattern is built per reader (_plain_block_pattern) so that it admits only words within the dialect's
 # length limit (GSK alarm 13, docs/gsk25i_alarms.md E1): a longer literal falls to the scanner, which names it
 # (``word-too-long``), and the hot path pays nothing for the check.
-_PLAIN_WORD = re.compile(r"([A-Z])([-+]?[0-9.]+)")
+# A plain block's words as single strings (``"X12.5"``): a match without groups builds one string, where
+# ``([A-Z])([-+]?[0-9.]+)`` built a tuple and two.
+_PLAIN_WORD_TEXT = re.compile(r"[A-Z][-+]?[0-9.]+")
 
 
 def _plain_block_pattern(max_word_length: int) -> re.Pattern:
@@ -102,8 +104,8 @@ class Reader:
         self._call_t = calls.t_sub is not None
         self._last_comment: str | None = None
         self._o_blocks: list[Block] = []
-        # Plain words already checked in this file: (letter, digits) → value.
-        self._seen: dict[tuple[str, str], float] = {}
+        # Plain words already checked in this file: word ("X12.5") → value.
+        self._seen: dict[str, float] = {}
         # The numbers of this program's plain blocks.
         self._store = LiteralStore()
         #: Most blocks a program text may hold (the run's ``max_blocks``; ``interpret`` sets it).
@@ -359,23 +361,23 @@ class Reader:
         """The hot path: letters and literal numbers only. Words are split and checked in one pass;
         ``Block.words`` keeps the ``(letter, digits)`` pairs for decimal-point checks. A word seen before in
         the file (G01, F1200, a repeated coordinate) takes its checked value from ``self._seen``."""
-        pairs = _PLAIN_WORD.findall(text)
-        if len(pairs) > self._max_words:
-            raise self.error(f"{len(pairs)} words in one block (at most {self._max_words})", "too-many-words",
+        words = _PLAIN_WORD_TEXT.findall(text)
+        if len(words) > self._max_words:
+            raise self.error(f"{len(words)} words in one block (at most {self._max_words})", "too-many-words",
                              line)  # fmt: skip
         values: dict[str, float] = {}
         gs = ms = None
         seen = self._seen
-        for pair in pairs:
-            value = seen.get(pair)
-            letter = pair[0]
+        for word in words:
+            value = seen.get(word)
+            letter = word[0]
             if value is None:
-                value = self._plain_value(pair, text, line)
+                value = self._plain_value((letter, word[1:]), text, line)
                 if value is None:
                     return self._rescan(text, line)
                 if len(seen) >= _SEEN_WORDS:
                     seen.clear()  # bounded: a program of all-different coordinates must not grow it per line
-                seen[pair] = value
+                seen[word] = value
             if letter == "G":
                 if gs is None:
                     gs = [value]
@@ -401,11 +403,11 @@ class Reader:
         has_o = False
         if "N" in values or "O" in values:
             has_o = "O" in values
-            head = pairs[0][0]
+            head = words[0][0]
             if "O" in values and head != "O":
                 raise self.error("O must be at the head of the block", "misplaced-word", line)
             if "N" in values:
-                if not (head == "N" or (head == "O" and pairs[1][0] == "N")):
+                if not (head == "N" or (head == "O" and words[1][0] == "N")):
                     raise self.error("N must be at the head of the block", "misplaced-word", line)
                 number = int(values.pop("N"))
         block = self._store.add(line, text, gs, ms, values, number)
