@@ -18,8 +18,9 @@ def run(code: str) -> str:
 #: What a simulation needs and a trace does not: each costs start-up time (numba alone ~0.3 s).
 HEAVY = ("numba", "llvmlite", "scipy", "matplotlib", "mujoco", "gymnasium", "torch", "toppra")
 #: What a trace without a config file does not need either: PyYAML (read with a machine preset or a setup
-#: file) and importlib.resources (with tempfile, shutil, random and the compression modules).
-CONFIG_ONLY = ("yaml", "importlib.resources", "tempfile", "random")
+#: file), importlib.resources (with tempfile, shutil, random and the compression modules), and the machine
+#: records with their config schema (the command line's unit choices come from cnc_gym.defaults).
+CONFIG_ONLY = ("yaml", "importlib.resources", "tempfile", "random", "cnc_gym.machine", "cnc_gym.config")
 
 
 @pytest.mark.parametrize("options", [[], ["--machine", "vmc-small", "--dialect", "fanuc"]])

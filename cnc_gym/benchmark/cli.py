@@ -30,8 +30,8 @@ tolerance, 0 otherwise (docs/benchmark.md)."""
 
 def register(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``bench`` to the ``cnc-gym`` subcommands."""
+    from cnc_gym.defaults import INPUT_UNITS
     from cnc_gym.gcode.dialect import DEFAULT_DIALECT
-    from cnc_gym.machine import INPUT_UNITS
 
     bench = subparsers.add_parser("bench", help="benchmark policies on a suite split or your own programs",
                                   epilog=EPILOG,
