@@ -36,6 +36,7 @@ from cnc_gym.config import (
     schema,
     shown,
 )
+from cnc_gym.envs.engine.episode import knob_of_override as compiled_knob_of_override
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE, INPUT_UNITS, PLANT_BACKENDS
 from cnc_gym.motion import ActionError
@@ -256,8 +257,10 @@ class EnvNotReset(CncGymError, gymnasium.error.ResetNeeded):
 
 def knob_of_override(override: float, max_override: float) -> float:
     """The knob value in [-1, 1] that asks for ``override``: the action ``a`` with override
-    ``(a + 1)/2 · max_override``, rounded to the action space's float32 and clipped."""
-    return float(np.float32(min(max(2.0 * override / max_override - 1.0, -1.0), 1.0)))
+    ``(a + 1)/2 · max_override``, rounded to the action space's float32 and clipped (the compiled
+    :func:`~cnc_gym.envs.engine.episode.knob_of_override`, which the baselines' compiled episodes round
+    with too)."""
+    return compiled_knob_of_override(float(override), float(max_override))
 
 
 def parse_action(action: Any) -> float:

@@ -11,8 +11,9 @@ Each step is the batch's own compiled step (:func:`~cnc_gym.envs.engine.step.run
 the Python loop would have given it: the rule reads the last step's ``path_s`` and ``feed_mm_min`` (the
 info values a policy reads), asks the planner's one knob rule
 (:func:`~cnc_gym.motion.planner.planner_override`) and rounds the override to the action space's float32
-and clips it, as :func:`~cnc_gym.envs.options.knob_of_override` does; the return is summed in the same
-order. So an episode run here is the Python loop's, bit for bit (``tests/envs/engine/test_episode.py``).
+and clips it with :func:`knob_of_override`, as the policy does; the return is
+summed in the same order. So an episode run here is the Python loop's, bit for bit
+(``tests/envs/engine/test_episode.py``).
 """
 
 from __future__ import annotations
@@ -69,6 +70,13 @@ class KnobRule:
 
 
 @njit(cache=True, nogil=True)
+def knob_of_override(override: float, max_override: float) -> float:
+    """The knob value in [-1, 1] that asks for ``override``, rounded to the action space's float32 and
+    clipped: :func:`cnc_gym.envs.options.knob_of_override`, compiled (the one definition of both)."""
+    return float(np.float32(min(max(2.0 * override / max_override - 1.0, -1.0), 1.0)))
+
+
+@njit(cache=True, nogil=True)
 def run_steps(bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions, obs, work_f, work_i,
               constant, schedule, lead_s, reach_mm, max_override, max_steps, stop_time_s, columns, rows,
               total):  # fmt: skip
@@ -86,8 +94,7 @@ def run_steps(bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions
             override = planner_override(schedule, out[_OUT_PATH_S], out[_OUT_FEED], lead_s, reach_mm)
             if override != override:
                 return k, total, NOT_FINITE
-            # knob_of_override: the action space's float32, clipped, as the env reads it back
-            knob = np.float64(np.float32(min(max(2.0 * override / max_override - 1.0, -1.0), 1.0)))
+            knob = knob_of_override(override, max_override)  # as the policy rounds it
         else:
             knob = constant
         actions[0] = min(max(knob, -1.0), 1.0)
