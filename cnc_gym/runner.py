@@ -215,7 +215,8 @@ def record_run(env: Any, policy: Any, *, seed: int | None = 0, progress: bool = 
         if series is not None:
             series.extend_rows(rows)
         if envelope is not None:
-            envelope.add_many(rows[:, 1], rows[:, 4])
+            path_s, error = _RECORDED.index("path_s"), _RECORDED.index("contour_error_mm")
+            envelope.add_many(rows[:, path_s], rows[:, error])
         report(info)
         return False
 
