@@ -118,6 +118,8 @@ def _ramp_error_response(model: ServoErrorModel, t: np.ndarray) -> np.ndarray:
     out = _compute_ramp_error_response(model, t)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        if sum(1 for _ in os.scandir(path.parent)) >= MAX_CACHED_RESPONSES:
+            return out  # (domain randomisation draws a machine per episode: the folder stays bounded)
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         with tmp.open("wb") as fh:
             np.save(fh, out, allow_pickle=False)
@@ -125,6 +127,11 @@ def _ramp_error_response(model: ServoErrorModel, t: np.ndarray) -> np.ndarray:
     except OSError:  # a read-only or full disk: the next process computes it again
         pass
     return out
+
+
+#: Files the response cache folder holds at most (about 4 KB each): the presets' and a user's machines, not
+#: every machine a randomised training run draws.
+MAX_CACHED_RESPONSES = 256
 
 
 def response_cache_dir() -> Path:

@@ -179,3 +179,18 @@ def test_the_servo_response_is_kept_on_disk_and_a_kept_one_is_the_computed_one(t
     files[0].write_bytes(b"not an array")  # damaged: computed again, and the file repaired
     assert np.array_equal(error_model._ramp_error_response(model, t), computed)
     assert np.array_equal(np.load(files[0]), computed)
+
+
+def test_the_servo_response_cache_stays_bounded(tmp_path, monkeypatch):
+    """A full cache folder (a randomised run draws a machine per episode) is read, never grown."""
+    from cnc_gym.motion.planner import error_model
+
+    monkeypatch.setenv("CNC_GYM_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(error_model, "MAX_CACHED_RESPONSES", 2)
+    t = np.linspace(0.0, 0.3, 40)
+    for kv in (30.0, 35.0, 40.0):
+        model = error_model.ServoErrorModel(load_machine("vmc-small"))
+        model.kv = np.full(3, kv)
+        out = error_model._ramp_error_response(model, t)
+        assert np.array_equal(out, error_model._compute_ramp_error_response(model, t))
+    assert len(list((tmp_path / "servo").iterdir())) == 2
