@@ -110,7 +110,9 @@ MACHINE_NAME = Text(max_length=MAX_TEXT, doc="machine preset name or YAML path")
 ACTION_MODE = Choice(choices=ACTION_MODES, doc="what the action sets: the override knob or the feed")
 MAX_EPISODE_STEPS = Number(
     low=1, high=10**9, integer=True, optional=True,
-    doc="step budget of an episode (null: 5 × the program's nominal time plus 1 s)")  # fmt: skip
+    doc="step budget of an episode (null: 5 × the program's nominal time plus 1 s); `gymnasium.make` keeps "
+        "this name for its TimeLimit wrapper, which can end an episode earlier but not later: to lengthen "
+        "the budget, build the env class itself")  # fmt: skip
 
 
 class ProgramRefs(Spec):
