@@ -32,6 +32,10 @@ from cnc_gym.plant import make_plant
 from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike, load_program
 from cnc_gym.toolpath import SegmentKind, Toolpath
 
+#: The action dtypes of :meth:`FeedrateEnv.step`'s quick path (numpy's own dtype objects: the usual arrays'
+#: dtypes are these very objects).
+_FLOAT32, _FLOAT64 = np.dtype(np.float32), np.dtype(np.float64)
+
 #: Feedrate-v0's scalar observation entries, in order (the look-ahead blocks, one per
 #: :data:`~cnc_gym.envs.engine.layout.LOOKAHEAD_ROWS` row, follow them); the entries are
 #: :data:`OBSERVATION_V0`.
@@ -188,7 +192,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     the reference advanced, and time, over the servo samples with contour error above ``tol``: these do
     not depend on the control period), ``cost``, ``line`` (source line of the current block),
     ``override`` (applied), ``feed_mm_min`` (current path speed × 60), ``path_s``, ``progress``,
-    ``program``, ``steps``. At the end of an episode these are the episode's totals.
+    ``program``, ``steps``. At the end of an episode these are the episode's totals. A step's info is a
+    dict made from the step's outputs when first used (:class:`~cnc_gym.envs.engine.batch.StepInfo`).
 
     ## Implementation
 
@@ -394,23 +399,35 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._batch.observations[0].copy(), self._batch.info(0)
 
     # --------------------------------------------------------------------------------------------- step
+    #: Whether the knob is computed from the action (v1's ``residual`` mode: :meth:`_residual_knob`).
+    _residual = False
+
     def _parse_action(self, action: Any) -> float:
+        """The knob value of an action (the step's; ActionError on a bad one)."""
         if self._needs_reset:
             raise EnvNotReset("FeedrateEnv: call reset() before step()")
-        if type(action) is np.ndarray and action.shape == (1,) and action.dtype.kind == "f":  # usual case
-            knob = float(action[0])
-            if math.isfinite(knob):
-                return min(max(knob, -1.0), 1.0)
-        return parse_action(action)  # every other form, checked (cnc_gym/envs/options.py)
+        # The usual case first, at the cost of a few attribute reads: an array of shape (1,) of float32 or
+        # float64 (the action space's dtype, or a policy's) holding a value in range.
+        if type(action) is np.ndarray and action.shape == (1,) and (
+                action.dtype is _FLOAT32 or action.dtype is _FLOAT64):  # fmt: skip
+            knob = action.item()
+            if not -1.0 <= knob <= 1.0:  # (NaN too)
+                knob = parse_action(action)
+        else:
+            knob = parse_action(action)  # every other form, checked (cnc_gym/envs/options.py)
+        return self._residual_knob(knob) if self._residual else knob
+
+    def _residual_knob(self, action: float) -> float:
+        """The knob of an action in [-1, 1] where :attr:`_residual` is set (none in v0)."""
+        raise NotImplementedError
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        batch = self._batch
-        batch.actions[0] = self._parse_action(action)
-        batch.step()  # one compiled call: controller, plant, contour error, statistics, reward, observation
-        reward, terminated, truncated, info = batch.outcome(0)
+        # One compiled call: controller, plant, contour error, statistics, reward, observation. The info is
+        # a dict made when first used (engine.batch.StepInfo).
+        result = self._batch.step_one(self._parse_action(action))
         if self._renderer is not None:
-            self._renderer.record(*batch.last_samples(0)[:2])
-        return batch.observations[0].copy(), reward, terminated, truncated, info
+            self._renderer.record(*self._batch.last_samples(0)[:2])
+        return result
 
     # ----------------------------------------------------------------------------------- whole episodes
     @property

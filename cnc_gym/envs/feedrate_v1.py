@@ -277,6 +277,7 @@ class FeedrateEnvV1(FeedrateEnv):
         self.reward_weights = args.reward or RankingReward()
         self.randomize = args.randomize or DomainRandomization()
         self.residual_range = float(args.residual_range)
+        self._residual = self.action_mode == "residual"
         if self.randomize.enabled:
             problem = self.randomize.stability_problem(self.machine)
             if problem:
@@ -340,11 +341,9 @@ class FeedrateEnvV1(FeedrateEnv):
             self._start()
 
     # --------------------------------------------------------------------------------------------- step
-    def _parse_action(self, action: Any) -> float:
-        a = super()._parse_action(action)
-        if self.action_mode != "residual":
-            return a
-        override = min(max(self.planner_override * self.residual_range**a, 0.0), self.max_override)
+    def _residual_knob(self, action: float) -> float:
+        """``residual`` mode: the knob asking for the planner's override × ``residual_range^a``."""
+        override = min(max(self.planner_override * self.residual_range**action, 0.0), self.max_override)
         return self._planner.knob(override)
 
 
