@@ -18,13 +18,14 @@ from __future__ import annotations
 import dataclasses
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from cnc_gym import ENV_IDS as REGISTERED_ENV_IDS
 from cnc_gym.config import (
     Choice,
     Number,
@@ -36,6 +37,7 @@ from cnc_gym.config import (
     items,
     number,
     parse_value,
+    parse_yaml,
     read_yaml,
     section,
     shown,
@@ -58,8 +60,8 @@ from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE
 from cnc_gym.programs import DEFAULT_DIALECT
 
-#: The env versions a training config may name.
-ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2")
+#: The env versions a training config may name: every id cnc_gym registers (v4: the live planner).
+ENV_IDS = REGISTERED_ENV_IDS
 #: A program entry naming a whole split of a benchmark suite.
 SUITE_PREFIX = "suite:"
 #: Keyword arguments a trained model records (plain JSON in its zip), so that ``cnc-gym bench`` and
@@ -83,7 +85,7 @@ class EnvSettings:
     dialect: str = declared(DIALECT, DEFAULT_DIALECT)
     machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
     action_mode: str = declared(dataclasses.replace(ACTION_MODE_V1, doc="what the action sets (`residual`: "
-                                                    "Feedrate-v1 only)"), DEFAULT_ACTION_MODE)  # fmt: skip
+                                                    "Feedrate-v1 to -v4)"), DEFAULT_ACTION_MODE)  # fmt: skip
     control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RewardWeights | None = section(  # noqa: RUF009
         RewardWeights, optional=True, doc="Feedrate-v0's reward weights (null: configs/tasks/default.yaml)")
@@ -98,12 +100,12 @@ class EnvSettings:
         """Rules across keys: ``(key, problem)``."""
         if self.id == "cnc_gym/Feedrate-v0":
             if self.action_mode == "residual":
-                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v2 or -v1"
+                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v4 (or -v1 to -v3)"
             for key in ("reward_v1", "randomize"):
                 if getattr(self, key) is not None:
-                    yield key, "belongs to cnc_gym/Feedrate-v1 and -v2 (set id: cnc_gym/Feedrate-v2)"
+                    yield key, "belongs to cnc_gym/Feedrate-v1 to -v4 (set id: cnc_gym/Feedrate-v4)"
         elif self.reward is not None:
-            yield "reward", "holds Feedrate-v0's weights; those of Feedrate-v1 and -v2 are reward_v1"
+            yield "reward", "holds Feedrate-v0's weights; those of Feedrate-v1 to -v4 are reward_v1"
         for program in self.programs:
             if program.startswith(SUITE_PREFIX):
                 problem = _suite_problem(program)
@@ -176,6 +178,54 @@ class LagrangianSettings:
 
 
 @dataclass
+class DistillSettings:
+    """Distillation of the oracle into a residual policy (agents/distillation.py, algorithm: distill)."""
+
+    rounds: int = number(3, 0, 100, integer=True, doc="DAgger rounds after the behaviour-cloning round "
+                         "(0: behaviour cloning only)", why="each round labels episodes_per_round "
+                         "episodes and refits on everything so far.")  # fmt: skip
+    episodes_per_round: int = number(240, 1, 100_000, integer=True, doc="training episodes labelled in "
+                                     "every round (the programs in turn, each with a machine of its own)",
+                                     why="an episode is a teacher's plan (about ten simulated episodes) "
+                                     "and about 10⁴ samples of memory at most.")  # fmt: skip
+    nominal_share: float = number(0.25, 0, 1, doc="share of each round's episodes on the nominal machine "
+                                  "(randomisation off), the rest drawn by env.randomize",
+                                  why="a fraction.")  # fmt: skip
+    teacher_margin: float = number(0.85, 0.1, 1, doc="fraction of the contour tolerance the teacher "
+                                   "(the oracle) aims at", why="the oracle's own range: at most the "
+                                   "tolerance.")  # fmt: skip
+    teacher_refine_iterations: int = number(12, 0, 100, integer=True, doc="the teacher's "
+                                            "simulate-and-correct rounds per episode",
+                                            why="each is one simulated episode.")  # fmt: skip
+    teacher_raise_rounds: int = number(3, 0, 100, integer=True, doc="the teacher's raising rounds per "
+                                       "episode", why="each is one simulated episode.")  # fmt: skip
+    label_limit: float = number(1.0, 1, 10, doc="the student's targets: the teacher's residual action "
+                                "clipped to ± this (1: the action box; above 1: how far beyond the range "
+                                "the oracle would go, which saturates the student firmly there)",
+                                why="1 is the box; 10 is a factor ρ¹⁰ beyond the planner.")  # fmt: skip
+    quantile: float = number(0.3, 0, 1, low_open=True, high_open=True, doc="τ of the student's pinball "
+                             "loss: it learns the τ-quantile of the teacher's action (< 0.5: the slow "
+                             "side)", why="a quantile level strictly inside (0, 1).")  # fmt: skip
+    violation_weight: float = number(4.0, 1, 1000, doc="weight of the samples of a DAgger episode in "
+                                     "which the student cut path over tolerance (others: 1)",
+                                     why="at least 1: violating episodes weigh more, not less.")  # fmt: skip
+    epochs: int = number(10, 1, 1000, integer=True, doc="passes over the data after the first round")
+    round_epochs: int = number(4, 1, 1000, integer=True, doc="passes over all data so far after each "
+                               "DAgger round (the fit continues)")  # fmt: skip
+    batch_size: int = number(512, 1, MAX_ROLLOUT, integer=True, doc="minibatch size of the fit")
+    learning_rate: float = number(1e-3, 0, 1, low_open=True, doc="Adam step size of the fit",
+                                  why="steps beyond 1 diverge at once.")  # fmt: skip
+    finetune_timesteps: int = number(0, 0, 10**10, integer=True, doc="env steps of PPO-Lagrangian "
+                                     "fine-tuning after distillation, with ppo: and lagrangian: (0: none)",
+                                     why="10¹⁰ steps are months at this env's ~10⁴ steps/s.")  # fmt: skip
+    finetune_critic_steps: int = number(20_000, 0, 10**10, integer=True, doc="fine-tune steps of those "
+                                        "that train only the value net (the distilled actor held fixed)",
+                                        why="at most the fine-tune's steps.")  # fmt: skip
+    compare: bool = flag(True, doc="run the planner and the teacher on every labelled episode too (the "
+                         "round statistics in TensorBoard)")  # fmt: skip
+
+
+@dataclass
 class PPOSettings:
     """Subset of ``stable_baselines3.PPO`` arguments (same names)."""
 
@@ -205,11 +255,16 @@ class TrainConfig:
     """A training run: env, vectorisation, algorithm settings and where to write."""
 
     env: EnvSettings = section(EnvSettings, doc="the env and its arguments")  # noqa: RUF009
-    algorithm: str = declared(Choice(choices=("ppo", "ppo_lagrangian"), doc="SB3 PPO, or PPO with a "
-                                     "Lagrange multiplier on the cost budget (Feedrate-v1)"), "ppo")
+    algorithm: str = declared(Choice(choices=("ppo", "ppo_lagrangian", "distill"), doc="SB3 PPO, PPO with a "
+                                     "Lagrange multiplier on the cost budget (Feedrate-v1), or distillation "
+                                     "of the oracle into a residual policy (behaviour cloning and DAgger; "
+                                     "ppo: gives its network)"), "ppo")  # fmt: skip
     ppo: PPOSettings = section(PPOSettings, doc="PPO's arguments (SB3 names)")  # noqa: RUF009
     lagrangian: LagrangianSettings = section(  # noqa: RUF009
-        LagrangianSettings, doc="PPO-Lagrangian's dual ascent (algorithm: ppo_lagrangian)")
+        LagrangianSettings, doc="PPO-Lagrangian's dual ascent (algorithm: ppo_lagrangian, and distill's "
+        "fine-tune)")  # fmt: skip
+    distill: DistillSettings = section(  # noqa: RUF009
+        DistillSettings, doc="distillation of the oracle (algorithm: distill)")  # fmt: skip
     total_timesteps: int = number(100_000, 1, 10**10, integer=True, doc="env steps to train for",
                                   why="10¹⁰ steps are months at this env's ~10⁴ steps/s.")  # fmt: skip
     n_envs: int = number(4, 1, 256, integer=True, doc="envs in the process, stepped together by one batched "
@@ -237,15 +292,41 @@ class TrainConfig:
             yield "ppo.batch_size", (f"must not exceed the rollout n_steps × n_envs = {rollout}, "
                                      f"got {self.ppo.batch_size}")  # fmt: skip
         if self.algorithm == "ppo_lagrangian" and self.env.id == "cnc_gym/Feedrate-v0":
-            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v2 or -v1 (cost per mm)"
+            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v4 (or -v1 to -v3; cost per mm)"
+        if self.algorithm == "distill":
+            if self.env.action_mode != "residual":
+                yield "env.action_mode", "distill trains a residual policy: set action_mode: residual"
+            if self.distill.finetune_critic_steps > self.distill.finetune_timesteps > 0:
+                yield "distill.finetune_critic_steps", (f"must not exceed finetune_timesteps "
+                                                        f"({self.distill.finetune_timesteps})")  # fmt: skip
 
 
-def load_config(path: str | Path) -> TrainConfig:
+def load_config(path: str | Path, overrides: Sequence[str] = ()) -> TrainConfig:
     """Read and validate a training config (YAML via the bounded safe loader): a path, or the name of a
-    shipped one (``ppo`` → ``configs/train/ppo.yaml``, package data in an installed wheel)."""
+    shipped one (``ppo`` → ``configs/train/ppo.yaml``, package data in an installed wheel).
+    ``overrides``: ``KEY=VALUE`` strings (``scripts/train.py --set``), a dotted key (``distill.rounds``)
+    and a YAML value, applied to the file's data before it is checked, by the same rules."""
     path = config_path(path)
     data = read_yaml(path, "training config")
+    for override in overrides:
+        data = _with_override(data, override)
     return from_mapping(TrainConfig, data, str(path), "", {"source": str(path)})
+
+
+def _with_override(data: Any, override: str) -> dict[str, Any]:
+    """``data`` (a config's mapping) with ``KEY=VALUE`` applied (:func:`load_config`)."""
+    key, sep, value = override.partition("=")
+    parts = key.strip().split(".")
+    if not sep or not all(parts):
+        raise ConfigError(f"--set {shown(override)}: write KEY=VALUE, e.g. --set distill.rounds=1")
+    out = dict(data) if isinstance(data, dict) else {}
+    node = out
+    for part in parts[:-1]:
+        child = node.get(part)
+        node[part] = child = dict(child) if isinstance(child, dict) else {}
+        node = child
+    node[parts[-1]] = parse_yaml(value, f"--set {key.strip()}")
+    return out
 
 
 def config_path(name_or_path: str | Path) -> Path:
@@ -291,9 +372,14 @@ def checked_run_dir(config: TrainConfig, out: str | None = None) -> Path:
 
 def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None = None,
           progress_bar: bool | None = None) -> Path:  # fmt: skip
-    """Train PPO as configured; returns the path of the saved ``model.zip``. ``timesteps`` and ``out``
-    override ``total_timesteps`` and ``output_dir`` (checked with the same rules)."""
+    """Train PPO or PPO-Lagrangian as configured; returns the path of the saved ``model.zip``.
+    ``timesteps`` and ``out`` override ``total_timesteps`` and ``output_dir`` (checked with the same
+    rules). ``algorithm: distill`` is :func:`cnc_gym_agents.distillation.train_distilled`
+    (``scripts/train.py`` picks by the config's algorithm)."""
     check_object(config, config.source)  # a config built in Python keeps the file's rules too
+    if config.algorithm == "distill":
+        raise ConfigError(f"{config.source}: algorithm distill is trained by cnc_gym_agents.distillation."
+                          "train_distilled (scripts/train.py picks it)")  # fmt: skip
     total = config.total_timesteps
     if timesteps is not None:
         total = parse_value(spec_of(TrainConfig, "total_timesteps"), timesteps, "", "--timesteps")
@@ -301,19 +387,13 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
     tensorboard_dir = run_dir.parent / "tensorboard"
 
     import torch
-    from stable_baselines3 import PPO
 
-    import cnc_gym  # noqa: F401  (registers the env)
-    from cnc_gym.envs.sb3 import make_sb3_vec_env
     from cnc_gym.programs import load_program
 
     torch.set_num_threads(config.torch_threads)  # small MLPs: more threads only add overhead
-    env_kwargs = config.env.make_kwargs()
-    for program in env_kwargs["programs"]:  # interpret up front: program errors are one clear line
+    for program in config.env.program_list():  # interpret up front: program errors are one clear line
         load_program(program, config.env.dialect)
-    # One batched engine steps every env (the numbers of DummyVecEnv over gym.make copies, bit for bit;
-    # DummyVecEnv itself when randomize is on: cnc_gym.envs.sb3).
-    vec_env = make_sb3_vec_env(config.n_envs, seed=config.seed, env_kwargs=env_kwargs, env_id=config.env.id)
+    vec_env = training_vec_env(config, config.seed)
     callback = None
     if config.algorithm == "ppo_lagrangian":
         from cnc_gym_agents.lagrangian import CostPenalty, DualAscent
@@ -325,17 +405,10 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
         from stable_baselines3.common.vec_env import VecNormalize
 
         vec_env = VecNormalize(vec_env, norm_obs=False, norm_reward=True, gamma=config.ppo.gamma)
-    p = config.ppo
-    model = PPO(
-        "MlpPolicy", vec_env, learning_rate=p.learning_rate, n_steps=p.n_steps, batch_size=p.batch_size,
-        n_epochs=p.n_epochs, gamma=p.gamma, gae_lambda=p.gae_lambda, clip_range=p.clip_range,
-        ent_coef=p.ent_coef, vf_coef=p.vf_coef, max_grad_norm=p.max_grad_norm, seed=config.seed,
-        policy_kwargs={"net_arch": list(p.net_arch), "log_std_init": p.log_std_init},
-        tensorboard_log=str(tensorboard_dir), device="cpu", verbose=0,
-    )  # fmt: skip
+    model = ppo_model(config, vec_env, tensorboard_dir)
     # Plain JSON in the model's zip: the env it acts in (cnc_gym/policies/model.py reads it back without
     # unpickling).
-    model.cnc_gym_env = config.env.policy_env()  # type: ignore[attr-defined]
+    model.cnc_gym_env = config.env.policy_env()
     show_bar = config.progress_bar if progress_bar is None else progress_bar
     started = time.perf_counter()
     model_path = run_dir / "model.zip"
@@ -356,3 +429,28 @@ def train(config: TrainConfig, *, timesteps: int | None = None, out: str | None 
     print(f"config:      {run_dir / 'config.yaml'}")
     print(f"tensorboard: {tensorboard_dir}")
     return model_path
+
+
+def training_vec_env(config: TrainConfig, seed: int) -> Any:
+    """The config's ``n_envs`` training envs, seeded from ``seed``: one batched engine steps every env
+    (the numbers of DummyVecEnv over gym.make copies, bit for bit; DummyVecEnv itself when randomize is
+    on: :mod:`cnc_gym.envs.sb3`)."""
+    import cnc_gym  # noqa: F401  (registers the env)
+    from cnc_gym.envs.sb3 import make_sb3_vec_env
+
+    return make_sb3_vec_env(config.n_envs, seed=seed, env_kwargs=config.env.make_kwargs(),
+                            env_id=config.env.id)  # fmt: skip
+
+
+def ppo_model(config: TrainConfig, vec_env: Any, tensorboard_dir: Path) -> Any:
+    """SB3 PPO with the config's ``ppo:`` settings on ``vec_env``, logging to ``tensorboard_dir``."""
+    from stable_baselines3 import PPO
+
+    p = config.ppo
+    return PPO(
+        "MlpPolicy", vec_env, learning_rate=p.learning_rate, n_steps=p.n_steps, batch_size=p.batch_size,
+        n_epochs=p.n_epochs, gamma=p.gamma, gae_lambda=p.gae_lambda, clip_range=p.clip_range,
+        ent_coef=p.ent_coef, vf_coef=p.vf_coef, max_grad_norm=p.max_grad_norm, seed=config.seed,
+        policy_kwargs={"net_arch": list(p.net_arch), "log_std_init": p.log_std_init},
+        tensorboard_log=str(tensorboard_dir), device="cpu", verbose=0,
+    )  # fmt: skip

@@ -37,7 +37,7 @@ from cnc_gym.machine import (
     SetupConfig,
     ToolSetup,
 )
-from cnc_gym_agents.training import EnvSettings, LagrangianSettings, PPOSettings, TrainConfig
+from cnc_gym_agents.training import DistillSettings, EnvSettings, LagrangianSettings, PPOSettings, TrainConfig
 
 REPO = Path(__file__).resolve().parent.parent
 #: Table name → (schema, key prefix shown in the table).
@@ -58,6 +58,7 @@ TABLES: dict[str, tuple[type, str]] = {
     "train.env": (EnvSettings, "env."),
     "train.ppo": (PPOSettings, "ppo."),
     "train.lagrangian": (LagrangianSettings, "lagrangian."),
+    "train.distill": (DistillSettings, "distill."),
     "env.arguments": (EnvArguments, ""),
     "env.v1.arguments": (EnvArgumentsV1, ""),
     "reward.v1": (RankingReward, ""),

@@ -374,30 +374,55 @@ def _episode_task(program: BenchProgram, policy_spec: str, seeds: Sequence[int],
 ResultHook = Callable[[int, Any], None]
 
 
-def _run_tasks(tasks: Sequence[Callable[[], Any]], config: BenchConfig, bar: Any, label: str,
-               on_result: ResultHook | None = None) -> list[Any]:  # fmt: skip
-    """Run zero-argument tasks (``functools.partial`` of module-level functions) serially, on a process
-    pool or on Ray; results in task order, each also handed to ``on_result`` as it finishes. On any
-    exception (a task's error, Ctrl-C) pending tasks are cancelled and workers ended before it goes on."""
-    if bar is not None:
-        bar.set_description(label)
+@dataclass(frozen=True)
+class Executor:
+    """Where tasks run: in this process (``workers`` 1), on a local ``spawn`` process pool (``workers``
+    > 1), or on Ray (``use_ray``; ``ray_address`` None: a local instance, else that cluster, whose
+    workers have cnc-gym installed). ``cnc-gym bench``'s ``--workers``/``--ray``; the learning code's
+    teacher labelling runs on it too."""
+
+    workers: int = 1
+    use_ray: bool = False
+    ray_address: str | None = None
+
+
+def run_tasks(tasks: Sequence[Callable[[], Any]], executor: Executor,
+              on_result: ResultHook | None = None) -> list[Any]:  # fmt: skip
+    """Run zero-argument tasks (``functools.partial`` of module-level functions, picklable) on
+    ``executor``; results in task order whatever ran them, each also handed to ``on_result`` as it
+    finishes. On any exception (a task's error, Ctrl-C) pending tasks are cancelled and workers ended
+    before it goes on."""
     results: list[Any] = [None] * len(tasks)
 
     def finished(index: int, result: Any) -> None:
         results[index] = result
         if on_result is not None:
             on_result(index, result)
-        if bar is not None:
-            bar.update()
 
-    if config.use_ray:
-        _run_ray(tasks, config, finished)
-    elif config.workers > 1 and len(tasks) > 1:
-        _run_pool(tasks, min(config.workers, len(tasks)), finished)
+    if executor.use_ray:
+        _run_ray(tasks, executor, finished)
+    elif executor.workers > 1 and len(tasks) > 1:
+        _run_pool(tasks, min(executor.workers, len(tasks)), finished)
     else:
         for index, task in enumerate(tasks):
             finished(index, task())
     return results
+
+
+def _run_tasks(tasks: Sequence[Callable[[], Any]], config: BenchConfig, bar: Any, label: str,
+               on_result: ResultHook | None = None) -> list[Any]:  # fmt: skip
+    """:func:`run_tasks` on the executor ``config`` names, with a progress bar."""
+    if bar is not None:
+        bar.set_description(label)
+
+    def finished(index: int, result: Any) -> None:
+        if on_result is not None:
+            on_result(index, result)
+        if bar is not None:
+            bar.update()
+
+    executor = Executor(workers=config.workers, use_ray=config.use_ray, ray_address=config.ray_address)
+    return run_tasks(tasks, executor, finished)
 
 
 def _ignore_sigint() -> None:
@@ -458,13 +483,13 @@ def _stop_pool(pool: Any) -> None:
         manager.join(timeout=2.0)
 
 
-def _run_ray(tasks: Sequence[Callable[[], Any]], config: BenchConfig, finished: ResultHook) -> None:
+def _run_ray(tasks: Sequence[Callable[[], Any]], executor: Executor, finished: ResultHook) -> None:
     try:
         import ray
     except ImportError:
         raise CncGymError("--ray needs the ray extra: pip install 'cnc-gym[ray]'") from None
     if not ray.is_initialized():
-        ray.init(address=config.ray_address or None, include_dashboard=False, log_to_driver=False,
+        ray.init(address=executor.ray_address or None, include_dashboard=False, log_to_driver=False,
                  ignore_reinit_error=True)  # fmt: skip
     remote = ray.remote(_call)
     refs = [remote.remote(task) for task in tasks]
