@@ -85,7 +85,7 @@ class EnvSettings:
     dialect: str = declared(DIALECT, DEFAULT_DIALECT)
     machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
     action_mode: str = declared(dataclasses.replace(ACTION_MODE_V1, doc="what the action sets (`residual`: "
-                                                    "Feedrate-v1 to -v4)"), DEFAULT_ACTION_MODE)  # fmt: skip
+                                                    "Feedrate-v1 to -v5)"), DEFAULT_ACTION_MODE)  # fmt: skip
     control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RewardWeights | None = section(  # noqa: RUF009
         RewardWeights, optional=True, doc="Feedrate-v0's reward weights (null: configs/tasks/default.yaml)")
@@ -100,12 +100,12 @@ class EnvSettings:
         """Rules across keys: ``(key, problem)``."""
         if self.id == "cnc_gym/Feedrate-v0":
             if self.action_mode == "residual":
-                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v4 (or -v1 to -v3)"
+                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v5 (or -v1 to -v4)"
             for key in ("reward_v1", "randomize"):
                 if getattr(self, key) is not None:
-                    yield key, "belongs to cnc_gym/Feedrate-v1 to -v4 (set id: cnc_gym/Feedrate-v4)"
+                    yield key, "belongs to cnc_gym/Feedrate-v1 to -v5 (set id: cnc_gym/Feedrate-v5)"
         elif self.reward is not None:
-            yield "reward", "holds Feedrate-v0's weights; those of Feedrate-v1 to -v4 are reward_v1"
+            yield "reward", "holds Feedrate-v0's weights; those of Feedrate-v1 to -v5 are reward_v1"
         for program in self.programs:
             if program.startswith(SUITE_PREFIX):
                 problem = _suite_problem(program)
@@ -292,7 +292,7 @@ class TrainConfig:
             yield "ppo.batch_size", (f"must not exceed the rollout n_steps × n_envs = {rollout}, "
                                      f"got {self.ppo.batch_size}")  # fmt: skip
         if self.algorithm == "ppo_lagrangian" and self.env.id == "cnc_gym/Feedrate-v0":
-            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v4 (or -v1 to -v3; cost per mm)"
+            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v5 (or -v1 to -v4; cost per mm)"
         if self.algorithm == "distill":
             if self.env.action_mode != "residual":
                 yield "env.action_mode", "distill trains a residual policy: set action_mode: residual"

@@ -20,7 +20,7 @@ __version__ = "0.1.0"
 _REGISTRATION = "gymnasium.envs.registration"
 #: The env ids this package registers (each with a vector entry point).
 ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2", "cnc_gym/Feedrate-v3",
-           "cnc_gym/Feedrate-v4")
+           "cnc_gym/Feedrate-v4", "cnc_gym/Feedrate-v5")
 
 
 def _register() -> None:
@@ -43,16 +43,20 @@ def _register() -> None:
                  kwargs={"contour_rule": "path"})  # fmt: skip
     # v3 and v4 are v2 with a later deployable planner (versions 2 and 3, the live one) behind the planner
     # entry and residual mode; v1 and v2 keep the frozen planner version 1, v3 the frozen version 2.
-    for env_id, planner in (("cnc_gym/Feedrate-v3", 2), ("cnc_gym/Feedrate-v4", 3)):
+    # v5 is v4 on the controller's revision 2 (cnc_gym.motion.kernel.CONTROLLER_REVISION: no overshoot
+    # where the override is lowered during an acceleration); v0 to v4 keep revision 1, the env classes'
+    # default.
+    for env_id, planner, revision in (("cnc_gym/Feedrate-v3", 2, 1), ("cnc_gym/Feedrate-v4", 3, 1),
+                                      ("cnc_gym/Feedrate-v5", 3, 2)):  # fmt: skip
         if env_id not in registry:
             register(id=env_id, entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
                      vector_entry_point="cnc_gym.envs.vector:make_vector_env_v1",
-                     kwargs={"contour_rule": "path", "planner_version": planner})  # fmt: skip
+                     kwargs={"contour_rule": "path", "planner_version": planner,
+                             "controller_revision": revision})  # fmt: skip
     import warnings
 
-    # v0 to v3 stay supported beside v4 (the benchmark runs its baselines in v0, with the path meter;
-    # the published models act in v1): no "out of date" warning.
-    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[0123] is out of date",
+    # v0 to v4 stay supported beside v5 (the published models act in v1): no "out of date" warning.
+    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[01234] is out of date",
                             category=DeprecationWarning)  # fmt: skip
 
 

@@ -8,7 +8,8 @@ module, so a baseline, a trained model and an RL agent are measured by the same 
   ``env.reset()``; ``act(observation, info) -> action`` every control step);
 - :func:`policy_env`, the env a policy runs a program in: the env id and settings the policy names (a
   trained model's: :mod:`cnc_gym.policies.model`), else ``cnc_gym/Feedrate-v0``, measured with the
-  programmed-path contour meter (:data:`CONTOUR_RULE`);
+  programmed-path contour meter (:data:`CONTOUR_RULE`) on the live controller
+  (:data:`cnc_gym.motion.kernel.CONTROLLER_REVISION`);
 - :func:`run_episode` (reset, then :func:`play`) and :func:`play` (the step loop from a given state),
   which return an :class:`Episode` record; an optional ``on_step`` hook sees every step and can stop the
   episode (``cnc-gym run``'s series, progress bar and ``--max-time``; the oracle's record of its
@@ -91,11 +92,13 @@ class Episode:
 
 
 def policy_env(policy: Any, *, programs: list[Any], env_id: str | None = None,
-               contour_rule: str | None = CONTOUR_RULE, **settings: Any) -> Any:  # fmt: skip
+               contour_rule: str | None = CONTOUR_RULE, controller_revision: int | None = 0,
+               **settings: Any) -> Any:  # fmt: skip
     """The Gymnasium env ``policy`` runs ``programs`` in: the env id and settings the policy names
     (``env_id``, ``env_kwargs`` attributes), else ``env_id`` (default :data:`DEFAULT_ENV_ID`); then
     ``settings`` (dialect, machine, units, plant …); measured with ``contour_rule`` (None: the env id's
-    own meter)."""
+    own meter), on the controller of ``controller_revision`` (0: the live one,
+    :data:`cnc_gym.motion.kernel.CONTROLLER_REVISION`; None: the env id's own)."""
     import gymnasium
 
     import cnc_gym  # noqa: F401  (registers the env ids)
@@ -104,6 +107,12 @@ def policy_env(policy: Any, *, programs: list[Any], env_id: str | None = None,
     kwargs = {**dict(getattr(policy, "env_kwargs", None) or {}), **settings, "programs": programs}
     if contour_rule is not None:
         kwargs["contour_rule"] = contour_rule
+    if controller_revision == 0:
+        from cnc_gym.envs.options import CONTROLLER_REVISION
+
+        controller_revision = CONTROLLER_REVISION
+    if controller_revision is not None:
+        kwargs["controller_revision"] = controller_revision
     return gymnasium.make(chosen, **kwargs)
 
 

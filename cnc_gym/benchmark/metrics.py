@@ -29,8 +29,10 @@ from typing import Any
 #: (``contour_rule`` "path": rapids the reference has left are part of the path) and bound version 2.
 #: 3: the deployable planner's version 2 behind ``classical`` (it holds tolerance), and the benchmark
 #: track (``track``, ``plant_parameters``) in every record. 4: the deployable planner's version 3 behind
-#: ``classical`` (faster, every split feasible).
-RECORD_VERSION = 4
+#: ``classical`` (faster, every split feasible). 5: the simulated controller's revision 2
+#: (:data:`cnc_gym.motion.kernel.CONTROLLER_REVISION`: no overshoot where the override is lowered during
+#: an acceleration) in every episode.
+RECORD_VERSION = 5
 
 #: Record keys every ``cnc-gym bench`` JSON Lines record carries (more may follow).
 RECORD_KEYS = (

@@ -231,13 +231,15 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         plant: str | None = None,
         contour_rule: str = "cuts",
         setup: Any = None,
+        controller_revision: int = 1,
     ) -> None:
         # Every argument checked once, against one schema (cnc_gym/envs/options.py).
         args = env_arguments(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                              control_period_s=control_period_s, reward=reward,
                              max_episode_steps=max_episode_steps, render_mode=render_mode,
                              lookahead_mm=lookahead_mm, lookahead_points=lookahead_points,
-                             units=units, plant=plant, contour_rule=contour_rule, setup=setup)  # fmt: skip
+                             units=units, plant=plant, contour_rule=contour_rule, setup=setup,
+                             controller_revision=controller_revision)  # fmt: skip
         self._configure(args)
         self.reward_weights = resolve_reward(args.reward)
         # Observation and reward: declared once (OBSERVATION_V0, reward_spec_v0), assembled by the
@@ -262,6 +264,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         self.dialect = args.dialect
         self.units = args.units
         self.contour_rule = args.contour_rule
+        #: The simulated controller's behaviour revision (:data:`cnc_gym.motion.kernel.CONTROLLER_REVISION`).
+        self.controller_revision = int(args.controller_revision)
         ctrl = self.machine.controller
         self.interpolation_period_s = ctrl.interpolation_period_s
         self.ticks_per_step = control_ticks(args.control_period_s, self.machine)
@@ -317,6 +321,7 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
             "lookahead_points": self.lookahead_points, "feed_mode": self.action_mode == "feed",
             # The contour window reaches back over the largest possible lag (max feed / Kv).
             "window_back_mm": self._max_lag_mm, "contour_rapids_behind": self.contour_rule == "path",
+            "controller_revision": self.controller_revision,
         }  # fmt: skip
         if plant is None and self.machine.plant.backend != "lti":
             plant = make_plant(self.machine, n_envs)

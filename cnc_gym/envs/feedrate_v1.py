@@ -100,6 +100,7 @@ class EnvArgumentsV1:
     plant: str | None = declared(spec_of(EnvArguments, "plant"))
     contour_rule: str = declared(spec_of(EnvArguments, "contour_rule"), "cuts")
     planner_version: int = declared(PLANNER_VERSION_V1, 1)
+    controller_revision: int = declared(spec_of(EnvArguments, "controller_revision"), 1)
 
 
 def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
@@ -264,6 +265,7 @@ class FeedrateEnvV1(FeedrateEnv):
         contour_rule: str = "cuts",
         setup: Any = None,
         planner_version: int = 1,
+        controller_revision: int = 1,
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                                 control_period_s=control_period_s, reward=reward, randomize=randomize,
@@ -271,7 +273,8 @@ class FeedrateEnvV1(FeedrateEnv):
                                 render_mode=render_mode, lookahead_mm=lookahead_mm,
                                 lookahead_points=lookahead_points, units=units, plant=plant,
                                 contour_rule=contour_rule, setup=setup,
-                                planner_version=planner_version)  # fmt: skip
+                                planner_version=planner_version,
+                                controller_revision=controller_revision)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
         self.reward_weights = args.reward or RankingReward()

@@ -40,6 +40,7 @@ from cnc_gym.envs.engine.episode import knob_of_override as compiled_knob_of_ove
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE, INPUT_UNITS, PLANT_BACKENDS
 from cnc_gym.motion import ActionError
+from cnc_gym.motion.kernel import CONTROLLER_REVISION
 from cnc_gym.programs import DEFAULT_DIALECT, PROGRAM_TYPES, ProgramLike
 
 if TYPE_CHECKING:
@@ -211,6 +212,12 @@ class EnvArguments:
         doc="look-ahead points in the observation (4 entries each)",
         why="the observation has 9 + 4 × this entries.")  # fmt: skip
     contour_rule: str = declared(CONTOUR_RULE, "cuts")
+    controller_revision: int = number(
+        1, 1, CONTROLLER_REVISION, integer=True,
+        doc="the simulated controller's behaviour revision: 1 as Feedrate-v0 to -v4 were published "
+            "(where the override was lowered while the reference was still accelerating below the new "
+            "target it overshot that target, up to about twice), 2 with that fixed (Feedrate-v5, "
+            "`cnc-gym run`, `bench`)")  # fmt: skip
 
 
 def env_arguments(**kwargs: Any) -> EnvArguments:

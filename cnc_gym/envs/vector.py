@@ -22,7 +22,7 @@ i with ``s + i`` (a list gives one seed per env). Infos: every key of the id's i
 
     import gymnasium as gym
     import cnc_gym
-    envs = gym.make_vec("cnc_gym/Feedrate-v4", 8, vectorization_mode="vector_entry_point",
+    envs = gym.make_vec("cnc_gym/Feedrate-v5", 8, vectorization_mode="vector_entry_point",
                         programs=["star", "circle"])
     obs, infos = envs.reset(seed=0)                       # env i is seeded with seed + i
     obs, rewards, terminated, truncated, infos = envs.step(envs.action_space.sample())

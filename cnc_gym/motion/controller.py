@@ -93,11 +93,13 @@ class Controller:
 
     def __init__(self, toolpath: Toolpath, machine: MachineConfig, in_position_check: bool = True, *,
                  limits: PathLimits | None = None,
-                 state: tuple[np.ndarray, np.ndarray] | None = None) -> None:  # fmt: skip
-        """``limits``: the tool path's :func:`build_limits` on ``machine`` if already built (they are the
-        expensive part). ``state``: the ``(float, int)`` state vectors (``kernel.N_STATE_F``,
-        ``kernel.N_STATE_I``) to run on, e.g. one env's rows of a batch, taken as they are (their owner
-        resets them); by default the controller's own, reset."""
+                 state: tuple[np.ndarray, np.ndarray] | None = None,
+                 revision: int = K.CONTROLLER_REVISION) -> None:  # fmt: skip
+        """``revision``: the controller's behaviour revision (``kernel.CONTROLLER_REVISION``, the live
+        one; env ids published before a fix keep theirs). ``limits``: the tool path's :func:`build_limits`
+        on ``machine`` if already built (they are the expensive part). ``state``: the ``(float, int)``
+        state vectors (``kernel.N_STATE_F``, ``kernel.N_STATE_I``) to run on, e.g. one env's rows of a
+        batch, taken as they are (their owner resets them); by default the controller's own, reset."""
         self.toolpath = toolpath
         #: Hold the reference at every in-position stop until :meth:`release_in_position` (see
         #: ``docs/motion.md``); False runs straight on from every stop once the reference is at rest.
@@ -108,7 +110,8 @@ class Controller:
         self.max_override = float(ctl.max_override)
         self.limits: PathLimits = build_limits(toolpath, machine) if limits is None else limits
         self._n_seg = self.limits.seg_f.shape[0]
-        self._cfg = kernel_config(machine, self.limits)
+        self.revision = controller_revision(revision)
+        self._cfg = kernel_config(machine, self.limits, self.revision)
         lim = self.limits
         #: The kernel's record of the path's tables (fixed for the controller's life), as the plain tuple
         #: kernel.advance_rows takes from Python.
@@ -355,15 +358,23 @@ class Controller:
         return (int(SegmentKind.LINE), int(SegmentKind.ARC))
 
 
-def kernel_config(machine: MachineConfig, limits: PathLimits) -> np.ndarray:
+def controller_revision(revision: int) -> int:
+    """``revision`` checked: 1 or 2 (:data:`cnc_gym.motion.kernel.CONTROLLER_REVISION`), else a ValueError."""
+    if isinstance(revision, bool) or revision not in range(1, K.CONTROLLER_REVISION + 1):
+        raise ValueError(f"unknown controller revision {revision!r} (known: 1 to {K.CONTROLLER_REVISION})")
+    return int(revision)
+
+
+def kernel_config(machine: MachineConfig, limits: PathLimits,
+                  revision: int = K.CONTROLLER_REVISION) -> np.ndarray:  # fmt: skip
     """The kernel's ``cfg`` of a tool path on a machine: [dt, window blocks, override slew per s, rest x, y,
-    z]. The window counts motion segments (a NURBS piece as one); without look-ahead every block ends at
-    rest anyway, and 2 keeps the pieces of one NURBS block flowing (the window end is never the next
-    junction)."""
+    z, controller revision]. The window counts motion segments (a NURBS piece as one); without look-ahead
+    every block ends at rest anyway, and 2 keeps the pieces of one NURBS block flowing (the window end is
+    never the next junction)."""
     ctl = machine.controller
     window = max(int(ctl.lookahead_blocks), 2)
-    return np.array([ctl.interpolation_period_s, window, ctl.override_slew_per_s, *limits.rest_position],
-                    dtype=np.float64)
+    return np.array([ctl.interpolation_period_s, window, ctl.override_slew_per_s, *limits.rest_position,
+                     controller_revision(revision)], dtype=np.float64)  # fmt: skip
 
 
 def _chunk(out: np.ndarray) -> MotionChunk:

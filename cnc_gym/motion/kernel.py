@@ -95,6 +95,16 @@ KIND_ARC = 2
 
 BISECT_ITERS = 22
 TRACK_PERIODS = 3.0  # time constant of the final approach to a speed target, in periods
+#: Revisions of the controller's behaviour (``cfg[N_CFG - 1]``), so that an env id keeps the dynamics it
+#: was published with. Revision 1: where the override was lowered while the reference was still
+#: accelerating below the new target (from rest, say), its "slow down without undershooting the target"
+#: rule asked for the largest jerk, since no jerk keeps a speed below the target at or above it; the
+#: reference overshot the new target by up to about twice (F1475 from rest, 110 % lowered to 100 % after
+#: 0.05 mm: 44.8 mm/s against 24.6). Revision 2 (the live one): below the target the rule only keeps the
+#: speed from falling below where it is, and the tracking jerk lands it on the target.
+CONTROLLER_REVISION = 2
+#: Entries of the kernel's ``cfg``: dt, window blocks, override slew per s, rest x, y, z, revision.
+N_CFG = 7
 SNAP_MM = 1e-6  # a mandatory stop closer than this (with the stop manoeuvre done) is snapped onto
 INF = 1e300
 
@@ -584,7 +594,7 @@ class PathTables(NamedTuple):
     """What holds still over a program (Ruckig's input parameters that do not change between calls): the
     tool path's limits on one machine, packed by :func:`cnc_gym.motion.limits.build_limits` (columns
     above), and the machine's ``cfg`` (:func:`cnc_gym.motion.controller.kernel_config`: [dt, window
-    blocks, override slew per s, rest x, y, z])."""
+    blocks, override slew per s, rest x, y, z, revision])."""
 
     seg_f: np.ndarray  # (n_seg, N_SEG_F) per motion segment
     seg_i: np.ndarray  # (n_seg, N_SEG_I)
@@ -592,7 +602,7 @@ class PathTables(NamedTuple):
     pt_i: np.ndarray  # (n_seg + 1, N_PT_I)
     dwell_f: np.ndarray  # (n_dwell, 5): seconds, toolpath row, x, y, z
     curve_f: np.ndarray  # NURBS pieces' samples: point and unit tangent per row
-    cfg: np.ndarray  # (6,)
+    cfg: np.ndarray  # (N_CFG,)
 
 
 class ControllerState(NamedTuple):
@@ -625,12 +635,14 @@ class Command(NamedTuple):
 
 class Clock(NamedTuple):
     """The per-call constants of a period (from ``cfg`` and the path): the period, the look-ahead window in
-    motion segments, the override's slew per period, the number of motion segments."""
+    motion segments, the override's slew per period, the number of motion segments, the controller's
+    revision (:data:`CONTROLLER_REVISION`)."""
 
     dt: float
     window: int
     slew_step: float
     n_seg: int
+    revision: int
 
 
 @njit(cache=True)
@@ -660,7 +672,7 @@ def advance_into(path: PathTables, state: ControllerState, command: Command, out
     ``len(out)``, or fewer with ``command.stop_when_done``."""
     cfg = path.cfg
     dt = cfg[0]
-    clock = Clock(dt, int(cfg[1]), cfg[2] * dt, path.seg_f.shape[0])
+    clock = Clock(dt, int(cfg[1]), cfg[2] * dt, path.seg_f.shape[0], int(cfg[N_CFG - 1]))
     st_i = state.i
     for tick in range(out.shape[0]):
         for col in range(N_OUT):
@@ -710,7 +722,7 @@ def _tick(path: PathTables, state: ControllerState, command: Command, clock: Clo
     st_f, st_i = state
     mode, commanded, rapid_ov, cmd = command.mode, command.override, command.rapid_override, command.feed_mm_s
     wait = command.wait
-    dt, window, slew_step, n_seg = clock
+    dt, window, slew_step, n_seg, revision = clock
     phase = st_i[K_PHASE]
     k = st_i[K_SEG]
     # The applied override follows the commanded one at a bounded rate.
@@ -890,7 +902,10 @@ def _tick(path: PathTables, state: ControllerState, command: Command, clock: Clo
                         floor = min(floor, pts[i, 2])
             if floor >= INF:
                 floor = min(cap_soft, cap_final)
-            j = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, floor)
+            # (Still below the floor, no jerk keeps the speed at or above it: revision 1 then took the
+            # largest jerk and overshot; revision 2 keeps the speed from falling below where it is.)
+            valley_floor = floor if revision < 2 else min(floor, v)
+            j = _smallest_valley(j_lo, j_hi, v, a, dt, jerk_b, valley_floor)
             j = max(j, min(_track_jerk(v, a, floor, jerk_b, dt), j_hi))
             # ... but never faster than the hard (geometric) limits allow.
             if not _upper_ok(j, s, v, a, dt, acc_b, jerk_b, cap_hard, pts, n_pts, hard):

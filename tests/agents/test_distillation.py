@@ -23,7 +23,7 @@ from cnc_gym_agents.student import ActorWeights, Student, quantile_huber_loss
 from cnc_gym_agents.teacher import ResidualOracle, residual_label
 
 REPO = Path(__file__).resolve().parents[2]
-V4 = "cnc_gym/Feedrate-v4"
+V5 = "cnc_gym/Feedrate-v5"  # (the id the config trains on)
 #: Two long diagonal lines and a sharp reversal between them: the deployable planner (version 3) keeps a
 #: margin on the lines that the teacher, simulating the exact plant, spends.
 ZIGZAG = "G90 G21 G17\nG00 X0 Y0 Z1\nG01 Z0 F600\nG01 X60 Y5 F4000\nG01 X0 Y10\nG00 Z5\nM30\n"
@@ -47,14 +47,14 @@ def _env(action_mode: str = "residual", randomize: dict | None = None, program: 
 
     import cnc_gym  # noqa: F401
 
-    return gymnasium.make(V4, programs=[ProgramText(program, "zigzag")], action_mode=action_mode,
+    return gymnasium.make(V5, programs=[ProgramText(program, "zigzag")], action_mode=action_mode,
                           residual_range=1.25, randomize=randomize)  # fmt: skip
 
 
 def _task(seed: int = 3, randomize: dict | None = None, actor: ActorWeights | None = None,
           compare: bool = True) -> EpisodeTask:  # fmt: skip
     kwargs = {"action_mode": "residual", "residual_range": 1.25, "randomize": randomize}
-    return EpisodeTask(V4, kwargs, "zigzag", ProgramText(ZIGZAG, "zigzag"), seed, QUICK, actor, compare)
+    return EpisodeTask(V5, kwargs, "zigzag", ProgramText(ZIGZAG, "zigzag"), seed, QUICK, actor, compare)
 
 
 def _constant_actor(value: float, width: int = 46) -> ActorWeights:
@@ -114,7 +114,7 @@ def test_the_teacher_refuses_an_env_it_cannot_speak_to():
         teacher.reset(env)
     import gymnasium
 
-    other = gymnasium.make(V4, programs=["circle"], action_mode="residual", residual_range=2.0)
+    other = gymnasium.make(V5, programs=["circle"], action_mode="residual", residual_range=2.0)
     other.reset(seed=0)
     with pytest.raises(CncGymError, match=r"planned for residual_range 1\.25, the env has 2"):
         teacher.reset(other)
@@ -260,12 +260,12 @@ def test_the_shipped_distill_config_loads():
 
 
 @pytest.mark.parametrize(("text", "message"), [
-    ("algorithm: distill\nenv: {id: cnc_gym/Feedrate-v4, programs: [circle]}\n",
+    ("algorithm: distill\nenv: {id: cnc_gym/Feedrate-v5, programs: [circle]}\n",
      "env.action_mode distill trains a residual policy"),
     ("algorithm: distill\ndistill: {quantile: 1}\n", r"distill.quantile must be in \(0, 1\)"),
     ("algorithm: distill\ndistill: {violation_weight: 0.5}\n",
      r"distill.violation_weight must be in \[1, 1000\]"),
-    ("algorithm: distill\nenv: {id: cnc_gym/Feedrate-v4, programs: [circle], action_mode: residual}\n"
+    ("algorithm: distill\nenv: {id: cnc_gym/Feedrate-v5, programs: [circle], action_mode: residual}\n"
      "distill: {finetune_timesteps: 10, finetune_critic_steps: 20}\n",
      "distill.finetune_critic_steps must not exceed finetune_timesteps"),
     ("distill: {roundz: 1}\n", "unknown key distill.roundz"),
@@ -281,7 +281,7 @@ def test_distill_config_mistakes_are_one_line(tmp_path, text, message):
 
 # --------------------------------------------------------------------------------------- end to end
 TINY = {
-    "env": {"id": V4, "programs": ["circle", "star"], "action_mode": "residual", "residual_range": 1.25,
+    "env": {"id": V5, "programs": ["circle", "star"], "action_mode": "residual", "residual_range": 1.25,
             "randomize": RANDOM},
     "algorithm": "distill",
     "distill": {"rounds": 1, "episodes_per_round": 2, "nominal_share": 0.5, "teacher_refine_iterations": 2,
@@ -386,7 +386,7 @@ def test_a_distill_run_saves_a_model_that_loads_without_unpickling(distilled):
     run, result = distilled
     assert f"model:       {run / 'model.zip'}" in result.stdout
     model = load_sb3_model(run / "model.zip")
-    assert model.env_id == V4
+    assert model.env_id == V5
     assert model.env_kwargs == {"action_mode": "residual", "control_period_s": 0.01, "residual_range": 1.25}
     from cnc_gym.policies import make_policy
 

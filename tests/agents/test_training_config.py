@@ -47,7 +47,7 @@ V1 = "env: {id: cnc_gym/Feedrate-v1, programs: [circle]"
     ("text", "message"),
     [
         ("total_timestep: 10\n", "unknown key total_timestep"),
-        ("env: {action_mode: residual}\n", r"action_mode residual needs id: cnc_gym/Feedrate-v4 \(or -v1"),
+        ("env: {action_mode: residual}\n", r"action_mode residual needs id: cnc_gym/Feedrate-v5 \(or -v1"),
         ("env: {randomize: {enabled: true}}\n", "env.randomize belongs to cnc_gym/Feedrate-v1"),
         ("env: {reward_v1: {time: 2}}\n", "env.reward_v1 belongs to cnc_gym/Feedrate-v1"),
         (V1 + ", reward: {time: 2}}\n", "env.reward holds Feedrate-v0's weights"),
@@ -58,7 +58,7 @@ V1 = "env: {id: cnc_gym/Feedrate-v1, programs: [circle]"
         ("env: {programs: ['suite:cnc-bench-v1/test']}\n", "the test split is for the reported result"),
         ("env: {programs: ['suite:nope/train']}\n", "unknown suite 'nope'"),
         ("env: {programs: ['suite:cnc-bench-v1']}\n", "suite:<name>/<split>"),
-        ("algorithm: ppo_lagrangian\n", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v4"),
+        ("algorithm: ppo_lagrangian\n", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v5"),
         ("algorithm: sac\n", "algorithm must be one of ppo, ppo_lagrangian"),
         ("lagrangian: {lambda_lr: -1}\n", r"lagrangian.lambda_lr must be in \[0, 1e6\]"),
         ("ppo: {learning_rat: 0.1}\n", "unknown key ppo.learning_rat"),

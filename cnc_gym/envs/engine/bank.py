@@ -42,10 +42,10 @@ from cnc_gym.toolpath import Toolpath
 FLOAT_TABLES = ("seg_f", "pt_f", "dwell_f", "curve_f", "geometry", "nurbs_f", "scalars", "schedule")
 TABLE_SCHEDULE = 7  # the planner's schedule: (n, 2) rows of path position (mm) and override
 INT_TABLES = ("seg_i", "pt_i", "seg_class", "axes", "first_back", "nurbs_i", "lines", "counts")
-# Per-program float scalars: the controller's cfg (6), start point (3), 1 / length, length,
-# control period / T, the finish bonus.
+# Per-program float scalars: the controller's cfg (kernel.N_CFG = 7), start point (3), 1 / length,
+# length, control period / T, the finish bonus.
 SCALAR_CFG, SCALAR_START, SCALAR_INV_LENGTH, SCALAR_LENGTH, SCALAR_TIME_FRACTION, SCALAR_FINISH_BONUS = (
-    0, 6, 9, 10, 11, 12)  # fmt: skip
+    0, 7, 10, 11, 12, 13)  # fmt: skip
 # Per-program int counts: motion segments, tool path rows, step budget.
 COUNT_MOTION, COUNT_ROWS, COUNT_MAX_STEPS = 0, 1, 2
 # Directory entries per program: (offset, rows) of each table.
@@ -69,7 +69,8 @@ class PackedProgram:
     @classmethod
     def build(cls, name: str, toolpath: Toolpath, machine: MachineConfig, window_back_mm: float,
               time_fraction: float, max_episode_steps: int, rapids_behind: bool = True,
-              finish_bonus: float = 0.0, planner: Planner | None = None) -> PackedProgram:  # fmt: skip
+              finish_bonus: float = 0.0, planner: Planner | None = None,
+              controller_revision: int = K.CONTROLLER_REVISION) -> PackedProgram:  # fmt: skip
         limits = build_limits(toolpath, machine)
         # The window reaches back over the largest possible lag (max feed / Kv) so that on short-segment
         # programs the actual point is never measured against the wrong segment.
@@ -77,7 +78,7 @@ class PackedProgram:
         start = toolpath.start[0].astype(np.float64) if len(toolpath) else np.zeros(3)
         length = max(toolpath.total_length, 1e-9)
         constants = [1.0 / length, length, time_fraction, finish_bonus]
-        scalars = np.concatenate((kernel_config(machine, limits), start, constants))
+        scalars = np.concatenate((kernel_config(machine, limits, controller_revision), start, constants))
         t = meter.tables
         n_rows = len(toolpath)
         schedule = np.zeros((0, 2)) if planner is None else planner.schedule_table(toolpath, machine, limits)

@@ -104,6 +104,8 @@ class FeedrateBatch:
         self.period_s = float(machine.controller.interpolation_period_s)
         self.window_back_mm = float(config["window_back_mm"])
         self.rapids_behind = bool(config.get("contour_rapids_behind", True))
+        #: The controller's behaviour revision (:data:`cnc_gym.motion.kernel.CONTROLLER_REVISION`).
+        self.controller_revision = int(config.get("controller_revision", K.CONTROLLER_REVISION))
         window = max(int(machine.controller.lookahead_blocks), 2)
         points = int(config["lookahead_points"])
         quantities = machine_quantities(machine)
@@ -193,7 +195,7 @@ class FeedrateBatch:
         reward spec has a ``finish_key``; the batch's planner plans it); returns its index."""
         program = PackedProgram.build(name, toolpath, self.machine, self.window_back_mm, time_fraction,
                                       max_episode_steps, self.rapids_behind, finish_bonus,
-                                      self.planner)  # fmt: skip
+                                      self.planner, self.controller_revision)  # fmt: skip
         index = self.bank.add(program)
         self._names = np.array([p.name for p in self.bank.programs] + [None], dtype=object)[:-1]
         return index
@@ -215,7 +217,8 @@ class FeedrateBatch:
         if p not in controllers:
             program = self.bank.programs[p]
             controllers[p] = Controller(program.toolpath, self.machine, limits=program.limits,
-                                        state=self._controller_state(env))  # fmt: skip
+                                        state=self._controller_state(env),
+                                        revision=self.controller_revision)  # fmt: skip
         return controllers[p]
 
     # ------------------------------------------------------------------------------ stepping

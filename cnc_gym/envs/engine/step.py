@@ -254,7 +254,7 @@ def _reference(e, bank_f, bank_i, sf, si, knob, seg_f, pt_f, dwell_f, curve_f, s
     st_f = sf[e, F_CTRL : F_CTRL + K.N_STATE_F]
     st_i = si[e, I_CTRL : I_CTRL + K.N_STATE_I]
     ticks = reference.shape[0]
-    cfg = scalars[SCALAR_CFG : SCALAR_CFG + 6]
+    cfg = scalars[SCALAR_CFG : SCALAR_CFG + K.N_CFG]
     if st_i[K.K_PHASE] != K.PHASE_DONE:
         # One call with a typed mode, not one per literal mode: numba would compile the controller twice.
         if bank_i[CI_FEED_MODE]:  # the knob commands the feed (replacing F), 0 … max feed

@@ -1,7 +1,7 @@
 """The planner as a service: a schedule per (tool path, machine), planned once by the version asked for.
 
 Version 3 (:mod:`.schedule` with :data:`~.schedule.SETTINGS_V3`) is the live planner: the ``classical``
-baseline, the benchmark and ``cnc_gym/Feedrate-v4`` use it. Version 2 (the same module with
+baseline, the benchmark and ``cnc_gym/Feedrate-v4`` and ``-v5`` use it. Version 2 (the same module with
 :data:`~.schedule.SETTINGS_V2`) is kept bit for bit for ``cnc_gym/Feedrate-v3``, version 1 (:mod:`.v1`) for
 ``cnc_gym/Feedrate-v1`` and ``-v2``: their planner observation entry and ``residual`` action mode publish
 them.
