@@ -6,8 +6,8 @@ tables, the per-program constants, the planner's schedule) and all programs of a
 after the config and the spec rows, into one float and one int array with a directory of offsets
 (:class:`ProgramBank`), so the compiled step takes a dozen arrays whatever the number of programs, and each
 env runs the program its state row names. :func:`program_tables` gives views of a program's tables,
-:func:`work_rows` views of an env's scratch row; :func:`borrowed` and :func:`matrix` are the view helpers
-they and the step are built on (no reference counting, no layout checks).
+:func:`work_rows` views of an env's scratch row; :func:`borrowed`, :func:`view_at` and :func:`matrix` are the
+view helpers they and the step are built on (no reference counting, no layout checks).
 """
 
 from __future__ import annotations
@@ -173,6 +173,40 @@ def borrowed(typingctx, array):
         return view._getvalue()
 
     return array(array), codegen
+
+
+@intrinsic
+def view_at(typingctx, address, shape, dtype):
+    """The C-ordered array of ``dtype`` (a numpy scalar type, e.g. ``np.float64``) and ``shape`` (a tuple of
+    ints) whose data starts at ``address`` (an int: a numpy array's ``ctypes.data``), counting no references,
+    as :func:`borrowed` makes. What a compiled call needs to step on arrays it is not passed as arrays (numba
+    unboxes each array argument on every call: see :func:`~cnc_gym.envs.engine.step.describe`). Only for
+    memory the caller keeps alive, of that type and shape, for the whole call."""
+    if not (isinstance(address, types.Integer) and isinstance(shape, types.UniTuple)
+            and isinstance(shape.dtype, types.Integer) and isinstance(dtype, types.NumberClass)):  # fmt: skip
+        return None
+    n_dims = shape.count
+    view_type = types.Array(dtype.dtype, n_dims, "C")
+
+    def codegen(context, builder, signature, args):
+        address_value, shape_value, _ = args
+        view = context.make_array(view_type)(context, builder)
+        intp = context.get_value_type(types.intp)
+        data_type = context.get_data_type(dtype.dtype)
+        itemsize = context.get_constant(types.intp, context.get_abi_sizeof(data_type))
+        dims = [context.cast(builder, builder.extract_value(shape_value, i), shape.dtype, types.intp)
+                for i in range(n_dims)]  # fmt: skip
+        strides = [itemsize]
+        for dim in reversed(dims[1:]):  # C order: the last axis is contiguous
+            strides.insert(0, builder.mul(strides[0], dim))
+        data = builder.inttoptr(context.cast(builder, address_value, signature.args[0], types.intp),
+                                data_type.as_pointer())  # fmt: skip
+        populate_array(view, data=data, shape=cgutils.pack_array(builder, dims, ty=intp),
+                       strides=cgutils.pack_array(builder, strides, ty=intp), itemsize=itemsize, meminfo=None,
+                       parent=None)  # fmt: skip
+        return view._getvalue()
+
+    return view_type(address, shape, dtype), codegen
 
 
 @intrinsic

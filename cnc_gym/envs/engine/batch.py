@@ -59,6 +59,7 @@ from cnc_gym.envs.engine.layout import (
 from cnc_gym.envs.engine.specs import ObservationSpec, RewardSpec
 from cnc_gym.envs.engine.step import (
     clip_actions,
+    describe,
     finish_modular,
     gather_outputs,
     no_motion_modular,
@@ -158,17 +159,22 @@ class FeedrateBatch:
         self._controllers: list[dict[int, Controller]] = [{} for _ in range(self.n_envs)]
         self._derived()
 
-    _DERIVED = ("_run", "_entry", "_args", "_args_bank", "_out_rows", "_observation_rows")
+    _DERIVED = ("_run", "_entry", "_args", "_descriptor", "_call_args", "_args_bank", "_out_rows",
+                "_observation_rows")
 
     def _derived(self) -> None:
         """What refers into the state arrays or is built from them: the compiled function and its
         arguments, views of the state rows. Rebuilt after a copy, never copied: a copy of a view is no view
         (``copy.deepcopy`` of an env, as the oracle planner makes, must step like the env)."""
         self._run = run_parallel if self.parallel else run_serial
-        #: ``self._run``'s machine code for :attr:`_args`, called without numba's dispatcher (see
+        #: ``self._run``'s machine code for :attr:`_call_args`, called without numba's dispatcher (see
         #: :func:`compiled_entry`); None until the first call with these arrays.
         self._entry: Any = None
-        self._args: tuple = ()  # the compiled call's arrays, rebuilt when the bank or the plant changes
+        self._args: tuple = ()  # the compiled step's arrays, rebuilt when the bank or the plant changes
+        self._descriptor = np.zeros(0, dtype=np.int64)  # their addresses and shapes (step.describe)
+        #: What ``self._run`` is called with before ``stepping``: the descriptor's address (run_serial) or
+        #: the arrays (run_parallel).
+        self._call_args: tuple = ()
         self._args_bank: np.ndarray | None = None
         self._out_rows = [self.state_f[e, F_OUT:] for e in range(self.n_envs)]  # views, read every step
         self._observation_rows = list(self.observations)  # (views too)
@@ -255,7 +261,7 @@ class FeedrateBatch:
         entry = self._entry
         if (entry is not None and self.plant.model_version == self._plant_version
                 and self._args_bank is self.bank.floats):  # (the arrays as they were: see _arguments)
-            entry(*self._args, True)
+            entry(*self._call_args, True)
         else:
             self.step()
         out = self._out_rows[0].tolist()
@@ -268,15 +274,16 @@ class FeedrateBatch:
         entry = self._entry
         if (entry is not None and self.plant.model_version == self._plant_version
                 and self._args_bank is self.bank.floats):  # (the arrays as they were: see _arguments)
-            entry(*self._args, stepping)
+            entry(*self._call_args, stepping)
             return
-        args = self._arguments()
+        self._arguments()
+        args = self._call_args
         self._run(*args, stepping)  # type: ignore[call-arg]  # (compiles or loads the code for these types)
         self._entry = compiled_entry(self._run, (*args, stepping))
 
     def _arguments(self) -> tuple:
         """The compiled step's arrays (rebuilt when the plant's gains changed or a program joined the
-        bank)."""
+        bank), and with them their descriptor and :attr:`_call_args`."""
         plant = self.plant
         if plant.model_version != self._plant_version or self._args_bank is not self.bank.floats:
             # gains changed (ServoPlant.set_kv_scale), or a program joined the bank
@@ -287,6 +294,9 @@ class FeedrateBatch:
             self._args = (self.bank.floats, self.bank.ints, self.state_f, self.state_i, plant._state,
                           plant._history, plant._velocity, plant._lifted4_matrix(self.ticks), self.actions,
                           self.observations, self.work_f, self.work_i)  # fmt: skip
+            self._descriptor = describe(self._args)  # (the arrays' addresses: _args keeps them alive)
+            address = int(self._descriptor.ctypes.data)
+            self._call_args = self._args if self.parallel else (address,)
         return self._args
 
     def run_rule(self, rule: KnobRule, max_steps: int, *, stop_time_s: float = math.inf,
@@ -305,9 +315,11 @@ class FeedrateBatch:
             rows = np.empty((max_steps, len(columns)))
         if rows.shape[0] < max_steps or rows.shape[1] != len(columns):
             raise ValueError(f"rows must have ({max_steps}, {len(columns)}) entries, got {rows.shape}")
-        steps, total, why = run_steps(*self._arguments(), rule.constant, rule.schedule, rule.lead_s,
-                                      rule.reach_mm, rule.max_override, int(max_steps), float(stop_time_s),
-                                      columns, rows, float(total))  # fmt: skip
+        self._arguments()
+        address = int(self._descriptor.ctypes.data)
+        steps, total, why = run_steps(address, rule.constant, rule.schedule, rule.lead_s, rule.reach_mm,
+                                      rule.max_override, int(max_steps), float(stop_time_s), columns, rows,
+                                      float(total))  # fmt: skip
         return int(steps), float(total), int(why)
 
     def _modular(self, reset_only: np.ndarray | None) -> None:
@@ -570,9 +582,9 @@ class StepInfo(dict):
 
 def compiled_entry(dispatcher: Any, args: tuple) -> Any:
     """The machine code that numba's ``dispatcher`` runs for ``args``, as a plain callable: it skips the
-    dispatcher's work on every call (typing the arguments, picking the compiled version), about a third of
-    the call's cost for the single env's thirteen arguments. Only for arguments of exactly these types:
-    the batch passes the same arrays every step and asks again when it builds new ones. The dispatcher
+    dispatcher's work on every call (typing the arguments, picking the compiled version). Only for
+    arguments of exactly these types: the batch passes the same descriptor address (or, to the threaded
+    step, the same arrays) every step and asks again when it builds new ones. The dispatcher
     itself where it has no such version (e.g. the code was compiled for other types, or numba's JIT is
     off)."""
     import numba

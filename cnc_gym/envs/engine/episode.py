@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from cnc_gym.envs.engine.layout import F_OUT, OUTPUT_INFO_KEYS
-from cnc_gym.envs.engine.step import run_serial
+from cnc_gym.envs.engine.step import run_serial, step_arrays
 from cnc_gym.motion.planner.rule import planner_override
 
 #: Why :func:`run_steps` returned: it ran its steps (the episode goes on), the episode ended (terminated or
@@ -77,16 +77,17 @@ def knob_of_override(override: float, max_override: float) -> float:
 
 
 @njit(cache=True, nogil=True)
-def run_steps(bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions, obs, work_f, work_i,
-              constant, schedule, lead_s, reach_mm, max_override, max_steps, stop_time_s, columns, rows,
-              total):  # fmt: skip
-    """Step env 0 of a batch (its other envs are stepped too: a batch of one is what this is for) under a
-    knob rule (:class:`KnobRule`'s fields) up to ``max_steps`` steps: ``(steps, total, why)``, ``total``
-    the return so far (``total`` plus each step's reward, in order), ``why`` one of :data:`RAN`,
+def run_steps(address, constant, schedule, lead_s, reach_mm, max_override, max_steps, stop_time_s, columns,
+              rows, total):  # fmt: skip
+    """Step env 0 of a batch (its other envs are stepped too: a batch of one is what this is for), whose
+    arrays are described at ``address`` (:func:`~cnc_gym.envs.engine.step.describe`), under a knob rule
+    (:class:`KnobRule`'s fields) up to ``max_steps`` steps: ``(steps, total, why)``, ``total`` the return so
+    far (``total`` plus each step's reward, in order), ``why`` one of :data:`RAN`,
     :data:`ENDED`, :data:`STOPPED`, :data:`NOT_FINITE`. After each step, row ``k`` of ``rows`` gets the
     info values of output columns ``columns`` (indices into ``OUTPUT_INFO_KEYS``). ``stop_time_s``: stop
     after the step whose cycle time reaches it, less 1 ns, unless that step terminated the episode (inf:
     never), as ``cnc-gym run --max-time`` does."""
+    _, _, sf, _, _, _, _, _, actions, _, _, _ = step_arrays(address)
     out = sf[0, F_OUT:]
     follow = schedule.shape[0] > 0
     for k in range(max_steps):
@@ -98,8 +99,7 @@ def run_steps(bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions
         else:
             knob = constant
         actions[0] = min(max(knob, -1.0), 1.0)
-        run_serial(bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions, obs, work_f, work_i,
-                   True)  # fmt: skip
+        run_serial(address, True)
         total += out[0]
         for j in range(columns.shape[0]):
             rows[k, j] = out[3 + columns[j]]

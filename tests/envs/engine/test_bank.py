@@ -90,3 +90,37 @@ def test_borrowed_and_matrix_views_are_the_arrays_own_memory():
     total = fill(flat, 7, 3, 4)
     np.testing.assert_array_equal(flat, expected)
     assert total == expected[7:19].sum()
+
+
+def test_view_at_is_the_arrays_own_memory_in_any_shape():
+    # The view the single env's step reads its arrays through (from their addresses): the same memory,
+    # in the array's C order, for each dtype and number of dimensions the step uses.
+    from numba import njit
+
+    from cnc_gym.envs.engine.bank import view_at
+
+    @njit
+    def bump_2d(address, rows, cols):
+        view = view_at(address, (rows, cols), np.float32)
+        for i in range(rows):
+            for j in range(cols):
+                view[i, j] += 10 * i + j
+        return view[rows - 1, cols - 1]
+
+    @njit
+    def bump_4d(address, a, b, c, d):
+        view = view_at(address, (a, b, c, d), np.int64)
+        view[a - 1, b - 1, c - 1, d - 1] += 1000
+        view[0, 0, 1, 0] += 7
+        return view.sum()
+
+    table = np.arange(12, dtype=np.float32).reshape(3, 4)
+    expected = table + (10 * np.arange(3)[:, None] + np.arange(4)).astype(np.float32)
+    assert bump_2d(table.ctypes.data, 3, 4) == expected[2, 3]
+    np.testing.assert_array_equal(table, expected)
+    block = np.arange(2 * 1 * 3 * 5, dtype=np.int64).reshape(2, 1, 3, 5)
+    expected_block = block.copy()
+    expected_block[1, 0, 2, 4] += 1000
+    expected_block[0, 0, 1, 0] += 7
+    assert bump_4d(block.ctypes.data, *block.shape) == expected_block.sum()
+    np.testing.assert_array_equal(block, expected_block)

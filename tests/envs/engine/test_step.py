@@ -126,3 +126,41 @@ def test_v1_random_programs_same_as_the_reference_path(seed, n_blocks, mode, rul
               "max_episode_steps": budget}  # fmt: skip
     assert_same_run_v1(FeedrateEnvV1(**kwargs), ReferenceEnvV1(**kwargs), knob_schedule(rng, 300),
                        seed=seed % 1000)  # fmt: skip
+
+
+def test_the_step_descriptor_reads_back_its_arrays_and_rejects_others():
+    # run_serial takes one address in place of the step's twelve arrays: the descriptor gives back each
+    # array's own memory and shape in compiled code; an array of another type, or not C-ordered, is refused
+    # (the step would read it wrongly).
+    from numba import njit
+
+    from cnc_gym.envs.engine.step import STEP_ARRAYS, describe, step_arrays
+
+    rng = np.random.default_rng(7)
+    shapes = [(5,), (6,), (2, 3), (2, 4), (3, 3, 2), (3, 2, 2), (3, 2), (3, 1, 4, 6), (2,), (2, 5), (2, 7),
+              (2, 3)]  # fmt: skip
+    arrays = tuple((rng.normal(size=shape) * 100).astype(dtype)
+                   for shape, (_, dtype, _) in zip(shapes, STEP_ARRAYS, strict=True))  # fmt: skip
+
+    @njit
+    def checksums(address):
+        views = step_arrays(address)
+        out = np.empty(len(views))  # (a tuple of arrays of several types: one by one)
+        out[0], out[1], out[2], out[3] = views[0].sum(), views[1].sum(), views[2].sum(), views[3].sum()
+        out[4], out[5], out[6], out[7] = views[4].sum(), views[5].sum(), views[6].sum(), views[7].sum()
+        out[8], out[9], out[10], out[11] = views[8].sum(), views[9].sum(), views[10].sum(), views[11].sum()
+        views[9][1, 4] = 123.0  # writes reach the array
+        return out, views[7].shape, views[2][1, 2]
+
+    expected = [a.sum(dtype=np.float64) for a in arrays]
+    descriptor = describe(arrays)
+    sums, lifted_shape, corner = checksums(descriptor.ctypes.data)
+    np.testing.assert_allclose(sums, expected, rtol=1e-5)
+    assert lifted_shape == shapes[7]
+    assert corner == arrays[2][1, 2]
+    assert arrays[9][1, 4] == 123.0
+    for k, bad in ((2, arrays[2].T.copy().T), (9, arrays[9].astype(np.float64)), (0, arrays[0][:, None])):
+        with pytest.raises(ValueError, match="C-ordered"):
+            describe((*arrays[:k], bad, *arrays[k + 1 :]))
+    with pytest.raises(ValueError, match="takes 12 arrays"):
+        describe(arrays[:-1])
