@@ -466,106 +466,10 @@ class StepInfo(dict):
                 dict.__setitem__(self, key, int(dict.__getitem__(self, key)))
             dict.__setitem__(self, "program", names[program])
 
-    def __getitem__(self, key: Any) -> Any:
-        self._fill()
-        return dict.__getitem__(self, key)
-
-    def __setitem__(self, key: Any, value: Any) -> None:
-        self._fill()
-        dict.__setitem__(self, key, value)
-
-    def __delitem__(self, key: Any) -> None:
-        self._fill()
-        dict.__delitem__(self, key)
-
-    def __contains__(self, key: object) -> bool:
-        self._fill()
-        return dict.__contains__(self, key)
-
-    def __iter__(self) -> Any:
-        self._fill()
-        return dict.__iter__(self)
-
-    def __reversed__(self) -> Any:
-        self._fill()
-        return dict.__reversed__(self)
-
-    def __len__(self) -> int:
-        self._fill()
-        return dict.__len__(self)
-
-    def __repr__(self) -> str:
-        self._fill()
-        return dict.__repr__(self)
-
-    def __eq__(self, other: object) -> bool:
-        self._fill()
-        if isinstance(other, StepInfo):
-            other._fill()
-        return dict.__eq__(self, other)
-
-    def __ne__(self, other: object) -> bool:
-        return not self == other
-
-    __hash__ = None  # (as a dict's)
-
-    def __or__(self, other: Any) -> Any:
-        self._fill()
-        if isinstance(other, StepInfo):
-            other._fill()
-        return dict.__or__(self, other)
-
-    def __ror__(self, other: Any) -> Any:
-        self._fill()
-        return dict.__ror__(self, other)
-
-    def __ior__(self, other: Any) -> Any:
-        self._fill()
-        if isinstance(other, StepInfo):
-            other._fill()
-        return dict.__ior__(self, other)
-
     def __reduce_ex__(self, protocol: Any) -> Any:
         return dict, (self.copy(),)
 
-    def get(self, key: Any, default: Any = None) -> Any:
-        self._fill()
-        return dict.get(self, key, default)
-
-    def keys(self) -> Any:
-        self._fill()
-        return dict.keys(self)
-
-    def values(self) -> Any:
-        self._fill()
-        return dict.values(self)
-
-    def items(self) -> Any:
-        self._fill()
-        return dict.items(self)
-
-    def copy(self) -> dict:
-        self._fill()
-        return dict.copy(self)
-
-    def pop(self, *args: Any) -> Any:
-        self._fill()
-        return dict.pop(self, *args)
-
-    def popitem(self) -> Any:
-        self._fill()
-        return dict.popitem(self)
-
-    def setdefault(self, key: Any, default: Any = None) -> Any:
-        self._fill()
-        return dict.setdefault(self, key, default)
-
-    def update(self, *args: Any, **kwargs: Any) -> None:
-        self._fill()
-        for other in args:
-            if isinstance(other, StepInfo):
-                other._fill()
-        dict.update(self, *args, **kwargs)
+    __hash__ = None  # (as a dict's)
 
     def clear(self) -> None:
         self._outputs = None
@@ -575,9 +479,32 @@ class StepInfo(dict):
     def fromkeys(cls, iterable: Any, value: Any = None) -> dict:
         return dict.fromkeys(iterable, value)
 
-    def __sizeof__(self) -> int:
+
+
+#: The dict methods a :class:`StepInfo` fills itself (and a StepInfo among the arguments) before: every one
+#: that reads, compares, copies or changes the entries.
+_FILLING = ("__getitem__", "__setitem__", "__delitem__", "__contains__", "__iter__", "__reversed__",
+            "__len__", "__repr__", "__eq__", "__ne__", "__or__", "__ror__", "__ior__", "__sizeof__", "get",
+            "keys", "values", "items", "copy", "pop", "popitem", "setdefault", "update")  # fmt: skip
+
+
+def _filling(name: str) -> Any:
+    """``dict``'s method ``name``, called once the info and any StepInfo argument are filled."""
+    method = getattr(dict, name)
+
+    def call(self: StepInfo, *args: Any, **kwargs: Any) -> Any:
         self._fill()
-        return dict.__sizeof__(self)
+        for other in args:
+            if isinstance(other, StepInfo):
+                other._fill()
+        return method(self, *args, **kwargs)
+
+    call.__name__, call.__qualname__, call.__doc__ = name, f"StepInfo.{name}", method.__doc__
+    return call
+
+
+for _name in _FILLING:
+    setattr(StepInfo, _name, _filling(_name))
 
 
 def compiled_entry(dispatcher: Any, args: tuple) -> Any:
