@@ -42,10 +42,12 @@ from cnc_gym.toolpath import Toolpath
 FLOAT_TABLES = ("seg_f", "pt_f", "dwell_f", "curve_f", "geometry", "nurbs_f", "scalars", "schedule")
 TABLE_SCHEDULE = 7  # the planner's schedule: (n, 2) rows of path position (mm) and override
 INT_TABLES = ("seg_i", "pt_i", "seg_class", "axes", "first_back", "nurbs_i", "lines", "counts")
-# Per-program float scalars: the controller's cfg (kernel.N_CFG = 7), start point (3), 1 / length,
+# Per-program float scalars: the controller's cfg (kernel.N_CFG entries), start point (3), 1 / length,
 # length, control period / T, the finish bonus.
-SCALAR_CFG, SCALAR_START, SCALAR_INV_LENGTH, SCALAR_LENGTH, SCALAR_TIME_FRACTION, SCALAR_FINISH_BONUS = (
-    0, 7, 10, 11, 12, 13)  # fmt: skip
+SCALAR_CFG = 0
+SCALAR_START = SCALAR_CFG + K.N_CFG
+SCALAR_INV_LENGTH, SCALAR_LENGTH, SCALAR_TIME_FRACTION, SCALAR_FINISH_BONUS = range(SCALAR_START + 3,
+                                                                                   SCALAR_START + 7)
 # Per-program int counts: motion segments, tool path rows, step budget.
 COUNT_MOTION, COUNT_ROWS, COUNT_MAX_STEPS = 0, 1, 2
 # Directory entries per program: (offset, rows) of each table.
