@@ -58,6 +58,7 @@ from cnc_gym.envs.options import (
 from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.policies.shield import CornerShield
 from cnc_gym.programs import DEFAULT_DIALECT
 
 #: The env versions a training config may name: every id cnc_gym registers (v4: the live planner).
@@ -223,6 +224,18 @@ class DistillSettings:
                                         why="at most the fine-tune's steps.")  # fmt: skip
     compare: bool = flag(True, doc="run the planner and the teacher on every labelled episode too (the "
                          "round statistics in TensorBoard)")  # fmt: skip
+    shield_bins: int = number(0, 0, 64, integer=True, doc="the corner shield's reach, in bins of the "
+                              "observation's preview (0: no shield): the student acts at the planner's "
+                              "override or below while a junction turning at least shield_turn lies "
+                              "there, in its DAgger rollouts and in the saved model",
+                              why="the preview has at most 64 bins.")  # fmt: skip
+    shield_turn: float = number(0.25, 0, 1, low_open=True, doc="the smallest turn (θ/π) the corner "
+                                "shield falls back to the planner for",
+                                why="θ/π of a turn is in (0, 1].")  # fmt: skip
+
+    def shield(self) -> CornerShield | None:
+        """The corner shield these settings ask for (None with ``shield_bins`` 0)."""
+        return CornerShield(self.shield_bins, self.shield_turn) if self.shield_bins > 0 else None
 
 
 @dataclass
