@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from cnc_gym.benchmark.runner import Executor, run_tasks
-from cnc_gym.policies.shield import BoundShield, CornerShield
+from cnc_gym.policies.shield import BoundShield, PlannerShield
 from cnc_gym_agents.student import ActorWeights
 from cnc_gym_agents.teacher import ResidualOracle
 
@@ -55,7 +55,7 @@ class EpisodeTask:
 
     ``env_kwargs`` are the env's keyword arguments without ``programs`` (its randomisation included);
     ``program`` the interpreted program (a :class:`cnc_gym.programs.Program`, or anything the env takes);
-    ``actor`` drives the episode (None: the teacher does), through ``shield`` if given (the corner shield
+    ``actor`` drives the episode (None: the teacher does), through ``shield`` if given (the shield
     the deployed student acts through); ``compare`` also runs the planner and the teacher on the same
     episode.
     """
@@ -68,7 +68,7 @@ class EpisodeTask:
     teacher: TeacherSettings = field(default_factory=TeacherSettings)
     actor: ActorWeights | None = None
     compare: bool = True
-    shield: CornerShield | None = None
+    shield: PlannerShield | None = None
 
 
 @dataclass(frozen=True)

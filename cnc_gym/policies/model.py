@@ -20,7 +20,7 @@ acts needs none of them, except one plain JSON entry of ``data`` that ``scripts/
 mean (``action_mode``, ``control_period_s``, ``residual_range``, ``lookahead_mm``, ``lookahead_points``),
 checked against a fixed list of ids and keys, so ``cnc-gym bench`` and ``cnc-gym run`` run the model in the
 env it was trained for (models without it run in ``cnc_gym/Feedrate-v0``); and ``cnc_gym_shield``, the
-corner shield a residual policy acts through (:mod:`cnc_gym.policies.shield`: two plain numbers), which
+shield a residual policy acts through (:mod:`cnc_gym.policies.shield`: two plain numbers), which
 :class:`ModelPolicy` applies.
 
 A model outside this list (a custom policy class, image or dict observations)
@@ -47,7 +47,7 @@ import numpy as np
 from cnc_gym import ENV_IDS
 from cnc_gym.config import escaped
 from cnc_gym.errors import CncGymError
-from cnc_gym.policies.shield import BoundShield, CornerShield
+from cnc_gym.policies.shield import BoundShield, PlannerShield
 
 #: Largest ``data`` entry read (SB3 writes a few KB).
 MAX_DATA_BYTES = 4 << 20
@@ -84,8 +84,8 @@ class LoadedModel:
     sb3_version: str
     env_id: str = "cnc_gym/Feedrate-v0"
     env_kwargs: dict[str, Any] = dataclasses.field(default_factory=dict)
-    #: The corner shield the model acts through (``cnc_gym_shield``), or None.
-    shield: CornerShield | None = None
+    #: The shield the model acts through (``cnc_gym_shield``), or None.
+    shield: PlannerShield | None = None
 
     def predict(self, observation: np.ndarray, deterministic: bool = True) -> np.ndarray:
         action, _ = self.policy.predict(observation, deterministic=deterministic)
@@ -142,15 +142,15 @@ def load_sb3_model(path: str | Path) -> LoadedModel:
                        env_kwargs=env_kwargs, shield=shield)  # fmt: skip
 
 
-def _shield(data: dict[str, Any]) -> CornerShield | None:
-    """The corner shield ``data["cnc_gym_shield"]`` records (plain JSON, checked), or None."""
+def _shield(data: dict[str, Any]) -> PlannerShield | None:
+    """The shield ``data["cnc_gym_shield"]`` records (plain JSON, checked), or None."""
     recorded = data.get("cnc_gym_shield")
     if recorded is None:
         return None
     try:
-        return CornerShield.from_record(recorded)
+        return PlannerShield.from_record(recorded)
     except CncGymError as exc:
-        raise _Refused(str(exc).removeprefix("corner shield: ")) from None
+        raise _Refused(str(exc).removeprefix("shield: ")) from None
 
 
 class _Refused(Exception):
@@ -396,7 +396,7 @@ def _check_size(net_arch: Any, n_inputs: int, n_weights: int) -> None:
 
 
 class ModelPolicy:
-    """A trained SB3 model (deterministic actions) driving the env, through the corner shield its zip
+    """A trained SB3 model (deterministic actions) driving the env, through the shield its zip
     records, if any (:mod:`cnc_gym.policies.shield`)."""
 
     def __init__(self, path: str | Path, deterministic: bool = True) -> None:

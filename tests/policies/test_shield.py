@@ -1,4 +1,4 @@
-"""The corner shield (cnc_gym/policies/shield.py): where it engages, what it holds, what it refuses."""
+"""The shield (cnc_gym/policies/shield.py): where it engages, what it holds, what it refuses."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cnc_gym.errors import CncGymError
-from cnc_gym.policies.shield import CornerShield
+from cnc_gym.policies.shield import PlannerShield
 from cnc_gym.programs import ProgramText
 
 V5 = "cnc_gym/Feedrate-v5"
@@ -23,16 +23,28 @@ def _env(action_mode: str = "residual", **kwargs):
                           residual_range=1.25, **kwargs)  # fmt: skip
 
 
-def test_it_binds_to_the_envs_turn_angle_bins():
+def test_it_binds_to_the_envs_turn_angle_bins_and_error_entry():
     env = _env()
-    turn = env.unwrapped.observation_structure["turn_angle"]
-    bound = CornerShield(2, 0.25).bind(env)
-    assert (bound.first, bound.stop) == (turn[0], turn[0] + 2)
+    structure = env.unwrapped.observation_structure
+    bound = PlannerShield(2, 0.25, 0.5).bind(env)
+    turn, error = structure["turn_angle"], structure["contour_error_step"]
+    assert (bound.first, bound.stop, bound.error_index) == (turn[0], turn[0] + 2, error[0])
+
+
+def test_its_error_rule_falls_back_from_a_large_contour_error():
+    env = _env()
+    up = np.array([0.7], np.float32)
+    obs = np.zeros(env.observation_space.shape, np.float32)
+    with_rule, without = PlannerShield(1, 0.25, 0.5).bind(env), PlannerShield(1, 0.25).bind(env)
+    obs[with_rule.error_index] = 0.49
+    assert with_rule.apply(obs, up) == pytest.approx(0.7)
+    obs[with_rule.error_index] = 0.5  # half the tolerance over the last step
+    assert with_rule.apply(obs, up) == 0.0 and without.apply(obs, up) == pytest.approx(0.7)
 
 
 def test_it_holds_a_raise_at_the_planner_where_a_sharp_turn_is_in_reach():
     env = _env()
-    bound = CornerShield(1, 0.25).bind(env)
+    bound = PlannerShield(1, 0.25).bind(env)
     obs = np.zeros(env.observation_space.shape, np.float32)
     up, down = np.array([0.7], np.float32), np.array([-0.4], np.float32)
     assert bound.apply(obs, up) == pytest.approx(0.7) and bound.apply(obs, down) == pytest.approx(-0.4)
@@ -49,7 +61,7 @@ def test_a_shielded_full_raise_stays_at_the_planner_before_each_corner():
     # The policy "always +1" through the shield: the env's own observation engages it before each corner,
     # and the override commanded there is the planner's.
     env = _env()
-    bound = CornerShield(1, 0.25).bind(env)
+    bound = PlannerShield(1, 0.25).bind(env)
     obs, _ = env.reset(seed=0)
     engaged = free = 0
     done = False
@@ -72,19 +84,26 @@ def test_a_shielded_full_raise_stays_at_the_planner_before_each_corner():
 ])  # fmt: skip
 def test_bad_settings_are_one_line(bins, turn, fragment):
     with pytest.raises(CncGymError, match=fragment):
-        CornerShield(bins, turn)
+        PlannerShield(bins, turn)
+
+
+@pytest.mark.parametrize("error", [0.0, -1.0, 6.0, "0.5", True, float("nan")])
+def test_a_bad_error_bound_is_one_line(error):
+    with pytest.raises(CncGymError, match=r"error must be in \(0, 5\]"):
+        PlannerShield(1, 0.25, error)
 
 
 def test_it_refuses_an_override_env_and_a_reach_past_the_preview():
     with pytest.raises(CncGymError, match="'override' action mode"):
-        CornerShield(1, 0.25).bind(_env("override"))
+        PlannerShield(1, 0.25).bind(_env("override"))
     with pytest.raises(CncGymError, match="reads 9 bin"):
-        CornerShield(9, 0.25).bind(_env())
+        PlannerShield(9, 0.25).bind(_env())
 
 
 def test_its_record_round_trips_and_malformed_records_are_refused():
-    shield = CornerShield(3, 0.4)
-    assert CornerShield.from_record(shield.record()) == shield
-    for record in ({"kind": "corner", "bins": 1}, {"kind": "other", "bins": 1, "turn": 0.3}, "corner", None):
-        with pytest.raises(CncGymError, match="not a corner shield"):
-            CornerShield.from_record(record)
+    for shield in (PlannerShield(3, 0.4), PlannerShield(1, 0.25, 0.6)):
+        assert PlannerShield.from_record(shield.record()) == shield
+    for record in ({"kind": "planner-fallback", "bins": 1, "turn": 0.3},
+                   {"kind": "other", "bins": 1, "turn": 0.3, "error": None}, "planner-fallback", None):
+        with pytest.raises(CncGymError, match="not a planner-fallback shield"):
+            PlannerShield.from_record(record)
