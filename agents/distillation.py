@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from cnc_gym.errors import CncGymError
+from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym_agents.labelling import EpisodeTask, Executor, LabelledEpisode, TeacherSettings, label_all
 
 if TYPE_CHECKING:
@@ -127,7 +127,7 @@ def round_tasks(config: TrainConfig, programs: Sequence[Program], round_index: i
         nominal = kwargs.get("randomize") is None or rng.random() < d.nominal_share
         seed = int(rng.integers(2**31 - 1))
         tasks.append(EpisodeTask(config.env.id, nominal_kwargs if nominal else kwargs, program.name, program,
-                                 seed, teacher, actor, d.compare))  # fmt: skip
+                                 seed, teacher, actor, d.compare, d.shield()))  # fmt: skip
     return tasks
 
 
@@ -223,6 +223,13 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
     kwargs = config.env.make_kwargs()
     kwargs["programs"] = [programs[0]]
     spaces_env = gymnasium.make(config.env.id, **kwargs)  # the spaces of the student's policy
+    shield = d.shield()
+    if shield is not None:
+        try:
+            shield.bind(spaces_env)  # the env's preview has the bins it reads
+        except CncGymError as exc:
+            spaces_env.close()
+            raise ConfigError(f"{config.source}: distill.shield_bins: {exc}") from None
     tensorboard_dir = run_dir.parent / "tensorboard"
     student = Student(spaces_env, config.ppo.net_arch, config.ppo.log_std_init, config.seed)
     logger = configure_logger(0, str(tensorboard_dir), config.run_name)
@@ -267,13 +274,13 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
         logger.close()
         spaces_env.close()
     try:
-        student_path = student.save(run_dir / "student.zip", config.env.policy_env())
+        student_path = student.save(run_dir / "student.zip", config.env.policy_env(), shield)
         model_path = run_dir / "model.zip"
         finetuned = None
         if d.finetune_timesteps > 0:
             finetuned = finetune(student, config, model_path, progress_bar)
         else:
-            student.save(model_path, config.env.policy_env())
+            student.save(model_path, config.env.policy_env(), shield)
         summary = {
             "rounds": [asdict(s) for s in history],
             "labelled_episodes": sum(s.episodes for s in history),
@@ -339,6 +346,9 @@ def finetune(student: Any, config: TrainConfig, model_path: Path, progress_bar: 
                     callback=CallbackList([DualAscent(penalty, lag.cost_limit, lag.lambda_lr, lag.lambda_max),
                                            CriticFirst()]))  # fmt: skip
         model.cnc_gym_env = config.env.policy_env()
+        shield = d.shield()
+        if shield is not None:
+            model.cnc_gym_shield = shield.record()
         model.save(model_path)
     finally:
         vec_env.close()

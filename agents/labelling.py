@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from cnc_gym.benchmark.runner import Executor, run_tasks
+from cnc_gym.policies.shield import BoundShield, PlannerShield
 from cnc_gym_agents.student import ActorWeights
 from cnc_gym_agents.teacher import ResidualOracle
 
@@ -54,8 +55,9 @@ class EpisodeTask:
 
     ``env_kwargs`` are the env's keyword arguments without ``programs`` (its randomisation included);
     ``program`` the interpreted program (a :class:`cnc_gym.programs.Program`, or anything the env takes);
-    ``actor`` drives the episode (None: the teacher does); ``compare`` also runs the planner and the
-    teacher on the same episode.
+    ``actor`` drives the episode (None: the teacher does), through ``shield`` if given (the shield
+    the deployed student acts through); ``compare`` also runs the planner and the teacher on the same
+    episode.
     """
 
     env_id: str
@@ -66,6 +68,7 @@ class EpisodeTask:
     teacher: TeacherSettings = field(default_factory=TeacherSettings)
     actor: ActorWeights | None = None
     compare: bool = True
+    shield: PlannerShield | None = None
 
 
 @dataclass(frozen=True)
@@ -132,14 +135,17 @@ class _Planner:
 
 class _Labeller:
     """A policy that records what the student sees and what the teacher would do, then lets the behaviour
-    act: the teacher (``actor`` None, its label clipped to the action box) or the student's actor."""
+    act: the teacher (``actor`` None, its label clipped to the action box) or the student's actor,
+    through ``shield`` if given."""
 
     name = "labeller"
 
-    def __init__(self, teacher: ResidualOracle, actor: ActorWeights | None, label_limit: float) -> None:
+    def __init__(self, teacher: ResidualOracle, actor: ActorWeights | None, label_limit: float,
+                 shield: BoundShield | None = None) -> None:  # fmt: skip
         self.teacher = teacher
         self.actor = actor
         self.label_limit = label_limit
+        self.shield = shield
         self.observations: list[np.ndarray] = []
         self.labels: list[float] = []
 
@@ -152,7 +158,8 @@ class _Labeller:
         self.labels.append(label)
         if self.actor is None:
             return np.array([min(max(label, -1.0), 1.0)], dtype=np.float32)
-        return self.actor.act(observation)
+        action = self.actor.act(observation)
+        return action if self.shield is None else self.shield.apply(observation, action)
 
 
 def _replay(task: EpisodeTask, policy: Any, teacher: ResidualOracle | None = None) -> Outcome:
@@ -189,7 +196,8 @@ def label_episode(task: EpisodeTask) -> LabelledEpisode:
         observation, info = env.reset(seed=task.seed)
         teacher.reset(env)  # plans on this episode: its machine draw, feed scale and plant
         randomized = getattr(env.unwrapped, "episode_draw", None) is not None
-        labeller = _Labeller(teacher, task.actor, s.label_limit)
+        shield = None if task.shield is None or task.actor is None else task.shield.bind(env)
+        labeller = _Labeller(teacher, task.actor, s.label_limit, shield)
         behaviour = _outcome(play(env, labeller, observation, info, on_step))
         width = int(env.observation_space.shape[0])
     finally:

@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from cnc_gym.policies.shield import PlannerShield
+
 #: Width of the quadratic zone of the smoothed pinball loss, in action units (1 = the whole residual).
 HUBER_KAPPA = 0.02
 
@@ -138,9 +140,12 @@ class Student:
 
         return ActorWeights(tuple(arrays(m) for m in linear), arrays(p.action_net))
 
-    def save(self, path: str | Path, policy_env: dict[str, Any]) -> Path:
-        """Write the SB3 model zip, recording the env it acts in (``cnc_gym_env``, plain JSON)."""
+    def save(self, path: str | Path, policy_env: dict[str, Any], shield: PlannerShield | None = None) -> Path:
+        """Write the SB3 model zip, recording the env it acts in (``cnc_gym_env``) and the shield it
+        acts through (``cnc_gym_shield``), as plain JSON."""
         self.model.cnc_gym_env = policy_env  # type: ignore[attr-defined]
+        if shield is not None:
+            self.model.cnc_gym_shield = shield.record()  # type: ignore[attr-defined]
         path = Path(path)
         self.model.save(path)
         return path

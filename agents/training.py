@@ -58,6 +58,7 @@ from cnc_gym.envs.options import (
 from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym.machine import DEFAULT_MACHINE
+from cnc_gym.policies.shield import PlannerShield
 from cnc_gym.programs import DEFAULT_DIALECT
 
 #: The env versions a training config may name: every id cnc_gym registers (v4: the live planner).
@@ -223,6 +224,24 @@ class DistillSettings:
                                         why="at most the fine-tune's steps.")  # fmt: skip
     compare: bool = flag(True, doc="run the planner and the teacher on every labelled episode too (the "
                          "round statistics in TensorBoard)")  # fmt: skip
+    shield_bins: int = number(0, 0, 64, integer=True, doc="the planner-fallback shield's reach, in bins "
+                              "of the observation's preview (0: no shield): the student acts at the "
+                              "planner's override or below while a junction turning at least shield_turn "
+                              "lies there, or while the contour error is at least shield_error × "
+                              "tolerance; in its DAgger rollouts and in the saved model",
+                              why="the preview has at most 64 bins.")  # fmt: skip
+    shield_turn: float = number(0.25, 0, 1, low_open=True, doc="the smallest junction turn (θ/π) the "
+                                "shield falls back to the planner for",
+                                why="θ/π of a turn is in (0, 1].")  # fmt: skip
+    shield_error: float = number(0.0, 0, 5, doc="the contour error (× tolerance, the last step's largest) "
+                                 "from which the shield falls back to the planner (0: no error rule)",
+                                 why="the observation's error entry is clipped at 5.")  # fmt: skip
+
+    def shield(self) -> PlannerShield | None:
+        """The shield these settings ask for (None with ``shield_bins`` 0)."""
+        if self.shield_bins == 0:
+            return None
+        return PlannerShield(self.shield_bins, self.shield_turn, self.shield_error or None)
 
 
 @dataclass

@@ -19,7 +19,9 @@ acts needs none of them, except one plain JSON entry of ``data`` that ``scripts/
 ``cnc_gym_env``: the env id and the few keyword arguments that fix what the model's observation and action
 mean (``action_mode``, ``control_period_s``, ``residual_range``, ``lookahead_mm``, ``lookahead_points``),
 checked against a fixed list of ids and keys, so ``cnc-gym bench`` and ``cnc-gym run`` run the model in the
-env it was trained for (models without it run in ``cnc_gym/Feedrate-v0``).
+env it was trained for (models without it run in ``cnc_gym/Feedrate-v0``); and ``cnc_gym_shield``, the
+shield a residual policy acts through (:mod:`cnc_gym.policies.shield`: two plain numbers), which
+:class:`ModelPolicy` applies.
 
 A model outside this list (a custom policy class, image or dict observations)
 is refused with one line; there is no unsafe fallback. Such a model can still be loaded in your own code
@@ -45,6 +47,7 @@ import numpy as np
 from cnc_gym import ENV_IDS
 from cnc_gym.config import escaped
 from cnc_gym.errors import CncGymError
+from cnc_gym.policies.shield import BoundShield, PlannerShield
 
 #: Largest ``data`` entry read (SB3 writes a few KB).
 MAX_DATA_BYTES = 4 << 20
@@ -81,6 +84,8 @@ class LoadedModel:
     sb3_version: str
     env_id: str = "cnc_gym/Feedrate-v0"
     env_kwargs: dict[str, Any] = dataclasses.field(default_factory=dict)
+    #: The shield the model acts through (``cnc_gym_shield``), or None.
+    shield: PlannerShield | None = None
 
     def predict(self, observation: np.ndarray, deterministic: bool = True) -> np.ndarray:
         action, _ = self.policy.predict(observation, deterministic=deterministic)
@@ -128,12 +133,24 @@ def load_sb3_model(path: str | Path) -> LoadedModel:
             weights = _weights(weights_bytes, torch)
             policy = _build(family, observation_space, action_space, kwargs, weights, torch)
             env_id, env_kwargs = _env(data)
+            shield = _shield(data)
         except _Refused as exc:
             raise ModelError(f"{name}: {exc}") from None
     sb3_version = escaped(version.decode("ascii", "replace"), 40)
     return LoadedModel(policy=policy, algorithm=algorithm, observation_space=observation_space,
                        action_space=action_space, sb3_version=sb3_version, env_id=env_id,
-                       env_kwargs=env_kwargs)  # fmt: skip
+                       env_kwargs=env_kwargs, shield=shield)  # fmt: skip
+
+
+def _shield(data: dict[str, Any]) -> PlannerShield | None:
+    """The shield ``data["cnc_gym_shield"]`` records (plain JSON, checked), or None."""
+    recorded = data.get("cnc_gym_shield")
+    if recorded is None:
+        return None
+    try:
+        return PlannerShield.from_record(recorded)
+    except CncGymError as exc:
+        raise _Refused(str(exc).removeprefix("shield: ")) from None
 
 
 class _Refused(Exception):
@@ -379,7 +396,8 @@ def _check_size(net_arch: Any, n_inputs: int, n_weights: int) -> None:
 
 
 class ModelPolicy:
-    """A trained SB3 model (deterministic actions) driving the env."""
+    """A trained SB3 model (deterministic actions) driving the env, through the shield its zip
+    records, if any (:mod:`cnc_gym.policies.shield`)."""
 
     def __init__(self, path: str | Path, deterministic: bool = True) -> None:
         self.path = Path(path)
@@ -389,6 +407,7 @@ class ModelPolicy:
         #: The env the model acts in (what ``cnc-gym bench`` and ``cnc-gym run`` build for it).
         self.env_id = self.model.env_id
         self.env_kwargs = dict(self.model.env_kwargs)
+        self._shield: BoundShield | None = None
 
     def reset(self, env: Any) -> None:
         want = self.model.observation_space.shape
@@ -400,7 +419,16 @@ class ModelPolicy:
         if self.model.action_space.shape != env.action_space.shape:
             raise CncGymError(f"{self.name}: model acts in shape {self.model.action_space.shape}, "
                               f"the env expects {env.action_space.shape}")  # fmt: skip
+        shield = self.model.shield
+        if shield is not None:
+            try:
+                self._shield = shield.bind(env)
+            except CncGymError as exc:
+                raise CncGymError(f"{self.name}: {exc}") from None
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         action = self.model.predict(observation, deterministic=self.deterministic)
-        return np.asarray(action, dtype=np.float32)
+        action = np.asarray(action, dtype=np.float32)
+        if self._shield is not None:
+            return self._shield.apply(observation, action)
+        return action

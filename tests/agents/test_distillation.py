@@ -17,6 +17,7 @@ import pytest
 import yaml
 
 from cnc_gym.errors import CncGymError, ConfigError
+from cnc_gym.policies.shield import PlannerShield
 from cnc_gym.programs import ProgramText
 from cnc_gym_agents.labelling import EpisodeTask, Executor, TeacherSettings, label_all, label_episode
 from cnc_gym_agents.student import ActorWeights, Student, quantile_huber_loss
@@ -52,9 +53,10 @@ def _env(action_mode: str = "residual", randomize: dict | None = None, program: 
 
 
 def _task(seed: int = 3, randomize: dict | None = None, actor: ActorWeights | None = None,
-          compare: bool = True) -> EpisodeTask:  # fmt: skip
+          compare: bool = True, shield: PlannerShield | None = None) -> EpisodeTask:  # fmt: skip
     kwargs = {"action_mode": "residual", "residual_range": 1.25, "randomize": randomize}
-    return EpisodeTask(V5, kwargs, "zigzag", ProgramText(ZIGZAG, "zigzag"), seed, QUICK, actor, compare)
+    return EpisodeTask(V5, kwargs, "zigzag", ProgramText(ZIGZAG, "zigzag"), seed, QUICK, actor, compare,
+                       shield)  # fmt: skip
 
 
 def _constant_actor(value: float, width: int = 46) -> ActorWeights:
@@ -171,6 +173,18 @@ def test_a_student_drives_the_dagger_episodes_and_the_teacher_labels_them():
     assert slow.planner is None and slow.teacher is None
 
 
+def test_the_shield_holds_the_students_dagger_rollouts_as_it_holds_the_deployed_student():
+    free = label_episode(_task(actor=_constant_actor(1.0), compare=False))
+    held = label_episode(_task(actor=_constant_actor(1.0), compare=False, shield=PlannerShield(8, 0.05)))
+    # Held at the planner's override near the reversal: slower than the unshielded full raise, and the
+    # teacher labels every state the shielded student visited.
+    assert held.behaviour.cycle_time_s > free.behaviour.cycle_time_s
+    assert len(held.labels) == held.behaviour.steps
+    # The teacher's own round (no actor) is never shielded.
+    teacher = label_episode(_task(compare=False, shield=PlannerShield(8, 0.05)))
+    assert teacher.behaviour == label_episode(_task(compare=False)).behaviour
+
+
 def test_a_process_pool_labels_as_the_serial_run_does():
     tasks = [_task(seed=1, compare=False), _task(seed=2, randomize=RANDOM, compare=False)]
     serial = label_all(tasks, Executor())
@@ -285,7 +299,8 @@ TINY = {
             "randomize": RANDOM},
     "algorithm": "distill",
     "distill": {"rounds": 1, "episodes_per_round": 2, "nominal_share": 0.5, "teacher_refine_iterations": 2,
-                "teacher_raise_rounds": 0, "epochs": 2, "round_epochs": 1, "batch_size": 256},
+                "teacher_raise_rounds": 0, "epochs": 2, "round_epochs": 1, "batch_size": 256,
+                "shield_bins": 1, "shield_error": 0.6},
     "ppo": {"net_arch": [8, 8]},
     "run_name": "tiny-distill",
     "progress_bar": False,
@@ -388,6 +403,7 @@ def test_a_distill_run_saves_a_model_that_loads_without_unpickling(distilled):
     model = load_sb3_model(run / "model.zip")
     assert model.env_id == V5
     assert model.env_kwargs == {"action_mode": "residual", "control_period_s": 0.01, "residual_range": 1.25}
+    assert model.shield == PlannerShield(1, 0.25, 0.6)  # shield_bins, shield_error; shield_turn default
     from cnc_gym.policies import make_policy
 
     policy = make_policy(str(run / "model.zip"))

@@ -64,6 +64,10 @@ def model_zip(tmp_path_factory) -> Path:
     return path
 
 
+#: A valid shield record (cnc_gym/policies/shield.py).
+SHIELD = {"kind": "planner-fallback", "bins": 1, "turn": 0.25, "error": 0.5}
+
+
 def rewrite(source: Path, target: Path, *, data=None, members: dict[str, bytes] | None = None) -> Path:
     """A copy of the model zip with ``data`` changed by ``data(dict)`` and members replaced."""
     with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as zout:
@@ -196,6 +200,11 @@ def readable(key: str, attribute: str, value):
          "cnc_gym_env.kwargs.residual_range is not"),
         (lambda d: d.update(cnc_gym_env={":type:": "<class 'dict'>", ":serialized:": "gAR9lC4="}),
          "names no known env"),
+        (lambda d: d.update(cnc_gym_shield={**SHIELD, "kind": "exec"}), "not a planner-fallback shield"),
+        (lambda d: d.update(cnc_gym_shield={**SHIELD, "bins": 0}), "bins must be"),
+        (lambda d: d.update(cnc_gym_shield={**SHIELD, "turn": "0.25"}), "turn must be"),
+        (lambda d: d.update(cnc_gym_shield={**SHIELD, "error": [0.5]}), "error must be"),
+        (lambda d: d.update(cnc_gym_shield=[1, 0.25]), "not a planner-fallback shield"),
     ],
 )
 def test_models_outside_the_known_list_are_refused_in_one_line(model_zip, tmp_path, change, fragment):
@@ -212,6 +221,21 @@ def test_the_env_record_is_read_as_plain_json(model_zip, tmp_path):
     policy = ModelPolicy(crafted)
     assert (policy.env_id, policy.env_kwargs) == (record["id"], record["kwargs"])
     assert (ModelPolicy(model_zip).env_id, ModelPolicy(model_zip).env_kwargs) == ("cnc_gym/Feedrate-v0", {})
+
+
+def test_a_recorded_shield_is_read_and_needs_a_residual_env(model_zip, tmp_path):
+    from cnc_gym.envs.feedrate import FeedrateEnv
+    from cnc_gym.policies.shield import PlannerShield
+
+    record = {"kind": "planner-fallback", "bins": 2, "turn": 0.3, "error": None}
+    crafted = rewrite(model_zip, tmp_path / "shielded.zip", data=lambda d: d.update(cnc_gym_shield=record))
+    policy = ModelPolicy(crafted)
+    assert policy.model.shield == PlannerShield(2, 0.3) and ModelPolicy(model_zip).model.shield is None
+    with pytest.raises(CncGymError) as err:  # Feedrate-v0 in override mode: nothing to hold at the planner
+        policy.reset(FeedrateEnv(programs=["circle"]))
+    message = str(err.value)
+    assert "\n" not in message and message.startswith("shielded.zip: the shield holds a residual")
+    assert "'override' action mode" in message
 
 
 def test_damaged_and_oversized_members_are_one_line(model_zip, tmp_path):

@@ -1,0 +1,117 @@
+"""The planner-fallback shield: a residual policy falls back to the planner where a raise is risky.
+
+A ``residual`` policy scales the deployable planner's override by ``ρ^a`` (docs/env.md, action modes).
+The planner alone finishes every program of the benchmark's splits within tolerance; a learned policy
+that only imitates a teacher now and then raises the knob (``a > 0``) where it must not, and one such
+mistake costs a whole program. Two situations cause nearly all of them:
+
+- **a sharp corner close ahead**: the controller's jerk-limited response to the knob cannot take the
+  speed back down in time, the corner is entered too fast and its transient cuts over tolerance;
+- **a contour error already large**: on a long run of fine CAM chords the error builds up over many
+  steps while the raise goes on, and the lag of the servo carries it over tolerance.
+
+:class:`PlannerShield` holds the action at ``min(a, 0)`` (the planner's override, or slower) while the
+observation's preview shows a junction turning at least ``turn`` (``θ / π``) in its first ``bins`` bins
+(each bin is ``lookahead_mm / lookahead_points`` long: 3 mm in Feedrate-v2 … v5), or while the largest
+contour error of the last step is at least ``error`` × tolerance. Everywhere else the policy acts freely,
+and below the planner it always does. It reads nothing but the observation, so a shielded policy stays
+deployable; it is a shield in the sense of safe RL (Alshiekh et al., AAAI 2018): a fixed rule between
+the learned policy and the machine, with a fallback known to be safe, the planner.
+
+A trained model records its shield in its zip (``cnc_gym_shield``, plain JSON: :meth:`record`);
+:class:`cnc_gym.policies.model.ModelPolicy` applies it, and the distillation learner trains with it in
+the loop (its DAgger rollouts are shielded as the deployed policy is).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cnc_gym.errors import CncGymError
+
+#: The observation entries the shield reads (docs/env.md, observation table).
+TURN_ENTRY = "turn_angle"
+ERROR_ENTRY = "contour_error_step"
+#: The record's keys (``cnc_gym_shield`` in a model zip).
+RECORD_KEYS = frozenset({"kind", "bins", "turn", "error"})
+
+
+def _number(value: Any) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float)
+
+
+@dataclass(frozen=True)
+class PlannerShield:
+    """Hold a residual action at ≤ 0 while a junction turning at least ``turn`` (θ/π, in (0, 1]) lies in
+    the first ``bins`` bins of the observation's preview, or while the last step's largest contour error
+    is at least ``error`` × tolerance (None: no error rule); module docstring."""
+
+    bins: int
+    turn: float
+    error: float | None = None
+
+    def __post_init__(self) -> None:
+        if isinstance(self.bins, bool) or not isinstance(self.bins, int) or self.bins < 1:
+            raise CncGymError(f"shield: bins must be an integer >= 1, got {self.bins!r}")
+        if not _number(self.turn) or not 0.0 < float(self.turn) <= 1.0:
+            raise CncGymError(f"shield: turn must be in (0, 1] (θ/π), got {self.turn!r}")
+        if self.error is not None and (not _number(self.error) or not 0.0 < float(self.error) <= 5.0):
+            raise CncGymError(f"shield: error must be in (0, 5] (× tolerance) or null, got {self.error!r}")
+
+    def record(self) -> dict[str, Any]:
+        """The shield as the plain JSON a model zip records (``cnc_gym_shield``)."""
+        error = None if self.error is None else float(self.error)
+        return {"kind": "planner-fallback", "bins": int(self.bins), "turn": float(self.turn), "error": error}
+
+    @classmethod
+    def from_record(cls, record: Any) -> PlannerShield:
+        """The shield a model zip records; a malformed record is one :class:`CncGymError` line."""
+        if not isinstance(record, dict) or set(record) != RECORD_KEYS or record["kind"] != "planner-fallback":
+            raise CncGymError("its cnc_gym_shield record is not a planner-fallback shield "
+                              "{kind: planner-fallback, bins, turn, error}")  # fmt: skip
+        return cls(bins=record["bins"], turn=record["turn"], error=record["error"])
+
+    def bind(self, env: Any) -> BoundShield:
+        """The shield on ``env``'s observation layout (``observation_structure``), for a ``residual``-mode
+        env; anything else is one :class:`CncGymError` line."""
+        base = env.unwrapped
+        mode = getattr(base, "action_mode", None)
+        if mode != "residual":
+            raise CncGymError(f"the shield holds a residual action at the planner's override; the env is "
+                              f"in {mode!r} action mode")  # fmt: skip
+        structure = getattr(base, "observation_structure", {})
+        turn = list(structure.get(TURN_ENTRY, []))
+        error = list(structure.get(ERROR_ENTRY, []))
+        if len(turn) < self.bins:
+            raise CncGymError(f"the shield reads {self.bins} bin(s) of the observation's {TURN_ENTRY}; "
+                              f"the env has {len(turn)}")  # fmt: skip
+        if self.error is not None and len(error) != 1:
+            raise CncGymError(f"the shield's error rule reads the observation's {ERROR_ENTRY}; the env "
+                              "has none")  # fmt: skip
+        return BoundShield(self, int(turn[0]), int(turn[0]) + self.bins, int(error[0]) if error else -1)
+
+
+@dataclass(frozen=True)
+class BoundShield:
+    """A :class:`PlannerShield` on one observation layout: the slice of the preview it reads and the
+    index of the contour error entry."""
+
+    shield: PlannerShield
+    first: int
+    stop: int
+    error_index: int
+
+    def engaged(self, observation: np.ndarray) -> bool:
+        """A junction turning at least ``turn`` lies in the shield's reach, or the error is at its bound."""
+        if float(np.max(observation[self.first : self.stop])) >= self.shield.turn:
+            return True
+        bound = self.shield.error
+        return bound is not None and float(observation[self.error_index]) >= bound
+
+    def apply(self, observation: np.ndarray, action: np.ndarray) -> np.ndarray:
+        """``action`` held at ≤ 0 where :meth:`engaged`, else unchanged (float32)."""
+        action = np.asarray(action, dtype=np.float32)
+        return np.minimum(action, np.float32(0.0)) if self.engaged(observation) else action

@@ -1,0 +1,109 @@
+"""The shield (cnc_gym/policies/shield.py): where it engages, what it holds, what it refuses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cnc_gym.errors import CncGymError
+from cnc_gym.policies.shield import PlannerShield
+from cnc_gym.programs import ProgramText
+
+V5 = "cnc_gym/Feedrate-v5"
+#: A line, a 90° corner 2 mm after a long run, then a reversal (180°).
+CORNERS = "G90 G21 G17\nG00 X0 Y0 Z1\nG01 Z0 F600\nG01 X40 F3000\nG01 Y20\nG01 Y0\nG00 Z5\nM30\n"
+
+
+def _env(action_mode: str = "residual", **kwargs):
+    import gymnasium
+
+    import cnc_gym  # noqa: F401
+
+    return gymnasium.make(V5, programs=[ProgramText(CORNERS, "corners")], action_mode=action_mode,
+                          residual_range=1.25, **kwargs)  # fmt: skip
+
+
+def test_it_binds_to_the_envs_turn_angle_bins_and_error_entry():
+    env = _env()
+    structure = env.unwrapped.observation_structure
+    bound = PlannerShield(2, 0.25, 0.5).bind(env)
+    turn, error = structure["turn_angle"], structure["contour_error_step"]
+    assert (bound.first, bound.stop, bound.error_index) == (turn[0], turn[0] + 2, error[0])
+
+
+def test_its_error_rule_falls_back_from_a_large_contour_error():
+    env = _env()
+    up = np.array([0.7], np.float32)
+    obs = np.zeros(env.observation_space.shape, np.float32)
+    with_rule, without = PlannerShield(1, 0.25, 0.5).bind(env), PlannerShield(1, 0.25).bind(env)
+    obs[with_rule.error_index] = 0.49
+    assert with_rule.apply(obs, up) == pytest.approx(0.7)
+    obs[with_rule.error_index] = 0.5  # half the tolerance over the last step
+    assert with_rule.apply(obs, up) == 0.0 and without.apply(obs, up) == pytest.approx(0.7)
+
+
+def test_it_holds_a_raise_at_the_planner_where_a_sharp_turn_is_in_reach():
+    env = _env()
+    bound = PlannerShield(1, 0.25).bind(env)
+    obs = np.zeros(env.observation_space.shape, np.float32)
+    up, down = np.array([0.7], np.float32), np.array([-0.4], np.float32)
+    assert bound.apply(obs, up) == pytest.approx(0.7) and bound.apply(obs, down) == pytest.approx(-0.4)
+    obs[bound.first] = 0.25  # a 45° junction in the first bin
+    assert bound.engaged(obs)
+    assert bound.apply(obs, up) == 0.0 and bound.apply(obs, down) == pytest.approx(-0.4)
+    obs[bound.first] = 0.2
+    obs[bound.first + 1] = 1.0  # a reversal, but beyond the shield's one bin
+    assert not bound.engaged(obs) and bound.apply(obs, up) == pytest.approx(0.7)
+    assert bound.apply(obs, up).dtype == np.float32
+
+
+def test_a_shielded_full_raise_stays_at_the_planner_before_each_corner():
+    # The policy "always +1" through the shield: the env's own observation engages it before each corner,
+    # and the override commanded there is the planner's.
+    env = _env()
+    bound = PlannerShield(1, 0.25).bind(env)
+    obs, _ = env.reset(seed=0)
+    engaged = free = 0
+    done = False
+    while not done:
+        action = bound.apply(obs, np.ones(1, np.float32))
+        if bound.engaged(obs):
+            engaged += 1
+            assert action[0] == 0.0
+        else:
+            free += 1
+            assert action[0] == 1.0
+        obs, _, terminated, truncated, _ = env.step(action)
+        done = terminated or truncated
+    assert engaged > 0 and free > engaged and terminated
+
+
+@pytest.mark.parametrize(("bins", "turn", "fragment"), [
+    (0, 0.25, "bins must be an integer >= 1"), (1.5, 0.25, "bins must be"), (True, 0.25, "bins must be"),
+    (1, 0.0, r"turn must be in \(0, 1\]"), (1, 1.5, "turn must be"), (1, "0.3", "turn must be"),
+])  # fmt: skip
+def test_bad_settings_are_one_line(bins, turn, fragment):
+    with pytest.raises(CncGymError, match=fragment):
+        PlannerShield(bins, turn)
+
+
+@pytest.mark.parametrize("error", [0.0, -1.0, 6.0, "0.5", True, float("nan")])
+def test_a_bad_error_bound_is_one_line(error):
+    with pytest.raises(CncGymError, match=r"error must be in \(0, 5\]"):
+        PlannerShield(1, 0.25, error)
+
+
+def test_it_refuses_an_override_env_and_a_reach_past_the_preview():
+    with pytest.raises(CncGymError, match="'override' action mode"):
+        PlannerShield(1, 0.25).bind(_env("override"))
+    with pytest.raises(CncGymError, match="reads 9 bin"):
+        PlannerShield(9, 0.25).bind(_env())
+
+
+def test_its_record_round_trips_and_malformed_records_are_refused():
+    for shield in (PlannerShield(3, 0.4), PlannerShield(1, 0.25, 0.6)):
+        assert PlannerShield.from_record(shield.record()) == shield
+    for record in ({"kind": "planner-fallback", "bins": 1, "turn": 0.3},
+                   {"kind": "other", "bins": 1, "turn": 0.3, "error": None}, "planner-fallback", None):
+        with pytest.raises(CncGymError, match="not a planner-fallback shield"):
+            PlannerShield.from_record(record)
