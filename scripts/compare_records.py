@@ -3,7 +3,8 @@
     .venv/bin/python scripts/compare_records.py RECORDS.jsonl [...] --policy SPEC [--baseline classical]
         [--markdown]
 
-For every (machine, track) of the records: how many programs the policy ran, the mean over them of its
+For every (programs, machine, track) of the records (programs: the suite's split, or ``user`` for
+``--programs`` files): how many programs the policy ran, the mean over them of its
 and the baseline's cycle time (each program's mean over seeds), on how many programs its mean cycle time
 is below / above the baseline's (0.1 % either way counts as equal), the mean of
 the per-program time ratios policy / baseline, and every program where the policy fails the baseline's
@@ -29,16 +30,18 @@ EQUAL = 1e-3
 
 
 def compare(records: list[dict[str, Any]], policy: str, baseline: str) -> list[dict[str, Any]]:
-    """One row per (machine, track): the counts of the module docstring and the failing programs."""
-    groups: dict[tuple[str, str], dict[str, dict[str, list[dict[str, Any]]]]] = defaultdict(
+    """One row per (programs, machine, track): the counts of the module docstring and the failing
+    programs."""
+    groups: dict[tuple[str, str, str], dict[str, dict[str, list[dict[str, Any]]]]] = defaultdict(
         lambda: defaultdict(lambda: defaultdict(list))
     )
     for r in records:
         if r.get("reference") or r["policy"] not in (policy, baseline):
             continue
-        groups[(r["machine"], r.get("track", "nominal"))][r["program"]][r["policy"]].append(r)
+        source = "user" if r.get("suite", "user") == "user" else f"{r['suite']}/{r.get('split')}"
+        groups[(source, r["machine"], r.get("track", "nominal"))][r["program"]][r["policy"]].append(r)
     rows = []
-    for (machine, track), programs in sorted(groups.items()):
+    for (source, machine, track), programs in sorted(groups.items()):
         faster = slower = 0
         ratios: list[float] = []
         times = [0.0, 0.0]  # sums of the policy's and the baseline's mean cycle times
@@ -61,7 +64,8 @@ def compare(records: list[dict[str, Any]], policy: str, baseline: str) -> list[d
             violating = sum(not r["feasible"] for r in runs[policy])
             if base_clean and violating:
                 failures.append(f"{name} adds a violation ({violating} of {len(runs[policy])} seeds)")
-        rows.append({"machine": machine, "track": track, "programs": len(both), "faster": faster,
+        rows.append({"programs_from": source, "machine": machine, "track": track, "programs": len(both),
+                     "faster": faster,
                      "slower": slower, "mean_ratio": sum(ratios) / len(ratios) if ratios else float("nan"),
                      "mean_time_s": times[0] / max(len(both), 1),
                      "baseline_time_s": times[1] / max(len(both), 1),
@@ -86,17 +90,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"no programs with both {args.policy!r} and {args.baseline!r}", file=sys.stderr)
         return 1
     if args.markdown:
-        print(f"| machine | track | programs | mean cycle time (s): policy / {args.baseline} | "
+        print(f"| programs | machine | track | count | mean cycle time (s): policy / {args.baseline} | "
               f"faster / slower | mean time ratio to {args.baseline} | where it fails |")  # fmt: skip
-        print("|---|---|---:|---:|---:|---:|---|")
+        print("|---|---|---|---:|---:|---:|---:|---|")
     for r in rows:
         failing = "; ".join(r["failures"]) or "none"
         if args.markdown:
-            print(f"| `{r['machine']}` | {r['track']} | {r['programs']} | {r['mean_time_s']:.2f} / "
+            print(f"| {r['programs_from']} | `{r['machine']}` | {r['track']} | {r['programs']} | "
+                  f"{r['mean_time_s']:.2f} / "
                   f"{r['baseline_time_s']:.2f} | {r['faster']} / {r['slower']} | {r['mean_ratio']:.3f} | "
                   f"{failing} |")  # fmt: skip
         else:
-            print(f"{r['machine']:<12} {r['track']:<9} programs {r['programs']:>3}  "
+            print(f"{r['programs_from']:<20} {r['machine']:<12} {r['track']:<9} programs {r['programs']:>3}  "
                   f"mean time {r['mean_time_s']:.2f} s against {r['baseline_time_s']:.2f} s  "
                   f"faster {r['faster']:>3}  slower {r['slower']:>3}  "
                   f"mean ratio {r['mean_ratio']:.3f}  fails: {failing}")  # fmt: skip

@@ -18,7 +18,8 @@ from compare_records import compare  # noqa: E402
 def _rec(policy: str, program: str, seed: int, cycle: float, feasible: bool = True,
          machine: str = "m") -> dict:  # fmt: skip
     return {"policy": policy, "program": program, "seed": seed, "cycle_time_s": cycle, "feasible": feasible,
-            "machine": machine, "track": "nominal", "reference": False, "score": 0.5}  # fmt: skip
+            "machine": machine, "track": "nominal", "reference": False, "score": 0.5, "suite": "s",
+            "split": "test"}  # fmt: skip
 
 
 RECORDS = [
@@ -33,6 +34,8 @@ RECORDS = [
 
 def test_counts_and_failures_per_machine():
     mine, other = compare(RECORDS, "agent", "classical")
+    user = compare([{**r, "suite": "user"} for r in RECORDS[:6]], "agent", "classical")
+    assert [r["programs_from"] for r in user] == ["user"] and mine["programs_from"] == "s/test"
     assert (mine["machine"], mine["programs"], mine["faster"], mine["slower"]) == ("m", 3, 2, 1)
     assert mine["failures"] == ["b slower (1.017 ×)"]  # c's violation is not added: classical violates too
     assert mine["mean_time_s"] == pytest.approx((9.0 + 30.5 / 3 + 8.0) / 3)
@@ -48,7 +51,8 @@ def test_the_script_prints_a_markdown_row_per_machine(tmp_path):
     result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
-    assert len(lines) == 4 and lines[2].startswith("| `m` | nominal | 3 |") and "b slower" in lines[2]
+    assert len(lines) == 4 and "b slower" in lines[2]
+    assert lines[2].startswith("| s/test | `m` | nominal | 3 |")
     missing = subprocess.run([*command[:3], "--policy", "nobody"], cwd=ROOT, capture_output=True, text=True,
                              timeout=120)  # fmt: skip
     assert missing.returncode == 1 and "no programs with both 'nobody'" in missing.stderr
