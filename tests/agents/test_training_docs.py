@@ -10,8 +10,12 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "training.md"
-#: The test-split records the table is made of: the baselines' and the trained agents'.
-RECORDS = ["docs/results/cnc-bench-v1-test-learned.jsonl", "docs/results/cnc-bench-v1-test.jsonl"]
+#: The test-split records the tables are made of (every track): the baselines' and the trained agents'.
+RECORDS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "results").glob("*.jsonl"))
+#: The trained agents' records: the PPO-Lagrangian agent's and the distilled student's on every track.
+AGENTS = ["docs/results/cnc-bench-v1-test-learned.jsonl", "docs/results/cnc-bench-v1-test-distill.jsonl",
+          "docs/results/cnc-bench-v1-test-distill-perturbed.jsonl",
+          "docs/results/cnc-bench-v1-test-distill-mujoco.jsonl"]  # fmt: skip
 
 
 def test_the_result_table_is_generated_from_the_committed_records():
@@ -20,10 +24,12 @@ def test_the_result_table_is_generated_from_the_committed_records():
     assert result.returncode == 0, result.stderr
 
 
-def test_the_agents_were_benched_with_three_training_seeds_on_a_committed_tree():
+@pytest.mark.parametrize("path", AGENTS)
+def test_the_agents_were_benched_with_three_training_seeds_on_a_committed_tree(path):
     from cnc_gym.benchmark.runner import read_jsonl
 
-    records = read_jsonl([ROOT / RECORDS[0]])
+    assert path in RECORDS
+    records = read_jsonl([ROOT / path])
     assert {r["split"] for r in records} == {"test"}
     for policy in {r["policy"] for r in records}:
         mine = [r for r in records if r["policy"] == policy]
@@ -37,6 +43,7 @@ def test_the_agents_were_benched_with_three_training_seeds_on_a_committed_tree()
     ["docs/results/val/ppo-lagrangian-residual-narrow.jsonl"],  # today's records
     [f"docs/results/val/record-v1/{name}.jsonl"  # how the variant was chosen (record version 1)
      for name in ("ppo-residual", "ppo-lagrangian-residual", "ppo-lagrangian-residual-narrow")],
+    sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "results" / "val" / "distill").glob("*.jsonl")),
 ])  # fmt: skip
 def test_the_val_tables_are_the_scripts_output(val):
     command = [sys.executable, "scripts/leaderboard.py", *val, "--print"]
