@@ -118,6 +118,7 @@ def round_tasks(config: TrainConfig, programs: Sequence[Program], round_index: i
     teacher = TeacherSettings(
         d.teacher_margin, d.teacher_refine_iterations, d.teacher_raise_rounds, d.label_limit
     )
+    shield = d.shield()
     order: list[int] = []
     while len(order) < d.episodes_per_round:
         order += rng.permutation(len(programs)).tolist()
@@ -127,7 +128,7 @@ def round_tasks(config: TrainConfig, programs: Sequence[Program], round_index: i
         nominal = kwargs.get("randomize") is None or rng.random() < d.nominal_share
         seed = int(rng.integers(2**31 - 1))
         tasks.append(EpisodeTask(config.env.id, nominal_kwargs if nominal else kwargs, program.name, program,
-                                 seed, teacher, actor, d.compare, d.shield()))  # fmt: skip
+                                 seed, teacher, actor, d.compare, shield))  # fmt: skip
     return tasks
 
 
@@ -312,6 +313,7 @@ def finetune(student: Any, config: TrainConfig, model_path: Path, progress_bar: 
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
     from cnc_gym_agents.lagrangian import CostPenalty, DualAscent
+    from cnc_gym_agents.student import save_model
     from cnc_gym_agents.training import ppo_model, training_vec_env
 
     d, lag = config.distill, config.lagrangian
@@ -345,11 +347,7 @@ def finetune(student: Any, config: TrainConfig, model_path: Path, progress_bar: 
                     tb_log_name=f"{config.run_name}-finetune",
                     callback=CallbackList([DualAscent(penalty, lag.cost_limit, lag.lambda_lr, lag.lambda_max),
                                            CriticFirst()]))  # fmt: skip
-        model.cnc_gym_env = config.env.policy_env()
-        shield = d.shield()
-        if shield is not None:
-            model.cnc_gym_shield = shield.record()
-        model.save(model_path)
+        save_model(model, model_path, config.env.policy_env(), d.shield())
     finally:
         vec_env.close()
     return {"timesteps": d.finetune_timesteps, "critic_steps": d.finetune_critic_steps, "lambda": penalty.lam}

@@ -141,11 +141,17 @@ class Student:
         return ActorWeights(tuple(arrays(m) for m in linear), arrays(p.action_net))
 
     def save(self, path: str | Path, policy_env: dict[str, Any], shield: PlannerShield | None = None) -> Path:
-        """Write the SB3 model zip, recording the env it acts in (``cnc_gym_env``) and the shield it
-        acts through (``cnc_gym_shield``), as plain JSON."""
-        self.model.cnc_gym_env = policy_env  # type: ignore[attr-defined]
-        if shield is not None:
-            self.model.cnc_gym_shield = shield.record()  # type: ignore[attr-defined]
-        path = Path(path)
-        self.model.save(path)
-        return path
+        """Write the SB3 model zip (:func:`save_model`)."""
+        return save_model(self.model, path, policy_env, shield)
+
+
+def save_model(model: Any, path: str | Path, policy_env: dict[str, Any],
+               shield: PlannerShield | None) -> Path:  # fmt: skip
+    """Write an SB3 model zip, recording the env it acts in (``cnc_gym_env``) and the shield it acts
+    through (``cnc_gym_shield``), as plain JSON (what :mod:`cnc_gym.policies.model` reads)."""
+    model.cnc_gym_env = policy_env
+    if shield is not None:
+        model.cnc_gym_shield = shield.record()
+    path = Path(path)
+    model.save(path)
+    return path
