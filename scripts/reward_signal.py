@@ -13,7 +13,9 @@ reports, per env id, the medians over programs of:
 
 and the spread (standard deviation over programs) of the planner's discounted return, about what reward
 normalisation (SB3's ``VecNormalize``) scales the reward by: the discounted gap over it is the share of
-the return's scale that the time a better policy saves is worth.
+the return's scale that the time a better policy saves is worth. For an env of the ``relative`` rule
+(Feedrate-v6: time per the planner's scheduled time) a second row re-weights the same episodes as if the
+time were counted per the planner's simulated cycle time of the program (what the schedule estimates).
 
 Usage::
 
@@ -43,6 +45,18 @@ class EpisodeReturn:
     bonus: float
     bonus_discounted: float
     feasible: bool
+    cycle_time_s: float
+    time_s: float  # the time the env's time term counts in (T_nominal or T_plan)
+    relative: bool  # the env's reward rule is `relative`
+    steps: list[tuple[float, float]]  # per step: the time term, and the rest of the reward
+
+    def rescaled(self, time_s: float, gamma: float) -> float:
+        """The discounted return had the time term counted per ``time_s`` instead of :attr:`time_s`."""
+        scale, total, weight = self.time_s / time_s, 0.0, 1.0
+        for time_term, rest in self.steps:
+            total += weight * (rest + scale * time_term)
+            weight *= gamma
+        return total
 
 
 def episode_return(env_id: str, policy_spec: str, program: Any, machine: str, dialect: str,
@@ -55,9 +69,11 @@ def episode_return(env_id: str, policy_spec: str, program: Any, machine: str, di
     env = policy_env(policy, programs=[program], env_id=env_id, contour_rule=None, controller_revision=None,
                      machine=machine, dialect=dialect)  # fmt: skip
     sums = {"discounted": 0.0, "bonus": 0.0, "bonus_discounted": 0.0, "weight": 1.0}
+    terms: list[tuple[float, float]] = []
 
     def on_step(steps: int, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> None:
         sums["discounted"] += sums["weight"] * float(reward)
+        terms.append((float(info["reward_time"]), float(reward) - float(info["reward_time"])))
         bonus = float(info.get("reward_finish", 0.0))
         sums["bonus"] += bonus
         sums["bonus_discounted"] += sums["weight"] * bonus
@@ -65,11 +81,14 @@ def episode_return(env_id: str, policy_spec: str, program: Any, machine: str, di
 
     try:
         episode = run_episode(env, policy, seed=0, on_step=on_step)
+        base = env.unwrapped
+        time_s = base.reward_time_s(base.resolve_program(0)[1], base.nominal_time_s)
     finally:
         env.close()
     feasible = bool(episode.terminated) and float(episode.info.get("violation_length_mm", 0.0)) <= 0.0
     return EpisodeReturn(episode.total_return, sums["discounted"], sums["bonus"], sums["bonus_discounted"],
-                         feasible)  # fmt: skip
+                         feasible, float(episode.info["cycle_time_s"]), time_s,
+                         getattr(base, "reward_rule", "") == "relative", terms)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-family", type=int, default=2, metavar="N")
     parser.add_argument("--ids", nargs="+", default=["cnc_gym/Feedrate-v5", "cnc_gym/Feedrate-v6"])
     parser.add_argument("--gamma", type=float, default=0.999, help="PPO's discount (configs/train: 0.999)")
+    parser.add_argument("--limit", type=int, default=None, metavar="N", help="the first N programs only")
     parser.add_argument("--json", default=None, help="write the per-program rows and the medians here")
     args = parser.parse_args(argv)
 
@@ -91,6 +111,7 @@ def main(argv: list[str] | None = None) -> int:
         if counts.get(entry.family, 0) < args.per_family:
             counts[entry.family] = counts.get(entry.family, 0) + 1
             programs.append(entry)
+    programs = programs[: args.limit] if args.limit else programs
     rows: list[dict[str, Any]] = []
     for n, entry in enumerate(programs, 1):
         path = str(entry.path)
@@ -105,6 +126,16 @@ def main(argv: list[str] | None = None) -> int:
                            "planner_return": planner.total, "planner_discounted": planner.discounted,
                            "planner_feasible": planner.feasible,
                            "oracle_feasible": oracle.feasible}  # fmt: skip
+            if planner.relative:  # re-weighted: time per the planner's simulated cycle time
+                simulated = planner.cycle_time_s
+                row[f"{env_id} (simulated)"] = {
+                    "gap": oracle.rescaled(simulated, 1.0) - planner.rescaled(simulated, 1.0),
+                    "gap_discounted": oracle.rescaled(simulated, args.gamma) - planner.rescaled(simulated,
+                                                                                                args.gamma),
+                    "bonus": 0.0, "bonus_discounted": 0.0,
+                    "planner_return": planner.rescaled(simulated, 1.0),
+                    "planner_discounted": planner.rescaled(simulated, args.gamma),
+                    "planner_feasible": planner.feasible, "oracle_feasible": oracle.feasible}  # fmt: skip
         rows.append(row)
         print(f"[{n}/{len(programs)}] {entry.name}", file=sys.stderr, flush=True)
 
@@ -112,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
         return statistics.median(row[env_id][key] for row in rows)
 
     summary: dict[str, dict[str, float]] = {}
-    for env_id in args.ids:
+    for env_id in [key for key in rows[0] if key != "program"]:
         summary[env_id] = {key: median(env_id, key) for key in
                            ("gap", "gap_discounted", "bonus", "bonus_discounted", "planner_return")}
         # What reward normalisation divides by is about the spread of discounted returns: over programs.
@@ -125,7 +156,9 @@ def main(argv: list[str] | None = None) -> int:
           "start | planner's discounted return: spread over programs | discounted gap ÷ spread |")
     print("|---|---:|---:|---:|---:|---:|---:|")
     for env_id, s in summary.items():
-        print(f"| `{env_id}` | {s['gap']:.3f} | {s['gap_discounted']:.3f} | {s['bonus']:.3f} | "
+        name = (f"`{env_id.removesuffix(' (simulated)')}`, time per the planner's simulated cycle time"
+                if env_id.endswith(" (simulated)") else f"`{env_id}`")  # fmt: skip
+        print(f"| {name} | {s['gap']:.3f} | {s['gap_discounted']:.3f} | {s['bonus']:.3f} | "
               f"{s['bonus_discounted']:.3f} | {s['spread_discounted']:.3f} | {s['signal']:.3f} |")
     if args.json:
         with open(args.json, "w", encoding="utf-8") as out:

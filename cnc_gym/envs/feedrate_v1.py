@@ -227,10 +227,18 @@ class FeedrateEnvV1(FeedrateEnv):
     ``w_progress = 1``, ``w_violation = 10`` per mm, ``w_finish = 1``. The terms are in ``info``
     (``reward_time``, ``reward_progress``, ``reward_violation``, ``reward_finish``).
 
+    **v6** (``reward_rule="relative"``): the same terms with ``τ = dt / T_plan``, ``T_plan`` the deployable
+    planner's scheduled time of the program on the episode's machine plus its dwells
+    (:meth:`reward_time_s`), and no finish bonus. Violation-free finishes rank by time as above, every
+    finish outranks a truncation, and a policy at the planner's pace earns about ``w_progress − w_time`` on
+    every program, so the time a policy saves is most of the return's spread; feasibility is the cost's
+    budget of 0, not part of the return's order. Weights: :class:`RelativeReward` (no ``w_finish``, no
+    ``reward_finish`` in the info).
+
     **Cost** (constrained RL, Safety-Gymnasium's convention): ``info["cost"] = ℓ``, the step's violation
     length in mm, so an episode's cost is its ``violation_length_mm``; the budget is
-    ``COST_BUDGET_MM = 0`` (the benchmark's feasibility). A Lagrangian learner needs a small positive
-    budget to settle on; ``agents/training.py``'s PPO-Lagrangian takes it as ``cost_limit``.
+    ``COST_BUDGET_MM = 0`` (the benchmark's feasibility); ``agents/training.py``'s PPO-Lagrangian takes it
+    as ``cost_limit`` (0 in ``configs/train/ppo-lagrangian-residual-v6.yaml``).
 
     ## Starting State
 
@@ -262,10 +270,14 @@ class FeedrateEnvV1(FeedrateEnv):
 
     ## Version History
 
+    - v6: v5 with the ``relative`` reward rule (above): time per the planner's scheduled time, no finish
+      bonus. Dynamics, observation, action and cost are v5's. The version to train on with a reward.
+    - v5: v4 on the controller's revision 2 (no overshoot where the override is lowered during an
+      acceleration). Observation, reward and planner are v4's.
     - v4: v3 with the live deployable planner, version 3 (``planner_version=3``): the ``planner_override``
       observation entry and info key, and the knob the ``residual`` mode scales, are the ``classical``
       baseline's of today (faster than version 2 at the same feasibility: docs/benchmark.md). Dynamics,
-      reward and the other entries are v2's. The version to train on.
+      reward and the other entries are v2's.
     - v3: v2 with the deployable planner version 2 (``planner_version=2``, now frozen bit for bit), which
       holds the contour tolerance on the test split of ``cnc-bench-v1``. Dynamics, reward and the other
       entries are v2's. v1 and v2 keep planner version 1, frozen bit for bit, so that their published
