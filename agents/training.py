@@ -44,7 +44,7 @@ from cnc_gym.config import (
     spec_of,
     text,
 )
-from cnc_gym.envs.feedrate_v1 import ACTION_MODE_V1, RESIDUAL_RANGE, RankingReward
+from cnc_gym.envs.feedrate_v1 import ACTION_MODE_V1, RESIDUAL_RANGE, RankingReward, RelativeReward
 from cnc_gym.envs.options import (
     CONTROL_PERIOD,
     DEFAULT_ACTION_MODE,
@@ -86,12 +86,14 @@ class EnvSettings:
     dialect: str = declared(DIALECT, DEFAULT_DIALECT)
     machine: str = declared(MACHINE_NAME, DEFAULT_MACHINE)
     action_mode: str = declared(dataclasses.replace(ACTION_MODE_V1, doc="what the action sets (`residual`: "
-                                                    "Feedrate-v1 to -v5)"), DEFAULT_ACTION_MODE)  # fmt: skip
+                                                    "Feedrate-v1 to -v6)"), DEFAULT_ACTION_MODE)  # fmt: skip
     control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
     reward: RewardWeights | None = section(  # noqa: RUF009
         RewardWeights, optional=True, doc="Feedrate-v0's reward weights (null: configs/tasks/default.yaml)")
     reward_v1: RankingReward | None = section(  # noqa: RUF009
-        RankingReward, optional=True, doc="Feedrate-v1's reward weights (null: its defaults)")
+        RankingReward, optional=True, doc="Feedrate-v1 to -v5's reward weights (null: their defaults)")
+    reward_v6: RelativeReward | None = section(  # noqa: RUF009
+        RelativeReward, optional=True, doc="Feedrate-v6's reward weights (null: its defaults)")
     randomize: DomainRandomization | None = section(  # noqa: RUF009
         DomainRandomization, optional=True, doc="Feedrate-v1's domain randomisation (null: off)")
     residual_range: float = declared(RESIDUAL_RANGE, 2.0)
@@ -101,12 +103,16 @@ class EnvSettings:
         """Rules across keys: ``(key, problem)``."""
         if self.id == "cnc_gym/Feedrate-v0":
             if self.action_mode == "residual":
-                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v5 (or -v1 to -v4)"
-            for key in ("reward_v1", "randomize"):
+                yield "action_mode", "residual needs id: cnc_gym/Feedrate-v6 (or -v1 to -v5)"
+            for key in ("reward_v1", "reward_v6", "randomize"):
                 if getattr(self, key) is not None:
-                    yield key, "belongs to cnc_gym/Feedrate-v1 to -v5 (set id: cnc_gym/Feedrate-v5)"
+                    yield key, "belongs to cnc_gym/Feedrate-v1 to -v6 (set id: cnc_gym/Feedrate-v6)"
         elif self.reward is not None:
-            yield "reward", "holds Feedrate-v0's weights; those of Feedrate-v1 to -v5 are reward_v1"
+            yield "reward", "holds Feedrate-v0's weights; v1 to v5 take reward_v1, v6 reward_v6"
+        elif self.id == "cnc_gym/Feedrate-v6" and self.reward_v1 is not None:
+            yield "reward_v1", "holds Feedrate-v1 to -v5's weights; v6's (no finish bonus) are reward_v6"
+        elif self.id != "cnc_gym/Feedrate-v6" and self.reward_v6 is not None:
+            yield "reward_v6", f"holds Feedrate-v6's weights; those of {self.id} are reward_v1"
         for program in self.programs:
             if program.startswith(SUITE_PREFIX):
                 problem = _suite_problem(program)
@@ -136,6 +142,8 @@ class EnvSettings:
             kwargs["residual_range"] = self.residual_range
             if self.reward_v1 is not None:
                 kwargs["reward"] = dataclasses.asdict(self.reward_v1)
+            if self.reward_v6 is not None:
+                kwargs["reward"] = dataclasses.asdict(self.reward_v6)
             if self.randomize is not None:
                 kwargs["randomize"] = dataclasses.asdict(self.randomize)
         if self.max_episode_steps is not None:
@@ -311,7 +319,7 @@ class TrainConfig:
             yield "ppo.batch_size", (f"must not exceed the rollout n_steps × n_envs = {rollout}, "
                                      f"got {self.ppo.batch_size}")  # fmt: skip
         if self.algorithm == "ppo_lagrangian" and self.env.id == "cnc_gym/Feedrate-v0":
-            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v5 (or -v1 to -v4; cost per mm)"
+            yield "algorithm", "ppo_lagrangian needs env.id: cnc_gym/Feedrate-v6 (or -v1 to -v5; cost per mm)"
         if self.algorithm == "distill":
             if self.env.action_mode != "residual":
                 yield "env.action_mode", "distill trains a residual policy: set action_mode: residual"

@@ -1,6 +1,6 @@
 """cnc-gym: Gymnasium environments for CNC feed-rate control on real G-code.
 
-Importing the package registers ``cnc_gym/Feedrate-v0``, ``-v1``, ``-v2`` and ``-v3`` with Gymnasium, each
+Importing the package registers ``cnc_gym/Feedrate-v0`` to ``-v6`` (:data:`ENV_IDS`) with Gymnasium, each
 with a vector entry point (``gymnasium.make_vec(id, n, vectorization_mode="vector_entry_point")``): at once
 when Gymnasium is already imported, otherwise the moment it is (a post-import hook on
 ``gymnasium.envs.registration``). So ``import cnc_gym`` stays cheap for interpreter-only users:
@@ -20,7 +20,7 @@ __version__ = "0.1.0"
 _REGISTRATION = "gymnasium.envs.registration"
 #: The env ids this package registers (each with a vector entry point).
 ENV_IDS = ("cnc_gym/Feedrate-v0", "cnc_gym/Feedrate-v1", "cnc_gym/Feedrate-v2", "cnc_gym/Feedrate-v3",
-           "cnc_gym/Feedrate-v4", "cnc_gym/Feedrate-v5")
+           "cnc_gym/Feedrate-v4", "cnc_gym/Feedrate-v5", "cnc_gym/Feedrate-v6")
 
 
 def _register() -> None:
@@ -45,18 +45,21 @@ def _register() -> None:
     # entry and residual mode; v1 and v2 keep the frozen planner version 1, v3 the frozen version 2.
     # v5 is v4 on the controller's revision 2 (cnc_gym.motion.kernel.CONTROLLER_REVISION: no overshoot
     # where the override is lowered during an acceleration); v0 to v4 keep revision 1, the env classes'
-    # default.
-    for env_id, planner, revision in (("cnc_gym/Feedrate-v3", 2, 1), ("cnc_gym/Feedrate-v4", 3, 1),
-                                      ("cnc_gym/Feedrate-v5", 3, 2)):  # fmt: skip
+    # default. v6 is v5 with the reward's `relative` rule (time per the deployable planner's scheduled time,
+    # no finish bonus: docs/env.md, "Reward"); v1 to v5 keep the `ranking` rule.
+    for env_id, planner, revision, rule in (("cnc_gym/Feedrate-v3", 2, 1, "ranking"),
+                                            ("cnc_gym/Feedrate-v4", 3, 1, "ranking"),
+                                            ("cnc_gym/Feedrate-v5", 3, 2, "ranking"),
+                                            ("cnc_gym/Feedrate-v6", 3, 2, "relative")):  # fmt: skip
         if env_id not in registry:
             register(id=env_id, entry_point="cnc_gym.envs.feedrate_v1:FeedrateEnvV1",
                      vector_entry_point="cnc_gym.envs.vector:make_vector_env_v1",
                      kwargs={"contour_rule": "path", "planner_version": planner,
-                             "controller_revision": revision})  # fmt: skip
+                             "controller_revision": revision, "reward_rule": rule})  # fmt: skip
     import warnings
 
-    # v0 to v4 stay supported beside v5 (the published models act in v1): no "out of date" warning.
-    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[01234] is out of date",
+    # v0 to v5 stay supported beside v6 (the published models act in v1 and v5): no "out of date" warning.
+    warnings.filterwarnings("ignore", message=r".*cnc_gym/Feedrate-v[012345] is out of date",
                             category=DeprecationWarning)  # fmt: skip
 
 

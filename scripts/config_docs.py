@@ -21,7 +21,7 @@ from doc_blocks import block_renderer, update_docs
 
 from cnc_gym.config import markdown_table
 from cnc_gym.envs import observation
-from cnc_gym.envs.feedrate_v1 import EnvArgumentsV1, RankingReward
+from cnc_gym.envs.feedrate_v1 import EnvArgumentsV1, RankingReward, RelativeReward
 from cnc_gym.envs.options import EnvArguments, RewardWeights
 from cnc_gym.envs.randomization import DomainRandomization
 from cnc_gym.envs.task import TaskConfig
@@ -62,6 +62,7 @@ TABLES: dict[str, tuple[type, str]] = {
     "env.arguments": (EnvArguments, ""),
     "env.v1.arguments": (EnvArgumentsV1, ""),
     "reward.v1": (RankingReward, ""),
+    "reward.v6": (RelativeReward, ""),
     "randomize": (DomainRandomization, ""),
 }
 #: Tables written by a function instead of from a schema: the observations of Feedrate-v1 and -v0, from

@@ -4,7 +4,7 @@
 Each case runs one env through ``gymnasium.make`` with seeded random actions for ``--steps`` steps,
 resetting at episode ends, and hashes everything the env returns, bit for bit: the observations' bytes,
 the rewards (``float.hex``), the terminated and truncated flags, and every info dict's ``repr`` (keys in
-order, values with their types). The cases cover v0 to v5 on the built-ins, the benchmark's helix and
+order, values with their types). The cases cover v0 to v6 on the built-ins, the benchmark's helix and
 NURBS programs, other presets, every action mode, another control period and look-ahead size, domain
 randomisation, short step budgets (truncations) and a program without motion.
 
@@ -63,6 +63,10 @@ CASES: dict[str, tuple[str, dict[str, Any]]] = {
     "v5-flat": ("cnc_gym/Feedrate-v5", {}),
     "v5-residual": ("cnc_gym/Feedrate-v5", {"programs": ["star", "pocket", "freeform"],
                                             "action_mode": "residual"}),
+    "v6-flat": ("cnc_gym/Feedrate-v6", {}),
+    "v6-randomized-residual": ("cnc_gym/Feedrate-v6", {"programs": ["star", "pocket", "freeform"],
+                                                       "action_mode": "residual", "randomize": RANDOMIZE,
+                                                       "reward": {"time": 2.0, "violation": 3.0}}),
 }  # fmt: skip
 
 

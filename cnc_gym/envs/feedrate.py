@@ -351,7 +351,8 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
         budget = self._max_episode_steps_arg or (
             math.ceil(5.0 * t_nominal / self.control_period_s) + math.ceil(1.0 / self.control_period_s)
         )
-        return batch.add_program(name, toolpath, self.control_period_s / t_nominal, int(budget),
+        t_reward = self.reward_time_s(toolpath, t_nominal)
+        return batch.add_program(name, toolpath, self.control_period_s / t_reward, int(budget),
                                  self.finish_bonus(t_nominal, int(budget)))  # fmt: skip
 
     #: The planner whose override the compiled step evaluates (none in v0).
@@ -360,6 +361,10 @@ class FeedrateEnv(gym.Env[np.ndarray, np.ndarray]):
     def finish_bonus(self, t_nominal: float, budget: int) -> float:
         """What a violation-free finish of a program pays (nothing in v0; see ``RewardSpec.finish_key``)."""
         return 0.0
+
+    def reward_time_s(self, toolpath: Toolpath, t_nominal: float) -> float:
+        """The time the reward's time term counts in (``τ = dt / this``): the program's nominal time."""
+        return t_nominal
 
     def episode_slot(self, choice: int | ProgramLike) -> int:
         """The bank index of the episode's program (v0: the program, packed on first use)."""

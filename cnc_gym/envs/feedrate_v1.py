@@ -60,6 +60,27 @@ class RankingReward:
                            doc="w_finish: paid, with the step budget's time, on a violation-free finish")
 
 
+@dataclass(frozen=True)
+class RelativeReward:
+    """Weights of Feedrate-v6's reward (the ``relative`` rule; the class docstring of
+    :class:`FeedrateEnvV1`): no finish bonus, so a violation-free episode's return is its time alone, per
+    the deployable planner's scheduled time; feasibility is the cost's budget of 0
+    (:data:`COST_BUDGET_MM`)."""
+
+    time: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
+                         doc="w_time: the episode's time cost per nominal time (> 0: faster ranks higher)")
+    progress: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
+                             doc="w_progress: paid over the whole path, in proportion to progress (> 0: a "
+                             "finish outranks a truncation)")
+    violation: float = number(10.0, 0, 1e6, why=WEIGHT_WHY,
+                              doc="w_violation: per mm of path cut with contour error over tolerance (the "
+                              "constraint's cost is that length, `info[\"cost\"]`)")
+
+
+#: Each reward rule's weights record (:data:`REWARD_RULES`).
+REWARD_RECORDS: dict[str, type] = {"ranking": RankingReward, "relative": RelativeReward}
+
+
 #: The per-mm violation cost's budget of the constrained formulation (``info["cost"]``, summed over an
 #: episode, is the episode's violation length in mm); the benchmark's feasibility is a budget of 0.
 COST_BUDGET_MM = 0.0
@@ -75,6 +96,13 @@ PLANNER_VERSION_V1 = Number(low=1, high=3, integer=True, doc="the deployable pla
                             why="the planner versions there are (motion.planner.PLANNERS).")  # fmt: skip
 ACTION_MODE_V1 = Choice(choices=ACTION_MODES_V1, doc="what the action sets: the override knob, the feed, or "
                         "a factor on the deployable planner's override")
+#: The two rules for what a violation-free finish pays (:meth:`FeedrateEnvV1.finish_bonus`).
+REWARD_RULES = ("ranking", "relative")
+REWARD_RULE = Choice(choices=REWARD_RULES, doc="the reward's rule: `ranking` (v1 to v5): time per nominal "
+                     "time, and a violation-free finish pays w_time·N_max·τ + w_finish, so that it outranks "
+                     "every violating or truncated episode; `relative` (v6): time per the deployable "
+                     "planner's scheduled time, no finish bonus, feasibility the cost's zero "
+                     "budget")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -86,8 +114,9 @@ class EnvArgumentsV1:
     machine: str | Path | MachineConfig = declared(MACHINE_V1, DEFAULT_MACHINE)  # noqa: RUF009
     action_mode: str = declared(ACTION_MODE_V1, DEFAULT_ACTION_MODE)
     control_period_s: float = declared(CONTROL_PERIOD, DEFAULT_CONTROL_PERIOD_S)
-    reward: RankingReward | None = section(  # noqa: RUF009
-        RankingReward, optional=True, doc="reward weights (null: the defaults)")
+    reward: RankingReward | RelativeReward | None = section(  # noqa: RUF009
+        RankingReward, optional=True, doc="reward weights: `RankingReward`'s under the `ranking` rule, "
+        "`RelativeReward`'s (no `finish`) under `relative` (null: the defaults)")
     randomize: DomainRandomization | None = section(  # noqa: RUF009
         DomainRandomization, optional=True, doc="domain randomisation (null: off)")
     residual_range: float = declared(RESIDUAL_RANGE, 2.0)
@@ -101,6 +130,7 @@ class EnvArgumentsV1:
     contour_rule: str = declared(spec_of(EnvArguments, "contour_rule"), "cuts")
     planner_version: int = declared(PLANNER_VERSION_V1, 1)
     controller_revision: int = declared(spec_of(EnvArguments, "controller_revision"), 1)
+    reward_rule: str = declared(REWARD_RULE, "ranking")
 
 
 def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
@@ -109,19 +139,27 @@ def env_arguments_v1(**kwargs: Any) -> EnvArgumentsV1:
     unknown = sorted(set(kwargs) - set(specs))
     if unknown:
         raise ConfigError(f"{SOURCE_V1}: unknown argument {unknown[0]} (allowed: {', '.join(specs)})")
-    values = {key: parse_value(specs[key], raw, SOURCE_V1, key) for key, raw in kwargs.items()}
+    values = {key: parse_value(specs[key], raw, SOURCE_V1, key) for key, raw in kwargs.items()
+              if key != "reward"}  # fmt: skip
+    if "reward" in kwargs:  # read into the weights record of the rule it belongs to
+        record = REWARD_RECORDS[values.get("reward_rule", "ranking")]
+        values["reward"] = parse_value(dataclasses.replace(specs["reward"], of=record), kwargs["reward"],
+                                       SOURCE_V1, "reward")  # fmt: skip
     return EnvArgumentsV1(**values)
 
 
-def reward_spec_v1(weights: RankingReward) -> RewardSpec:
-    """Feedrate-v1's reward, term by term, with the finish bonus (:meth:`FeedrateEnvV1.finish_bonus`); the
-    terms and the bonus are in the info, and the cost is the step's violation length."""
+def reward_spec_v1(weights: RankingReward | RelativeReward) -> RewardSpec:
+    """Feedrate-v1's reward, term by term, with the finish bonus under the ``ranking`` rule
+    (:meth:`FeedrateEnvV1.finish_bonus`) and none under the ``relative`` rule (``weights`` a
+    :class:`RelativeReward`); the terms and the bonus are in the info, and the cost is the step's violation
+    length."""
+    ranking = isinstance(weights, RankingReward)
     return RewardSpec((
         ("time_fraction", "linear", 0.0, -weights.time),
         ("progress_delta", "linear", 0.0, weights.progress),
         ("violation_length", "linear", 0.0, -weights.violation),
-    ), term_keys=("reward_time", "reward_progress", "reward_violation"), finish_key="reward_finish",
-        cost="violation_length")  # fmt: skip
+    ), term_keys=("reward_time", "reward_progress", "reward_violation"),
+        finish_key="reward_finish" if ranking else None, cost="violation_length")  # fmt: skip
 
 
 def scaled_feed(toolpath: Toolpath, factor: float) -> Toolpath:
@@ -189,10 +227,18 @@ class FeedrateEnvV1(FeedrateEnv):
     ``w_progress = 1``, ``w_violation = 10`` per mm, ``w_finish = 1``. The terms are in ``info``
     (``reward_time``, ``reward_progress``, ``reward_violation``, ``reward_finish``).
 
+    **v6** (``reward_rule="relative"``): the same terms with ``τ = dt / T_plan``, ``T_plan`` the deployable
+    planner's scheduled time of the program on the episode's machine plus its dwells
+    (:meth:`reward_time_s`), and no finish bonus. Violation-free finishes rank by time as above, every
+    finish outranks a truncation, and a policy at the planner's pace earns about ``w_progress − w_time`` on
+    every program, so the time a policy saves is most of the return's spread; feasibility is the cost's
+    budget of 0, not part of the return's order. Weights: :class:`RelativeReward` (no ``w_finish``, no
+    ``reward_finish`` in the info).
+
     **Cost** (constrained RL, Safety-Gymnasium's convention): ``info["cost"] = ℓ``, the step's violation
     length in mm, so an episode's cost is its ``violation_length_mm``; the budget is
-    ``COST_BUDGET_MM = 0`` (the benchmark's feasibility). A Lagrangian learner needs a small positive
-    budget to settle on; ``agents/training.py``'s PPO-Lagrangian takes it as ``cost_limit``.
+    ``COST_BUDGET_MM = 0`` (the benchmark's feasibility); ``agents/training.py``'s PPO-Lagrangian takes it
+    as ``cost_limit`` (0 in ``configs/train/ppo-lagrangian-residual-v6.yaml``).
 
     ## Starting State
 
@@ -224,10 +270,14 @@ class FeedrateEnvV1(FeedrateEnv):
 
     ## Version History
 
+    - v6: v5 with the ``relative`` reward rule (above): time per the planner's scheduled time, no finish
+      bonus. Dynamics, observation, action and cost are v5's. The version to train on with a reward.
+    - v5: v4 on the controller's revision 2 (no overshoot where the override is lowered during an
+      acceleration). Observation, reward and planner are v4's.
     - v4: v3 with the live deployable planner, version 3 (``planner_version=3``): the ``planner_override``
       observation entry and info key, and the knob the ``residual`` mode scales, are the ``classical``
       baseline's of today (faster than version 2 at the same feasibility: docs/benchmark.md). Dynamics,
-      reward and the other entries are v2's. The version to train on.
+      reward and the other entries are v2's.
     - v3: v2 with the deployable planner version 2 (``planner_version=2``, now frozen bit for bit), which
       holds the contour tolerance on the test split of ``cnc-bench-v1``. Dynamics, reward and the other
       entries are v2's. v1 and v2 keep planner version 1, frozen bit for bit, so that their published
@@ -266,6 +316,7 @@ class FeedrateEnvV1(FeedrateEnv):
         setup: Any = None,
         planner_version: int = 1,
         controller_revision: int = 1,
+        reward_rule: str = "ranking",
     ) -> None:
         args = env_arguments_v1(programs=programs, dialect=dialect, machine=machine, action_mode=action_mode,
                                 control_period_s=control_period_s, reward=reward, randomize=randomize,
@@ -274,10 +325,13 @@ class FeedrateEnvV1(FeedrateEnv):
                                 lookahead_points=lookahead_points, units=units, plant=plant,
                                 contour_rule=contour_rule, setup=setup,
                                 planner_version=planner_version,
-                                controller_revision=controller_revision)  # fmt: skip
+                                controller_revision=controller_revision,
+                                reward_rule=reward_rule)  # fmt: skip
         self._configure(args)
         self.base_machine = self.machine
-        self.reward_weights = args.reward or RankingReward()
+        self.reward_rule = args.reward_rule
+        weights = args.reward or REWARD_RECORDS[self.reward_rule]()
+        self.reward_weights: RankingReward | RelativeReward = weights
         self.randomize = args.randomize or DomainRandomization()
         self.residual_range = float(args.residual_range)
         self._residual = self.action_mode == "residual"
@@ -306,9 +360,23 @@ class FeedrateEnvV1(FeedrateEnv):
         self._start()
 
     def finish_bonus(self, t_nominal: float, budget: int) -> float:
-        """The finish bonus of a program: ``w_time · N_max · τ + w_finish`` (the class docstring)."""
+        """The finish bonus of a program (the class docstring): ``w_time · N_max · τ + w_finish`` under the
+        ``ranking`` rule, none under the ``relative`` rule."""
         w = self.reward_weights
+        if not isinstance(w, RankingReward):
+            return 0.0
         return w.time * budget * self.control_period_s / max(t_nominal, 1e-12) + w.finish
+
+    def reward_time_s(self, toolpath: Toolpath, t_nominal: float) -> float:
+        """The time the reward's time term counts in (the class docstring): ``T_nominal`` under the
+        ``ranking`` rule; under ``relative`` ``T_plan``, the deployable planner's scheduled time of the
+        program on the episode's machine (as it plans: :meth:`plan_on`) plus its dwells, never below a
+        tenth of ``T_nominal``. The schedule is the one the planner entries and ``residual`` mode use
+        (planned once, recalled when the program is packed)."""
+        if self.reward_rule != "relative":
+            return t_nominal
+        schedule = self._planner.schedule(toolpath, self.machine, None)
+        return max(schedule.time_s + float(np.sum(toolpath.dwell_s)), 0.1 * t_nominal)
 
     @property
     def planner_override(self) -> float:
@@ -354,5 +422,6 @@ FeedrateEnvV1.__doc__ = (FeedrateEnvV1.__doc__ or "").replace(
     "{observation_table}", markdown_table().replace("\n", "\n    ")).replace("{{", "{").replace("}}", "}")
 
 
-__all__ = ["ACTION_MODES_V1", "COST_BUDGET_MM", "EnvArgumentsV1", "FeedrateEnvV1", "RankingReward",
-           "env_arguments_v1", "reward_spec_v1", "scaled_feed"]
+__all__ = ["ACTION_MODES_V1", "COST_BUDGET_MM", "REWARD_RECORDS", "REWARD_RULES", "EnvArgumentsV1",
+           "FeedrateEnvV1", "RankingReward", "RelativeReward", "env_arguments_v1", "reward_spec_v1",
+           "scaled_feed"]

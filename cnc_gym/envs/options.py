@@ -216,7 +216,7 @@ class EnvArguments:
         1, 1, CONTROLLER_REVISION, integer=True,
         doc="the simulated controller's behaviour revision: 1 as Feedrate-v0 to -v4 were published "
             "(where the override was lowered while the reference was still accelerating below the new "
-            "target it overshot that target, up to about twice), 2 with that fixed (Feedrate-v5, "
+            "target it overshot that target, up to about twice), 2 with that fixed (Feedrate-v5 and -v6, "
             "`cnc-gym run`, `bench`)")  # fmt: skip
 
 

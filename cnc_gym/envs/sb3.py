@@ -8,7 +8,7 @@ is the drop-in for SB3's ``make_vec_env(env_id, n_envs, seed=..., env_kwargs=...
 (the same seeds, programs and numbers, bit for bit; Monitor's episode records from ``VecMonitor``)::
 
     from cnc_gym.envs.sb3 import make_sb3_vec_env
-    vec_env = make_sb3_vec_env(8, seed=0, env_id="cnc_gym/Feedrate-v5",
+    vec_env = make_sb3_vec_env(8, seed=0, env_id="cnc_gym/Feedrate-v6",
                                env_kwargs={"programs": ["star", "circle"]})
     model = PPO("MlpPolicy", vec_env).learn(100_000)
 

@@ -22,7 +22,7 @@ i with ``s + i`` (a list gives one seed per env). Infos: every key of the id's i
 
     import gymnasium as gym
     import cnc_gym
-    envs = gym.make_vec("cnc_gym/Feedrate-v5", 8, vectorization_mode="vector_entry_point",
+    envs = gym.make_vec("cnc_gym/Feedrate-v6", 8, vectorization_mode="vector_entry_point",
                         programs=["star", "circle"])
     obs, infos = envs.reset(seed=0)                       # env i is seeded with seed + i
     obs, rewards, terminated, truncated, infos = envs.step(envs.action_space.sample())
@@ -162,11 +162,12 @@ class FeedrateVectorEnv(gym.vector.VectorEnv):
 
 
 class FeedrateVectorEnvV1(FeedrateVectorEnv):
-    """``num_envs`` episodes of ``cnc_gym/Feedrate-v1``, ``-v2`` or ``-v3`` (keyword arguments as
+    """``num_envs`` episodes of ``cnc_gym/Feedrate-v1`` to ``-v6`` (keyword arguments as
     :class:`~cnc_gym.envs.feedrate_v1.FeedrateEnvV1`'s; the ids differ only in them: ``contour_rule``,
-    ``planner_version``). In ``residual`` mode each env's action scales the deployable planner's override
-    of its own episode, as in the single env. Domain randomisation is refused here (each episode would
-    need an engine of its own): :func:`make_vector_env` gives ``SyncVectorEnv`` for it."""
+    ``planner_version``, ``controller_revision``, ``reward_rule``). In ``residual`` mode each env's action
+    scales the deployable planner's override of its own episode, as in the single env. Domain
+    randomisation is refused here (each episode would need an engine of its own): :func:`make_vector_env`
+    gives ``SyncVectorEnv`` for it."""
 
     task_class: ClassVar[type[FeedrateEnv]] = FeedrateEnvV1
 
@@ -197,7 +198,7 @@ class FeedrateVectorEnvV1(FeedrateVectorEnv):
 
 def make_vector_env_v1(num_envs: int = 8, parallel: bool | None = None,
                        **env_kwargs: Any) -> gym.vector.VectorEnv:  # fmt: skip
-    """The vector entry point of ``cnc_gym/Feedrate-v1``, ``-v2`` and ``-v3``: :class:`FeedrateVectorEnvV1`,
+    """The vector entry point of ``cnc_gym/Feedrate-v1`` to ``-v6``: :class:`FeedrateVectorEnvV1`,
     or with domain randomisation on (or a render mode) ``SyncVectorEnv`` over ``num_envs`` single envs
     (the same semantics and numbers; each env steps its own engine)."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:

@@ -14,7 +14,7 @@ import pytest
 import cnc_gym  # noqa: F401  (registers the envs)
 from cnc_gym.benchmark.metrics import episode_score, is_feasible
 from cnc_gym.envs.feedrate import FeedrateEnv
-from cnc_gym.envs.feedrate_v1 import FeedrateEnvV1, RankingReward, env_arguments_v1
+from cnc_gym.envs.feedrate_v1 import FeedrateEnvV1, RankingReward, RelativeReward, env_arguments_v1
 from cnc_gym.envs.observation import OBSERVATION_V1, markdown_table
 from cnc_gym.errors import ConfigError
 from cnc_gym.motion.bound import time_optimal_bound
@@ -271,3 +271,96 @@ def test_bad_arguments_are_one_config_error():
         env_arguments_v1(progress_bonus=1.0)
     with pytest.raises(ConfigError, match=re.escape("residual_range must be in (1, 10]")):
         FeedrateEnvV1(programs=["circle"], residual_range=1.0)
+
+
+# ----------------------------------------------------------------------- v6: the relative reward rule
+V6 = "cnc_gym/Feedrate-v6"
+
+
+@pytest.fixture(scope="module")
+def circle_outcomes_v6():
+    """Feedrate-v6 episodes on circle.nc: overrides 0.2, 0.5, 1.0 (within tolerance), 2.0 (violating), the
+    knob at 0 (truncated by the step budget), and 0.5 with a short budget (truncated)."""
+    env = gym.make(V6, programs=["circle"]).unwrapped
+    outcomes = {}
+    for override in (0.2, 0.5, 1.0, 2.0, 0.0):
+        total, steps, terminated, _, info, infos = run_episode(env, override - 1.0)
+        outcomes[override] = (total, steps, terminated, info, infos)
+    short = gym.make(V6, programs=["circle"], max_episode_steps=200)  # (TimeLimit truncates)
+    total, steps, terminated, _, info, infos = run_episode(short, -0.5)
+    outcomes["truncated"] = (total, steps, terminated, info, infos)
+    return env, outcomes
+
+
+def test_v6_counts_time_per_the_planners_scheduled_time(circle_outcomes_v6):
+    env, out = circle_outcomes_v6
+    assert env.reward_rule == "relative" and isinstance(env.reward_weights, RelativeReward)
+    _, toolpath = env.resolve_program(0)
+    t_plan = env._planner.schedule(toolpath, env.machine, None).time_s + float(np.sum(toolpath.dwell_s))
+    assert env.reward_time_s(toolpath, env.nominal_time_s) == t_plan
+    # The planner's schedule is slower than the programmed feed on this program, and it is what τ counts in.
+    assert t_plan > env.nominal_time_s
+    w = RelativeReward()
+    for key in (0.2, 0.5, 1.0):
+        total, steps, terminated, info, infos = out[key]
+        assert terminated and info["violation_length_mm"] == 0.0
+        # No finish bonus: a violation-free return is the progress less the time, per T_plan.
+        assert total == pytest.approx(w.progress - w.time * steps * env.control_period_s / t_plan,
+                                      rel=1e-9, abs=1e-9)  # fmt: skip
+        assert all("reward_finish" not in i for i in infos)
+        terms = sum(i["reward_time"] + i["reward_progress"] + i["reward_violation"] for i in infos[1:])
+        assert terms == pytest.approx(total, rel=1e-9, abs=1e-9)
+
+
+def test_v6_ranks_violation_free_finishes_like_the_score_and_finishes_above_truncations(circle_outcomes_v6):
+    env, out = circle_outcomes_v6
+    bound = time_optimal_bound(env.resolve_program(0)[1], env.machine).total_s
+    feasible = [0.2, 0.5, 1.0]
+    scores = {k: episode_score(True, 0.0, out[k][3]["cycle_time_s"] / bound) for k in feasible}
+    assert sorted(feasible, key=lambda k: out[k][0]) == sorted(feasible, key=lambda k: scores[k]) == feasible
+    # Every finish outranks the episode the same budget truncated (p < 1 and n ≤ N_max).
+    assert not out[0.0][2] and min(out[k][0] for k in feasible) > out[0.0][0]
+    # A truncated episode's return is its progress less its time: nothing more.
+    total, steps, terminated, info, infos = out["truncated"]
+    progress = sum(i["reward_progress"] for i in infos[1:])
+    assert not terminated and 0.0 < progress < 1.0
+    assert total == pytest.approx(progress - steps * env.control_period_s / env.reward_time_s(
+        env.resolve_program(0)[1], env.nominal_time_s), rel=1e-9)
+    # The violating episode pays its violation length (w_violation per mm) and its cost is that length.
+    total, steps, _, info, infos = out[2.0]
+    assert info["violation_length_mm"] > 0.0
+    assert sum(i["cost"] for i in infos[1:]) == pytest.approx(info["violation_length_mm"], abs=1e-12)
+    assert sum(i["reward_violation"] for i in infos[1:]) == pytest.approx(
+        -RelativeReward().violation * info["violation_length_mm"], rel=1e-9)
+
+
+def test_v6_moves_and_observes_like_v5():
+    # Only the reward differs: the same knob sequence gives the same observations and motion.
+    knobs = np.random.default_rng(3).uniform(-1.0, 1.0, 900).astype(np.float32)
+    runs = []
+    for env_id in ("cnc_gym/Feedrate-v5", V6):
+        env = gym.make(env_id, programs=["star", "circle"], action_mode="residual").unwrapped
+        obs, _ = env.reset(seed=5)
+        seen = [obs]
+        for knob in knobs:
+            obs, _, terminated, truncated, info = env.step(np.array([knob]))
+            seen.append(obs)
+            if terminated or truncated:
+                obs, _ = env.reset()
+                seen.append(obs)
+        runs.append((np.array(seen), info["cycle_time_s"], info["violation_length_mm"]))
+    (obs5, t5, v5), (obs6, t6, v6) = runs
+    np.testing.assert_array_equal(obs5, obs6)
+    assert (t5, v5) == (t6, v6)
+
+
+def test_v6_reward_weights_are_its_own():
+    with pytest.raises(ConfigError, match=r"^FeedrateEnv-v1: unknown key reward.finish \(allowed: progress, "
+                                          r"time, violation\)$"):  # fmt: skip
+        gym.make(V6, reward={"finish": 1.0})
+    with pytest.raises(ConfigError, match=r"reward.progress must be in \(0, 1e6\]"):
+        gym.make(V6, reward={"progress": 0.0})
+    assert gym.make(V6, reward={"time": 2.0}).unwrapped.reward_weights == RelativeReward(time=2.0)
+    # v5 keeps its ranking rule and its weights.
+    v5 = gym.make("cnc_gym/Feedrate-v5").unwrapped
+    assert v5.reward_rule == "ranking" and v5.reward_weights == RankingReward()

@@ -65,6 +65,7 @@ def test_bad_arguments():
     ("cnc_gym/Feedrate-v3", {}),
     ("cnc_gym/Feedrate-v3", {"action_mode": "residual"}),
     ("cnc_gym/Feedrate-v1", {"action_mode": "residual", "residual_range": 4.0}),
+    ("cnc_gym/Feedrate-v6", {"action_mode": "residual", "reward": {"time": 2.0}}),
 ])  # fmt: skip
 def test_every_id_has_a_vector_entry_point_with_the_single_envs_numbers(env_id, kwargs):
     # gymnasium.make_vec through the id's vector entry point against SyncVectorEnv over gymnasium.make

@@ -20,6 +20,19 @@ class Schedule:
     predicted_violations: int = 0
 
     @cached_property
+    def time_s(self) -> float:
+        """The schedule's own time over the path: ``Σ 2 Δs / (v_i + v_{i+1})`` of the scheduled speed on
+        the grid (constant acceleration between grid points; dwells not counted). An estimate of the
+        deployable planner's cycle time, not a simulation of it."""
+        s = np.asarray(self.s, dtype=np.float64)
+        v = np.asarray(self.speed_mm_s, dtype=np.float64)
+        if s.size < 2:
+            return 0.0
+        mean = 0.5 * (v[1:] + v[:-1])
+        moving = mean > 0.0
+        return float(np.sum(np.diff(s)[moving] / mean[moving]))
+
+    @cached_property
     def table(self) -> np.ndarray:
         """(n, 2) rows of path position and override: the table the compiled rule reads
         (:func:`~cnc_gym.motion.planner.rule.planner_override`)."""

@@ -11,6 +11,7 @@ import pytest
 from cnc_gym.machine import load_machine
 from cnc_gym.motion.kernel import reach_speed
 from cnc_gym.motion.planner import bidirectional_scan, plan_schedule
+from cnc_gym.motion.planner.record import Schedule
 from cnc_gym.programs import load_program
 
 
@@ -79,3 +80,19 @@ def test_the_sliding_window_maximum_is_the_maximum_over_the_window():
             lo = min(hi + 1, lo + int(rng.integers(0, 2)), n)
             want = values[lo : hi + 1].max() if lo <= hi else 0.0
             assert _window_max(values, queue[0], head, tail, pushed, 0, lo, hi) == want
+
+
+# ----------------------------------------------------------------------------------- the schedule's time
+def _schedule(s, speed):
+    s, speed = np.asarray(s, dtype=float), np.asarray(speed, dtype=float)
+    return Schedule(s=s, cap_mm_s=speed, speed_mm_s=speed, override=np.ones_like(s))
+
+
+def test_schedule_time_is_the_closed_form_of_its_speed():
+    # Constant speed: length / speed.
+    assert _schedule([0.0, 10.0, 30.0], [20.0, 20.0, 20.0]).time_s == pytest.approx(1.5, rel=1e-12)
+    # A ramp from rest at constant acceleration: 2 L / v (L = v² / 2a, t = v / a).
+    assert _schedule([0.0, 25.0], [0.0, 10.0]).time_s == pytest.approx(5.0, rel=1e-12)
+    # A stop (zero speed at both ends of a grid step, e.g. a repeated point) takes no time; one point: 0.
+    assert _schedule([0.0, 4.0, 4.0, 8.0], [4.0, 0.0, 0.0, 4.0]).time_s == pytest.approx(4.0, rel=1e-12)
+    assert _schedule([3.0], [5.0]).time_s == 0.0
