@@ -5,12 +5,13 @@ A child process imports numpy, numba, Gymnasium and cnc_gym, then the env's modu
 point names), runs ``gymnasium.make(id)``, one reset and ``--steps`` steps with random actions (resetting
 at episode ends), and reports its peak resident set (``ru_maxrss``) after each phase, and at the end how
 much of what is resident is file-backed (shared libraries' pages, which processes running the same
-libraries share) and how much anonymous (the process's own). Two references run the same way:
+libraries share) and how much anonymous (the process's own). References run the same way:
 
-- ``Pendulum-v1``: numpy, Gymnasium, make, steps;
 - ``numba floor``: numpy, numba, Gymnasium, then one call of a trivial function loaded from numba's disk
   cache: what any process that runs numba-compiled code from the cache pays before an env of its own (numba
-  compiles its runtime and imports ``scipy.linalg`` for its BLAS the first time it readies its target).
+  compiles its runtime and imports ``scipy.linalg`` for its BLAS the first time it readies its target);
+- the env again, with that call before ``import cnc_gym``: its later phases are then the env's own;
+- ``Pendulum-v1``: numpy, Gymnasium, make, steps.
 
 Each figure is the median over ``--repeats`` children. One child of each runs first and is not counted,
 so that numba's disk cache and the planner's servo table are on disk (the warm case: what every process
@@ -68,8 +69,9 @@ def _trivial_sum(x: Any) -> float:
     return total
 
 
-def child(env_id: str, steps: int) -> dict[str, Any]:
-    """Run the phases in this (fresh) process; the peak after each, in order."""
+def child(env_id: str, steps: int, floor_first: bool = False) -> dict[str, Any]:
+    """Run the phases in this (fresh) process; the peak after each, in order. ``floor_first``: call the
+    numba floor's function before importing cnc_gym, so that the later phases are the env's own."""
     phases: list[tuple[str, float]] = [("python", peak_mib())]
     import importlib
 
@@ -82,14 +84,16 @@ def child(env_id: str, steps: int) -> dict[str, Any]:
         phases.append(("import numba", peak_mib()))
     import gymnasium as gym
 
-    if env_id == NUMBA_FLOOR:
-        phases.append(("import gymnasium", peak_mib()))
+    phases.append(("import gymnasium", peak_mib()))
+    if env_id == NUMBA_FLOOR or floor_first:
         numba.njit(cache=True)(_trivial_sum)(np.ones(3))
         phases.append(("one function from numba's cache", peak_mib()))
-        return {"phases": phases, "end": resident_split(), "loaded": [m for m in NOTED if m in sys.modules]}
+        if env_id == NUMBA_FLOOR:
+            return _figures(phases, resident_split())
     if env_id != PENDULUM_ID:
         import cnc_gym  # noqa: F401  (registers the ids)
-    phases.append(("import gymnasium" + ("" if env_id == PENDULUM_ID else " + cnc_gym"), peak_mib()))
+
+        phases.append(("import cnc_gym", peak_mib()))
     entry_point = gym.spec(env_id).entry_point
     if isinstance(entry_point, str):
         importlib.import_module(entry_point.split(":")[0])
@@ -105,17 +109,21 @@ def child(env_id: str, steps: int) -> dict[str, Any]:
     phases.append((f"reset + {steps} steps", peak_mib()))
     end = resident_split()
     env.close()
+    return _figures(phases, end)
+
+
+def _figures(phases: list[tuple[str, float]], end: dict[str, float]) -> dict[str, Any]:
     return {"phases": phases, "end": end, "loaded": [m for m in NOTED if m in sys.modules]}
 
 
-def child_main(env_id: str, steps: int) -> None:
-    figures = child(env_id, steps)
+def child_main(env_id: str, steps: int, floor_first: bool = False) -> None:
+    figures = child(env_id, steps, floor_first)
     import json  # after the phases: not in their figures
 
     print(json.dumps(figures))
 
 
-def run_child(env_id: str, steps: int) -> dict[str, Any]:
+def run_child(env_id: str, steps: int, floor_first: bool = False) -> dict[str, Any]:
     import json
     import subprocess
     from pathlib import Path
@@ -124,24 +132,25 @@ def run_child(env_id: str, steps: int) -> dict[str, Any]:
     # read from its cache, as in a user's process.
     code = (
         f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); import bench_env_memory; "
-        f"bench_env_memory.child_main({env_id!r}, {steps})"
+        f"bench_env_memory.child_main({env_id!r}, {steps}, {floor_first})"
     )
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
     result: dict[str, Any] = json.loads(out.strip().splitlines()[-1])
     return result
 
 
-def measure(env_id: str, steps: int, repeats: int) -> dict[str, Any]:
+def measure(env_id: str, steps: int, repeats: int, floor_first: bool = False) -> dict[str, Any]:
     """The median peak after each phase over ``repeats`` fresh children (after one uncounted warm-up)."""
     import statistics
 
-    run_child(env_id, steps)  # warms numba's disk cache and the servo table; not counted
-    runs = [run_child(env_id, steps) for _ in range(repeats)]
+    run_child(env_id, steps, floor_first)  # warms numba's disk cache and the servo table; not counted
+    runs = [run_child(env_id, steps, floor_first) for _ in range(repeats)]
     names = [name for name, _ in runs[0]["phases"]]
     medians = [statistics.median(run["phases"][i][1] for run in runs) for i in range(len(names))]
     end = {key: statistics.median(run["end"][key] for run in runs) for key in runs[0]["end"]}
     phases = dict(zip(names, medians, strict=True))
-    return {"id": env_id, "steps": steps, "repeats": repeats, "phases": phases, "peak_mib": medians[-1],
+    name = f"{env_id}, numba's floor first" if floor_first else env_id
+    return {"id": name, "steps": steps, "repeats": repeats, "phases": phases, "peak_mib": medians[-1],
             "end": end, "loaded": runs[0]["loaded"]}  # fmt: skip
 
 
@@ -169,15 +178,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--id", default=None, help="env id (default: the newest cnc_gym/Feedrate-* id)")
     parser.add_argument("--steps", type=int, default=200)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--no-references", action="store_true", help="skip Pendulum-v1 and the numba floor")
+    parser.add_argument("--no-references", action="store_true",
+                        help="only the env (no floor first, no numba floor, no Pendulum-v1)")  # fmt: skip
     parser.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     args = parser.parse_args(argv)
     if args.id is None:
         import cnc_gym  # cheap: loads neither Gymnasium nor numba
 
         args.id = cnc_gym.ENV_IDS[-1]
-    ids = [args.id] + ([] if args.no_references else [NUMBA_FLOOR, PENDULUM_ID])
-    results = [measure(env_id, args.steps, args.repeats) for env_id in ids]
+    runs = [(args.id, False)]
+    if not args.no_references:
+        runs += [(args.id, True), (NUMBA_FLOOR, False), (PENDULUM_ID, False)]
+    results = [measure(env_id, args.steps, args.repeats, floor_first) for env_id, floor_first in runs]
     print(table(results))
     if args.json:
         with open(args.json, "w") as f:
