@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Peak memory of a process holding one env: ``ru_maxrss`` of a fresh child process, phase by phase.
+"""Peak memory of a process holding one env: the peak resident set of a fresh child, phase by phase.
 
 A child process imports numpy, numba, Gymnasium and cnc_gym, then the env's module (the one its entry
 point names), runs ``gymnasium.make(id)``, one reset and ``--steps`` steps with random actions (resetting
-at episode ends), and reports its peak resident set (``ru_maxrss``) after each phase, and at the end how
+at episode ends), and reports its peak resident set (``VmHWM`` on Linux) after each phase, and at the end how
 much of what is resident is file-backed (shared libraries' pages, which processes running the same
 libraries share) and how much anonymous (the process's own). References run the same way:
 
@@ -17,8 +17,9 @@ Each figure is the median over ``--repeats`` children. One child of each runs fi
 so that numba's disk cache and the planner's servo table are on disk (the warm case: what every process
 after the first pays). The child also lists which of the heavy modules of ``NOTED`` it ended up loading.
 
-On Linux a child's ``ru_maxrss`` starts at the launching process's own resident set (the peak carries
-over ``exec``), so the ``python`` row is at least this script's: the later rows are the child's own.
+On Linux the peak is the child's ``VmHWM`` (``/proc/self/status``), which counts only the child's own
+program: its ``ru_maxrss`` would start at the launching process's resident set (the peak carries over
+``exec``).
 
 Usage::
 
@@ -42,7 +43,17 @@ NOTED = ("scipy", "yaml", "matplotlib", "pydantic", "toppra", "mujoco", "torch",
 
 
 def peak_mib() -> float:
-    """This process's peak resident set so far, MiB (``ru_maxrss`` is KiB on Linux, bytes on macOS)."""
+    """This process's peak resident set so far, MiB: ``VmHWM`` on Linux (the high-water mark of this
+    program's memory, which starts afresh at ``exec``), else ``ru_maxrss`` (bytes on macOS). On Linux
+    ``ru_maxrss`` would carry the launching process's resident set over ``exec``: under a large parent
+    (a test runner) every phase would read as the parent's size."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 2**10
+    except OSError:
+        pass
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return peak / 2**20 if sys.platform == "darwin" else peak / 2**10
 
@@ -157,7 +168,7 @@ def measure(env_id: str, steps: int, repeats: int, floor_first: bool = False) ->
 def table(results: list[dict[str, Any]]) -> str:
     lines = []
     for result in results:
-        lines.append(f"{result['id']}: peak resident set (ru_maxrss, MiB) after each phase, "
+        lines.append(f"{result['id']}: peak resident set (MiB) after each phase, "
                      f"median of {result['repeats']} fresh processes")  # fmt: skip
         before = 0.0
         for name, peak in result["phases"].items():
