@@ -13,8 +13,8 @@ the compile.
   (its ``numba:compile`` events) and prints where the time goes, per numba function: how many
   signatures it was compiled for, its own CPU time (the compiles of the functions it calls taken out:
   numba compiles a callee when it types the caller), of which LLVM (optimising and emitting machine
-  code: a function's module links in the machine code of all it calls and optimises it again), and its
-  time with its callees; ``--signatures`` also lists each signature;
+  code: a function's module links in the code of everything it calls and LLVM optimises all of it
+  again), and its time with its callees; ``--signatures`` also lists each signature and its caller;
 - bytecode: as in an installed package (pip compiles it at install), the runs keep Python's bytecode
   cache (``PYTHONDONTWRITEBYTECODE`` is dropped) and each checkout is imported once before the timed runs.
 
@@ -79,7 +79,7 @@ def record_compiles(out: Path, demo_args: list[str]) -> None:
             name = _qualified(data["dispatcher"].py_func)
             rows.append((name, str(data["args"]), spent, spent - callees, llvm, caller))
 
-    class Llvm(event.Listener):  # numba holds its LLVM lock while it optimises and emits machine code
+    class Llvm(event.Listener):  # llvmlite holds this lock in each call into LLVM (optimising, emitting code)
         def on_start(self, ev: event.Event) -> None:
             llvm_started.append(time.process_time())
 
