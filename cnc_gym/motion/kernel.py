@@ -109,9 +109,10 @@ SNAP_MM = 1e-6  # a mandatory stop closer than this (with the stop manoeuvre don
 INF = 1e300
 
 
-# The small helpers (_peak, _valley, _step, _tick_top, _track_jerk, _bottom, _accel_bound, _target) are
-# plain calls, not inline="always": LLVM inlines them all the same, while numba's own inlining typed and
-# lowered their bodies again at each of their dozens of call sites, seconds of a first run's compile.
+# The smallest helpers (_peak, _valley, _step, _tick_top, _bottom, _accel_bound) are plain calls, not
+# inline="always": LLVM inlines them all the same, while numba's own inlining typed and lowered their
+# bodies again at each of their dozens of call sites, seconds of a first run's compile. (_target and
+# _track_jerk stay inlined: LLVM leaves them as calls in _tick.)
 @njit(cache=True)
 def _peak(v: float, a: float, jerk: float) -> float:
     """Highest speed reached if the acceleration is ramped to zero now at the full jerk."""
@@ -433,7 +434,7 @@ def reach_speed(v0: float, dist: float, acc: float, jerk: float) -> float:
     return (-qb + math.sqrt(qb * qb - 4.0 * qa * qc)) / (2.0 * qa)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _target(seg_f: np.ndarray, seg_i: np.ndarray, k: int, mode: int, ov: float, rapid_ov: float,
             cmd: float) -> float:  # fmt: skip
     """The speed the operator asks for on motion segment k (soft), never above its hard cap."""
@@ -466,7 +467,7 @@ def _step(v: float, a: float, j: float, dt: float) -> tuple[float, float, float]
     return ds, v + a * dt + 0.5 * j * dt * dt, a + j * dt
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _track_jerk(v: float, a: float, target: float, jerk: float, dt: float) -> float:
     """Jerk that settles the speed on ``target`` without chattering.
 
