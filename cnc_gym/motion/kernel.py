@@ -109,7 +109,11 @@ SNAP_MM = 1e-6  # a mandatory stop closer than this (with the stop manoeuvre don
 INF = 1e300
 
 
-@njit(cache=True, inline="always")
+# The smallest helpers (_peak, _valley, _step, _tick_top, _bottom, _accel_bound) are plain calls, not
+# inline="always": LLVM inlines them all the same, while numba's own inlining typed and lowered their
+# bodies again at each of their dozens of call sites, seconds of a first run's compile. (_target and
+# _track_jerk stay inlined: LLVM leaves them as calls in _tick.)
+@njit(cache=True)
 def _peak(v: float, a: float, jerk: float) -> float:
     """Highest speed reached if the acceleration is ramped to zero now at the full jerk."""
     if a > 0.0:
@@ -117,7 +121,7 @@ def _peak(v: float, a: float, jerk: float) -> float:
     return v
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _valley(v: float, a: float, jerk: float) -> float:
     """Lowest speed reached if the (negative) acceleration is ramped to zero now at the full jerk."""
     if a < 0.0:
@@ -446,7 +450,7 @@ def _target(seg_f: np.ndarray, seg_i: np.ndarray, k: int, mode: int, ov: float, 
     return min(want, cap)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _accel_bound(seg_f: np.ndarray, pt_f: np.ndarray, k: int, s: float) -> float:
     """Acceleration bound at arc length s inside motion segment k (falls linearly towards the next
     segment's arrival bound so that the acceleration can follow it with the jerk limit)."""
@@ -456,7 +460,7 @@ def _accel_bound(seg_f: np.ndarray, pt_f: np.ndarray, k: int, s: float) -> float
     return min(seg_f[k, F_ACC], pt_f[k + 1, P_AIN] + jerk * rest / seg_f[k, F_CAP])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _step(v: float, a: float, j: float, dt: float) -> tuple[float, float, float]:
     """Exact integration of a constant jerk over one period: (ds, v', a')."""
     ds = v * dt + 0.5 * a * dt * dt + j * dt * dt * dt / 6.0
@@ -478,7 +482,7 @@ def _track_jerk(v: float, a: float, target: float, jerk: float, dt: float) -> fl
     return min(max((a_des - a) / dt, -jerk), jerk)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _tick_top(v: float, a: float, j: float, dt: float, v1: float) -> float:
     """Highest speed within one period of constant jerk j from (v, a) ending at speed v1."""
     if a > 0.0 and j < 0.0 and a + j * dt < 0.0:
@@ -542,7 +546,7 @@ def _smallest_valley(lo: float, hi: float, v: float, a: float, dt: float, jerk_b
     return hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _bottom(v: float, a: float, j: float, dt: float, jerk_b: float) -> float:
     """Lowest speed within a period of constant jerk j and after it (valley of the end state)."""
     _, v1, a1 = _step(v, a, j, dt)

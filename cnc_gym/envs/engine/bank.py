@@ -262,9 +262,10 @@ def int_column(bank_f, bank_i, p, t):
     return bank_i[bank_i[at] : bank_i[at] + bank_i[at + 1]]
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def program_tables(bank_f, bank_i, p):
-    """Views of program p's tables (see FLOAT_TABLES, INT_TABLES)."""
+    """Views of program p's tables (see FLOAT_TABLES, INT_TABLES). A call, not inlined: its fifteen views
+    inlined into each of the step's functions that reads a program cost numba seconds of compiling each."""
     seg_f = float_table(bank_f, bank_i, p, 0, K.N_SEG_F)
     pt_f = float_table(bank_f, bank_i, p, 1, K.N_PT_F)
     dwell_f = float_table(bank_f, bank_i, p, 2, 5)

@@ -99,7 +99,9 @@ def run_steps(address, constant, schedule, lead_s, reach_mm, max_override, max_s
         else:
             knob = constant
         actions[0] = min(max(knob, -1.0), 1.0)
-        run_serial(address, True)
+        # A typed True, not the literal: numba would compile the step (its whole tree of kernels) a second
+        # time for Literal[bool](True), beside the (int64, bool) one the batch's own calls use.
+        run_serial(address, np.bool_(True))
         total += out[0]
         for j in range(columns.shape[0]):
             rows[k, j] = out[3 + columns[j]]

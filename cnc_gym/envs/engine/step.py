@@ -246,7 +246,10 @@ def _reset_plant(e, start, plant_x, plant_h, plant_v) -> None:
         plant_v[a, e] = 0.0
 
 
-@njit(cache=True, nogil=True)
+# Inlined into their callers (_reference into _run_env, _run_env into run_serial and run_parallel): a
+# separately compiled function links the machine code of everything it calls and LLVM optimises all of it
+# again, so each level of calls between the step's entry and the kernels cost seconds of a first run.
+@njit(cache=True, nogil=True, inline="always")
 def _reference(e, bank_f, bank_i, sf, si, knob, seg_f, pt_f, dwell_f, curve_f, seg_i, pt_i, scalars, out,
                reference, hints, pts) -> None:  # fmt: skip
     """The step's reference positions and segments: the controller's periods at the knob, or the last
@@ -401,7 +404,7 @@ def no_motion_modular(e, bank_f, bank_i, sf, si, obs, work_f) -> None:
     _no_motion_step(e, bank_f, bank_i, sf, si, obs, ahead)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _run_env(e, bank_f, bank_i, sf, si, plant_x, plant_h, plant_v, lifted, actions, obs, work_f, work_i,
              stepping) -> None:  # fmt: skip
     """One env's part of a batch call: reset it (row flag I_RESET), or step it (if ``stepping``)."""

@@ -289,7 +289,7 @@ def _on_row(table: np.ndarray, row: int, w: float, c: int) -> float:
     return table[row, c] * (1.0 - w) + table[row + 1, c] * w
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # (not inlined: its two callers would each compile the whole of it again)
 def _approach_error_at(k: int, u_in: np.ndarray, u_out: np.ndarray, speed: float, drop: float, ramp_s: float,
                        hold_s: float, t: np.ndarray, e: np.ndarray, c_int: np.ndarray,
                        lag: np.ndarray) -> float:  # fmt: skip

@@ -162,7 +162,8 @@ def _piece_tangents(seg_f: np.ndarray, seg_i: np.ndarray,
             dz = seg_f[k, K.F_EZ] - seg_f[k, K.F_SZ]
             norm = max(math.sqrt(dx * dx + dy * dy + dz * dz), 1e-300)
             t0[k, 0], t0[k, 1], t0[k, 2] = dx / norm, dy / norm, dz / norm
-            t1[k] = t0[k]
+            for a in range(3):  # (element by element: an array assignment compiles numba's shape check
+                t1[k, a] = t0[k, a]  # and its error message, string formatting included: seconds)
     return t0, t1
 
 
