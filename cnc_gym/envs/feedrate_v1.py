@@ -68,7 +68,8 @@ class RelativeReward:
     (:data:`COST_BUDGET_MM`)."""
 
     time: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
-                         doc="w_time: the episode's time cost per nominal time (> 0: faster ranks higher)")
+                         doc="w_time: the episode's time cost per the planner's scheduled time (> 0: faster "
+                         "ranks higher)")
     progress: float = number(1.0, 0, 1e6, low_open=True, why=WEIGHT_WHY,
                              doc="w_progress: paid over the whole path, in proportion to progress (> 0: a "
                              "finish outranks a truncation)")
