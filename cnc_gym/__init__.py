@@ -46,7 +46,7 @@ def _register() -> None:
     # v5 is v4 on the controller's revision 2 (cnc_gym.motion.kernel.CONTROLLER_REVISION: no overshoot
     # where the override is lowered during an acceleration); v0 to v4 keep revision 1, the env classes'
     # default. v6 is v5 with the reward's `relative` rule (time per the deployable planner's scheduled time,
-    # no finish bonus: docs/env.md, "Reward"); v1 to v5 keep the `ranking` rule.
+    # no finish bonus: docs/env.md, "The relative reward (v6)"); v1 to v5 keep the `ranking` rule.
     for env_id, planner, revision, rule in (("cnc_gym/Feedrate-v3", 2, 1, "ranking"),
                                             ("cnc_gym/Feedrate-v4", 3, 1, "ranking"),
                                             ("cnc_gym/Feedrate-v5", 3, 2, "ranking"),

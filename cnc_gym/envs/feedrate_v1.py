@@ -97,8 +97,9 @@ PLANNER_VERSION_V1 = Number(low=1, high=3, integer=True, doc="the deployable pla
                             why="the planner versions there are (motion.planner.PLANNERS).")  # fmt: skip
 ACTION_MODE_V1 = Choice(choices=ACTION_MODES_V1, doc="what the action sets: the override knob, the feed, or "
                         "a factor on the deployable planner's override")
-#: The two rules for what a violation-free finish pays (:meth:`FeedrateEnvV1.finish_bonus`).
-REWARD_RULES = ("ranking", "relative")
+#: The reward's rules (:data:`REWARD_RECORDS`): what the time term counts in
+#: (:meth:`FeedrateEnvV1.reward_time_s`) and what a violation-free finish pays (:meth:`~.finish_bonus`).
+REWARD_RULES = tuple(REWARD_RECORDS)
 REWARD_RULE = Choice(choices=REWARD_RULES, doc="the reward's rule: `ranking` (v1 to v5): time per nominal "
                      "time, and a violation-free finish pays w_time·N_max·τ + w_finish, so that it outranks "
                      "every violating or truncated episode; `relative` (v6): time per the deployable "
@@ -364,7 +365,7 @@ class FeedrateEnvV1(FeedrateEnv):
         """The finish bonus of a program (the class docstring): ``w_time · N_max · τ + w_finish`` under the
         ``ranking`` rule, none under the ``relative`` rule."""
         w = self.reward_weights
-        if not isinstance(w, RankingReward):
+        if not isinstance(w, RankingReward):  # the relative rule's record (REWARD_RECORDS)
             return 0.0
         return w.time * budget * self.control_period_s / max(t_nominal, 1e-12) + w.finish
 
@@ -374,7 +375,7 @@ class FeedrateEnvV1(FeedrateEnv):
         program on the episode's machine (as it plans: :meth:`plan_on`) plus its dwells, never below a
         tenth of ``T_nominal``. The schedule is the one the planner entries and ``residual`` mode use
         (planned once, recalled when the program is packed)."""
-        if self.reward_rule != "relative":
+        if isinstance(self.reward_weights, RankingReward):  # the ranking rule's record (REWARD_RECORDS)
             return t_nominal
         schedule = self._planner.schedule(toolpath, self.machine, None)
         return max(schedule.time_s + float(np.sum(toolpath.dwell_s)), 0.1 * t_nominal)
