@@ -19,6 +19,11 @@ The loop (:func:`distill`), in the terms of Ross et al. (AISTATS 2011, DAgger):
   with the **quantile (pinball) loss** at level ``quantile``: the τ-quantile of the teacher's actions in
   states the student cannot tell apart, below the median for τ < 0.5.
 
+The saved model acts through the planner-fallback shield (:mod:`cnc_gym.policies.shield`) if
+``shield_bins`` > 0; with ``shield_envelope`` its record also holds the range of each of the observation's
+machine entries over all training samples (:func:`machine_envelope`), outside which the student hands the
+knob to the planner.
+
 Episodes are labelled by tasks (:mod:`.labelling`) on a process pool or on Ray, as ``cnc-gym bench`` runs
 its episodes. Optionally the distilled student is then fine-tuned with PPO-Lagrangian
 (:mod:`.lagrangian`) at the budget ``lagrangian.cost_limit`` (the benchmark's is 0), its actor held fixed
@@ -47,6 +52,8 @@ from cnc_gym.errors import CncGymError, ConfigError
 from cnc_gym_agents.labelling import EpisodeTask, Executor, LabelledEpisode, TeacherSettings, label_all
 
 if TYPE_CHECKING:
+    from cnc_gym.envs.observation import ObservationLayout
+    from cnc_gym.policies.shield import PlannerShield
     from cnc_gym.programs import Program
     from cnc_gym_agents.training import TrainConfig
 
@@ -96,6 +103,15 @@ class Dataset:
 
     def __len__(self) -> int:
         return sum(len(x) for x in self.labels)
+
+
+def machine_envelope(observations: np.ndarray,
+                     layout: ObservationLayout) -> tuple[tuple[str, float, float], ...]:  # fmt: skip
+    """The range of each of the observation's machine entries (``layout``'s entries of source
+    ``machine``) over ``observations``: the machines the student was trained on, the shield's envelope."""
+    return tuple((e.name, float(np.min(observations[:, layout.structure[e.name][0]])),
+                  float(np.max(observations[:, layout.structure[e.name][0]])))
+                 for e in layout.entries if e.source == "machine")  # fmt: skip
 
 
 def sample_weight(episode: LabelledEpisode, round_index: int, violation_weight: float) -> float:
@@ -231,6 +247,11 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
         except CncGymError as exc:
             spaces_env.close()
             raise ConfigError(f"{config.source}: distill.shield_bins: {exc}") from None
+    elif d.shield_envelope:
+        spaces_env.close()
+        raise ConfigError(f"{config.source}: distill.shield_envelope: the envelope is the shield's; set "
+                          "distill.shield_bins > 0")  # fmt: skip
+    layout: ObservationLayout = spaces_env.unwrapped.layout  # type: ignore[attr-defined]
     tensorboard_dir = run_dir.parent / "tensorboard"
     student = Student(spaces_env, config.ppo.net_arch, config.ppo.log_std_init, config.seed)
     logger = configure_logger(0, str(tensorboard_dir), config.run_name)
@@ -274,12 +295,14 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
         bar.close()
         logger.close()
         spaces_env.close()
+    if shield is not None and d.shield_envelope:
+        shield = d.shield(machine_envelope(data.arrays()[0], layout))
     try:
         student_path = student.save(run_dir / "student.zip", config.env.policy_env(), shield)
         model_path = run_dir / "model.zip"
         finetuned = None
         if d.finetune_timesteps > 0:
-            finetuned = finetune(student, config, model_path, progress_bar)
+            finetuned = finetune(student, config, model_path, progress_bar, shield)
         else:
             student.save(model_path, config.env.policy_env(), shield)
         summary = {
@@ -306,10 +329,11 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
     return model_path
 
 
-def finetune(student: Any, config: TrainConfig, model_path: Path, progress_bar: bool) -> dict[str, Any]:
+def finetune(student: Any, config: TrainConfig, model_path: Path, progress_bar: bool,
+             shield: PlannerShield | None) -> dict[str, Any]:  # fmt: skip
     """PPO-Lagrangian on the distilled student (module docstring), with the PPO and env of ``train``
     (:func:`~cnc_gym_agents.training.training_vec_env`, :func:`~cnc_gym_agents.training.ppo_model`);
-    saves ``model_path``."""
+    saves ``model_path``, recording ``shield``."""
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 
     from cnc_gym_agents.lagrangian import CostPenalty, DualAscent
@@ -347,7 +371,7 @@ def finetune(student: Any, config: TrainConfig, model_path: Path, progress_bar: 
                     tb_log_name=f"{config.run_name}-finetune",
                     callback=CallbackList([DualAscent(penalty, lag.cost_limit, lag.lambda_lr, lag.lambda_max),
                                            CriticFirst()]))  # fmt: skip
-        save_model(model, model_path, config.env.policy_env(), d.shield())
+        save_model(model, model_path, config.env.policy_env(), shield)
     finally:
         vec_env.close()
     return {"timesteps": d.finetune_timesteps, "critic_steps": d.finetune_critic_steps, "lambda": penalty.lam}

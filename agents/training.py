@@ -245,11 +245,16 @@ class DistillSettings:
                                  "from which the shield falls back to the planner (0: no error rule)",
                                  why="the observation's error entry is clipped at 5.")  # fmt: skip
 
-    def shield(self) -> PlannerShield | None:
-        """The shield these settings ask for (None with ``shield_bins`` 0)."""
+    shield_envelope: bool = flag(False, doc="record in the saved model's shield the range of each of "
+                                 "the observation's machine entries over the training samples: on a "
+                                 "machine outside it the student acts as the planner (needs shield_bins "
+                                 "> 0)")  # fmt: skip
+
+    def shield(self, envelope: tuple[tuple[str, float, float], ...] = ()) -> PlannerShield | None:
+        """The shield these settings ask for (None with ``shield_bins`` 0), with ``envelope`` if given."""
         if self.shield_bins == 0:
             return None
-        return PlannerShield(self.shield_bins, self.shield_turn, self.shield_error or None)
+        return PlannerShield(self.shield_bins, self.shield_turn, self.shield_error or None, envelope)
 
 
 @dataclass

@@ -300,7 +300,7 @@ TINY = {
     "algorithm": "distill",
     "distill": {"rounds": 1, "episodes_per_round": 2, "nominal_share": 0.5, "teacher_refine_iterations": 2,
                 "teacher_raise_rounds": 0, "epochs": 2, "round_epochs": 1, "batch_size": 256,
-                "shield_bins": 1, "shield_error": 0.6},
+                "shield_bins": 1, "shield_error": 0.6, "shield_envelope": True},
     "ppo": {"net_arch": [8, 8]},
     "run_name": "tiny-distill",
     "progress_bar": False,
@@ -403,7 +403,15 @@ def test_a_distill_run_saves_a_model_that_loads_without_unpickling(distilled):
     model = load_sb3_model(run / "model.zip")
     assert model.env_id == V5
     assert model.env_kwargs == {"action_mode": "residual", "control_period_s": 0.01, "residual_range": 1.25}
-    assert model.shield == PlannerShield(1, 0.25, 0.6)  # shield_bins, shield_error; shield_turn default
+    shield = model.shield
+    # shield_bins, shield_error; shield_turn default; the envelope of the machines it was trained on
+    assert shield is not None and (shield.bins, shield.turn, shield.error) == (1, 0.25, 0.6)
+    envelope = {name: (low, high) for name, low, high in shield.envelope}
+    assert list(envelope) == ["kv", "kv_mismatch", "feedforward", "accel_limit"]
+    assert all(low <= high for low, high in envelope.values())
+    # The default ranges draw feed-forward in [0.5, 0.9], and the nominal machine's 0.7 lies within.
+    assert 0.5 <= envelope["feedforward"][0] <= 0.7 <= envelope["feedforward"][1] <= 0.9
+    assert load_sb3_model(run / "student.zip").shield == shield
     from cnc_gym.policies import make_policy
 
     policy = make_policy(str(run / "model.zip"))
@@ -428,6 +436,29 @@ def test_a_distill_run_reports_its_rounds_and_budget(distilled):
     events = EventAccumulator(str(next((run.parent / "tensorboard").glob("tiny-distill_*"))))
     events.Reload()
     assert {"distill/fit_loss", "distill/round_time_vs_planner"} <= set(events.Tags()["scalars"])
+
+
+def test_an_envelope_without_a_shield_is_refused_before_any_labelling(tmp_path):
+    from cnc_gym_agents.distillation import distill
+
+    config = _config(shield_bins=0, shield_envelope=True)
+    with pytest.raises(ConfigError, match="distill.shield_envelope: the envelope is the shield's"):
+        distill(config, tmp_path, progress_bar=False)
+    assert not any(tmp_path.iterdir())
+
+
+def test_the_envelope_is_each_machine_entrys_range_over_the_samples():
+    from cnc_gym_agents.distillation import machine_envelope
+
+    layout = _env().unwrapped.layout
+    observations = np.zeros((3, layout.size), np.float32)
+    for row, (kv, ff) in enumerate(((0.8, 0.6), (1.2, 0.5), (1.0, 0.9))):
+        observations[row, layout.structure["kv"][0]] = kv
+        observations[row, layout.structure["feedforward"][0]] = ff
+    envelope = {name: (low, high) for name, low, high in machine_envelope(observations, layout)}
+    assert envelope["kv"] == pytest.approx((0.8, 1.2)) and envelope["feedforward"] == pytest.approx((0.5, 0.9))
+    assert envelope["kv_mismatch"] == (0.0, 0.0) and set(envelope) == {
+        e.name for e in layout.entries if e.source == "machine"}  # fmt: skip
 
 
 def test_timesteps_is_refused_for_distill(tmp_path):
@@ -457,11 +488,13 @@ def test_the_fine_tune_starts_from_the_distilled_actor(tmp_path):
     before = student.actor_weights()
     (tmp_path / "runs").mkdir()
     config = dataclasses.replace(config, output_dir=str(tmp_path))
-    result = finetune(student, config, tmp_path / "runs" / "m.zip", progress_bar=False)
+    shield = PlannerShield(1, 0.25, None, (("feedforward", 0.5, 0.9),))
+    result = finetune(student, config, tmp_path / "runs" / "m.zip", progress_bar=False, shield=shield)
     assert result["timesteps"] == 128
     from cnc_gym.policies.model import load_sb3_model
 
     tuned = load_sb3_model(tmp_path / "runs" / "m.zip")
+    assert tuned.shield == shield  # the fine-tuned model records the distilled student's shield
     # The critic-only phase covered every step: the actor is the distilled one, weight for weight.
     weights = tuned.policy.mlp_extractor.policy_net[0].weight.detach().numpy()
     np.testing.assert_array_equal(weights, before.layers[0][0])

@@ -107,3 +107,71 @@ def test_its_record_round_trips_and_malformed_records_are_refused():
                    {"kind": "other", "bins": 1, "turn": 0.3, "error": None}, "planner-fallback", None):
         with pytest.raises(CncGymError, match="not a planner-fallback shield"):
             PlannerShield.from_record(record)
+
+
+# ----------------------------------------------------------------------------------------- envelope
+ENVELOPE = (("kv", 0.6, 1.5), ("feedforward", 0.5, 0.9))
+
+
+def test_outside_its_envelope_it_hands_the_knob_to_the_planner():
+    env = _env()
+    bound = PlannerShield(1, 0.25, 0.5, ENVELOPE).bind(env)
+    structure = env.unwrapped.observation_structure
+    kv, ff = structure["kv"][0], structure["feedforward"][0]
+    obs = np.zeros(env.observation_space.shape, np.float32)
+    obs[kv], obs[ff] = 1.0, 0.7
+    up, down = np.array([0.7], np.float32), np.array([-0.4], np.float32)
+    assert not bound.outside(obs)
+    assert bound.apply(obs, up) == pytest.approx(0.7) and bound.apply(obs, down) == pytest.approx(-0.4)
+    for index, value in ((ff, 0.0), (ff, 0.95), (kv, 0.5), (kv, 1.6)):
+        off = obs.copy()
+        off[index] = value
+        assert bound.outside(off)
+        assert bound.apply(off, up) == 0.0 and bound.apply(off, down) == 0.0  # not even slower
+        assert bound.apply(off, up).dtype == np.float32
+    edge = obs.copy()
+    edge[ff] = np.float32(0.9) + np.float32(5e-5)  # within the slack: the same machine on another CPU
+    assert not bound.outside(edge)
+
+
+def test_the_envelope_tells_a_machine_without_feed_forward_from_the_one_it_was_trained_on():
+    # vmc-small (feed-forward 0.7, Kv 38-45) lies inside; p-loop-30 (no feed-forward) does not, and a
+    # full raise through the shield stays at the planner's override for its whole episode.
+    inside, outside = _env(machine="vmc-small"), _env(machine="p-loop-30")
+    shield = PlannerShield(1, 0.25, 0.5, ENVELOPE)
+    obs, _ = inside.reset(seed=0)
+    assert not shield.bind(inside).outside(obs)
+    bound = shield.bind(outside)
+    obs, _ = outside.reset(seed=0)
+    done, steps = False, 0
+    while not done:
+        assert bound.outside(obs)
+        action = bound.apply(obs, np.ones(1, np.float32))
+        assert action[0] == 0.0
+        obs, _, terminated, truncated, _ = outside.step(action)
+        done, steps = terminated or truncated, steps + 1
+    assert terminated and steps > 10
+
+
+def test_an_envelope_record_round_trips_and_an_old_record_has_none():
+    shield = PlannerShield(1, 0.25, 0.5, ENVELOPE)
+    record = shield.record()
+    assert record["envelope"] == {"kv": [0.6, 1.5], "feedforward": [0.5, 0.9]}
+    assert PlannerShield.from_record(record) == shield
+    old = {"kind": "planner-fallback", "bins": 1, "turn": 0.25, "error": 0.5}
+    assert PlannerShield.from_record(old).envelope == () and "envelope" not in PlannerShield(1, 0.25).record()
+
+
+@pytest.mark.parametrize("envelope", [[0.6, 1.5], {"kv": [1.0]}, {"kv": "0.6-1.5"}, {"kv": [1.5, 0.6]},
+                                      {"kv": [0.6, float("inf")]}, {"kv": ["0.6", 1.5]}])  # fmt: skip
+def test_a_malformed_envelope_record_is_one_line(envelope):
+    record = {"kind": "planner-fallback", "bins": 1, "turn": 0.25, "error": None, "envelope": envelope}
+    with pytest.raises(CncGymError, match="envelope"):
+        PlannerShield.from_record(record)
+
+
+def test_an_envelope_entry_the_env_lacks_is_refused_when_bound():
+    with pytest.raises(CncGymError, match="envelope reads the observation's spindle_load"):
+        PlannerShield(1, 0.25, None, (("spindle_load", 0.0, 1.0),)).bind(_env())
+    with pytest.raises(CncGymError, match="envelope reads the observation's turn_angle"):  # not one entry
+        PlannerShield(1, 0.25, None, (("turn_angle", 0.0, 1.0),)).bind(_env())
