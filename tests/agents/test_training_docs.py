@@ -39,12 +39,17 @@ def test_the_agents_were_benched_with_three_training_seeds_on_a_committed_tree(p
         assert (ROOT / policy.replace("{seed}", "0")).is_file()
 
 
+def _records(folder: str) -> list[str]:
+    return sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "results" / folder).glob("*.jsonl"))
+
+
 @pytest.mark.parametrize("val", [
     ["docs/results/val/ppo-lagrangian-residual-narrow.jsonl"],  # today's records
     [f"docs/results/val/record-v1/{name}.jsonl"  # how the variant was chosen (record version 1)
      for name in ("ppo-residual", "ppo-lagrangian-residual", "ppo-lagrangian-residual-narrow")],
-    sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "results" / "val" / "distill").glob("*.jsonl")),
+    _records("val/distill"),
     ["docs/results/val/distill/baselines.jsonl", "docs/results/val/ppo-lagrangian-residual-v6.jsonl"],
+    _records("val/perturbed"),
 ])  # fmt: skip
 def test_the_val_tables_are_the_scripts_output(val):
     command = [sys.executable, "scripts/leaderboard.py", *val, "--print"]
