@@ -15,6 +15,8 @@ The loop (:func:`distill`), in the terms of Ross et al. (AISTATS 2011, DAgger):
 - **rounds 1 … ``rounds``, DAgger**: the student drives fresh episodes (fresh machines), and every state it
   visits is labelled with what the teacher would do there; the samples of an episode in which the
   student cut path over tolerance weigh ``violation_weight`` (its mistakes are rare and matter most);
+- with ``teacher_prefers_planner`` the planner teaches an episode (every label 0) where its run of the
+  episode is within tolerance and no slower than the teacher's (:mod:`.labelling`);
 - after every round the student is fitted to all samples so far (the fit continues from the last round)
   with the **quantile (pinball) loss** at level ``quantile``: the τ-quantile of the teacher's actions in
   states the student cannot tell apart, below the median for τ < 0.5.
@@ -76,6 +78,8 @@ class RoundStats:
     violating_share: float
     added_violation_share: float
     planner_violating_share: float
+    #: Share of episodes the planner taught (``teacher_prefers_planner``; 0 without it).
+    planner_taught_share: float
     fit_loss: float
     labelling_cpu_s: float  # CPU seconds of the tasks (in whichever processes ran them)
     fit_cpu_s: float  # CPU seconds of this process's fit
@@ -132,7 +136,8 @@ def round_tasks(config: TrainConfig, programs: Sequence[Program], round_index: i
     kwargs.pop("programs")
     nominal_kwargs = {**kwargs, "randomize": None}
     teacher = TeacherSettings(
-        d.teacher_margin, d.teacher_refine_iterations, d.teacher_raise_rounds, d.label_limit
+        d.teacher_margin, d.teacher_refine_iterations, d.teacher_raise_rounds, d.label_limit,
+        d.teacher_prefers_planner,
     )
     shield = d.shield()
     order: list[int] = []
@@ -173,6 +178,7 @@ def round_stats(round_index: int, episodes: list[LabelledEpisode], samples_total
         violating_share=mean([float(not e.behaviour.feasible) for e in episodes]),
         added_violation_share=mean([float(not e.behaviour.feasible) for e in clean]),
         planner_violating_share=mean([float(not e.planner.feasible) for e in compared if e.planner]),
+        planner_taught_share=mean([float(e.taught_by_planner) for e in episodes]),
         fit_loss=fit_loss,
         labelling_cpu_s=sum(e.cpu_s for e in episodes),
         fit_cpu_s=fit_cpu_s,

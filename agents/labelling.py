@@ -15,6 +15,13 @@ so any worker rebuilds the same episode. The task
    statistics can say where the student is slower than the teacher or violates where the planner is
    clean.
 
+With ``prefer_planner`` the planner and the teacher run the episode *before* step 3, and where the
+planner's run is within tolerance and no slower than the teacher's (or the teacher's is not within
+tolerance), the planner teaches that episode: every label is 0, its own action. The oracle is an oracle
+of the contour error, not of time: on programs whose speed the feed, not the error, limits, its schedule
+can be slower than the planner's (measured on real shop programs at feeds of 5 to 80 mm/min, and on
+some of the suite's), and a student that imitates it there inherits the loss.
+
 Tasks are plain data (the interpreted program, settings, NumPy arrays of the student's actor) and a
 module-level function, so :func:`label_all` runs them with ``cnc-gym bench``'s executor
 (:func:`cnc_gym.benchmark.runner.run_tasks`): in the calling process, on a ``spawn`` process pool or on
@@ -47,6 +54,8 @@ class TeacherSettings:
     #: Labels are the teacher's residual action clipped to [-label_limit, label_limit] (the teacher still
     #: acts within [-1, 1]): :func:`~cnc_gym_agents.teacher.residual_label`.
     label_limit: float = 1.0
+    #: The planner teaches an episode where it is within tolerance and no slower (module docstring).
+    prefer_planner: bool = False
 
 
 @dataclass(frozen=True)
@@ -101,6 +110,7 @@ class LabelledEpisode:
     teacher: Outcome | None  # ... and under the teacher, with compare
     randomized: bool  # the env drew the episode's machine (False: the nominal machine)
     cpu_s: float  # CPU seconds of the task (planning, the episodes, the env set-up)
+    taught_by_planner: bool = False  # the labels are the planner's (0): TeacherSettings.prefer_planner
 
 
 def _make_env(task: EpisodeTask) -> Any:
@@ -136,16 +146,17 @@ class _Planner:
 class _Labeller:
     """A policy that records what the student sees and what the teacher would do, then lets the behaviour
     act: the teacher (``actor`` None, its label clipped to the action box) or the student's actor,
-    through ``shield`` if given."""
+    through ``shield`` if given; with ``planner_teaches`` every label is the planner's action, 0."""
 
     name = "labeller"
 
     def __init__(self, teacher: ResidualOracle, actor: ActorWeights | None, label_limit: float,
-                 shield: BoundShield | None = None) -> None:  # fmt: skip
+                 shield: BoundShield | None = None, planner_teaches: bool = False) -> None:  # fmt: skip
         self.teacher = teacher
         self.actor = actor
         self.label_limit = label_limit
         self.shield = shield
+        self.planner_teaches = planner_teaches
         self.observations: list[np.ndarray] = []
         self.labels: list[float] = []
 
@@ -153,7 +164,7 @@ class _Labeller:
         return None
 
     def act(self, observation: Any, info: dict[str, Any]) -> np.ndarray:
-        label = self.teacher.label(info, self.label_limit)
+        label = 0.0 if self.planner_teaches else self.teacher.label(info, self.label_limit)
         self.observations.append(np.asarray(observation, dtype=np.float32))
         self.labels.append(label)
         if self.actor is None:
@@ -192,18 +203,24 @@ def label_episode(task: EpisodeTask) -> LabelledEpisode:
     def on_step(steps: int, reward: float, terminated: bool, truncated: bool, info: dict[str, Any]) -> None:
         violating.append(float(info.get("cost", 0.0)) > 0.0)
 
+    planner = teacher_run = None
+    planner_teaches = False
     try:
         observation, info = env.reset(seed=task.seed)
         teacher.reset(env)  # plans on this episode: its machine draw, feed scale and plant
+        if s.prefer_planner:  # who teaches this episode (module docstring)
+            planner, teacher_run = _replay(task, _Planner()), _replay(task, None, teacher)
+            planner_teaches = planner.feasible and (
+                not teacher_run.feasible or planner.cycle_time_s <= teacher_run.cycle_time_s)  # fmt: skip
+            teacher.attach(env)
         randomized = getattr(env.unwrapped, "episode_draw", None) is not None
         shield = None if task.shield is None or task.actor is None else task.shield.bind(env)
-        labeller = _Labeller(teacher, task.actor, s.label_limit, shield)
+        labeller = _Labeller(teacher, task.actor, s.label_limit, shield, planner_teaches)
         behaviour = _outcome(play(env, labeller, observation, info, on_step))
         width = int(env.observation_space.shape[0])
     finally:
         env.close()
-    planner = teacher_run = None
-    if task.compare:
+    if task.compare and planner is None:
         planner = _replay(task, _Planner())
         teacher_run = behaviour if task.actor is None else _replay(task, None, teacher)
     return LabelledEpisode(
@@ -211,7 +228,7 @@ def label_episode(task: EpisodeTask) -> LabelledEpisode:
         observations=np.asarray(labeller.observations, dtype=np.float32).reshape(-1, width),
         labels=np.asarray(labeller.labels, dtype=np.float32), violating=np.asarray(violating, dtype=bool),
         behaviour=behaviour, planner=planner, teacher=teacher_run, randomized=randomized,
-        cpu_s=time.process_time() - started)  # fmt: skip
+        cpu_s=time.process_time() - started, taught_by_planner=planner_teaches)  # fmt: skip
 
 
 def label_all(tasks: Sequence[EpisodeTask], executor: Executor,

@@ -212,6 +212,9 @@ class DistillSettings:
                                 "clipped to ± this (1: the action box; above 1: how far beyond the range "
                                 "the oracle would go, which saturates the student firmly there)",
                                 why="1 is the box; 10 is a factor ρ¹⁰ beyond the planner.")  # fmt: skip
+    teacher_prefers_planner: bool = flag(False, doc="the planner teaches an episode (labels 0) where its "
+                                         "run of it is within tolerance and no slower than the teacher's "
+                                         "(or the teacher's is not within tolerance)")  # fmt: skip
     quantile: float = number(0.3, 0, 1, low_open=True, high_open=True, doc="τ of the student's pinball "
                              "loss: it learns the τ-quantile of the teacher's action (< 0.5: the slow "
                              "side)", why="a quantile level strictly inside (0, 1).")  # fmt: skip

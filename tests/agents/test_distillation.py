@@ -151,6 +151,34 @@ def test_round_zero_is_the_teacher_and_the_comparison_runs_the_same_episode():
     assert episode.cpu_s > 0
 
 
+#: Short strokes at 20-40 mm/min: the feed, not the contour error, limits the speed, and the oracle's
+#: schedule is slower than the planner's.
+SLOW_STROKES = "G90 G21 G17\nG00 X0 Y0 Z1\nG01 Z0 F20\nG01 X2 Y0.5 F40\nG01 X0 Y1\nG01 X2 Y1.5\nG00 Z5\nM30\n"
+
+
+def test_the_planner_teaches_an_episode_where_the_oracle_is_slower():
+    prefer = dataclasses.replace(QUICK, prefer_planner=True)
+    task = dataclasses.replace(_task(), program=ProgramText(SLOW_STROKES, "slow"), teacher=prefer)
+    episode = label_episode(task)
+    assert episode.planner is not None and episode.teacher is not None
+    assert episode.planner.feasible and episode.planner.cycle_time_s < episode.teacher.cycle_time_s
+    assert episode.taught_by_planner and np.all(episode.labels == 0.0)
+    assert episode.behaviour == episode.planner  # round 0: the planner drives its own episode
+    # Without the preference the oracle teaches it, slower.
+    oracle = label_episode(dataclasses.replace(task, teacher=QUICK))
+    assert not oracle.taught_by_planner and oracle.behaviour == episode.teacher
+
+
+def test_where_the_oracle_is_faster_it_teaches_as_it_would_without_the_preference():
+    prefer_planner = dataclasses.replace(QUICK, prefer_planner=True)
+    prefer = label_episode(dataclasses.replace(_task(), teacher=prefer_planner))
+    plain = label_episode(_task())
+    assert not prefer.taught_by_planner and prefer.teacher == plain.teacher == plain.behaviour
+    assert prefer.behaviour == plain.behaviour and prefer.planner == plain.planner
+    np.testing.assert_array_equal(prefer.labels, plain.labels)
+    np.testing.assert_array_equal(prefer.observations, plain.observations)
+
+
 def test_wider_labels_change_the_targets_not_the_teachers_episode():
     boxed = label_episode(_task(compare=False))
     wider = dataclasses.replace(QUICK, label_limit=3.0)
@@ -442,7 +470,7 @@ def test_an_envelope_without_a_shield_is_refused_before_any_labelling(tmp_path):
     from cnc_gym_agents.distillation import distill
 
     config = _config(shield_bins=0, shield_envelope=True)
-    with pytest.raises(ConfigError, match="distill.shield_envelope: the envelope is the shield's"):
+    with pytest.raises(ConfigError, match=r"distill\.shield_envelope: the envelope is the shield's"):
         distill(config, tmp_path, progress_bar=False)
     assert not any(tmp_path.iterdir())
 
@@ -456,7 +484,8 @@ def test_the_envelope_is_each_machine_entrys_range_over_the_samples():
         observations[row, layout.structure["kv"][0]] = kv
         observations[row, layout.structure["feedforward"][0]] = ff
     envelope = {name: (low, high) for name, low, high in machine_envelope(observations, layout)}
-    assert envelope["kv"] == pytest.approx((0.8, 1.2)) and envelope["feedforward"] == pytest.approx((0.5, 0.9))
+    assert envelope["kv"] == pytest.approx((0.8, 1.2))
+    assert envelope["feedforward"] == pytest.approx((0.5, 0.9))
     assert envelope["kv_mismatch"] == (0.0, 0.0) and set(envelope) == {
         e.name for e in layout.entries if e.source == "machine"}  # fmt: skip
 
