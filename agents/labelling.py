@@ -17,10 +17,9 @@ so any worker rebuilds the same episode. The task
 
 With ``prefer_planner`` the planner and the teacher run the episode *before* step 3, and where the
 planner's run is within tolerance and no slower than the teacher's (or the teacher's is not within
-tolerance), the planner teaches that episode: every label is 0, its own action. The oracle is an oracle
-of the contour error, not of time: on programs whose speed the feed, not the error, limits, its schedule
-can be slower than the planner's (measured on real shop programs at feeds of 5 to 80 mm/min, and on
-some of the suite's), and a student that imitates it there inherits the loss.
+tolerance), the planner teaches that episode: every label is 0, its own action. The oracle plans
+against the contour error, not against time, and its schedule can be the slower (docs/training.md,
+the loop); a student that imitates it there inherits the loss.
 
 Tasks are plain data (the interpreted program, settings, NumPy arrays of the student's actor) and a
 module-level function, so :func:`label_all` runs them with ``cnc-gym bench``'s executor
