@@ -64,3 +64,13 @@ def test_todays_records_do_not_mix_with_record_version_1():
                "docs/results/val/record-v1/ppo-residual.jsonl"]  # fmt: skip
     result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
     assert result.returncode != 0 and "record_version" in result.stderr
+
+
+def test_the_generalisation_table_is_the_scripts_output():
+    records = _records("generalisation")
+    assert len(records) == 4  # three machines and the real programs
+    command = [sys.executable, "scripts/compare_records.py", *records, "--policy",
+               "docs/results/models/distill-shielded-residual-s{seed}.zip", "--markdown"]  # fmt: skip
+    result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout in DOC.read_text()
