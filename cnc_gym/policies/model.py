@@ -37,6 +37,7 @@ import itertools
 import json
 import math
 import re
+import warnings
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -408,6 +409,7 @@ class ModelPolicy:
         self.env_id = self.model.env_id
         self.env_kwargs = dict(self.model.env_kwargs)
         self._shield: BoundShield | None = None
+        self._first_step = False
 
     def reset(self, env: Any) -> None:
         want = self.model.observation_space.shape
@@ -425,10 +427,17 @@ class ModelPolicy:
                 self._shield = shield.bind(env)
             except CncGymError as exc:
                 raise CncGymError(f"{self.name}: {exc}") from None
+        self._first_step = True
 
     def act(self, observation: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         action = self.model.predict(observation, deterministic=self.deterministic)
         action = np.asarray(action, dtype=np.float32)
         if self._shield is not None:
+            if self._first_step and self._shield.outside(observation):
+                # Once per machine and process (the warnings module shows a message once per place).
+                warnings.warn(f"{self.name}: the machine lies outside the envelope the model was trained "
+                              f"on ({self._shield.outside_entries(observation)}); it acts as the planner",
+                              stacklevel=2)  # fmt: skip
+            self._first_step = False
             return self._shield.apply(observation, action)
         return action

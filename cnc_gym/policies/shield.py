@@ -170,6 +170,15 @@ class BoundShield:
         values = observation[self.envelope_index]
         return bool(np.any(values < self.envelope_low) or np.any(values > self.envelope_high))
 
+    def outside_entries(self, observation: np.ndarray) -> str:
+        """The envelope entries the observation lies outside of, as ``name value not in [low, high]``."""
+        values = observation[self.envelope_index]
+        return ", ".join(
+            f"{name} {float(v):.3g} not in [{low:.3g}, {high:.3g}]"
+            for (name, low, high), v, lo, hi in zip(self.shield.envelope, values, self.envelope_low,
+                                                    self.envelope_high, strict=True)
+            if v < lo or v > hi)  # fmt: skip
+
     def engaged(self, observation: np.ndarray) -> bool:
         """A junction turning at least ``turn`` lies in the shield's reach, or the error is at its bound."""
         if float(np.max(observation[self.first : self.stop])) >= self.shield.turn:

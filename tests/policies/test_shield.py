@@ -175,3 +175,27 @@ def test_an_envelope_entry_the_env_lacks_is_refused_when_bound():
         PlannerShield(1, 0.25, None, (("spindle_load", 0.0, 1.0),)).bind(_env())
     with pytest.raises(CncGymError, match="envelope reads the observation's turn_angle"):  # not one entry
         PlannerShield(1, 0.25, None, (("turn_angle", 0.0, 1.0),)).bind(_env())
+
+
+def test_a_model_outside_its_envelope_says_so_once_and_runs_as_the_planner(tmp_path):
+    # The committed distilled student records its envelope (feed-forward 0.5-0.9 among others):
+    # on p-loop-30 (no feed-forward) it warns, naming the entries, and its episode is the planner's.
+    import warnings
+    from pathlib import Path
+
+    from cnc_gym.policies import make_policy
+    from cnc_gym.rollout import policy_env, run_episode
+
+    model = Path(__file__).resolve().parents[2] / "docs/results/models/distill-shielded-residual-s0.zip"
+    policy = make_policy(str(model))
+    env = policy_env(policy, programs=[ProgramText(CORNERS, "corners")], machine="p-loop-30")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        episode = run_episode(env, policy, seed=0)
+    messages = [str(w.message) for w in caught if "envelope" in str(w.message)]
+    assert len(messages) == 1 and "feedforward 0 not in [0.5" in messages[0]
+    assert "it acts as the planner" in messages[0]
+    planner = run_episode(policy_env(make_policy("classical"), programs=[ProgramText(CORNERS, "corners")],
+                                     machine="p-loop-30"), make_policy("classical"), seed=0)  # fmt: skip
+    assert episode.finished and episode.steps == planner.steps
+    assert episode.info["cycle_time_s"] == pytest.approx(planner.info["cycle_time_s"], abs=0.011)
