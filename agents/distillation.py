@@ -109,13 +109,16 @@ class Dataset:
         return sum(len(x) for x in self.labels)
 
 
-def machine_envelope(observations: np.ndarray,
+def machine_envelope(observations: Sequence[np.ndarray],
                      layout: ObservationLayout) -> tuple[tuple[str, float, float], ...]:  # fmt: skip
     """The range of each of the observation's machine entries (``layout``'s entries of source
-    ``machine``) over ``observations``: the machines the student was trained on, the shield's envelope."""
-    return tuple((e.name, float(np.min(observations[:, layout.structure[e.name][0]])),
-                  float(np.max(observations[:, layout.structure[e.name][0]])))
-                 for e in layout.entries if e.source == "machine")  # fmt: skip
+    ``machine``) over the arrays of ``observations`` (one per episode): the machines the student was
+    trained on, the shield's envelope."""
+    names = [e.name for e in layout.entries if e.source == "machine"]
+    columns = [int(layout.structure[name][0]) for name in names]
+    values = np.concatenate([episode[:, columns] for episode in observations])  # only those columns
+    low, high = values.min(axis=0), values.max(axis=0)
+    return tuple((name, float(low[i]), float(high[i])) for i, name in enumerate(names))
 
 
 def sample_weight(episode: LabelledEpisode, round_index: int, violation_weight: float) -> float:
@@ -302,7 +305,7 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
         logger.close()
         spaces_env.close()
     if shield is not None and d.shield_envelope:
-        shield = d.shield(machine_envelope(data.arrays()[0], layout))
+        shield = d.shield(machine_envelope(data.observations, layout))
     try:
         student_path = student.save(run_dir / "student.zip", config.env.policy_env(), shield)
         model_path = run_dir / "model.zip"

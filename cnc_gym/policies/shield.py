@@ -36,7 +36,7 @@ the loop (its DAgger rollouts are shielded as the deployed policy is).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -160,13 +160,15 @@ class BoundShield:
     first: int
     stop: int
     error_index: int
-    envelope_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.intp))
-    envelope_low: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    envelope_high: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    envelope_index: np.ndarray
+    envelope_low: np.ndarray
+    envelope_high: np.ndarray
 
     def outside(self, observation: np.ndarray) -> bool:
         """An envelope entry of the observation lies outside its range: a machine the policy was not
         trained on."""
+        if not self.envelope_index.size:  # no envelope: nothing to read on every step
+            return False
         values = observation[self.envelope_index]
         return bool(np.any(values < self.envelope_low) or np.any(values > self.envelope_high))
 

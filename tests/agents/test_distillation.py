@@ -483,7 +483,8 @@ def test_the_envelope_is_each_machine_entrys_range_over_the_samples():
     for row, (kv, ff) in enumerate(((0.8, 0.6), (1.2, 0.5), (1.0, 0.9))):
         observations[row, layout.structure["kv"][0]] = kv
         observations[row, layout.structure["feedforward"][0]] = ff
-    envelope = {name: (low, high) for name, low, high in machine_envelope(observations, layout)}
+    episodes = [observations[:1], observations[1:]]  # one array per episode
+    envelope = {name: (low, high) for name, low, high in machine_envelope(episodes, layout)}
     assert envelope["kv"] == pytest.approx((0.8, 1.2))
     assert envelope["feedforward"] == pytest.approx((0.5, 0.9))
     assert envelope["kv_mismatch"] == (0.0, 0.0) and set(envelope) == {
