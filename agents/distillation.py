@@ -17,6 +17,8 @@ The loop (:func:`distill`), in the terms of Ross et al. (AISTATS 2011, DAgger):
   student cut path over tolerance weigh ``violation_weight`` (its mistakes are rare and matter most);
 - with ``teacher_prefers_planner`` the planner teaches an episode (every label 0) where its run of the
   episode is within tolerance and no slower than the teacher's (:mod:`.labelling`);
+- with ``teacher_floor_at_planner`` the teacher is never slower than the planner where the planner's
+  run of the episode is within tolerance (:mod:`.teacher`);
 - after every round the student is fitted to all samples so far (the fit continues from the last round)
   with the **quantile (pinball) loss** at level ``quantile``: the τ-quantile of the teacher's actions in
   states the student cannot tell apart, below the median for τ < 0.5.
@@ -140,7 +142,7 @@ def round_tasks(config: TrainConfig, programs: Sequence[Program], round_index: i
     nominal_kwargs = {**kwargs, "randomize": None}
     teacher = TeacherSettings(
         d.teacher_margin, d.teacher_refine_iterations, d.teacher_raise_rounds, d.label_limit,
-        d.teacher_prefers_planner,
+        d.teacher_prefers_planner, d.teacher_floor_at_planner,
     )
     shield = d.shield()
     order: list[int] = []

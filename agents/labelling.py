@@ -55,6 +55,9 @@ class TeacherSettings:
     label_limit: float = 1.0
     #: The planner teaches an episode where it is within tolerance and no slower (module docstring).
     prefer_planner: bool = False
+    #: The teacher is never below the planner where the planner is within tolerance
+    #: (:class:`~cnc_gym_agents.teacher.ResidualOracle`, ``planner_floor``).
+    planner_floor: bool = False
 
 
 @dataclass(frozen=True)
@@ -195,7 +198,8 @@ def label_episode(task: EpisodeTask) -> LabelledEpisode:
     started = time.process_time()
     s = task.teacher
     teacher = ResidualOracle(float(task.env_kwargs.get("residual_range", 2.0)), margin=s.margin,
-                             refine_iterations=s.refine_iterations, raise_rounds=s.raise_rounds)  # fmt: skip
+                             refine_iterations=s.refine_iterations, raise_rounds=s.raise_rounds,
+                             planner_floor=s.planner_floor)  # fmt: skip
     env = _make_env(task)
     violating: list[bool] = []
 

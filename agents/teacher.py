@@ -15,6 +15,16 @@ its plant, so every randomised machine gets a teacher of its own. Nothing here e
 class only changes how its knob is spoken (residual instead of override) and drops the override-mode
 check of :func:`~cnc_gym.policies.classical.knob_setup`.
 
+With ``planner_floor`` the teacher is never slower than the deployable planner where the planner runs
+the episode within tolerance. The oracle plans against the contour error, not against time: it starts
+from the servo model's speed cap and raises only a little, so on some programs it stays below a
+planner that was already clean (docs/training.md, the loop). The teacher then runs the planner (the
+residual action 0) on a copy of the episode, marks the stretches of path behind each step the planner
+cut over tolerance (the oracle's own correction window), and elsewhere acts at ``max(a*, 0)``: at the
+planner's override, or the oracle's where it is faster. It simulates that combined schedule and, for a
+few rounds, hands every stretch where it cut over tolerance back to the oracle; if it still cuts more
+steps over tolerance than the oracle's own schedule, the episode keeps the oracle alone.
+
 What the teacher knows that the student does not: the whole program (not a 24 mm preview), and the exact
 plant of the episode, which it simulates to the end before the first step. The student only sees the
 env's observation (docs/env.md).
@@ -28,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from cnc_gym.errors import CncGymError
-from cnc_gym.motion.planner import reaction_lead_s
+from cnc_gym.motion.planner import ServoErrorModel, reaction_lead_s
 from cnc_gym.policies.oracle import OraclePlanner
 
 
@@ -54,26 +64,76 @@ class ResidualOracle(OraclePlanner):
     """The oracle restricted to the residual range ``ρ``, as a ``residual``-mode policy (module docstring).
 
     ``margin``, ``refine_iterations`` and ``raise_rounds`` are the oracle's (the fraction of the contour
-    tolerance it aims at, its simulate-and-correct rounds and its raising rounds). An **oracle**: it runs
+    tolerance it aims at, its simulate-and-correct rounds and its raising rounds); ``planner_floor``: never
+    below the planner where the planner is within tolerance (module docstring). An **oracle**: it runs
     copies of the exact env, so it labels training data; it is never deployed.
     """
 
     deterministic = True
+    #: Simulated rounds that hand stretches where the combined schedule cut over tolerance back to the
+    #: oracle (``planner_floor``).
+    FLOOR_ROUNDS = 3
 
     def __init__(self, residual_range: float, margin: float = 0.85, refine_iterations: int = 12,
-                 raise_rounds: int = 3) -> None:  # fmt: skip
+                 raise_rounds: int = 3, planner_floor: bool = False) -> None:  # fmt: skip
         super().__init__(margin=margin, refine_iterations=refine_iterations, raise_rounds=raise_rounds,
                          progress=False)  # fmt: skip
         if not residual_range > 1.0:
             raise CncGymError(f"residual oracle: residual_range must be above 1, got {residual_range}")
         self.name = "residual-oracle"
         self.residual_range = float(residual_range)
+        self.planner_floor = bool(planner_floor)
+        #: Per point of the schedule's grid: the planner is within tolerance there, so the teacher acts
+        #: at ``max(a*, 0)`` (None: the oracle alone).
+        self.floor: np.ndarray | None = None
+        self._as_planner = False  # simulating the planner (the residual action 0)
 
     def reset(self, env: Any) -> None:
         """Plan the episode ``env`` was just reset to (its machine, feed scale and plant)."""
         base = self.attach(env)
         self._cache.clear()  # one schedule per episode: a randomised episode has a machine of its own
+        self.floor = None
         self.schedule = self.plan(base.toolpath, base.machine, env=base)
+        if self.planner_floor:
+            self.floor = self._planner_floor(base)
+
+    def _planner_floor(self, base: Any) -> np.ndarray | None:
+        """Where the teacher acts at least at the planner's override (module docstring); None: nowhere."""
+        schedule = self.schedule
+        assert schedule is not None
+        tolerance = float(base.machine.controller.contour_tolerance_mm)
+        lag_s = float(np.max(1.0 / ServoErrorModel(base.machine).kv))
+        s = schedule.s
+
+        def clear_behind(mask: np.ndarray, run: tuple[np.ndarray, np.ndarray, np.ndarray]) -> int:
+            path_s, error, speed = run
+            over = np.flatnonzero(error > tolerance)
+            for k in over:  # the oracle's correction window: the error builds up over the settling distance
+                back = max(2.0, 4.0 * float(speed[k]) * lag_s)
+                mask[(s >= path_s[k] - back) & (s <= path_s[k] + 1.0)] = False
+            return len(over)
+
+        self._as_planner = True
+        try:
+            planner_run = self._simulate(base)
+        finally:
+            self._as_planner = False
+        if planner_run is None:
+            return None
+        floor = np.ones(len(s), dtype=bool)
+        clear_behind(floor, planner_run)
+        for _ in range(self.FLOOR_ROUNDS):
+            if not floor.any():
+                return None
+            self.floor = floor
+            run = self._simulate(base)
+            self.floor = None
+            if run is None:
+                return None
+            simulated = floor.copy()
+            if clear_behind(floor, run) <= schedule.predicted_violations:
+                return simulated  # no more steps over tolerance than the oracle's own schedule
+        return None
 
     def attach(self, env: Any) -> Any:
         """Drive ``env`` (just reset) with the schedule planned already, without planning again: for
@@ -97,8 +157,17 @@ class ResidualOracle(OraclePlanner):
         """The residual action the teacher takes at the state ``info`` describes (path position, speed and
         the planner's override for the next step); with ``limit`` > 1, how far beyond the action box the
         oracle would go, up to ``limit`` (:func:`residual_label`)."""
-        oracle = self.override_at(float(info.get("path_s", 0.0)), info)
-        return residual_label(oracle, float(info.get("planner_override", 0.0)), self.residual_range, limit)
+        if self._as_planner:
+            return 0.0
+        path_s = float(info.get("path_s", 0.0))
+        oracle = self.override_at(path_s, info)
+        label = residual_label(oracle, float(info.get("planner_override", 0.0)), self.residual_range, limit)
+        if self.floor is not None and self.schedule is not None:
+            index = min(max(int(np.searchsorted(self.schedule.s, path_s, side="right")) - 1, 0),
+                        len(self.floor) - 1)  # fmt: skip
+            if self.floor[index]:
+                return max(label, 0.0)
+        return label
 
     def act(self, observation: Any, info: dict[str, Any]) -> np.ndarray:
         return np.array([self.label(info)], dtype=np.float32)
