@@ -179,6 +179,68 @@ def test_where_the_oracle_is_faster_it_teaches_as_it_would_without_the_preferenc
     np.testing.assert_array_equal(prefer.observations, plain.observations)
 
 
+def test_the_floored_teacher_is_no_slower_than_the_planner_or_the_oracle():
+    floored = dataclasses.replace(QUICK, planner_floor=True)
+    for program in (ProgramText(SLOW_STROKES, "slow"), ProgramText(ZIGZAG, "zigzag")):
+        task = dataclasses.replace(_task(randomize=RANDOM), program=program)
+        plain, floor = label_episode(task), label_episode(dataclasses.replace(task, teacher=floored))
+        assert plain.teacher is not None and floor.teacher is not None and floor.planner is not None
+        assert floor.planner == plain.planner and floor.teacher.feasible
+        # (on the slow strokes the oracle alone is the slower of the two; on the zigzag the planner)
+        assert floor.teacher.cycle_time_s < min(plain.teacher.cycle_time_s, floor.planner.cycle_time_s)
+        assert np.all(floor.labels >= 0.0)  # the planner is within tolerance everywhere: floored everywhere
+
+
+class _ScriptedRuns:
+    """Stands in for the teacher's simulations: the planner's run, then the combined schedule's."""
+
+    def __init__(self, teacher: ResidualOracle, runs: list[list[float]]) -> None:
+        self.teacher, self.runs = teacher, list(runs)
+        self.floors: list[np.ndarray | None] = []
+
+    def __call__(self, env):
+        self.floors.append(None if self.teacher.floor is None else self.teacher.floor.copy())
+        over = self.runs.pop(0) if len(self.runs) > 1 else self.runs[0]  # path positions over tolerance
+        path_s = np.arange(0.0, 60.0, 0.1)
+        error = np.zeros(len(path_s))
+        for where in over:
+            error[np.argmin(np.abs(path_s - where))] = 1.0
+        return path_s, error, np.full(len(path_s), 10.0)
+
+
+def _floor_teacher(runs: list[list[float]], monkeypatch) -> tuple[ResidualOracle, _ScriptedRuns, object]:
+    env = _env()
+    env.reset(seed=0)
+    teacher = ResidualOracle(1.25, refine_iterations=0, planner_floor=True)
+    scripted = _ScriptedRuns(teacher, runs)
+    monkeypatch.setattr(teacher, "_simulate", scripted)
+    teacher.reset(env)
+    return teacher, scripted, env
+
+
+def test_the_floor_leaves_the_stretch_behind_a_planner_violation_to_the_oracle(monkeypatch):
+    teacher, scripted, _ = _floor_teacher([[30.0], []], monkeypatch)
+    assert scripted.floors[0] is None  # the planner's run: no floor
+    assert teacher.floor is not None and teacher.schedule is not None
+    s = teacher.schedule.s
+    # The stretch behind the planner's violation (at least 2 mm) up to 1 mm past it is the oracle's.
+    assert not teacher.floor[(s >= 28.0) & (s <= 31.0)].any()
+    assert teacher.floor[s < 20.0].all() and teacher.floor[(s > 32.0) & (s < 59.0)].all()
+    np.testing.assert_array_equal(scripted.floors[1], teacher.floor)  # the floor kept is the one simulated
+    info = {"path_s": 30.0, "planner_override": 1.0, "feed_mm_min": 600.0}
+    assert teacher.label(info) == residual_label(teacher.override_at(30.0, info), 1.0, 1.25)
+
+
+def test_a_floor_that_keeps_cutting_over_tolerance_is_dropped(monkeypatch):
+    teacher, scripted, _ = _floor_teacher([[], [12.0], [25.0], [40.0]], monkeypatch)
+    assert teacher.floor is None  # every round cut somewhere new: the oracle alone
+    assert len(scripted.floors) == 1 + ResidualOracle.FLOOR_ROUNDS
+    # Each round handed the stretch where it cut back to the oracle before the next.
+    assert scripted.floors[1].all() and not scripted.floors[2][np.abs(teacher.schedule.s - 12.0) < 1].any()
+    teacher, _, _ = _floor_teacher([[], [12.0], []], monkeypatch)
+    assert teacher.floor is not None and not teacher.floor[np.abs(teacher.schedule.s - 12.0) < 1].any()
+
+
 def test_wider_labels_change_the_targets_not_the_teachers_episode():
     boxed = label_episode(_task(compare=False))
     wider = dataclasses.replace(QUICK, label_limit=3.0)
