@@ -18,7 +18,7 @@ The loop (:func:`distill`), in the terms of Ross et al. (AISTATS 2011, DAgger):
 - with ``teacher_prefers_planner`` the planner teaches an episode (every label 0) where its run of the
   episode is within tolerance and no slower than the teacher's (:mod:`.labelling`);
 - with ``teacher_floor_at_planner`` the teacher is never slower than the planner where the planner's
-  run of the episode is within tolerance (:mod:`.teacher`);
+  run of the episode keeps within the teacher's target (:mod:`.teacher`);
 - after every round the student is fitted to all samples so far (the fit continues from the last round)
   with the **quantile (pinball) loss** at level ``quantile``: the τ-quantile of the teacher's actions in
   states the student cannot tell apart, below the median for τ < 0.5.

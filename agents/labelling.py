@@ -55,7 +55,7 @@ class TeacherSettings:
     label_limit: float = 1.0
     #: The planner teaches an episode where it is within tolerance and no slower (module docstring).
     prefer_planner: bool = False
-    #: The teacher is never below the planner where the planner is within tolerance
+    #: The teacher is never below the planner where the planner keeps within the teacher's target
     #: (:class:`~cnc_gym_agents.teacher.ResidualOracle`, ``planner_floor``).
     planner_floor: bool = False
 

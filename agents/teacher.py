@@ -15,15 +15,17 @@ its plant, so every randomised machine gets a teacher of its own. Nothing here e
 class only changes how its knob is spoken (residual instead of override) and drops the override-mode
 check of :func:`~cnc_gym.policies.classical.knob_setup`.
 
-With ``planner_floor`` the teacher is never slower than the deployable planner where the planner runs
-the episode within tolerance. The oracle plans against the contour error, not against time: it starts
+With ``planner_floor`` the teacher is never slower than the deployable planner where the planner's run
+of the episode keeps within the teacher's target. The oracle plans against the contour error, not against time: it starts
 from the servo model's speed cap and raises only a little, so on some programs it stays below a
 planner that was already clean (docs/training.md, the loop). The teacher then runs the planner (the
-residual action 0) on a copy of the episode, marks the stretches of path behind each step the planner
-cut over tolerance (the oracle's own correction window), and elsewhere acts at ``max(a*, 0)``: at the
+residual action 0) on a copy of the episode, marks the stretches of path behind each step where the
+planner's contour error exceeds the teacher's target (``margin`` × tolerance, what the oracle aims at;
+the stretch is the oracle's own correction window), and elsewhere acts at ``max(a*, 0)``: at the
 planner's override, or the oracle's where it is faster. It simulates that combined schedule and, for a
-few rounds, hands every stretch where it cut over tolerance back to the oracle; if it still cuts more
-steps over tolerance than the oracle's own schedule, the episode keeps the oracle alone.
+few rounds, hands every stretch where its error exceeded the target back to the oracle, until a round
+adds none; if none is found within the rounds, or the last run cuts more steps over tolerance than
+the oracle's own schedule, the episode keeps the oracle alone.
 
 What the teacher knows that the student does not: the whole program (not a 24 mm preview), and the exact
 plant of the episode, which it simulates to the end before the first step. The student only sees the
@@ -65,7 +67,7 @@ class ResidualOracle(OraclePlanner):
 
     ``margin``, ``refine_iterations`` and ``raise_rounds`` are the oracle's (the fraction of the contour
     tolerance it aims at, its simulate-and-correct rounds and its raising rounds); ``planner_floor``: never
-    below the planner where the planner is within tolerance (module docstring). An **oracle**: it runs
+    below the planner where the planner keeps within the target (module docstring). An **oracle**: it runs
     copies of the exact env, so it labels training data; it is never deployed.
     """
 
@@ -83,7 +85,7 @@ class ResidualOracle(OraclePlanner):
         self.name = "residual-oracle"
         self.residual_range = float(residual_range)
         self.planner_floor = bool(planner_floor)
-        #: Per point of the schedule's grid: the planner is within tolerance there, so the teacher acts
+        #: Per point of the schedule's grid: the planner keeps within the target there, so the teacher acts
         #: at ``max(a*, 0)`` (None: the oracle alone).
         self.floor: np.ndarray | None = None
         self._as_planner = False  # simulating the planner (the residual action 0)
@@ -102,16 +104,17 @@ class ResidualOracle(OraclePlanner):
         schedule = self.schedule
         assert schedule is not None
         tolerance = float(base.machine.controller.contour_tolerance_mm)
+        target = self.margin * tolerance
         lag_s = float(np.max(1.0 / ServoErrorModel(base.machine).kv))
         s = schedule.s
 
         def clear_behind(mask: np.ndarray, run: tuple[np.ndarray, np.ndarray, np.ndarray]) -> int:
+            """Clear ``mask`` behind every step of ``run`` over the target; the steps over tolerance."""
             path_s, error, speed = run
-            over = np.flatnonzero(error > tolerance)
-            for k in over:  # the oracle's correction window: the error builds up over the settling distance
-                back = max(2.0, 4.0 * float(speed[k]) * lag_s)
+            for k in np.flatnonzero(error > target):  # the oracle's correction window: the error builds
+                back = max(2.0, 4.0 * float(speed[k]) * lag_s)  # up over the servo's settling distance
                 mask[(s >= path_s[k] - back) & (s <= path_s[k] + 1.0)] = False
-            return len(over)
+            return int(np.sum(error > tolerance))
 
         self._as_planner = True
         try:
@@ -131,8 +134,9 @@ class ResidualOracle(OraclePlanner):
             if run is None:
                 return None
             simulated = floor.copy()
-            if clear_behind(floor, run) <= schedule.predicted_violations:
-                return simulated  # no more steps over tolerance than the oracle's own schedule
+            over_tolerance = clear_behind(floor, run)
+            if np.array_equal(floor, simulated):  # every step over the target lies in the oracle's stretches
+                return simulated if over_tolerance <= schedule.predicted_violations else None
         return None
 
     def attach(self, env: Any) -> Any:

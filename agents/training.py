@@ -216,8 +216,9 @@ class DistillSettings:
                                          "run of it is within tolerance and no slower than the teacher's "
                                          "(or the teacher's is not within tolerance)")  # fmt: skip
     teacher_floor_at_planner: bool = flag(False, doc="the teacher is never slower than the planner where "
-                                          "the planner's run of the episode is within tolerance (it acts "
-                                          "at the larger of the two overrides there)")  # fmt: skip
+                                          "the planner's run of the episode keeps within the teacher's "
+                                          "target, teacher_margin × tolerance (it acts at the larger of "
+                                          "the two overrides there)")  # fmt: skip
     quantile: float = number(0.3, 0, 1, low_open=True, high_open=True, doc="τ of the student's pinball "
                              "loss: it learns the τ-quantile of the teacher's action (< 0.5: the slow "
                              "side)", why="a quantile level strictly inside (0, 1).")  # fmt: skip
