@@ -15,17 +15,17 @@ its plant, so every randomised machine gets a teacher of its own. Nothing here e
 class only changes how its knob is spoken (residual instead of override) and drops the override-mode
 check of :func:`~cnc_gym.policies.classical.knob_setup`.
 
-With ``planner_floor`` the teacher is never slower than the deployable planner where the planner's run
-of the episode keeps within the teacher's target. The oracle plans against the contour error, not against time: it starts
-from the servo model's speed cap and raises only a little, so on some programs it stays below a
-planner that was already clean (docs/training.md, the loop). The teacher then runs the planner (the
-residual action 0) on a copy of the episode, marks the stretches of path behind each step where the
-planner's contour error exceeds the teacher's target (``margin`` × tolerance, what the oracle aims at;
-the stretch is the oracle's own correction window), and elsewhere acts at ``max(a*, 0)``: at the
-planner's override, or the oracle's where it is faster. It simulates that combined schedule and, for a
-few rounds, hands every stretch where its error exceeded the target back to the oracle, until a round
-adds none; if none is found within the rounds, or the last run cuts more steps over tolerance than
-the oracle's own schedule, the episode keeps the oracle alone.
+With ``planner_floor`` the teacher is never slower than the deployable planner where the planner's run of
+the episode keeps within the teacher's target. The oracle plans against the contour error, not against
+time: it starts from the servo model's speed cap and raises only a little, so on some programs it stays
+below a planner that was already clean (docs/training.md, the loop). The teacher then runs the planner
+(the residual action 0) on a copy of the episode, marks the stretches of path behind each step where the
+planner's contour error exceeds the teacher's target (``margin`` × tolerance, what the oracle aims at; the
+stretch is the oracle's own correction window), and elsewhere acts at ``max(a*, 0)``: at the planner's
+override, or the oracle's where it is faster. It simulates that combined schedule and, for a few rounds,
+hands every stretch where its error exceeded the target back to the oracle, until a round adds none; if
+none is found within the rounds, or the last run cuts more steps over tolerance than the oracle's own
+schedule, the episode keeps the oracle alone.
 
 What the teacher knows that the student does not: the whole program (not a 24 mm preview), and the exact
 plant of the episode, which it simulates to the end before the first step. The student only sees the
