@@ -258,10 +258,11 @@ def distill(config: TrainConfig, run_dir: Path, *, executor: Executor | None = N
         except CncGymError as exc:
             spaces_env.close()
             raise ConfigError(f"{config.source}: distill.shield_bins: {exc}") from None
-    elif d.shield_envelope:
+    elif d.shield_envelope or d.shield_hold:
         spaces_env.close()
-        raise ConfigError(f"{config.source}: distill.shield_envelope: the envelope is the shield's; set "
-                          "distill.shield_bins > 0")  # fmt: skip
+        key = "shield_envelope: the envelope" if d.shield_envelope else "shield_hold: the hold"
+        raise ConfigError(f"{config.source}: distill.{key} is the shield's; set distill.shield_bins > "
+                          "0")  # fmt: skip
     layout: ObservationLayout = spaces_env.unwrapped.layout  # type: ignore[attr-defined]
     tensorboard_dir = run_dir.parent / "tensorboard"
     student = Student(spaces_env, config.ppo.net_arch, config.ppo.log_std_init, config.seed)

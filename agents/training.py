@@ -251,6 +251,10 @@ class DistillSettings:
     shield_error: float = number(0.0, 0, 5, doc="the contour error (× tolerance, the last step's largest) "
                                  "from which the shield falls back to the planner (0: no error rule)",
                                  why="the observation's error entry is clipped at 5.")  # fmt: skip
+    shield_hold: int = number(0, 0, 1000, integer=True, doc="control periods the shield keeps holding "
+                              "after a junction of shield_turn or more leaves its reach (the servo's "
+                              "transient through the corner)", why="1000 periods are 10 s at the "
+                              "10 ms period.")  # fmt: skip
 
     shield_envelope: bool = flag(False, doc="record in the saved model's shield the range of each of "
                                  "the observation's machine entries over the training samples: on a "
@@ -261,7 +265,8 @@ class DistillSettings:
         """The shield these settings ask for (None with ``shield_bins`` 0), with ``envelope`` if given."""
         if self.shield_bins == 0:
             return None
-        return PlannerShield(self.shield_bins, self.shield_turn, self.shield_error or None, envelope)
+        return PlannerShield(self.shield_bins, self.shield_turn, self.shield_error or None, envelope,
+                             self.shield_hold)  # fmt: skip
 
 
 @dataclass

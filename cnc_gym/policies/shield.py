@@ -12,7 +12,9 @@ mistake costs a whole program. Two situations cause nearly all of them:
 
 :class:`PlannerShield` holds the action at ``min(a, 0)`` (the planner's override, or slower) while the
 observation's preview shows a junction turning at least ``turn`` (``θ / π``) in its first ``bins`` bins
-(each bin is ``lookahead_mm / lookahead_points`` long: 3 mm in Feedrate-v2 … v5), or while the largest
+(each bin is ``lookahead_mm / lookahead_points`` long: 3 mm in Feedrate-v2 … v5), and for ``hold`` more
+control periods after such a junction leaves the preview (the tool is then at the corner, and the
+servo's transient through it lasts about four of its time constants ``1/Kv``), or while the largest
 contour error of the last step is at least ``error`` × tolerance. Everywhere else the policy acts freely,
 and below the planner it always does.
 
@@ -48,7 +50,7 @@ TURN_ENTRY = "turn_angle"
 ERROR_ENTRY = "contour_error_step"
 #: The record's keys (``cnc_gym_shield`` in a model zip); ``envelope`` may be absent (none).
 RECORD_KEYS = frozenset({"kind", "bins", "turn", "error"})
-OPTIONAL_RECORD_KEYS = frozenset({"envelope"})
+OPTIONAL_RECORD_KEYS = frozenset({"envelope", "hold"})
 #: How far beyond the recorded envelope an entry may lie and still count as inside (in the entry's units:
 #: the envelope's ends are float32 observations, and the same machine observed on another CPU may differ
 #: in the last bits).
@@ -78,15 +80,16 @@ def _envelope(envelope: Any) -> bool:
 @dataclass(frozen=True)
 class PlannerShield:
     """Hold a residual action at ≤ 0 while a junction turning at least ``turn`` (θ/π, in (0, 1]) lies in
-    the first ``bins`` bins of the observation's preview, or while the last step's largest contour error
-    is at least ``error`` × tolerance (None: no error rule); and at the planner (``a = 0``) while an
-    observation entry named in ``envelope`` (``(name, low, high)`` each) lies outside its range; module
-    docstring."""
+    the first ``bins`` bins of the observation's preview and for ``hold`` control periods after, or while
+    the last step's largest contour error is at least ``error`` × tolerance (None: no error rule); and at
+    the planner (``a = 0``) while an observation entry named in ``envelope`` (``(name, low, high)`` each)
+    lies outside its range; module docstring."""
 
     bins: int
     turn: float
     error: float | None = None
     envelope: tuple[tuple[str, float, float], ...] = ()
+    hold: int = 0
 
     def __post_init__(self) -> None:
         if isinstance(self.bins, bool) or not isinstance(self.bins, int) or self.bins < 1:
@@ -95,6 +98,9 @@ class PlannerShield:
             raise CncGymError(f"shield: turn must be in (0, 1] (θ/π), got {self.turn!r}")
         if self.error is not None and (not _number(self.error) or not 0.0 < float(self.error) <= 5.0):
             raise CncGymError(f"shield: error must be in (0, 5] (× tolerance) or null, got {self.error!r}")
+        if isinstance(self.hold, bool) or not isinstance(self.hold, int) or not 0 <= self.hold <= 1000:
+            raise CncGymError(f"shield: hold must be an integer in [0, 1000] (control periods), got "
+                              f"{self.hold!r}")  # fmt: skip
         if not _envelope(self.envelope):
             raise CncGymError("shield: envelope must map distinct observation entries to finite ranges "
                               f"[low, high], got {self.envelope!r}")  # fmt: skip
@@ -106,6 +112,8 @@ class PlannerShield:
                                   "turn": float(self.turn), "error": error}  # fmt: skip
         if self.envelope:
             record["envelope"] = {name: [float(low), float(high)] for name, low, high in self.envelope}
+        if self.hold:
+            record["hold"] = int(self.hold)
         return record
 
     @classmethod
@@ -115,13 +123,14 @@ class PlannerShield:
         if not isinstance(record, dict) or not RECORD_KEYS <= set(record) <= allowed or (
                 record["kind"] != "planner-fallback"):  # fmt: skip
             raise CncGymError("its cnc_gym_shield record is not a planner-fallback shield "
-                              "{kind: planner-fallback, bins, turn, error[, envelope]}")  # fmt: skip
+                              "{kind: planner-fallback, bins, turn, error[, envelope][, hold]}")  # fmt: skip
         envelope = record.get("envelope", {})
         if not isinstance(envelope, dict) or not all(
                 isinstance(ends, list) and len(ends) == 2 for ends in envelope.values()):  # fmt: skip
             raise CncGymError("its cnc_gym_shield envelope is not {entry: [low, high], ...}")
         return cls(bins=record["bins"], turn=record["turn"], error=record["error"],
-                   envelope=tuple((name, low, high) for name, (low, high) in envelope.items()))  # fmt: skip
+                   envelope=tuple((name, low, high) for name, (low, high) in envelope.items()),
+                   hold=record.get("hold", 0))  # fmt: skip
 
     def bind(self, env: Any) -> BoundShield:
         """The shield on ``env``'s observation layout (``observation_structure``), for a ``residual``-mode
@@ -151,10 +160,11 @@ class PlannerShield:
                            indices, low, high)  # fmt: skip
 
 
-@dataclass(frozen=True)
+@dataclass
 class BoundShield:
     """A :class:`PlannerShield` on one observation layout: the slice of the preview it reads, the index
-    of the contour error entry, and the envelope's entries with their ranges (the slack included)."""
+    of the contour error entry, and the envelope's entries with their ranges (the slack included); one
+    episode's (bind again for the next: :meth:`apply` counts the control periods of ``hold``)."""
 
     shield: PlannerShield
     first: int
@@ -163,6 +173,8 @@ class BoundShield:
     envelope_index: np.ndarray
     envelope_low: np.ndarray
     envelope_high: np.ndarray
+    #: Control periods the corner rule still holds after its junction left the preview.
+    hold_left: int = 0
 
     def outside(self, observation: np.ndarray) -> bool:
         """An envelope entry of the observation lies outside its range: a machine the policy was not
@@ -181,17 +193,30 @@ class BoundShield:
                                                     self.envelope_high, strict=True)
             if v < lo or v > hi)  # fmt: skip
 
+    def turn_in_reach(self, observation: np.ndarray) -> bool:
+        """A junction turning at least ``turn`` lies in the shield's reach."""
+        return float(np.max(observation[self.first : self.stop])) >= self.shield.turn
+
     def engaged(self, observation: np.ndarray) -> bool:
-        """A junction turning at least ``turn`` lies in the shield's reach, or the error is at its bound."""
-        if float(np.max(observation[self.first : self.stop])) >= self.shield.turn:
+        """A junction turning at least ``turn`` lies in the shield's reach, or the error is at its bound
+        (this observation alone: :meth:`apply` adds the ``hold`` after a junction)."""
+        if self.turn_in_reach(observation):
             return True
         bound = self.shield.error
         return bound is not None and float(observation[self.error_index]) >= bound
 
     def apply(self, observation: np.ndarray, action: np.ndarray) -> np.ndarray:
-        """``action`` at 0 (the planner) where :meth:`outside`, held at ≤ 0 where :meth:`engaged`, else
-        unchanged (float32)."""
+        """``action`` at 0 (the planner) where :meth:`outside`, held at ≤ 0 where :meth:`engaged` or
+        within ``hold`` control periods after a junction left the reach, else unchanged (float32). Call
+        it once per control step."""
         action = np.asarray(action, dtype=np.float32)
         if self.outside(observation):
             return np.zeros_like(action)
-        return np.minimum(action, np.float32(0.0)) if self.engaged(observation) else action
+        held = False
+        if self.turn_in_reach(observation):
+            self.hold_left = self.shield.hold
+            held = True
+        elif self.hold_left > 0:
+            self.hold_left -= 1
+            held = True
+        return np.minimum(action, np.float32(0.0)) if held or self.engaged(observation) else action

@@ -535,6 +535,8 @@ def test_an_envelope_without_a_shield_is_refused_before_any_labelling(tmp_path):
     config = _config(shield_bins=0, shield_envelope=True)
     with pytest.raises(ConfigError, match=r"distill\.shield_envelope: the envelope is the shield's"):
         distill(config, tmp_path, progress_bar=False)
+    with pytest.raises(ConfigError, match=r"distill\.shield_hold: the hold is the shield's"):
+        distill(_config(shield_bins=0, shield_envelope=False, shield_hold=10), tmp_path, progress_bar=False)
     assert not any(tmp_path.iterdir())
 
 

@@ -57,6 +57,35 @@ def test_it_holds_a_raise_at_the_planner_where_a_sharp_turn_is_in_reach():
     assert bound.apply(obs, up).dtype == np.float32
 
 
+def test_its_hold_keeps_a_raise_at_the_planner_for_hold_periods_after_a_junction_leaves_the_reach():
+    env = _env()
+    bound = PlannerShield(1, 0.25, hold=3).bind(env)
+    up = np.array([0.7], np.float32)
+    corner = np.zeros(env.observation_space.shape, np.float32)
+    corner[bound.first] = 0.5  # a 90° junction in the first bin
+    past = np.zeros(env.observation_space.shape, np.float32)  # ... which the tool has now reached
+    assert bound.apply(past, up) == pytest.approx(0.7)  # no junction yet: nothing to hold
+    assert bound.apply(corner, up) == 0.0 and bound.apply(corner, up) == 0.0
+    held = [float(bound.apply(past, up)[0]) for _ in range(5)]
+    assert held == [0.0, 0.0, 0.0, pytest.approx(0.7), pytest.approx(0.7)]
+    assert bound.apply(past, np.array([-0.4], np.float32)) == pytest.approx(-0.4)  # slower is always free
+    # A new junction restarts the count; without a hold the shield lets go at once.
+    assert bound.apply(corner, up) == 0.0 and bound.apply(past, up) == 0.0
+    plain = PlannerShield(1, 0.25).bind(env)
+    assert plain.apply(corner, up) == 0.0 and plain.apply(past, up) == pytest.approx(0.7)
+    # Binding again (the next episode) starts with nothing held.
+    assert PlannerShield(1, 0.25, hold=3).bind(env).apply(past, up) == pytest.approx(0.7)
+
+
+def test_a_hold_record_round_trips_and_bad_holds_are_one_line():
+    shield = PlannerShield(1, 0.25, 0.5, hold=10)
+    assert shield.record()["hold"] == 10 and PlannerShield.from_record(shield.record()) == shield
+    assert "hold" not in PlannerShield(1, 0.25).record()  # the record of a shield without one is as before
+    for hold in (-1, 1001, 2.5, True):
+        with pytest.raises(CncGymError, match="hold must be an integer"):
+            PlannerShield(1, 0.25, hold=hold)
+
+
 def test_a_shielded_full_raise_stays_at_the_planner_before_each_corner():
     # The policy "always +1" through the shield: the env's own observation engages it before each corner,
     # and the override commanded there is the planner's.
