@@ -12,10 +12,14 @@ ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "training.md"
 #: The test-split records the tables are made of (every track): the baselines' and the trained agents'.
 RECORDS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs" / "results").glob("*.jsonl"))
-#: The trained agents' records: the PPO-Lagrangian agent's and the distilled student's on every track.
+#: The trained agents' records: the PPO-Lagrangian agent's and the distilled students' on every track (the
+#: chosen configuration's, ``distill-floor``, and the previous choice's).
 AGENTS = ["docs/results/cnc-bench-v1-test-learned.jsonl", "docs/results/cnc-bench-v1-test-distill.jsonl",
           "docs/results/cnc-bench-v1-test-distill-perturbed.jsonl",
-          "docs/results/cnc-bench-v1-test-distill-mujoco.jsonl"]  # fmt: skip
+          "docs/results/cnc-bench-v1-test-distill-mujoco.jsonl",
+          "docs/results/cnc-bench-v1-test-distill-floor.jsonl",
+          "docs/results/cnc-bench-v1-test-distill-floor-perturbed.jsonl",
+          "docs/results/cnc-bench-v1-test-distill-floor-mujoco.jsonl"]  # fmt: skip
 
 
 def test_the_result_table_is_generated_from_the_committed_records():
@@ -70,7 +74,7 @@ def test_the_generalisation_table_is_the_scripts_output():
     records = _records("generalisation")
     assert len(records) == 4  # three machines and the real programs
     command = [sys.executable, "scripts/compare_records.py", *records, "--policy",
-               "docs/results/models/distill-shielded-residual-s{seed}.zip", "--markdown"]  # fmt: skip
+               "docs/results/models/distill-floor-residual-s{seed}.zip", "--markdown"]  # fmt: skip
     result = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert result.stdout in DOC.read_text()
