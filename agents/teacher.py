@@ -72,8 +72,8 @@ class ResidualOracle(OraclePlanner):
     """
 
     deterministic = True
-    #: Simulated rounds that hand stretches where the combined schedule cut over tolerance back to the
-    #: oracle (``planner_floor``).
+    #: Simulated rounds that hand stretches where the combined schedule's error went over the target back
+    #: to the oracle (``planner_floor``).
     FLOOR_ROUNDS = 3
 
     def __init__(self, residual_range: float, margin: float = 0.85, refine_iterations: int = 12,

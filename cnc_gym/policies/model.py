@@ -20,7 +20,7 @@ acts needs none of them, except one plain JSON entry of ``data`` that ``scripts/
 mean (``action_mode``, ``control_period_s``, ``residual_range``, ``lookahead_mm``, ``lookahead_points``),
 checked against a fixed list of ids and keys, so ``cnc-gym bench`` and ``cnc-gym run`` run the model in the
 env it was trained for (models without it run in ``cnc_gym/Feedrate-v0``); and ``cnc_gym_shield``, the
-shield a residual policy acts through (:mod:`cnc_gym.policies.shield`: three plain numbers), which
+shield a residual policy acts through (:mod:`cnc_gym.policies.shield`: plain numbers, checked), which
 :class:`ModelPolicy` applies.
 
 A model outside this list (a custom policy class, image or dict observations)

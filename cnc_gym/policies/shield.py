@@ -48,7 +48,7 @@ from cnc_gym.errors import CncGymError
 #: The observation entries the shield reads (docs/env.md, observation table).
 TURN_ENTRY = "turn_angle"
 ERROR_ENTRY = "contour_error_step"
-#: The record's keys (``cnc_gym_shield`` in a model zip); ``envelope`` may be absent (none).
+#: The record's keys (``cnc_gym_shield`` in a model zip); ``envelope`` and ``hold`` may be absent (none, 0).
 RECORD_KEYS = frozenset({"kind", "bins", "turn", "error"})
 OPTIONAL_RECORD_KEYS = frozenset({"envelope", "hold"})
 #: How far beyond the recorded envelope an entry may lie and still count as inside (in the entry's units:
