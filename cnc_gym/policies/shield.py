@@ -197,13 +197,15 @@ class BoundShield:
         """A junction turning at least ``turn`` lies in the shield's reach."""
         return float(np.max(observation[self.first : self.stop])) >= self.shield.turn
 
+    def error_at_bound(self, observation: np.ndarray) -> bool:
+        """The last step's largest contour error is at least ``error`` × tolerance (False: no error rule)."""
+        bound = self.shield.error
+        return bound is not None and float(observation[self.error_index]) >= bound
+
     def engaged(self, observation: np.ndarray) -> bool:
         """A junction turning at least ``turn`` lies in the shield's reach, or the error is at its bound
         (this observation alone: :meth:`apply` adds the ``hold`` after a junction)."""
-        if self.turn_in_reach(observation):
-            return True
-        bound = self.shield.error
-        return bound is not None and float(observation[self.error_index]) >= bound
+        return self.turn_in_reach(observation) or self.error_at_bound(observation)
 
     def apply(self, observation: np.ndarray, action: np.ndarray) -> np.ndarray:
         """``action`` at 0 (the planner) where :meth:`outside`, held at ≤ 0 where :meth:`engaged` or
@@ -212,11 +214,12 @@ class BoundShield:
         action = np.asarray(action, dtype=np.float32)
         if self.outside(observation):
             return np.zeros_like(action)
-        held = False
         if self.turn_in_reach(observation):
             self.hold_left = self.shield.hold
             held = True
         elif self.hold_left > 0:
             self.hold_left -= 1
             held = True
-        return np.minimum(action, np.float32(0.0)) if held or self.engaged(observation) else action
+        else:
+            held = self.error_at_bound(observation)
+        return np.minimum(action, np.float32(0.0)) if held else action

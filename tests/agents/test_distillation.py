@@ -209,18 +209,18 @@ class _ScriptedRuns:
         return path_s, error, np.full(len(path_s), 10.0)
 
 
-def _floor_teacher(runs: list[list[float]], monkeypatch) -> tuple[ResidualOracle, _ScriptedRuns, object]:
+def _floor_teacher(runs: list[list[float]], monkeypatch) -> tuple[ResidualOracle, _ScriptedRuns]:
     env = _env()
     env.reset(seed=0)
     teacher = ResidualOracle(1.25, refine_iterations=0, planner_floor=True)
     scripted = _ScriptedRuns(teacher, runs)
     monkeypatch.setattr(teacher, "_simulate", scripted)
     teacher.reset(env)
-    return teacher, scripted, env
+    return teacher, scripted
 
 
 def test_the_floor_leaves_the_stretch_behind_a_planner_violation_to_the_oracle(monkeypatch):
-    teacher, scripted, _ = _floor_teacher([[30.0], []], monkeypatch)
+    teacher, scripted = _floor_teacher([[30.0], []], monkeypatch)
     assert scripted.floors[0] is None  # the planner's run: no floor
     assert teacher.floor is not None and teacher.schedule is not None
     s = teacher.schedule.s
@@ -233,12 +233,12 @@ def test_the_floor_leaves_the_stretch_behind_a_planner_violation_to_the_oracle(m
 
 
 def test_a_floor_that_keeps_cutting_over_tolerance_is_dropped(monkeypatch):
-    teacher, scripted, _ = _floor_teacher([[], [12.0], [25.0], [40.0]], monkeypatch)
+    teacher, scripted = _floor_teacher([[], [12.0], [25.0], [40.0]], monkeypatch)
     assert teacher.floor is None  # every round cut somewhere new: the oracle alone
     assert len(scripted.floors) == 1 + ResidualOracle.FLOOR_ROUNDS
     # Each round handed the stretch where it cut back to the oracle before the next.
     assert scripted.floors[1].all() and not scripted.floors[2][np.abs(teacher.schedule.s - 12.0) < 1].any()
-    teacher, _, _ = _floor_teacher([[], [12.0], []], monkeypatch)
+    teacher, _ = _floor_teacher([[], [12.0], []], monkeypatch)
     assert teacher.floor is not None and not teacher.floor[np.abs(teacher.schedule.s - 12.0) < 1].any()
 
 
